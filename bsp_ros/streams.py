@@ -1,0 +1,78 @@
+"""The recorded streams of one cell session as numpy arrays (what a bag or the simulator yields)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+SEGMENTS_3 = ("upper_arm", "forearm", "hand")
+JOINTS_3 = ("shoulder", "elbow", "wrist")
+# Proximal then distal marker of each segment: the hand segment ends at the contact point (`hand` marker).
+MARKERS_3 = ("shoulder", "elbow", "wrist", "hand")
+MARKERS_2 = ("shoulder", "elbow", "hand")
+
+
+def segments_for(n_segments: int) -> tuple[str, ...]:
+    """Segment names of a chain of ``n_segments`` (2: the paper's mechanical arm, 3: a human arm)."""
+    return SEGMENTS_3[:n_segments]
+
+
+def joints_for(n_segments: int) -> tuple[str, ...]:
+    """Joint names of a chain of ``n_segments``."""
+    return JOINTS_3[:n_segments]
+
+
+def markers_for(n_segments: int) -> tuple[str, ...]:
+    """Marker names of a chain of ``n_segments``, proximal to distal, ending at the contact point."""
+    return MARKERS_3 if n_segments == 3 else MARKERS_2
+
+
+@dataclass(frozen=True)
+class WrenchSeries:
+    """Wrench the hand exerts on the sensor, in the sensor frame, referenced at the contact point.
+
+    Attributes
+    ----------
+    t_ns : (N,) int64, header stamps in nanoseconds.
+    force_n : (N, 3) float64, force in N.
+    torque_nm : (N, 3) float64, moment in Nm.
+    frame_id : the ``header.frame_id`` of the messages.
+    """
+
+    t_ns: np.ndarray
+    force_n: np.ndarray
+    torque_nm: np.ndarray
+    frame_id: str = "world"
+
+
+@dataclass(frozen=True)
+class MarkerSeries:
+    """Positions of one marker in ``world`` (m): (M,) int64 stamps and (M, 3) positions.
+
+    A frame in which the marker was occluded is simply absent.
+    """
+
+    t_ns: np.ndarray
+    position_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class Session:
+    """All streams of one session.
+
+    Attributes
+    ----------
+    wrench : the force/torque stream.
+    markers : marker name (``shoulder``, ``elbow``, ``wrist``, ``hand``) -> its series.
+    rotation_world_from_sensor : (3, 3) rotation taking wrench-frame vectors into ``world``.
+    """
+
+    wrench: WrenchSeries
+    markers: dict[str, MarkerSeries]
+    rotation_world_from_sensor: np.ndarray = field(default_factory=lambda: np.eye(3))
+
+    @property
+    def n_segments(self) -> int:
+        """3 with a wrist marker, otherwise 2."""
+        return 3 if "wrist" in self.markers else 2

@@ -1,0 +1,45 @@
+"""Packaging for bsp_ros: an ament_python package that also installs with pip."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = "bsp_ros"
+NODES = ["cell_simulator", "joint_angle_estimator", "bsp_identifier", "session_recorder"]
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(include=["bsp_ros", "bsp_ros.*", "msg_adapters", "msg_adapters.*"]),
+    package_data={"bsp_ros": ["py.typed", "config/*.yaml"], "msg_adapters": ["py.typed"]},
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
+        ("share/" + PACKAGE, ["package.xml"]),
+        ("share/" + PACKAGE + "/launch", glob("launch/*.launch.py")),
+        ("share/" + PACKAGE + "/config", glob("bsp_ros/config/*.yaml")),
+    ],
+    python_requires=">=3.10",
+    install_requires=[
+        "numpy>=1.26",
+        "scipy>=1.11",
+        "rosbags>=0.10",
+        "mcap>=1.1",
+        "mcap-ros2-support>=0.5",
+        "cyclonedds>=0.10.5",
+        "matplotlib>=3.7",
+        "setuptools",
+    ],
+    extras_require={
+        "test": ["pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1"],
+        "postgres": ["psycopg[binary]>=3.1"],
+    },
+    zip_safe=True,
+    maintainer="bsp_ros developers",
+    maintainer_email="dev@bsp-ros.local",
+    description="Online identification of arm body segment parameters for rehabilitation robot cells.",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": ["bsp = bsp_ros.cli:main"]
+        + [f"{node} = bsp_ros.nodes.{node}:main" for node in NODES],
+    },
+)
