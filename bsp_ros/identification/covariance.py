@@ -1,0 +1,58 @@
+"""Parameter covariance that stays honest when residuals are autocorrelated (Newey-West HAC)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def bartlett_bandwidth(scores: np.ndarray) -> int:
+    """Newey-West lag truncation by Andrews' (1991) AR(1) plug-in rule for the Bartlett kernel.
+
+    Parameters
+    ----------
+    scores : (N, p) per-sample score contributions.
+
+    Returns
+    -------
+    The number of lags to include (at least 1, at most N // 4).
+    """
+    n = scores.shape[0]
+    x, y = scores[:-1], scores[1:]
+    denominator = (x * x).sum(axis=0)
+    usable = denominator > 0
+    if n < 8 or not usable.any():
+        return 1
+    rho = np.clip((x * y).sum(axis=0)[usable] / denominator[usable], -0.99, 0.99)
+    sigma2 = ((y[:, usable] - rho * x[:, usable]) ** 2).mean(axis=0)  # AR(1) innovation variances
+    numerator = (4 * rho**2 * sigma2**2 / ((1 - rho) ** 6 * (1 + rho) ** 2)).sum()
+    scale = (sigma2**2 / (1 - rho) ** 4).sum()
+    alpha = numerator / scale if scale > 0 else 0.0
+    lags = int(np.ceil(1.1447 * (alpha * n) ** (1.0 / 3.0)))
+    return int(np.clip(lags, 1, max(n // 4, 1)))
+
+
+def hac_covariance(design: np.ndarray, scores: np.ndarray, lags: int | None = None) -> tuple[np.ndarray, int]:
+    """Sandwich covariance ``A^-1 S A^-1`` with a Bartlett-weighted long-run score covariance ``S``.
+
+    Parameters
+    ----------
+    design : (p, p) ``A = X^T W X`` of the weighted problem.
+    scores : (N, p) per-sample scores ``sum_i x_ti w_i r_ti`` (summed over the joints of sample t, which
+        also captures correlation between joints).
+    lags : lag truncation; chosen from the data when None.
+
+    Returns
+    -------
+    covariance : (p, p).
+    lags : the truncation used.
+    """
+    if lags is None:
+        lags = bartlett_bandwidth(scores)
+    centred = scores - scores.mean(axis=0)
+    long_run = centred.T @ centred
+    for lag in range(1, lags + 1):
+        gamma = centred[lag:].T @ centred[:-lag]
+        long_run += (1.0 - lag / (lags + 1.0)) * (gamma + gamma.T)
+    inverse = np.linalg.pinv(design)
+    covariance = inverse @ long_run @ inverse
+    return 0.5 * (covariance + covariance.T), lags

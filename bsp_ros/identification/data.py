@@ -1,0 +1,149 @@
+"""Identification input: joint angles, direction velocities and contact torques on common stamps."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bsp_ros.errors import DataError, InputError
+from bsp_ros.joint_angles import KinematicsConfig, kinematics_from_markers, resample_kinematics
+from bsp_ros.model import contact_torques_nm
+from bsp_ros.streams import Session, WrenchSeries
+
+
+@dataclass(frozen=True)
+class IdentificationData:
+    """Samples ready for identification, one row per usable wrench sample.
+
+    Attributes
+    ----------
+    t_ns : (N,) int64 stamps (ns).
+    q_rad : (N, n) joint angles (rad).
+    velocity_rad_s : (N, n) direction-of-motion velocities (rad/s).
+    tau_nm : (N, n) measured joint torques ``-J^T F_end`` (Nm).
+    lengths_m, lengths_std_m : (n,) segment lengths and their standard errors (m).
+    velocity_noise_rad_s : (n,) noise of the direction velocities (rad/s), NaN if unknown.
+    n_wrench_samples : wrench samples received, before any was removed.
+    warnings : what was removed and why.
+    """
+
+    t_ns: np.ndarray
+    q_rad: np.ndarray
+    velocity_rad_s: np.ndarray
+    tau_nm: np.ndarray
+    lengths_m: np.ndarray
+    lengths_std_m: np.ndarray
+    velocity_noise_rad_s: np.ndarray
+    n_wrench_samples: int = 0
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints (= segments)."""
+        return int(self.q_rad.shape[1])
+
+    def window(self, start: int, stop: int) -> IdentificationData:
+        """Rows ``start:stop`` (a sliding window for online use)."""
+        return IdentificationData(
+            self.t_ns[start:stop],
+            self.q_rad[start:stop],
+            self.velocity_rad_s[start:stop],
+            self.tau_nm[start:stop],
+            self.lengths_m,
+            self.lengths_std_m,
+            self.velocity_noise_rad_s,
+            stop - start,
+            list(self.warnings),
+        )
+
+
+def wrench_world_yzx(wrench: WrenchSeries, rotation_world_from_sensor: np.ndarray) -> np.ndarray:
+    """``[F_y, F_z, M_x]`` in ``world`` from a sensor-frame wrench.
+
+    Parameters
+    ----------
+    wrench : force (N) and moment (Nm) in the sensor frame, referenced at the contact point.
+    rotation_world_from_sensor : (3, 3), or (N, 3, 3) one per sample.
+
+    Returns
+    -------
+    (N, 3) ``[F_y (N), F_z (N), M_x (Nm)]``; the translation of the frame does not matter because the
+    wrench is already referenced at the contact point.
+    """
+    rotation = np.asarray(rotation_world_from_sensor, dtype=np.float64)
+    if rotation.shape == (3, 3):
+        force = wrench.force_n @ rotation.T
+        torque = wrench.torque_nm @ rotation.T
+    elif rotation.shape == (wrench.t_ns.size, 3, 3):
+        force = np.einsum("nij,nj->ni", rotation, wrench.force_n)
+        torque = np.einsum("nij,nj->ni", rotation, wrench.torque_nm)
+    else:
+        raise InputError(f"rotation_world_from_sensor must be (3, 3) or (N, 3, 3), got {rotation.shape}")
+    return np.column_stack((force[:, 1], force[:, 2], torque[:, 0]))
+
+
+def _clean_wrench(wrench: WrenchSeries) -> tuple[np.ndarray, list[str]]:
+    """Indices of usable wrench samples in time order: finite, unique stamps; say what was removed."""
+    t_ns = np.asarray(wrench.t_ns, dtype=np.int64)
+    values = np.column_stack((wrench.force_n, wrench.torque_nm))
+    notes = []
+    finite = np.isfinite(values).all(axis=1)
+    if not finite.all():
+        notes.append(f"wrench: {int((~finite).sum())} samples with NaN/Inf removed")
+    positive = t_ns > 0
+    if not positive.all():
+        notes.append(f"wrench: {int((~positive).sum())} samples with stamp <= 0 removed")
+    if (np.diff(t_ns) < 0).any():
+        notes.append(f"wrench: {int((np.diff(t_ns) < 0).sum())} stamps go backwards; samples re-ordered by stamp")
+    order = np.argsort(t_ns, kind="stable")
+    duplicate = np.concatenate(([False], np.diff(t_ns[order]) == 0))
+    if duplicate.any():
+        notes.append(f"wrench: {int(duplicate.sum())} duplicate stamps removed (first kept)")
+    keep = (finite & positive)[order] & ~duplicate
+    return order[keep], notes
+
+
+def identification_data_from_session(
+    session: Session, kinematics_config: KinematicsConfig | None = None
+) -> IdentificationData:
+    """Angles from the markers, resampled onto the wrench stamps, with the contact torques.
+
+    Raises
+    ------
+    DataError
+        No wrench sample coincides with valid marker angles.
+    """
+    n_wrench = int(np.asarray(session.wrench.t_ns).size)
+    if n_wrench == 0:
+        raise DataError("the session holds no wrench samples")
+    kinematics = kinematics_from_markers(session.markers, session.n_segments, kinematics_config)
+    rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
+    keep, notes = _clean_wrench(session.wrench)
+    if rotation.ndim == 3:
+        rotation = rotation[keep]
+    wrench = WrenchSeries(
+        session.wrench.t_ns[keep],
+        session.wrench.force_n[keep],
+        session.wrench.torque_nm[keep],
+        session.wrench.frame_id,
+    )
+    wrench_yzx = wrench_world_yzx(wrench, rotation)
+    q_rad, velocity, valid = resample_kinematics(kinematics, wrench.t_ns)
+    if not valid.any():
+        raise DataError("no wrench sample falls where the markers give joint angles (streams do not overlap)")
+    dropped = int((~valid).sum())
+    if dropped:
+        notes.append(f"{dropped} of {keep.size} wrench samples have no joint angles (marker gaps or edges)")
+    tau = contact_torques_nm(q_rad[valid], kinematics.lengths_m, wrench_yzx[valid])
+    return IdentificationData(
+        wrench.t_ns[valid],
+        q_rad[valid],
+        velocity[valid],
+        tau,
+        kinematics.lengths_m,
+        kinematics.lengths_std_m,
+        kinematics.direction_velocity_noise_rad_s,
+        n_wrench,
+        kinematics.warnings + notes,
+    )

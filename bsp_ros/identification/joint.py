@@ -1,0 +1,270 @@
+"""Our default identification: all joints in one weighted, bounded least-squares problem."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import lsq_linear
+from scipy.stats import chi2
+
+from bsp_ros.identification.covariance import hac_covariance
+from bsp_ros.identification.data import IdentificationData
+from bsp_ros.identification.passive import TERMS, PassiveModel
+from bsp_ros.identification.result import IdentificationResult, ParameterName
+from bsp_ros.model import gravity_regressor
+from bsp_ros.streams import joints_for, segments_for
+from bsp_ros.validation import check_finite_scalar, check_positive
+
+
+@dataclass(frozen=True)
+class JointConfig:
+    """Settings of the stacked identification.
+
+    Attributes
+    ----------
+    passive : the passive moment model (Coulomb by default).
+    deadband_fraction : rows of a joint whose direction speed is below this fraction of its typical speed
+        are left out of the fit: there the sign of the motion, hence the Coulomb term, is ambiguous.
+    deadband_noise_sd : and rows below this many standard deviations of the velocity noise.
+    min_samples : fewer usable samples make the estimate invalid.
+    min_range_deg : a joint moving less than this has no excitation (invalid).
+    min_direction_share : each direction of motion must hold this share of a joint's rows (Coulomb).
+    max_condition : a larger column-scaled condition number makes the estimate invalid.
+    check_elastic : test whether an elastic term the model lacks would change the static moments.
+    """
+
+    passive: PassiveModel = field(default_factory=PassiveModel)
+    deadband_fraction: float = 0.1
+    deadband_noise_sd: float = 4.0
+    min_samples: int = 200
+    min_range_deg: float = 0.2
+    min_direction_share: float = 0.05
+    max_condition: float = 1e4
+    check_elastic: bool = True
+
+    def __post_init__(self) -> None:
+        check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)
+        check_finite_scalar("deadband_noise_sd", self.deadband_noise_sd, 0.0, 100.0)
+        check_positive("min_samples", self.min_samples)
+        check_finite_scalar("min_range_deg", self.min_range_deg, 0.0, 90.0)
+        check_finite_scalar("min_direction_share", self.min_direction_share, 0.0, 0.5)
+        check_positive("max_condition", self.max_condition)
+
+
+@dataclass(frozen=True)
+class _Problem:
+    names: list[ParameterName]
+    regressor: np.ndarray  # (N, n, p)
+    torque: np.ndarray  # (N, n)
+    rows: np.ndarray  # (N, n) bool: row used
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Fit:
+    values: np.ndarray
+    covariance: np.ndarray
+    residual: np.ndarray  # (N, n), NaN off the used rows
+    sigma: np.ndarray  # (n,)
+    condition: float
+    lags: int
+
+
+def _build_problem(data: IdentificationData, passive: PassiveModel, rows: np.ndarray) -> _Problem:
+    n = data.n_joints
+    joints, segments = joints_for(n), segments_for(n)
+    k = len(passive.terms)
+    regressor = np.zeros((data.t_ns.size, n, n + n * k))
+    regressor[:, :, :n] = gravity_regressor(data.q_rad)
+    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments]
+    lower = [0.0] * n
+    for j, joint in enumerate(joints):
+        regressor[:, j, n + j * k : n + (j + 1) * k] = passive.columns(data.q_rad, data.velocity_rad_s, j)
+        for term in passive.terms:
+            key, _, bound = TERMS[term]
+            names.append((key, joint))
+            lower.append(bound)
+    return _Problem(names, regressor, data.tau_nm, rows, np.array(lower), np.full(len(names), np.inf))
+
+
+def _weighted_solve(problem: _Problem, weights: np.ndarray) -> np.ndarray:
+    root = np.sqrt(weights)[None, :, None]
+    a = (problem.regressor * root)[problem.rows]
+    b = (problem.torque * root[..., 0])[problem.rows]
+    # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
+    scale = np.linalg.norm(a, axis=0)
+    scale[scale == 0] = 1.0
+    solution = lsq_linear(a / scale, b, bounds=(problem.lower * scale, problem.upper * scale), method="bvls", tol=1e-12)
+    return np.asarray(solution.x / scale)
+
+
+def _fit(problem: _Problem) -> _Fit:
+    n = problem.torque.shape[1]
+    weights = np.ones(n)
+    values = _weighted_solve(problem, weights)
+    for _ in range(2):  # reweight by per-joint residual variance (Gautier and Poignet 2001)
+        residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+        counts = problem.rows.sum(axis=0)
+        sigma = np.sqrt(np.where(problem.rows, residual**2, 0.0).sum(axis=0) / np.maximum(counts, 1))
+        sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(problem.torque).max()), 1e-9))
+        weights = 1.0 / sigma**2
+        values = _weighted_solve(problem, weights)
+    residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+    w = np.where(problem.rows, weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    scores = np.einsum("tip,ti->tp", problem.regressor, w * np.where(problem.rows, residual, 0.0))
+    used_samples = problem.rows.any(axis=1)
+    covariance, lags = hac_covariance(design, scores[used_samples])
+    a = (problem.regressor * np.sqrt(weights)[None, :, None])[problem.rows]
+    norms = np.linalg.norm(a, axis=0)
+    singular = np.linalg.svd(a / np.where(norms > 0, norms, 1.0), compute_uv=False)
+    condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+    return _Fit(values, covariance, np.where(problem.rows, residual, np.nan), sigma, condition, lags)
+
+
+def _motion_rows(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
+    """Rows with a trustworthy direction of motion (all rows when the model has no Coulomb term)."""
+    speed = np.abs(data.velocity_rad_s)
+    if "coulomb" not in config.passive.terms:
+        return np.ones_like(speed, dtype=bool), []
+    typical = np.percentile(speed, 95, axis=0)
+    noise = np.nan_to_num(data.velocity_noise_rad_s, nan=0.0)
+    deadband = np.maximum(config.deadband_fraction * typical, config.deadband_noise_sd * noise)
+    notes = []
+    for j, joint in enumerate(joints_for(data.n_joints)):
+        if noise[j] > 0 and config.deadband_noise_sd * noise[j] > 0.5 * typical[j]:
+            notes.append(
+                f"uncertain direction of motion at the {joint}: velocity noise {noise[j]:.2g} rad/s against "
+                f"a typical speed of {typical[j]:.2g} rad/s"
+            )
+    return speed > deadband[None, :], notes
+
+
+def _excitation_problems(data: IdentificationData, rows: np.ndarray, config: JointConfig) -> list[str]:
+    problems = []
+    if data.t_ns.size < config.min_samples:
+        problems.append(f"too few samples: {data.t_ns.size} < {config.min_samples}")
+        return problems
+    range_deg = np.degrees(np.ptp(data.q_rad, axis=0))
+    for j, joint in enumerate(joints_for(data.n_joints)):
+        if range_deg[j] < config.min_range_deg:
+            problems.append(f"no motion at the {joint}: range {range_deg[j]:.3f} deg < {config.min_range_deg} deg")
+        elif "coulomb" in config.passive.terms:
+            signs = np.sign(data.velocity_rad_s[rows[:, j], j])
+            share = min((signs > 0).mean(), (signs < 0).mean()) if signs.size else 0.0
+            if share < config.min_direction_share:
+                problems.append(f"the {joint} moved in one direction only ({100 * share:.1f}% of rows the other way)")
+    return problems
+
+
+def _elastic_check(
+    data: IdentificationData, config: JointConfig, rows: np.ndarray, base: _Fit, names: list[ParameterName]
+) -> list[str]:
+    """Warn when an elastic term the model lacks is supported by the data and moves the static moments."""
+    missing = [t for t in ("offset", "stiffness") if t not in config.passive.terms]
+    if not missing:
+        return []
+    wider = PassiveModel(config.passive.terms + tuple(missing))
+    problem = _build_problem(data, wider, rows)
+    fit = _fit(problem)
+    n = data.n_joints
+    notes = []
+    base_beta, wide_beta = base.values[:n], fit.values[:n]
+    change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
+    correlation = fit.covariance / np.sqrt(np.outer(np.diag(fit.covariance), np.diag(fit.covariance)) + 1e-300)
+    for j, joint in enumerate(joints_for(n)):
+        picks = [
+            i
+            for i, (key, owner) in enumerate(problem.names)
+            if owner == joint and key in ("offset_nm", "stiffness_nm_per_rad")
+        ]
+        sub = fit.covariance[np.ix_(picks, picks)]
+        theta = fit.values[picks]
+        try:
+            statistic = float(theta @ np.linalg.solve(sub, theta))
+        except np.linalg.LinAlgError:
+            continue
+        if chi2.sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005:
+            worst = int(np.argmax(change))
+            corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
+            notes.append(
+                f"elastic passive moment at the {joint}: an angle-dependent term is supported by the data "
+                f"(chi2 {statistic:.0f}) and is confounded with gravity (|corr| {corr:.2f}); modelling it moves "
+                f"the {problem.names[worst][1]} static moment by {100 * change[worst]:.1f}%: the static moments "
+                f"may be biased (try --passive {wider.label})"
+            )
+    return notes
+
+
+def identify_joint(data: IdentificationData, config: JointConfig | None = None) -> IdentificationResult:
+    """Identify static moments and passive moments of all joints in one stacked problem.
+
+    Parameters
+    ----------
+    data : samples with joint angles, direction velocities and measured torques.
+    config : passive model and validity thresholds.
+
+    Returns
+    -------
+    IdentificationResult with a HAC covariance; ``valid`` False with a message when excitation is poor.
+    """
+    config = config or JointConfig()
+    n = data.n_joints
+    rows, notes = _motion_rows(data, config)
+    problems = _excitation_problems(data, rows, config)
+    problem = _build_problem(data, config.passive, rows)
+    if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
+        problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
+        p = len(problem.names)
+        return IdentificationResult(
+            "joint",
+            problem.names,
+            np.full(p, np.nan),
+            np.full((p, p), np.nan),
+            False,
+            "; ".join(problems),
+            notes + list(data.warnings),
+            n_samples=int(data.t_ns.size),
+        )
+    fit = _fit(problem)
+    warnings = list(data.warnings) + notes
+    if fit.condition > config.max_condition:
+        problems.append(f"poor excitation: condition number {fit.condition:.3g} > {config.max_condition:g}")
+    correlation = fit.covariance / np.sqrt(np.outer(np.diag(fit.covariance), np.diag(fit.covariance)) + 1e-300)
+    max_corr_with_gravity = {}
+    for i, (key, owner) in enumerate(problem.names):
+        if i >= n:
+            corr = float(np.max(np.abs(correlation[i, :n])))
+            max_corr_with_gravity[f"{key}/{owner}"] = corr
+            if corr > 0.95:
+                warnings.append(f"confounded: {key} at the {owner} is correlated with gravity (|corr| {corr:.3f})")
+        std = np.sqrt(max(fit.covariance[i, i], 0.0))
+        if np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12 and std > 0:
+            warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
+        if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
+            warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
+    if config.check_elastic and not problems:
+        warnings += _elastic_check(data, config, rows, fit, problem.names)
+    valid = not problems and bool(np.isfinite(fit.values).all())
+    message = "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples"
+    residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints_for(n))}
+    return IdentificationResult(
+        "joint",
+        problem.names,
+        fit.values,
+        fit.covariance,
+        valid,
+        message,
+        warnings,
+        fit.condition,
+        residual_rms,
+        int(data.t_ns.size),
+        {
+            "hac_lags": fit.lags,
+            "max_corr_with_gravity": max_corr_with_gravity,
+            "passive_model": config.passive.label,
+            "rows_used": {j: int(c) for j, c in zip(joints_for(n), rows.sum(axis=0), strict=True)},
+        },
+    )

@@ -1,0 +1,71 @@
+"""The result of an identification: values, covariance, validity and diagnostics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# A parameter is named by (quantity key, segment or joint name), e.g. ("static_moment_kgm", "forearm")
+# or ("coulomb_nm", "elbow"): the same keys as the estimate JSON of CONTRACT.md.
+ParameterName = tuple[str, str]
+
+
+@dataclass
+class IdentificationResult:
+    """What an identification found, and how far to trust it.
+
+    Attributes
+    ----------
+    method : ``"joint"`` (ours) or ``"paper"`` (the method paper's sequential procedure).
+    names : (p,) parameter names.
+    values : (p,) estimates (SI units of each key).
+    covariance : (p, p) covariance of the estimates.
+    valid : False when the data cannot support the estimate (poor excitation, too few samples, ...).
+    message : why not valid, or a one-line summary.
+    warnings : plain-language notes (confounding, bounds, removed samples).
+    condition_number : of the column-scaled weighted regressor.
+    residual_rms_nm : joint -> RMS of the torque residual (Nm).
+    n_samples : samples (time instants) used.
+    diagnostics : further figures (per-parameter max correlation with gravity terms, HAC lags, ...).
+    """
+
+    method: str
+    names: list[ParameterName]
+    values: np.ndarray
+    covariance: np.ndarray
+    valid: bool
+    message: str
+    warnings: list[str] = field(default_factory=list)
+    condition_number: float = float("nan")
+    residual_rms_nm: dict[str, float] = field(default_factory=dict)
+    n_samples: int = 0
+    diagnostics: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def std(self) -> np.ndarray:
+        """(p,) one standard deviation of each estimate."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    @property
+    def weak(self) -> bool:
+        """Valid, but with a warning that qualifies it (confounding, large uncertainty)."""
+        return self.valid and any(w.startswith(("confounded", "uncertain", "elastic")) for w in self.warnings)
+
+    def index(self, quantity: str, owner: str) -> int:
+        """Position of a parameter in ``names``."""
+        return self.names.index((quantity, owner))
+
+    def value(self, quantity: str, owner: str) -> float:
+        """Estimate of one parameter."""
+        return float(self.values[self.index(quantity, owner)])
+
+    def std_of(self, quantity: str, owner: str) -> float:
+        """One standard deviation of one parameter."""
+        return float(self.std[self.index(quantity, owner)])
+
+    def block(self, quantity: str) -> tuple[list[str], np.ndarray, np.ndarray]:
+        """Owners, values (k,) and covariance (k, k) of every parameter of one quantity."""
+        picks = [i for i, (key, _) in enumerate(self.names) if key == quantity]
+        owners = [self.names[i][1] for i in picks]
+        return owners, self.values[picks], self.covariance[np.ix_(picks, picks)]

@@ -1,0 +1,317 @@
+"""Joint angles, segment lengths and direction-of-motion velocities from motion-capture markers."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+from scipy import signal
+
+from bsp_ros.errors import DataError, InputError
+from bsp_ros.streams import MarkerSeries, markers_for
+from bsp_ros.validation import check_finite_scalar, check_positive
+
+
+@dataclass(frozen=True)
+class KinematicsConfig:
+    """How marker trajectories become joint angles.
+
+    Attributes
+    ----------
+    cutoff_hz : zero-phase low-pass cutoff for the angles (the method paper's 5 Hz).
+    direction_cutoff_hz : far lower cutoff for the velocity whose sign gives the direction of motion;
+        at 0.03 rad/s a 5 Hz-filtered derivative is as noisy as the signal (NOTES.md 1).
+    max_gap_s : marker gaps up to this long are bridged by interpolation; longer ones remove samples.
+    min_run_s : stretches of valid frames shorter than this are dropped (the filters need a run-in).
+    """
+
+    cutoff_hz: float = 5.0
+    direction_cutoff_hz: float = 0.5
+    max_gap_s: float = 0.1
+    min_run_s: float = 2.0
+
+    def __post_init__(self) -> None:
+        check_positive("cutoff_hz", self.cutoff_hz, 1000.0)
+        check_positive("direction_cutoff_hz", self.direction_cutoff_hz, self.cutoff_hz)
+        check_finite_scalar("max_gap_s", self.max_gap_s, 0.0, 10.0)
+        check_finite_scalar("min_run_s", self.min_run_s, 0.0, 600.0)
+
+
+@dataclass(frozen=True)
+class MarkerKinematics:
+    """Joint angles on a uniform marker-rate grid.
+
+    Attributes
+    ----------
+    t_ns : (M,) int64 grid stamps (ns).
+    q_rad : (M, n) low-pass filtered joint angles (rad); NaN where not valid.
+    direction_velocity_rad_s : (M, n) heavily smoothed joint velocities (rad/s); NaN where not valid.
+    lengths_m : (n,) segment lengths (m), medians over the session of the sagittal marker distances.
+    lengths_std_m : (n,) standard errors of those lengths (m).
+    n_frames_bridged : frames filled across short gaps, per marker.
+    n_frames_invalid : grid frames without valid angles (long gaps, short runs, edges).
+    direction_velocity_noise_rad_s : (n,) standard deviation of the marker noise in the direction
+        velocities (rad/s), propagated from the angle noise through the filter.
+    warnings : plain-language notes on data quality.
+    """
+
+    t_ns: np.ndarray
+    q_rad: np.ndarray
+    direction_velocity_rad_s: np.ndarray
+    lengths_m: np.ndarray
+    lengths_std_m: np.ndarray
+    n_frames_bridged: dict[str, int]
+    n_frames_invalid: int
+    direction_velocity_noise_rad_s: np.ndarray
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def rate_hz(self) -> float:
+        """Grid rate (Hz)."""
+        return 1e9 / float(self.t_ns[1] - self.t_ns[0])
+
+
+def sagittal_from_world(position_m: npt.ArrayLike) -> np.ndarray:
+    """Project world positions onto the sagittal plane: (..., 3) ``[x, y, z]`` -> (..., 2) ``[y, z]``."""
+    return np.asarray(position_m, dtype=np.float64)[..., 1:3]
+
+
+def joint_angles_from_positions(points_yz: npt.ArrayLike) -> np.ndarray:
+    """Joint angles of a planar chain from its joint and contact-point positions.
+
+    Parameters
+    ----------
+    points_yz : (N, n + 1, 2) sagittal positions of shoulder, distal joints and contact point (m).
+
+    Returns
+    -------
+    (N, n) ``q1`` absolute from +y, the others relative to the previous segment, in (-pi, pi] (rad).
+    """
+    points = np.asarray(points_yz, dtype=np.float64)
+    step = np.diff(points, axis=1)
+    phi = np.arctan2(step[..., 1], step[..., 0])
+    relative = np.diff(phi, axis=1)
+    relative = np.angle(np.exp(1j * relative))  # wrap to (-pi, pi]
+    return np.concatenate((phi[:, :1], relative), axis=1)
+
+
+def _clean_marker(name: str, series: MarkerSeries) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Sort by stamp, drop duplicate stamps and non-finite positions; say how many."""
+    t_ns = np.asarray(series.t_ns, dtype=np.int64)
+    position = np.asarray(series.position_m, dtype=np.float64)
+    if position.ndim != 2 or position.shape[1] != 3 or position.shape[0] != t_ns.shape[0]:
+        raise InputError(f"marker {name!r}: positions of shape {position.shape} do not match {t_ns.shape[0]} stamps")
+    notes = []
+    finite = np.isfinite(position).all(axis=1)
+    if not finite.all():
+        notes.append(f"marker {name}: {int((~finite).sum())} frames with non-finite positions removed")
+    order = np.argsort(t_ns, kind="stable")
+    if (np.diff(t_ns) < 0).any():
+        notes.append(f"marker {name}: stamps out of order, sorted")
+    t_sorted, keep_sorted = t_ns[order], finite[order]
+    duplicate = np.concatenate(([False], np.diff(t_sorted) == 0))
+    if duplicate.any():
+        notes.append(f"marker {name}: {int(duplicate.sum())} duplicate stamps removed (first kept)")
+    keep = keep_sorted & ~duplicate
+    return t_sorted[keep], position[order][keep], notes
+
+
+def _grid_values(grid_ns: np.ndarray, t_ns: np.ndarray, values: np.ndarray, max_gap_ns: int) -> tuple[np.ndarray, int]:
+    """Interpolate samples onto the grid; NaN inside gaps longer than ``max_gap_ns`` and outside the data."""
+    out = np.full((grid_ns.size, values.shape[1]), np.nan)
+    if t_ns.size < 2:
+        return out, 0
+    after = np.searchsorted(t_ns, grid_ns, side="left")
+    inside = (after > 0) & (after < t_ns.size)
+    exact = (after < t_ns.size) & (t_ns[np.minimum(after, t_ns.size - 1)] == grid_ns)
+    gap = np.zeros(grid_ns.size, dtype=np.int64)
+    gap[inside] = t_ns[after[inside]] - t_ns[after[inside] - 1]
+    usable = exact | (inside & (gap <= max_gap_ns))
+    # Time relative to the first sample keeps float64 interpolation exact to the nanosecond.
+    t_rel = (t_ns - t_ns[0]).astype(np.float64)
+    g_rel = (grid_ns - t_ns[0]).astype(np.float64)
+    for axis in range(values.shape[1]):
+        out[usable, axis] = np.interp(g_rel[usable], t_rel, values[:, axis])
+    nominal = np.median(np.diff(t_ns)) if t_ns.size > 1 else 0
+    bridged = int((usable & ~exact & (gap > 1.5 * nominal)).sum())
+    return out, bridged
+
+
+def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open index ranges of consecutive True values."""
+    padded = np.concatenate(([False], valid, [False])).astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+def _zero_phase_lowpass(values: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.ndarray:
+    """Butterworth low-pass run forwards and backwards (no phase lag), padded by odd extension.
+
+    The pad is about three time constants long so that slopes at the run's ends are kept, which a short
+    default pad does not do at 0.5 Hz.
+    """
+    nyquist = rate_hz / 2.0
+    if cutoff_hz >= nyquist:
+        return values.copy()
+    sos = signal.butter(order, cutoff_hz, fs=rate_hz, output="sos")
+    padlen = min(values.shape[0] - 1, int(3.0 * rate_hz / cutoff_hz))
+    return signal.sosfiltfilt(sos, values, axis=0, padtype="odd", padlen=padlen)
+
+
+def _segment_lengths(
+    cleaned: dict[str, tuple[np.ndarray, np.ndarray]], names: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Median sagittal distance between consecutive markers over frames where both were seen."""
+    lengths, stds = [], []
+    for proximal, distal in zip(names[:-1], names[1:], strict=True):
+        t_a, p_a = cleaned[proximal]
+        t_b, p_b = cleaned[distal]
+        common, i_a, i_b = np.intersect1d(t_a, t_b, assume_unique=True, return_indices=True)
+        if common.size < 3:
+            raise DataError(f"markers {proximal} and {distal} are never seen together: no segment length")
+        distance = np.linalg.norm(sagittal_from_world(p_b[i_b]) - sagittal_from_world(p_a[i_a]), axis=1)
+        median = float(np.median(distance))
+        robust_sd = 1.4826 * float(np.median(np.abs(distance - median)))
+        lengths.append(median)
+        # Standard error of a median: sqrt(pi/2) times that of a mean.
+        stds.append(1.2533 * robust_sd / np.sqrt(distance.size))
+    return np.array(lengths), np.array(stds)
+
+
+def _direction_velocity_noise(
+    raw_q: np.ndarray, filtered_q: np.ndarray, config: KinematicsConfig, rate_hz: float
+) -> np.ndarray:
+    """Noise (1 sd, rad/s) of the direction velocity, from the angle noise seen above the angle cutoff.
+
+    The raw-minus-filtered angle holds the white marker noise above ``cutoff_hz`` only, so its variance is
+    scaled up by the share of the band it covers; the filter-and-differentiate chain is linear, so its
+    noise gain is the norm of its impulse response.
+    """
+    high = raw_q - filtered_q
+    high = high[np.isfinite(high).all(axis=1)]
+    if high.shape[0] < 10:
+        return np.full(raw_q.shape[1], np.nan)
+    band_share = max(1.0 - 2.0 * config.cutoff_hz / rate_hz, 0.05)
+    angle_sd = high.std(axis=0) / np.sqrt(band_share)
+    length = int(20.0 * rate_hz / config.direction_cutoff_hz) | 1
+    impulse = np.zeros((length, 1))
+    impulse[length // 2] = 1.0
+    response = np.gradient(_zero_phase_lowpass(impulse, config.direction_cutoff_hz, rate_hz, 2), 1.0 / rate_hz, axis=0)
+    return np.asarray(angle_sd * float(np.linalg.norm(response)))
+
+
+def kinematics_from_markers(
+    markers: dict[str, MarkerSeries], n_segments: int, config: KinematicsConfig | None = None
+) -> MarkerKinematics:
+    """Joint angles, direction velocities and segment lengths from marker trajectories.
+
+    Parameters
+    ----------
+    markers : marker name -> series in ``world`` (m); names per CONTRACT.md (``wrist`` only for 3 segments).
+    n_segments : 2 or 3.
+    config : filter and gap settings.
+
+    Returns
+    -------
+    MarkerKinematics on a uniform grid at the marker rate.
+
+    Raises
+    ------
+    DataError
+        A marker is missing or too sparse to give any angle.
+    """
+    config = config or KinematicsConfig()
+    if n_segments not in (2, 3):
+        raise InputError(f"n_segments must be 2 or 3, got {n_segments!r}")
+    names = markers_for(n_segments)
+    missing = [name for name in names if name not in markers]
+    if missing:
+        raise DataError(f"missing marker(s) {missing}: a {n_segments}-segment chain needs {list(names)}")
+    warnings: list[str] = []
+    cleaned = {}
+    for name in names:
+        t_ns, position, notes = _clean_marker(name, markers[name])
+        warnings += notes
+        if t_ns.size < 10:
+            raise DataError(f"marker {name!r} has {t_ns.size} usable frames; at least 10 are needed")
+        cleaned[name] = (t_ns, position)
+    lengths_m, lengths_std_m = _segment_lengths(cleaned, names)
+
+    step_ns = int(round(float(np.median(np.concatenate([np.diff(t) for t, _ in cleaned.values()])))))
+    start_ns = min(int(t[0]) for t, _ in cleaned.values())
+    stop_ns = max(int(t[-1]) for t, _ in cleaned.values())
+    grid_ns = start_ns + step_ns * np.arange((stop_ns - start_ns) // step_ns + 1, dtype=np.int64)
+    max_gap_ns = int(config.max_gap_s * 1e9) + step_ns // 2
+
+    points = np.empty((grid_ns.size, len(names), 2))
+    bridged = {}
+    for k, name in enumerate(names):
+        t_ns, position = cleaned[name]
+        gridded, bridged[name] = _grid_values(grid_ns, t_ns, sagittal_from_world(position), max_gap_ns)
+        points[:, k] = gridded
+    raw_q = joint_angles_from_positions(points)
+    valid = np.isfinite(raw_q).all(axis=1)
+
+    rate_hz = 1e9 / step_ns
+    if config.cutoff_hz >= rate_hz / 2:
+        warnings.append(
+            f"angle cutoff {config.cutoff_hz} Hz is above the marker Nyquist {rate_hz / 2:g} Hz: not filtered"
+        )
+    q_rad = np.full_like(raw_q, np.nan)
+    velocity = np.full_like(raw_q, np.nan)
+    min_frames = max(int(config.min_run_s * rate_hz), 16)
+    for begin, end in _valid_runs(valid):
+        if end - begin < min_frames:
+            continue
+        run = np.unwrap(raw_q[begin:end], axis=0)
+        q_rad[begin:end] = _zero_phase_lowpass(run, config.cutoff_hz, rate_hz, order=4)
+        slow = _zero_phase_lowpass(run, config.direction_cutoff_hz, rate_hz, order=2)
+        velocity[begin:end] = np.gradient(slow, 1.0 / rate_hz, axis=0)
+    noise = _direction_velocity_noise(raw_q, q_rad, config, rate_hz)
+    n_invalid = int((~np.isfinite(q_rad).all(axis=1)).sum())
+    if n_invalid:
+        warnings.append(
+            f"{n_invalid} of {grid_ns.size} marker frames give no angle (gaps over {config.max_gap_s} s or short runs)"
+        )
+    if not np.isfinite(q_rad).any():
+        raise DataError("no stretch of marker data is long enough to give joint angles")
+    return MarkerKinematics(grid_ns, q_rad, velocity, lengths_m, lengths_std_m, bridged, n_invalid, noise, warnings)
+
+
+def resample_kinematics(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Interpolate angles and direction velocities onto other stamps (the wrench's).
+
+    Parameters
+    ----------
+    kinematics : angles on the marker grid.
+    t_ns : (N,) int64 target stamps.
+
+    Returns
+    -------
+    q_rad : (N, n) angles (rad), NaN where invalid.
+    velocity_rad_s : (N, n) direction velocities (rad/s), NaN where invalid.
+    valid : (N,) bool, True where both neighbouring grid frames are valid.
+    """
+    target = np.asarray(t_ns, dtype=np.int64)
+    grid = kinematics.t_ns
+    step = float(grid[1] - grid[0]) if grid.size > 1 else 1.0
+    position = (target - grid[0]).astype(np.float64) / step
+    lower = np.floor(position).astype(np.int64)
+    inside = (lower >= 0) & (lower < grid.size - 1)
+    lower_c = np.clip(lower, 0, max(grid.size - 2, 0))
+    frac = (position - lower_c)[:, None]
+    exact_last = position == grid.size - 1
+    lower_c = np.where(exact_last, grid.size - 2, lower_c)
+    frac = np.where(exact_last[:, None], 1.0, frac)
+    inside |= exact_last
+
+    def blend(values: np.ndarray) -> np.ndarray:
+        return (1.0 - frac) * values[lower_c] + frac * values[lower_c + 1]
+
+    q_rad = blend(kinematics.q_rad)
+    velocity = blend(kinematics.direction_velocity_rad_s)
+    valid = inside & np.isfinite(q_rad).all(axis=1) & np.isfinite(velocity).all(axis=1)
+    q_rad[~valid] = np.nan
+    velocity[~valid] = np.nan
+    return q_rad, velocity, valid

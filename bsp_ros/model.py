@@ -1,0 +1,140 @@
+"""The planar arm chain of CONTRACT.md: kinematics, contact-point Jacobian and gravity regressor."""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from bsp_ros.errors import InputError
+from bsp_ros.validation import check_finite_array
+
+GRAVITY_M_S2 = 9.81
+
+
+def check_lengths_m(lengths_m: npt.ArrayLike) -> np.ndarray:
+    """Return segment lengths (m) of a 2- or 3-segment chain if each is within (0.01, 1.0] m."""
+    lengths = check_finite_array("segment lengths (m)", lengths_m, (None,))
+    if lengths.size not in (2, 3):
+        raise InputError(f"a chain has 2 or 3 segments, got {lengths.size} lengths {lengths.tolist()}")
+    if ((lengths <= 0.01) | (lengths > 1.0)).any():
+        raise InputError(f"segment lengths must be within (0.01, 1.0] m, got {lengths.tolist()}")
+    return lengths
+
+
+def absolute_angles_rad(q_rad: npt.ArrayLike) -> np.ndarray:
+    """Absolute segment angles from the horizontal +y axis.
+
+    Parameters
+    ----------
+    q_rad : (N, n) joint angles q1..qn (rad); q1 is absolute, the rest relative.
+
+    Returns
+    -------
+    (N, n) ``phi_j = q_1 + ... + q_j`` (rad).
+    """
+    return np.cumsum(np.atleast_2d(np.asarray(q_rad, dtype=np.float64)), axis=1)
+
+
+def joint_positions_m(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> np.ndarray:
+    """Sagittal positions of the shoulder, the distal joints and the contact point.
+
+    Parameters
+    ----------
+    q_rad : (N, n) joint angles (rad).
+    lengths_m : (n,) segment lengths (m).
+
+    Returns
+    -------
+    (N, n + 1, 2) positions ``[y, z]`` (m) relative to the shoulder; the last point is the contact point.
+    """
+    phi = absolute_angles_rad(q_rad)
+    steps = np.asarray(lengths_m, dtype=np.float64)[None, :, None] * np.stack((np.cos(phi), np.sin(phi)), axis=-1)
+    origin = np.zeros((phi.shape[0], 1, 2))
+    return np.concatenate((origin, np.cumsum(steps, axis=1)), axis=1)
+
+
+def contact_jacobian(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> np.ndarray:
+    """Planar Jacobian of the contact point.
+
+    Parameters
+    ----------
+    q_rad : (N, n) joint angles (rad).
+    lengths_m : (n,) segment lengths (m).
+
+    Returns
+    -------
+    (N, 3, n): rows d(y, z, phi)/dq, with phi = q1 + ... + qn the orientation of the last segment.
+    """
+    phi = absolute_angles_rad(q_rad)
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    # d p / d q_i sums the distal segments k >= i: a reversed cumulative sum.
+    dy = np.cumsum((-lengths * np.sin(phi))[:, ::-1], axis=1)[:, ::-1]
+    dz = np.cumsum((lengths * np.cos(phi))[:, ::-1], axis=1)[:, ::-1]
+    return np.stack((dy, dz, np.ones_like(phi)), axis=1)
+
+
+def contact_torques_nm(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike, wrench_yzx: npt.ArrayLike) -> np.ndarray:
+    """Joint torques that balance the contact wrench: ``-J(q)^T F_end`` (Eq. 3 right-hand side).
+
+    Parameters
+    ----------
+    q_rad : (N, n) joint angles (rad).
+    lengths_m : (n,) segment lengths (m).
+    wrench_yzx : (N, 3) ``[F_y (N), F_z (N), M_x (Nm)]`` the hand exerts on the sensor, in ``world``.
+
+    Returns
+    -------
+    (N, n) torques (Nm); equal to ``tau_G + tau_p`` in quasi-static equilibrium.
+    """
+    jacobian = contact_jacobian(q_rad, lengths_m)
+    wrench = np.atleast_2d(np.asarray(wrench_yzx, dtype=np.float64))
+    return -np.einsum("nki,nk->ni", jacobian, wrench)
+
+
+def gravity_regressor(q_rad: npt.ArrayLike) -> np.ndarray:
+    """Regressor of gravity torques in the grouped static moments ``beta`` (CONTRACT.md).
+
+    Parameters
+    ----------
+    q_rad : (N, n) joint angles (rad).
+
+    Returns
+    -------
+    (N, n, n) ``Y`` with ``tau_G[:, i] = Y[:, i, :] @ beta``: ``Y[:, i, j] = g cos(phi_j)`` for j >= i, else 0.
+    """
+    cos_phi = GRAVITY_M_S2 * np.cos(absolute_angles_rad(q_rad))
+    n = cos_phi.shape[1]
+    upper = np.triu(np.ones((n, n)))
+    return cos_phi[:, None, :] * upper[None, :, :]
+
+
+def static_moments_kgm(lengths_m: npt.ArrayLike, masses_kg: npt.ArrayLike, com_m: npt.ArrayLike) -> np.ndarray:
+    """Grouped static moments from masses and centres of mass (CONTRACT.md).
+
+    ``beta_j = m_j l_j + a_j * sum_{k > j} m_k`` (kg m): the first moment about joint j of segment j and
+    everything distal to it, with the distal mass lumped at the next joint.
+
+    Parameters
+    ----------
+    lengths_m, masses_kg, com_m : (n,) segment lengths, masses and COM distances from the proximal joint.
+
+    Returns
+    -------
+    (n,) static moments (kg m).
+    """
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    masses = np.asarray(masses_kg, dtype=np.float64)
+    com = np.asarray(com_m, dtype=np.float64)
+    distal_mass = np.concatenate((np.cumsum(masses[::-1])[::-1][1:], [0.0]))
+    return masses * com + lengths * distal_mass
+
+
+def static_moments_jacobian(lengths_m: npt.ArrayLike, masses_kg: npt.ArrayLike, com_m: npt.ArrayLike) -> np.ndarray:
+    """Derivative of :func:`static_moments_kgm` w.r.t. ``[m_1..m_n, l_1..l_n]``: shape (n, 2n)."""
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    masses = np.asarray(masses_kg, dtype=np.float64)
+    com = np.asarray(com_m, dtype=np.float64)
+    n = lengths.size
+    d_mass = np.diag(com) + np.triu(np.ones((n, n)), k=1) * lengths[:, None]
+    d_com = np.diag(masses)
+    return np.hstack((d_mass, d_com))
