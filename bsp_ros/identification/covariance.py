@@ -31,6 +31,33 @@ def bartlett_bandwidth(scores: np.ndarray) -> int:
     return int(np.clip(lags, 1, max(n // 4, 1)))
 
 
+def correlation_length(scores: np.ndarray, max_lag: int = 500) -> int:
+    """First lag at which every score component's autocorrelation falls inside its noise band ``2/sqrt(N)``.
+
+    Parameters
+    ----------
+    scores : (N, p) per-sample score contributions.
+    max_lag : longest lag examined.
+
+    Returns
+    -------
+    The lag (at least 1).
+    """
+    n = scores.shape[0]
+    centred = scores - scores.mean(axis=0)
+    variance = (centred**2).sum(axis=0)
+    usable = variance > 0
+    if n < 8 or not usable.any():
+        return 1
+    centred = centred[:, usable] / np.sqrt(variance[usable])
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    spectrum = np.fft.rfft(centred, size, axis=0)
+    acf = np.fft.irfft(np.abs(spectrum) ** 2, size, axis=0)[: min(max_lag, n // 4) + 1]
+    inside = (np.abs(acf) < 2.0 / np.sqrt(n)).all(axis=1)
+    hits = np.flatnonzero(inside[1:])
+    return int(hits[0] + 1) if hits.size else int(min(max_lag, n // 4))
+
+
 def hac_covariance(design: np.ndarray, scores: np.ndarray, lags: int | None = None) -> tuple[np.ndarray, int]:
     """Sandwich covariance ``A^-1 S A^-1`` with a Bartlett-weighted long-run score covariance ``S``.
 
@@ -47,7 +74,10 @@ def hac_covariance(design: np.ndarray, scores: np.ndarray, lags: int | None = No
     lags : the truncation used.
     """
     if lags is None:
-        lags = bartlett_bandwidth(scores)
+        # The AR(1) plug-in rule under-covers the smooth, filtered marker errors; twice the observed
+        # correlation length keeps the Bartlett weights near 1 where the correlation really is.
+        lags = max(bartlett_bandwidth(scores), 2 * correlation_length(scores))
+        lags = min(lags, max(scores.shape[0] // 4, 1))
     centred = scores - scores.mean(axis=0)
     long_run = centred.T @ centred
     for lag in range(1, lags + 1):
