@@ -201,6 +201,71 @@ def _direction_velocity_noise(
     return np.asarray(angle_sd * float(np.linalg.norm(response)))
 
 
+def _filtered_runs(
+    raw_q: np.ndarray, rate_hz: float, config: KinematicsConfig, angle_filter: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """Zero-phase filtered angles and direction velocities over each long-enough run of valid frames.
+
+    Returns angles, velocities (NaN outside usable runs), the direction-velocity noise (n,), and notes.
+
+    Raises
+    ------
+    DataError
+        No run is long enough.
+    """
+    notes = []
+    if angle_filter and config.cutoff_hz >= rate_hz / 2:
+        notes.append(f"angle cutoff {config.cutoff_hz} Hz is above the Nyquist {rate_hz / 2:g} Hz: not filtered")
+    valid = np.isfinite(raw_q).all(axis=1)
+    q_rad = np.full_like(raw_q, np.nan)
+    velocity = np.full_like(raw_q, np.nan)
+    min_frames = max(int(config.min_run_s * rate_hz), 16)
+    for begin, end in _valid_runs(valid):
+        if end - begin < min_frames:
+            continue
+        run = np.unwrap(raw_q[begin:end], axis=0)
+        q_rad[begin:end] = _zero_phase_lowpass(run, config.cutoff_hz, rate_hz, order=4) if angle_filter else run
+        slow = _zero_phase_lowpass(run, config.direction_cutoff_hz, rate_hz, order=2)
+        velocity[begin:end] = np.gradient(slow, 1.0 / rate_hz, axis=0)
+    if not np.isfinite(q_rad).any():
+        raise DataError("no stretch of marker data is long enough to give joint angles")
+    noise = _direction_velocity_noise(raw_q, q_rad, config, rate_hz)
+    return q_rad, velocity, noise, notes
+
+
+def kinematics_from_angles(
+    t_ns: npt.ArrayLike,
+    q_rad: npt.ArrayLike,
+    lengths_m: npt.ArrayLike,
+    config: KinematicsConfig | None = None,
+    angle_filter: bool = False,
+) -> MarkerKinematics:
+    """Put already-estimated joint angles (e.g. a live `arm/joint_states` stream) on a uniform grid.
+
+    Gaps longer than ``max_gap_s`` are not bridged; direction velocities are smoothed with zero phase.
+
+    Parameters
+    ----------
+    t_ns : (M,) strictly increasing stamps (ns).
+    q_rad : (M, n) joint angles (rad).
+    lengths_m : (n,) segment lengths (m).
+    config : gap and filter settings.
+    angle_filter : also low-pass the angles (False when the source already filtered them).
+    """
+    config = config or KinematicsConfig()
+    stamps = np.asarray(t_ns, dtype=np.int64)
+    angles = np.asarray(q_rad, dtype=np.float64)
+    if stamps.size < 16:
+        raise DataError(f"{stamps.size} joint-angle samples: at least 16 are needed")
+    step_ns = int(round(float(np.median(np.diff(stamps)))))
+    grid_ns = stamps[0] + step_ns * np.arange((stamps[-1] - stamps[0]) // step_ns + 1, dtype=np.int64)
+    gridded, _ = _grid_values(grid_ns, stamps, angles, int(config.max_gap_s * 1e9) + step_ns // 2)
+    q_grid, velocity, noise, notes = _filtered_runs(gridded, 1e9 / step_ns, config, angle_filter)
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    invalid = int((~np.isfinite(q_grid).all(axis=1)).sum())
+    return MarkerKinematics(grid_ns, q_grid, velocity, lengths, np.zeros_like(lengths), {}, invalid, noise, notes)
+
+
 def kinematics_from_markers(
     markers: dict[str, MarkerSeries], n_segments: int, config: KinematicsConfig | None = None
 ) -> MarkerKinematics:
@@ -251,31 +316,13 @@ def kinematics_from_markers(
         gridded, bridged[name] = _grid_values(grid_ns, t_ns, sagittal_from_world(position), max_gap_ns)
         points[:, k] = gridded
     raw_q = joint_angles_from_positions(points)
-    valid = np.isfinite(raw_q).all(axis=1)
-
-    rate_hz = 1e9 / step_ns
-    if config.cutoff_hz >= rate_hz / 2:
-        warnings.append(
-            f"angle cutoff {config.cutoff_hz} Hz is above the marker Nyquist {rate_hz / 2:g} Hz: not filtered"
-        )
-    q_rad = np.full_like(raw_q, np.nan)
-    velocity = np.full_like(raw_q, np.nan)
-    min_frames = max(int(config.min_run_s * rate_hz), 16)
-    for begin, end in _valid_runs(valid):
-        if end - begin < min_frames:
-            continue
-        run = np.unwrap(raw_q[begin:end], axis=0)
-        q_rad[begin:end] = _zero_phase_lowpass(run, config.cutoff_hz, rate_hz, order=4)
-        slow = _zero_phase_lowpass(run, config.direction_cutoff_hz, rate_hz, order=2)
-        velocity[begin:end] = np.gradient(slow, 1.0 / rate_hz, axis=0)
-    noise = _direction_velocity_noise(raw_q, q_rad, config, rate_hz)
+    q_rad, velocity, noise, notes = _filtered_runs(raw_q, 1e9 / step_ns, config)
+    warnings += notes
     n_invalid = int((~np.isfinite(q_rad).all(axis=1)).sum())
     if n_invalid:
         warnings.append(
             f"{n_invalid} of {grid_ns.size} marker frames give no angle (gaps over {config.max_gap_s} s or short runs)"
         )
-    if not np.isfinite(q_rad).any():
-        raise DataError("no stretch of marker data is long enough to give joint angles")
     return MarkerKinematics(grid_ns, q_rad, velocity, lengths_m, lengths_std_m, bridged, n_invalid, noise, warnings)
 
 

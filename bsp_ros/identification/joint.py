@@ -89,6 +89,22 @@ def _build_problem(data: IdentificationData, passive: PassiveModel, rows: np.nda
     return _Problem(names, regressor, data.tau_nm, rows, np.array(lower), np.full(len(names), np.inf))
 
 
+def _triangular(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``R, c`` with ``|a x - b|^2 = |R x - c|^2 + const``: the bounded problem at p x p cost.
+
+    Normal equations with Cholesky are fast for tall, column-scaled, well-conditioned ``a``; QR otherwise.
+    """
+    gram = a.T @ a
+    try:
+        lower = np.linalg.cholesky(gram)
+        if np.linalg.cond(lower) < 1e6:
+            return lower.T, np.linalg.solve(lower, a.T @ b)
+    except np.linalg.LinAlgError:
+        pass
+    q_factor, r_factor = np.linalg.qr(a, mode="reduced")
+    return r_factor, q_factor.T @ b
+
+
 def _weighted_solve(problem: _Problem, weights: np.ndarray) -> np.ndarray:
     root = np.sqrt(weights)[None, :, None]
     a = (problem.regressor * root)[problem.rows]
@@ -96,7 +112,10 @@ def _weighted_solve(problem: _Problem, weights: np.ndarray) -> np.ndarray:
     # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
     scale = np.linalg.norm(a, axis=0)
     scale[scale == 0] = 1.0
-    solution = lsq_linear(a / scale, b, bounds=(problem.lower * scale, problem.upper * scale), method="bvls", tol=1e-12)
+    r_factor, rhs = _triangular(a / scale, b)
+    solution = lsq_linear(
+        r_factor, rhs, bounds=(problem.lower * scale, problem.upper * scale), method="bvls", tol=1e-12
+    )
     return np.asarray(solution.x / scale)
 
 
@@ -119,7 +138,8 @@ def _fit(problem: _Problem) -> _Fit:
     covariance, lags = hac_covariance(design, scores[used_samples])
     a = (problem.regressor * np.sqrt(weights)[None, :, None])[problem.rows]
     norms = np.linalg.norm(a, axis=0)
-    singular = np.linalg.svd(a / np.where(norms > 0, norms, 1.0), compute_uv=False)
+    # Singular values of the column-scaled matrix are those of its triangular factor.
+    singular = np.linalg.svd(_triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0], compute_uv=False)
     condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
     return _Fit(values, covariance, np.where(problem.rows, residual, np.nan), sigma, condition, lags)
 

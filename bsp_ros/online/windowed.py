@@ -1,0 +1,166 @@
+"""Sliding-window identification for live use: the batch estimator over the last `window_s` seconds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.errors import BspError
+from bsp_ros.estimate import estimate_document
+from bsp_ros.identification.data import IdentificationData
+from bsp_ros.joint_angles import kinematics_from_angles, resample_kinematics
+from bsp_ros.model import contact_torques_nm
+from bsp_ros.online.buffer import TimedBuffer
+from bsp_ros.online.guard import StreamGuard
+from bsp_ros.pipeline import IdentifyOptions, fuse, identify_data
+from bsp_ros.validation import check_finite_scalar, check_positive
+
+
+@dataclass(frozen=True)
+class WindowConfig:
+    """Settings of :class:`WindowedIdentifier`.
+
+    Attributes
+    ----------
+    window_s : length of the sliding window (s).
+    stale_s : an input whose newest stamp is older than this (against the other input or the caller's
+        clock) makes the estimate invalid.
+    options : method, passive model and subject, as for `bsp identify`.
+    """
+
+    window_s: float = 30.0
+    stale_s: float = 0.5
+    options: IdentifyOptions = field(default_factory=IdentifyOptions)
+
+    def __post_init__(self) -> None:
+        check_positive("window_s", self.window_s, 3600.0)
+        check_finite_scalar("stale_s", self.stale_s, 0.01, 60.0)
+
+
+@dataclass(frozen=True)
+class WindowEstimate:
+    """One update: the estimate document (CONTRACT.md schema) and the newest wrench stamp it used."""
+
+    document: dict[str, Any]
+    valid: bool
+    last_wrench_t_ns: int | None
+
+
+class WindowedIdentifier:
+    """Wrench and joint-state samples in, an estimate of the last ``window_s`` seconds out.
+
+    Samples that are non-finite, out of order or duplicated are refused and counted; a backwards clock
+    jump clears both buffers, so no estimate mixes samples from either side of it.
+    """
+
+    def __init__(self, n_segments: int, config: WindowConfig | None = None) -> None:
+        self.n = n_segments
+        self.config = config or WindowConfig()
+        horizon_ns = int((self.config.window_s + 5.0) * 1e9)
+        self.wrench = TimedBuffer(3, horizon_ns)
+        self.angles = TimedBuffer(2 * n_segments, horizon_ns)
+        self.wrench_guard = StreamGuard("wrench")
+        self.angle_guard = StreamGuard("joint_states")
+
+    def add_wrench(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
+        """Add ``[F_y, F_z, M_x]`` in ``world`` at ``t_ns``; False if refused."""
+        verdict = self.wrench_guard.check(t_ns, wrench_yzx)
+        if verdict == "jump":
+            self.reset()
+            self.wrench_guard.last_t_ns = t_ns
+        if verdict == "refused":
+            return False
+        self.wrench.append(t_ns, wrench_yzx)
+        return True
+
+    def add_joint_state(self, t_ns: int, q_rad: np.ndarray, lengths_m: np.ndarray) -> bool:
+        """Add joint angles (rad) and segment lengths (m) at ``t_ns``; False if refused."""
+        row = np.concatenate((q_rad, lengths_m))
+        verdict = self.angle_guard.check(t_ns, row)
+        if verdict == "jump":
+            self.reset()
+            self.angle_guard.last_t_ns = t_ns
+        if verdict == "refused":
+            return False
+        self.angles.append(t_ns, row)
+        return True
+
+    def reset(self) -> None:
+        """Forget every sample (a new session or a clock jump)."""
+        self.wrench.clear()
+        self.angles.clear()
+
+    def _invalid(self, message: str) -> WindowEstimate:
+        document = {
+            "schema": "bsp_ros/estimate/1",
+            "method": self.config.options.method,
+            "segments": {},
+            "joints": {},
+            "quality": {
+                "valid": False,
+                "n_samples": 0,
+                "condition_number": None,
+                "residual_rms_nm": {},
+                "warnings": [],
+                "message": message,
+                "level": "invalid",
+            },
+        }
+        return WindowEstimate(document, False, self.wrench.last_t_ns)
+
+    def estimate(self, now_ns: int | None = None) -> WindowEstimate:
+        """Identify over the newest window.
+
+        Parameters
+        ----------
+        now_ns : the caller's clock, in the stamps' time base; None judges staleness between the inputs only.
+        """
+        last_wrench, last_angle = self.wrench.last_t_ns, self.angles.last_t_ns
+        if last_wrench is None or last_angle is None:
+            return self._invalid("waiting for wrench and joint states")
+        stale_ns = self.config.stale_s * 1e9
+        newest = max(last_wrench, last_angle) if now_ns is None else now_ns
+        for name, last in (("wrench", last_wrench), ("joint states", last_angle)):
+            if newest - last > stale_ns:
+                return self._invalid(f"stale input: newest {name} is {(newest - last) / 1e9:.2f} s old")
+        start = last_wrench - int(self.config.window_s * 1e9)
+        t_w, wrench = self.wrench.since(start)
+        t_a, rows = self.angles.since(start - int(2e9))
+        try:
+            lengths = np.median(rows[:, self.n :], axis=0)
+            kinematics = kinematics_from_angles(t_a, rows[:, : self.n], lengths, self.config.options.kinematics)
+            q, velocity, valid = resample_kinematics(kinematics, t_w)
+            if valid.sum() < 2:
+                return self._invalid("no wrench sample in the window has joint angles")
+            tau = contact_torques_nm(q[valid], lengths, wrench[valid])
+            data = IdentificationData(
+                t_w[valid],
+                q[valid],
+                velocity[valid],
+                tau,
+                lengths,
+                np.zeros(self.n),
+                kinematics.direction_velocity_noise_rad_s,
+                int(t_w.size),
+                [],
+            )
+            result = identify_data(data, self.config.options)
+        except BspError as error:
+            return self._invalid(str(error))
+        posterior = fuse(result, data, self.config.options.subject) if result.valid else None
+        refused = {
+            **{f"wrench_{k}": v for k, v in self.wrench_guard.refused.items()},
+            **{f"joint_states_{k}": v for k, v in self.angle_guard.refused.items()},
+        }
+        info = {
+            "start_time_ns": int(t_w[0]),
+            "end_time_ns": int(t_w[-1]),
+            "window_s": self.config.window_s,
+            "refused_samples": refused,
+            "clock_jumps": self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
+            "config": self.config.options.config(),
+        }
+        document = estimate_document(result, data, posterior, self.config.options.subject, info)
+        return WindowEstimate(document, result.valid, last_wrench)
