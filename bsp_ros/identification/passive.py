@@ -48,3 +48,13 @@ class PassiveModel:
         v = velocity_rad_s[:, joint]
         table = {"coulomb": np.sign(v), "viscous": v, "offset": np.ones_like(q), "stiffness": q}
         return np.column_stack([table[term] for term in self.terms])
+
+    def columns_all(self, q_rad: np.ndarray, velocity_rad_s: np.ndarray) -> np.ndarray:
+        """Passive columns of every joint at one instant: (n,) angles and velocities -> (n, n_terms)."""
+        table = {
+            "coulomb": np.sign(velocity_rad_s),
+            "viscous": velocity_rad_s,
+            "offset": np.ones_like(q_rad),
+            "stiffness": q_rad,
+        }
+        return np.column_stack([table[term] for term in self.terms])

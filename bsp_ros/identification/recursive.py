@@ -1,0 +1,146 @@
+"""Recursive identification sample by sample: weighted RLS with forgetting, frozen without excitation."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bsp_ros.identification.passive import TERMS, PassiveModel
+from bsp_ros.identification.result import IdentificationResult, ParameterName
+from bsp_ros.model import gravity_regressor
+from bsp_ros.streams import joints_for, segments_for
+from bsp_ros.validation import check_finite_scalar, check_positive
+
+
+@dataclass(frozen=True)
+class RecursiveConfig:
+    """Settings of :class:`RecursiveIdentifier`.
+
+    Attributes
+    ----------
+    passive : passive model (Coulomb by default).
+    memory_s : time constant of the exponential forgetting while the arm moves (s): the parameters may
+        drift over this horizon.
+    initial_std : prior standard deviation of every parameter (a weak ridge toward zero); the bound of
+        the covariance, so that it cannot wind up while excitation is poor.
+    deadband_fraction : rows slower than this fraction of the joint's recent peak speed are skipped (the
+        causal velocity lags, so its sign is wrong just after a turning point).
+    sample_correlation : each sample is worth 1/this of an independent one (filtered angles make
+        consecutive samples' errors alike); it inflates the measurement variance.
+    max_relative_std : valid only once every static moment is known to this relative precision.
+    warmup_s : after a (re)start, samples only teach the peak speeds for this long: the deadband needs
+        them, and an early wrong-signed sample would otherwise weigh heavily under the large initial gain.
+    """
+
+    passive: PassiveModel = field(default_factory=PassiveModel)
+    memory_s: float = 300.0
+    initial_std: float = 10.0
+    deadband_fraction: float = 0.25
+    sample_correlation: float = 10.0
+    max_relative_std: float = 0.05
+    warmup_s: float = 10.0
+
+    def __post_init__(self) -> None:
+        check_positive("memory_s", self.memory_s, 1e6)
+        check_positive("initial_std", self.initial_std, 100.0)
+        check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)
+        check_finite_scalar("sample_correlation", self.sample_correlation, 1.0, 1e4)
+        check_positive("max_relative_std", self.max_relative_std, 10.0)
+        check_finite_scalar("warmup_s", self.warmup_s, 0.0, 600.0)
+
+
+class RecursiveIdentifier:
+    """Static moments and passive terms updated with every wrench sample.
+
+    Recursive weighted least squares in information form with exponential forgetting (memory
+    ``memory_s``), equivalent to a random walk of the parameters. Forgetting runs only while the arm
+    moves, so without excitation the information is frozen and the covariance cannot wind up; a weak
+    ridge toward zero (``initial_std``) bounds it from the start.
+    """
+
+    def __init__(self, n_segments: int, config: RecursiveConfig | None = None) -> None:
+        self.config = config or RecursiveConfig()
+        self.n = n_segments
+        terms = self.config.passive.terms
+        self.names: list[ParameterName] = [("static_moment_kgm", s) for s in segments_for(n_segments)]
+        self.names += [(TERMS[t][0], j) for j in joints_for(n_segments) for t in terms]
+        self.lower = np.array([0.0] * n_segments + [TERMS[t][2] for _ in range(n_segments) for t in terms])
+        self._ridge = np.eye(len(self.names)) / self.config.initial_std**2
+        self.reset()
+
+    def reset(self) -> None:
+        """Start over from the prior (a new session or a clock jump)."""
+        p = len(self.names)
+        self.theta = np.zeros(p)
+        self._information = np.zeros((p, p))
+        self._weighted_target = np.zeros(p)
+        self._noise_var = np.full(self.n, 0.05**2)
+        self._peak_speed = np.zeros(self.n)
+        self._last_t_ns: int | None = None
+        self._first_t_ns: int | None = None
+        self._directions = np.zeros((self.n, 2), dtype=np.int64)
+        self.n_updates = 0
+
+    def update(self, t_ns: int, q_rad: np.ndarray, velocity_rad_s: np.ndarray, tau_nm: np.ndarray) -> bool:
+        """Fold in one sample; False if it carried no excitation (the estimate stayed frozen)."""
+        dt_s = 0.0 if self._last_t_ns is None else max((t_ns - self._last_t_ns) / 1e9, 0.0)
+        self._last_t_ns = t_ns
+        if self._first_t_ns is None:
+            self._first_t_ns = t_ns
+        speed = np.abs(velocity_rad_s)
+        self._peak_speed = np.maximum(self._peak_speed * np.exp(-dt_s / 60.0), speed)
+        moving = speed > self.config.deadband_fraction * self._peak_speed
+        if t_ns - self._first_t_ns < self.config.warmup_s * 1e9 or not moving.any():
+            return False
+        forget = np.exp(-dt_s / self.config.memory_s)
+        self._information *= forget
+        self._weighted_target *= forget
+        gravity = gravity_regressor(q_rad[None, :])[0]
+        passive = self.config.passive.columns_all(q_rad, velocity_rad_s)
+        k = len(self.config.passive.terms)
+        for j in np.flatnonzero(moving):
+            row = np.zeros(len(self.names))
+            row[: self.n] = gravity[j]
+            row[self.n + j * k : self.n + (j + 1) * k] = passive[j]
+            residual = tau_nm[j] - row @ self.theta
+            # Per-joint noise tracks the residuals, clipped at 5 sd so a poor start cannot swamp it.
+            self._noise_var[j] = 0.999 * self._noise_var[j] + 0.001 * min(residual**2, 25 * self._noise_var[j])
+            weight = 1.0 / self._noise_var[j]
+            self._information += weight * np.outer(row, row)
+            self._weighted_target += weight * row * tau_nm[j]
+            self._directions[j, 0 if velocity_rad_s[j] > 0 else 1] += 1
+        solution = np.linalg.solve(self._information + self._ridge, self._weighted_target)
+        self.theta = np.maximum(solution, self.lower)
+        self.n_updates += 1
+        return True
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """(p, p) covariance, inflated for the correlation between consecutive samples."""
+        return np.linalg.inv(self._information + self._ridge) * self.config.sample_correlation
+
+    def result(self) -> IdentificationResult:
+        """The current estimate, valid once the static moments are precise and both directions were seen."""
+        covariance = self.covariance
+        std = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+        problems = []
+        beta, beta_std = self.theta[: self.n], std[: self.n]
+        if self.n_updates < 100:
+            problems.append(f"too few samples: {self.n_updates} updates")
+        elif (beta_std > self.config.max_relative_std * np.maximum(beta, 1e-6)).any():
+            problems.append("poor excitation: static moments not yet determined")
+        if "coulomb" in self.config.passive.terms and (self._directions.min(axis=1) < 10).any():
+            problems.append("each joint must move both ways")
+        return IdentificationResult(
+            "recursive",
+            list(self.names),
+            self.theta.copy(),
+            covariance,
+            not problems,
+            "; ".join(problems) if problems else f"{self.n_updates} recursive updates",
+            [],
+            float("nan"),
+            {j: float(np.sqrt(v)) for j, v in zip(joints_for(self.n), self._noise_var, strict=True)},
+            self.n_updates,
+        )
