@@ -86,6 +86,7 @@ def identify_session(
         "end_time_ns": int(data.t_ns[-1]),
         "duration_s": float(data.t_ns[-1] - data.t_ns[0]) / 1e9,
         "n_wrench_samples": data.n_wrench_samples,
+        "method": options.method,
         "config": options.config(),
         **(session_info or {}),
     }

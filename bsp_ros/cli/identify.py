@@ -1,0 +1,136 @@
+"""`bsp identify BAG`: body segment parameters and passive moments of a recorded session."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from bsp_ros.errors import BspError
+from bsp_ros.fusion import SubjectInfo
+from bsp_ros.identification.passive import PassiveModel
+from bsp_ros.pipeline import METHODS, IdentifyOptions
+
+# Distinct exit codes per failure, so scripts can tell them apart (0 valid, 1 written but invalid).
+EXIT_INVALID = 1
+BAG_EXIT_CODES = {
+    "not-found": 10,
+    "not-a-bag": 11,
+    "empty": 12,
+    "missing-topic": 13,
+    "wrong-type": 14,
+    "corrupt": 15,
+    "unsupported": 16,
+}
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register `bsp identify`."""
+    parser = subparsers.add_parser(
+        "identify",
+        help="identify a recorded session (rosbag2 MCAP bag)",
+        description="Identify static moments, masses, COMs and passive joint moments from a bag.",
+    )
+    parser.add_argument("bag", type=Path, help="rosbag2 directory or .mcap file")
+    parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/estimate/1) here")
+    parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
+    parser.add_argument("--passive", default="coulomb", help="passive model, e.g. coulomb+viscous (default coulomb)")
+    parser.add_argument("--body-mass", type=float, metavar="KG", help="body mass for the anthropometric prior")
+    parser.add_argument("--height", type=float, metavar="M", help="body height (m)")
+    parser.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table")
+    parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
+    parser.add_argument("--marker-topic", action="append", default=[], metavar="NAME=TOPIC",
+                        help="remap a marker topic, e.g. elbow=/vicon/elbow (repeatable)")
+    parser.add_argument("--tf-topic", default="/tf")
+    parser.add_argument("--tf-static-topic", default="/tf_static")
+    parser.add_argument("--format", choices=("auto", "table", "tsv", "none"), default="auto",
+                        help="stdout: a table on a terminal, tab-separated values otherwise")
+    return parser
+
+
+def _topics(args: argparse.Namespace) -> Any:
+    from bsp_ros.bag import TopicMap
+    from bsp_ros.errors import InputError
+
+    markers = dict(TopicMap().markers)
+    for item in args.marker_topic:
+        name, _, topic = item.partition("=")
+        if name not in markers or not topic:
+            raise InputError(f"--marker-topic takes NAME=TOPIC with NAME in {sorted(markers)}, got {item!r}")
+        markers[name] = topic
+    return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
+
+
+def _progress_bar() -> Any:
+    if not sys.stderr.isatty():
+        return None
+
+    def show(done: int, total: int) -> None:
+        fraction = done / total if total else 1.0
+        bar = "#" * int(40 * fraction)
+        sys.stderr.write(f"\rreading [{bar:<40s}] {100 * fraction:5.1f}%")
+        if done >= total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show
+
+
+def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
+    """(group, owner/key, value, std, source) for every quantity of an estimate document."""
+    out = []
+    for group in ("segments", "joints"):
+        for owner, quantities in document[group].items():
+            for key, q in quantities.items():
+                out.append((owner, key, q["value"], q["std"], q["source"]))
+    return out
+
+
+def format_table(document: dict[str, Any]) -> str:
+    """A human-readable table of an estimate document."""
+    quality = document["quality"]
+    lines = [f"method: {document['method']}   samples: {quality['n_samples']}   "
+             f"condition number: {quality['condition_number'] if quality['condition_number'] is None else round(quality['condition_number'], 2)}",
+             f"{'':10s} {'parameter':22s} {'value':>12s} {'+- std':>11s}  source"]
+    for owner, key, value, std, source in rows(document):
+        value_text = "n/a" if value is None else f"{value:.5g}"
+        std_text = "n/a" if std is None else f"{std:.2g}"
+        lines.append(f"{owner:10s} {key:22s} {value_text:>12s} {std_text:>11s}  {source}")
+    state = "VALID" if quality["valid"] else "INVALID"
+    lines.append(f"{state}: {quality.get('message', '')}")
+    lines += [f"warning: {w}" for w in quality["warnings"]]
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Identify the bag; print the result; write the JSON."""
+    from bsp_ros.bag.errors import BagError
+    from bsp_ros.offline import identify_bag
+
+    options = IdentifyOptions(
+        method=args.method,
+        passive=PassiveModel.parse(args.passive),
+        subject=SubjectInfo(args.body_mass, args.height, args.sex),
+    )
+    try:
+        document = identify_bag(args.bag, options, _topics(args), _progress_bar())
+    except BagError as error:
+        print(f"bsp identify: error: {error}", file=sys.stderr)
+        return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)
+    except BspError:
+        raise
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(document, indent=2, allow_nan=False) + "\n")
+    output = args.format if args.format != "auto" else ("table" if sys.stdout.isatty() else "tsv")
+    if output == "table":
+        print(format_table(document))
+    elif output == "tsv":
+        print(f"valid\t{str(document['quality']['valid']).lower()}")
+        for owner, key, value, std, source in rows(document):
+            print(f"{owner}\t{key}\t{value}\t{std}\t{source}")
+        for warning in document["quality"]["warnings"]:
+            print(f"warning\t{warning}", file=sys.stderr)
+    return 0 if document["quality"]["valid"] else EXIT_INVALID

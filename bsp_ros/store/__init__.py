@@ -1,0 +1,30 @@
+"""The session store: identified sessions per pseudonymous subject, in SQLite (default) or PostgreSQL."""
+
+from bsp_ros.store.csv_export import CSV_COLUMNS, write_sessions_csv
+from bsp_ros.store.estimate import ESTIMATE_SCHEMA, load_estimate_file, parse_estimate, parse_time_ns
+from bsp_ros.store.location import default_location, is_database_url
+from bsp_ros.store.records import ParamKey, Quality, Quantity, SessionRecord, SubjectSummary, format_time
+from bsp_ros.store.schema import SCHEMA_VERSION
+from bsp_ros.store.store import Store, open_store
+from bsp_ros.store.subject import check_subject_id
+
+__all__ = [
+    "CSV_COLUMNS",
+    "ESTIMATE_SCHEMA",
+    "SCHEMA_VERSION",
+    "ParamKey",
+    "Quality",
+    "Quantity",
+    "SessionRecord",
+    "Store",
+    "SubjectSummary",
+    "check_subject_id",
+    "default_location",
+    "format_time",
+    "is_database_url",
+    "load_estimate_file",
+    "open_store",
+    "parse_estimate",
+    "parse_time_ns",
+    "write_sessions_csv",
+]
