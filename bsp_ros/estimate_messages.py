@@ -1,0 +1,66 @@
+"""The estimate document as ROS message samples: DiagnosticArray, InertiaStamped, passive-moment JointState."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from msg_adapters.diagnostics import ERROR, OK, WARN, DiagnosticArraySample, DiagnosticStatusData
+from msg_adapters.inertia import InertiaSample
+from msg_adapters.joint_state import JointStateSample
+
+LEVELS = {"ok": OK, "weak": WARN, "invalid": ERROR}
+
+
+def level_of(document: dict[str, Any]) -> int:
+    """OK / WARN / ERROR for a valid / weak / invalid estimate."""
+    return LEVELS.get(document["quality"].get("level", "invalid"), ERROR)
+
+
+def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str = "bsp") -> DiagnosticArraySample:
+    """One status per segment and joint (every quantity's value, std and source) and one for quality.
+
+    Keys are ``<quantity>``, ``<quantity>.std`` and ``<quantity>.source``, e.g. ``mass_kg.std``.
+    """
+    level = level_of(document)
+    quality = document["quality"]
+    statuses = []
+    for group in ("segments", "joints"):
+        for owner, quantities in document.get(group, {}).items():
+            values: dict[str, object] = {}
+            for key, q in quantities.items():
+                values[key] = q["value"]
+                values[f"{key}.std"] = q["std"]
+                values[f"{key}.source"] = q["source"]
+            statuses.append(DiagnosticStatusData.with_values(level, f"{prefix}/{owner}", quality.get("message", ""), "", values))
+    quality_values = {
+        "valid": quality["valid"],
+        "n_samples": quality["n_samples"],
+        "condition_number": quality["condition_number"],
+        **{f"residual_rms_nm.{k}": v for k, v in quality.get("residual_rms_nm", {}).items()},
+        **{f"warning.{i}": w for i, w in enumerate(quality.get("warnings", []))},
+    }
+    statuses.append(DiagnosticStatusData.with_values(level, f"{prefix}/quality", quality.get("message", ""), "", quality_values))
+    return DiagnosticArraySample(t_ns, "", tuple(statuses))
+
+
+def inertias_from_estimate(document: dict[str, Any], t_ns: int) -> dict[str, InertiaSample]:
+    """Segment -> mass and COM (along the segment's x axis, from its proximal joint); inertia unknown (0)."""
+    out = {}
+    for segment, quantities in document.get("segments", {}).items():
+        mass, com = quantities.get("mass_kg", {}).get("value"), quantities.get("com_m", {}).get("value")
+        if mass is None or com is None:
+            continue
+        out[segment] = InertiaSample(t_ns, segment, float(mass), np.array([float(com), 0.0, 0.0]), np.zeros((3, 3)))
+    return out
+
+
+def passive_moments_from_estimate(document: dict[str, Any], t_ns: int) -> JointStateSample | None:
+    """Joint names with effort = Coulomb amplitude (Nm); None when there is none."""
+    joints = document.get("joints", {})
+    names = [j for j, q in joints.items() if q.get("coulomb_nm", {}).get("value") is not None]
+    if not names:
+        return None
+    effort = np.array([joints[j]["coulomb_nm"]["value"] for j in names], dtype=np.float64)
+    return JointStateSample(t_ns, "", tuple(names), np.zeros(0), np.zeros(0), effort)

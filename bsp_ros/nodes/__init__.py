@@ -1,0 +1,1 @@
+"""The node suite: thin nodes (parameters, subscriptions, adapters, core, publishers) on either backend."""

@@ -1,0 +1,141 @@
+"""`cell_simulator`: the simulated cell publishing wrench, marker poses, /tf_static and the truth in real time."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import sys
+from typing import Any
+
+import numpy as np
+
+from bsp_ros import simulation as sim
+from bsp_ros.runtime import run_node
+from msg_adapters.pose import PoseSample, build_pose_stamped
+from msg_adapters.rotation import quaternion_from_matrix
+from msg_adapters.tf import TransformSample, build_tf_message
+from msg_adapters.wrench import WrenchSample, build_wrench_stamped
+
+NAME = "cell_simulator"
+
+
+class CellSimulatorNode:
+    """Paces :class:`bsp_ros.simulation.CellSimulator` against the clock and publishes its streams.
+
+    Faults on request (parameters): marker dropouts, NaN bursts in the wrench, a stalled sensor (stops
+    publishing the wrench), a dying process, and a backwards clock jump of the stamps.
+    """
+
+    def __init__(self, node: Any) -> None:
+        self.node = node
+        p = node.declare_parameter
+        subject = p("subject", "human", "simulated arm: human (3 segments) or paper-arm (2 segments)")
+        seed = p("seed", 0, "random seed", lo=0, hi=2**31 - 1)
+        self.speed = p("speed", 1.0, "simulated seconds per wall second", "", lo=0.01, hi=100.0)
+        wrench_hz = p("wrench_hz", 100.0, "wrench rate", "Hz", lo=1.0, hi=5000.0)
+        marker_hz = p("marker_hz", 50.0, "marker rate", "Hz", lo=1.0, hi=1000.0)
+        self.duration_s = p("duration_s", 0.0, "simulated session length (0: endless)", "s", lo=0.0, hi=1e6)
+        dropout = p("dropout_fraction", 0.0, "share of marker frames lost", "", lo=0.0, hi=0.9)
+        self.nan_burst_period_s = p("nan_burst_period_s", 0.0, "a NaN burst every this many s (0: none)", "s", lo=0.0)
+        self.nan_burst_s = p("nan_burst_s", 0.2, "length of a NaN burst", "s", lo=0.0, hi=10.0)
+        self.stall_at_s = p("stall_at_s", 0.0, "the sensor stops publishing at this time (0: never)", "s", lo=0.0)
+        self.die_at_s = p("die_at_s", 0.0, "the process exits at this time (0: never)", "s", lo=0.0)
+        self.jump_at_s = p("clock_jump_at_s", 0.0, "stamps jump backwards at this time (0: never)", "s", lo=0.0)
+        self.jump_s = p("clock_jump_s", 10.0, "size of the backwards jump", "s", lo=0.0, hi=1e6)
+        self.wrench_topic = p("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic")
+        self.marker_prefix = p("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name")
+        self.start_wall_ns = node.now_ns()
+        base = sim.human_arm_cell() if subject == "human" else sim.paper_mechanical_arm_cell()
+        spec = dataclasses.replace(
+            base,
+            seed=seed,
+            start_ns=self.start_wall_ns,
+            duration_s=max(self.duration_s, 1.0),
+            sensor=dataclasses.replace(base.sensor, wrench_hz=wrench_hz),
+            markers=dataclasses.replace(base.markers, marker_hz=marker_hz, dropout_fraction=dropout),
+        )
+        self.simulator = sim.CellSimulator(spec)
+        self.frame_id = spec.sensor.frame_id
+        self.wrench_period_ns = int(1e9 / wrench_hz)
+        self.marker_period_ns = int(1e9 / marker_hz)
+        self.next_wrench_ns = self.start_wall_ns
+        self.next_marker_ns = self.start_wall_ns
+        types = node.message_class
+        self.types = types
+        self.wrench_pub = node.create_publisher("geometry_msgs/msg/WrenchStamped", self.wrench_topic, "sensor_data")
+        self.marker_pubs = {
+            name: node.create_publisher("geometry_msgs/msg/PoseStamped", self.marker_prefix + name, "sensor_data")
+            for name in self.simulator.marker_names
+        }
+        tf_pub = node.create_publisher("tf2_msgs/msg/TFMessage", "/tf_static", "tf_static")
+        rotation = self.simulator.rotation_world_from_sensor
+        transform = TransformSample(self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion_from_matrix(rotation))
+        tf_pub.publish(build_tf_message(types, [transform]))
+        truth_pub = node.create_publisher("std_msgs/msg/String", "sim/truth", "tf_static")
+        truth = self.simulator.truth.to_dict()
+        truth_pub.publish(types("std_msgs/msg/String")(data=json.dumps(truth)))
+        self._keep = (tf_pub, truth_pub)
+        node.create_timer(0.005, self.tick)
+        node.get_logger().info(
+            "simulating a %d-segment arm at %.1fx real time, wrench %.0f Hz, markers %.0f Hz",
+            self.simulator.n_segments, self.speed, wrench_hz, marker_hz,
+        )
+
+    def _sim_now_ns(self) -> int:
+        return self.start_wall_ns + int((self.node.now_ns() - self.start_wall_ns) * self.speed)
+
+    def _stamp(self, t_ns: np.ndarray) -> np.ndarray:
+        """Apply the clock-jump fault to stamps (the physics keeps going)."""
+        if self.jump_at_s > 0:
+            jumped = t_ns - self.start_wall_ns >= self.jump_at_s * 1e9
+            return np.where(jumped, t_ns - int(self.jump_s * 1e9), t_ns)
+        return t_ns
+
+    def tick(self) -> None:
+        """Publish every sample whose simulated time has come."""
+        now = self._sim_now_ns()
+        elapsed_s = (now - self.start_wall_ns) / 1e9
+        if self.die_at_s and elapsed_s >= self.die_at_s:
+            self.node.get_logger().warning("fault: the simulated sensor dies now")
+            os._exit(3)
+        if self.duration_s and elapsed_s >= self.duration_s:
+            now = min(now, self.start_wall_ns + int(self.duration_s * 1e9))
+        wrench_t = np.arange(self.next_wrench_ns, now + 1, self.wrench_period_ns, dtype=np.int64)
+        marker_t = np.arange(self.next_marker_ns, now + 1, self.marker_period_ns, dtype=np.int64)
+        if wrench_t.size:
+            self.next_wrench_ns = int(wrench_t[-1]) + self.wrench_period_ns
+            if not (self.stall_at_s and elapsed_s >= self.stall_at_s):
+                self._publish_wrench(wrench_t)
+        if marker_t.size:
+            self.next_marker_ns = int(marker_t[-1]) + self.marker_period_ns
+            self._publish_markers(marker_t)
+
+    def _publish_wrench(self, t_ns: np.ndarray) -> None:
+        series = self.simulator.sample_wrench(t_ns)
+        force, torque = series.force_n.copy(), series.torque_nm.copy()
+        if self.nan_burst_period_s > 0:
+            phase = ((t_ns - self.start_wall_ns) / 1e9) % self.nan_burst_period_s
+            burst = phase > self.nan_burst_period_s - self.nan_burst_s
+            force[burst] = np.nan
+        stamps = self._stamp(series.t_ns)
+        for k in range(stamps.size):
+            sample = WrenchSample(int(stamps[k]), self.frame_id, force[k], torque[k])
+            self.wrench_pub.publish(build_wrench_stamped(self.types, sample))
+
+    def _publish_markers(self, t_ns: np.ndarray) -> None:
+        identity = np.array([0.0, 0.0, 0.0, 1.0])
+        for name, series in self.simulator.sample_markers(t_ns).items():
+            stamps = self._stamp(series.t_ns)
+            for k in range(stamps.size):
+                pose = PoseSample(int(stamps[k]), "world", series.position_m[k], identity)
+                self.marker_pubs[name].publish(build_pose_stamped(self.types, pose))
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point (`ros2 run bsp_ros cell_simulator` or `cell_simulator` on DDS)."""
+    return run_node(CellSimulatorNode, NAME, args=args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
