@@ -1,0 +1,141 @@
+"""Vectorised CDR for fixed-layout stamped messages (WrenchStamped, PoseStamped): bytes <-> numpy in bulk.
+
+Layout (little-endian XCDR1, as rosbags, Cyclone DDS and rmw write it): a 4-byte encapsulation header
+``00 01 00 00``, then ``int32 sec, uint32 nanosec, uint32 L, L bytes frame_id (NUL-terminated)``,
+padding to a multiple of 8 counted from the end of the encapsulation header, then ``k`` float64.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bsp_ros.bag.topics import POSE_TYPE, WRENCH_TYPE
+from bsp_ros.errors import InputError
+
+#: Message type -> number of float64 after the header (Wrench: force, torque; Pose: position, xyzw).
+FIXED_LAYOUT_FLOATS: dict[str, int] = {WRENCH_TYPE: 6, POSE_TYPE: 7}
+
+_STAMP = np.dtype([("sec", "<i4"), ("nanosec", "<u4")])
+_NS = np.int64(1_000_000_000)
+_HEADER = 16  # encapsulation (4) + sec (4) + nanosec (4) + string length (4)
+
+
+def _gather(buf: np.ndarray, starts: np.ndarray, width: int) -> np.ndarray:
+    """Bytes ``buf[s:s + width]`` for every start ``s``, as a C-contiguous (n, width) uint8 array."""
+    return buf[starts[:, None] + np.arange(width, dtype=np.int64)]
+
+
+@dataclass
+class FixedBatch:
+    """Messages of one channel decoded by the fast path.
+
+    Attributes
+    ----------
+    t_ns : (n,) int64 header stamps.
+    values : (n, k) float64, bit-exact copies of the message floats.
+    frame_index : (n,) int64 index into the decoder's frame list.
+    ok : (n,) bool, False where the bytes do not fit the layout (decode those another way).
+    """
+
+    t_ns: np.ndarray
+    values: np.ndarray
+    frame_index: np.ndarray
+    ok: np.ndarray
+
+
+def decode_fixed(
+    buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray, n_floats: int, frames: dict[str, int]
+) -> FixedBatch:
+    """Decode messages ``buf[offsets[i]:offsets[i] + lengths[i]]`` of a fixed-layout type in bulk.
+
+    Parameters
+    ----------
+    buf : (B,) uint8, the bytes holding the messages (e.g. one MCAP chunk).
+    offsets, lengths : (n,) int64, where each serialized message starts and its length in bytes.
+    n_floats : float64 count after the header (6 WrenchStamped, 7 PoseStamped).
+    frames : frame id -> index, extended with new frame ids.
+
+    Returns
+    -------
+    FixedBatch ; rows with ``ok`` False hold zeros.
+    """
+    n = offsets.size
+    t_ns = np.zeros(n, dtype=np.int64)
+    values = np.zeros((n, n_floats), dtype=np.float64)
+    frame_index = np.full(n, -1, dtype=np.int64)
+    ok = lengths >= _HEADER + 1 + 8 * n_floats
+    idx = np.flatnonzero(ok)
+    if idx.size:
+        head = _gather(buf, offsets[idx], _HEADER)
+        little = (head[:, 0] == 0) & (head[:, 1] == 1)
+        str_len = head[:, 12:16].copy().view("<u4")[:, 0].astype(np.int64)
+        float_at = 4 + ((12 + str_len + 7) & ~np.int64(7))
+        fits = little & (str_len >= 1) & (float_at + 8 * n_floats <= lengths[idx])
+        ok[idx[~fits]] = False
+        keep, head, str_len, float_at = idx[fits], head[fits], str_len[fits], float_at[fits]
+        stamps = head[:, 4:12].copy().view(_STAMP)[:, 0]
+        t_ns[keep] = stamps["sec"].astype(np.int64) * _NS + stamps["nanosec"].astype(np.int64)
+        starts = offsets[keep]
+        values[keep] = _gather(buf, starts + float_at, 8 * n_floats).view("<f8")
+        for size in np.unique(str_len):
+            group = str_len == size
+            text = _gather(buf, starts[group] + _HEADER, int(size))
+            terminated = text[:, -1] == 0
+            ok[keep[group][~terminated]] = False
+            names = text[terminated, :-1]
+            if names.shape[0] and (names == names[0]).all():  # the usual case: one frame id
+                rows, inverse = names[:1], np.zeros(names.shape[0], dtype=np.int64)
+            else:
+                rows, inverse = np.unique(names, axis=0, return_inverse=True)
+            codes = np.empty(rows.shape[0], dtype=np.int64)
+            for r, row in enumerate(rows):
+                name = row.tobytes().decode("utf-8", errors="replace")
+                codes[r] = frames.setdefault(name, len(frames))
+            frame_index[keep[group][terminated]] = codes[np.asarray(inverse).reshape(-1)]
+    return FixedBatch(t_ns, values, frame_index, ok)
+
+
+def encode_fixed(t_ns: np.ndarray, frame_id: str, values: np.ndarray) -> np.ndarray:
+    """Serialize stamped fixed-layout messages in bulk, byte-identical to rosbags' serializer.
+
+    Parameters
+    ----------
+    t_ns : (n,) int64 header stamps.
+    frame_id : ``header.frame_id`` of every message.
+    values : (n, k) float64 (WrenchStamped: force xyz, torque xyz; PoseStamped: position xyz,
+        quaternion xyzw).
+
+    Returns
+    -------
+    (n, size) uint8, one serialized message per row.
+
+    Raises
+    ------
+    InputError
+        If a stamp does not fit ``builtin_interfaces/msg/Time`` or the shapes disagree.
+    """
+    stamps = np.asarray(t_ns, dtype=np.int64).reshape(-1)
+    floats = np.asarray(values, dtype=np.float64)
+    if floats.ndim != 2 or floats.shape[0] != stamps.size:
+        raise InputError(f"values must be ({stamps.size}, k), got {floats.shape}")
+    name = frame_id.encode("utf-8") + b"\x00"
+    float_at = 4 + ((12 + len(name) + 7) & ~7)
+    layout = np.dtype(
+        {
+            "names": ["encap", "sec", "nanosec", "str_len", "name", "values"],
+            "formats": ["<u4", "<i4", "<u4", "<u4", f"S{len(name)}", ("<f8", (floats.shape[1],))],
+            "offsets": [0, 4, 8, 12, 16, float_at],
+            "itemsize": float_at + 8 * floats.shape[1],
+        }
+    )
+    sec, nanosec = np.divmod(stamps, _NS)
+    if stamps.size and (sec.min() < -(2**31) or sec.max() >= 2**31):
+        raise InputError("a stamp does not fit builtin_interfaces/msg/Time (int32 seconds)")
+    records = np.zeros(stamps.size, dtype=layout)
+    records["encap"] = 0x100  # bytes 00 01 00 00: CDR little-endian
+    records["sec"], records["nanosec"], records["str_len"] = sec, nanosec, len(name)
+    records["name"] = name
+    records["values"] = floats
+    return records.view(np.uint8).reshape(stamps.size, layout.itemsize)

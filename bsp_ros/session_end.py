@@ -1,0 +1,38 @@
+"""When a live session ends, which estimate to keep: the last valid one, stored exactly once."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass
+class SessionEndDetector:
+    """Tracks the live estimates of a session and says when to store its final valid estimate.
+
+    A session ends when estimates stop arriving for ``end_timeout_s`` or an end-of-session message arrives.
+    The final valid estimate is handed out once; a later valid estimate opens a new session.
+    """
+
+    end_timeout_s: float = 5.0
+    last_valid: dict[str, Any] | None = None
+    last_seen_ns: int | None = None
+    stored: bool = False
+
+    def on_estimate(self, document: dict[str, Any], now_ns: int) -> None:
+        """Remember a live estimate (only valid ones can be stored)."""
+        self.last_seen_ns = now_ns
+        if document.get("quality", {}).get("valid"):
+            if self.stored:  # a new session after a stored one
+                self.stored = False
+            self.last_valid = document
+
+    def due(self, now_ns: int, end_requested: bool = False) -> dict[str, Any] | None:
+        """The estimate to store now, or None; each session's estimate is returned at most once."""
+        if self.stored or self.last_valid is None or self.last_seen_ns is None:
+            return None
+        if end_requested or now_ns - self.last_seen_ns > self.end_timeout_s * 1e9:
+            self.stored = True
+            document, self.last_valid = self.last_valid, None
+            return document
+        return None

@@ -1,0 +1,28 @@
+"""Launch the bsp_ros cell on a Jazzy cell: joint angles, identification, session recording (and optionally the simulator)."""
+
+import os
+
+from ament_index_python.packages import get_package_share_directory
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.conditions import IfCondition
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import Node
+
+
+def generate_launch_description() -> LaunchDescription:
+    config = os.path.join(get_package_share_directory("bsp_ros"), "config", "bsp_cell.yaml")
+    params = LaunchConfiguration("params_file")
+    return LaunchDescription(
+        [
+            DeclareLaunchArgument("params_file", default_value=config, description="ros__parameters YAML"),
+            DeclareLaunchArgument("simulate", default_value="false", description="also start the simulated cell"),
+            DeclareLaunchArgument("record_sessions", default_value="false", description="start session_recorder"),
+            Node(package="bsp_ros", executable="cell_simulator", parameters=[params],
+                 condition=IfCondition(LaunchConfiguration("simulate"))),
+            Node(package="bsp_ros", executable="joint_angle_estimator", parameters=[params]),
+            Node(package="bsp_ros", executable="bsp_identifier", parameters=[params]),
+            Node(package="bsp_ros", executable="session_recorder", parameters=[params],
+                 condition=IfCondition(LaunchConfiguration("record_sessions"))),
+        ]
+    )
