@@ -160,8 +160,8 @@ class _Recorder:
         self.waitset = WaitSet(self.ctx.participant)
         self.subs: dict[str, _Sub] = {}
         self.schemas: dict[str, int] = {}
-        # Unbuffered: every chunk the writer finishes reaches the file at once (a kill loses only the open one).
-        self.stream = (out / self.mcap_name).open("xb", buffering=0)
+        # Buffered (the mcap writer would wrap a raw file anyway); :meth:`flush` pushes everything to the OS.
+        self.stream = (out / self.mcap_name).open("xb")
         self.writer = Writer(
             self.stream,
             chunk_size=chunk_bytes,
@@ -276,7 +276,7 @@ class _Recorder:
         return total
 
     def flush(self) -> None:
-        """Close the open chunk and write it out."""
+        """Close the open chunk and hand everything written so far to the OS (a kill cannot lose it)."""
         if self.unflushed:
             self.writer.flush()
             self.unflushed = 0

@@ -139,13 +139,14 @@ def write_session_bag(
     starts = [int(p[3].min()) for p in payloads if p[3].size]
     t0 = min(starts) if starts else 1
     if w.frame_id != world_frame:
-        transform = TransformSample(
-            t0,
-            world_frame,
-            w.frame_id,
-            np.asarray(sensor_translation_m, dtype=np.float64),
-            quaternion_from_matrix(session.rotation_world_from_sensor),
-        )
+        try:
+            rotation_xyzw = quaternion_from_matrix(session.rotation_world_from_sensor)
+        except ValueError as error:
+            raise BagWriteError(f"rotation_world_from_sensor cannot go on /tf_static: {error}") from None
+        translation = np.asarray(sensor_translation_m, dtype=np.float64)
+        if translation.shape != (3,) or not np.isfinite(translation).all():
+            raise BagWriteError(f"sensor_translation_m must be 3 finite numbers, got {translation.tolist()}")
+        transform = TransformSample(t0, world_frame, w.frame_id, translation, rotation_xyzw)
         tf_msg = build_tf_message(lambda n: typestore.types[n], [transform])
         data = bytes(typestore.serialize_cdr(tf_msg, TF_TYPE))
         payloads.insert(0, (topic_map.tf_static, TF_TYPE, [data], np.array([t0]), np.array([t0]), True))

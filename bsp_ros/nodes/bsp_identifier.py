@@ -48,7 +48,7 @@ class BspIdentifierNode:
         self.n = p("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3)
         window_s = p("window_s", 30.0, "sliding window length", "s", lo=1.0, hi=3600.0)
         update_hz = p("update_hz", 5.0, "estimate rate", "Hz", lo=0.1, hi=100.0)
-        self.stale_s = p("stale_s", 0.5, "an input silent this long makes the estimate invalid", "s", lo=0.01, hi=60.0)
+        self.stale_s = p("stale_s", 0.4, "an input silent this long makes the estimate invalid", "s", lo=0.01, hi=60.0)
         method = p("method", "joint", "joint (ours) or paper (the method paper's sequential procedure)")
         passive = p("passive", "coulomb", "passive model, e.g. coulomb+viscous")
         body_mass = p("body_mass_kg", 0.0, "subject body mass for the prior (0: unknown)", "kg", lo=0.0, hi=300.0)

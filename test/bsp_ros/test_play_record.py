@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 import signal
@@ -22,6 +23,7 @@ from bsp_ros.recorder import parse_topic_specs, subscription_qos
 from bsp_ros.replay import playback_qos
 
 ROOT = Path(__file__).resolve().parents[2]
+PEER = Path(__file__).with_name("play_record_peer.py")
 TOPICS = ["/ft_sensor/wrench", "/mocap/shoulder", "/mocap/elbow", "/mocap/wrist", "/mocap/hand", "/tf_static"]
 pytestmark = pytest.mark.dds
 
@@ -32,9 +34,10 @@ def _domain(k: int) -> int:
 
 
 def _bsp(*args: object) -> subprocess.Popen[str]:
+    """``bsp ARGS`` (play and record only: the other subcommands' imports would slow every start)."""
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     return subprocess.Popen(
-        [sys.executable, "-m", "bsp_ros", *map(str, args)],
+        [sys.executable, str(PEER), *map(str, args)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -94,6 +97,13 @@ def procs() -> Iterator[list[subprocess.Popen[str]]]:
         proc.communicate(timeout=10)
 
 
+def test_play_and_record_are_bsp_subcommands() -> None:
+    from bsp_ros.cli import play, record
+
+    for module in (play, record):
+        assert callable(module.add_parser) and callable(module.run)
+
+
 def test_qos_choices_and_topic_specs() -> None:
     assert not playback_qos("/ft_sensor/wrench", False).reliable
     assert not playback_qos("/mocap/hand", False).reliable
@@ -125,7 +135,7 @@ def test_fast_play_into_recorder_loses_nothing_and_is_bit_identical(
     assert "playing 6 topics" in played and "without subscribers" not in played
     time.sleep(0.5)
     recorder.send_signal(signal.SIGINT)
-    recorded, err = recorder.communicate(timeout=20)
+    _, err = recorder.communicate(timeout=20)
     assert recorder.returncode == 0, err
 
     source, copy = _raw(source_bag), _raw(out)
@@ -178,7 +188,7 @@ def test_tf_static_reaches_a_late_subscriber_and_clock_runs(
     store = typestore()
     payload = bytes(store.serialize_cdr(dds_to_ros(got[0]), "tf2_msgs/msg/TFMessage"))
     assert payload == _raw(source_bag)["/tf_static"][0]
-    assert len(clock) > 5 and all(b >= a for a, b in zip(clock, clock[1:], strict=False))
+    assert len(clock) > 5 and all(b >= a for a, b in itertools.pairwise(clock))
     player.send_signal(signal.SIGINT)
     stdout, _ = player.communicate(timeout=20)
     assert "interrupted" in stdout

@@ -313,3 +313,41 @@ def test_random_bit_flips_are_reported_never_returned_as_data(
         )
         for name, series in got.markers.items():
             assert_rows_from(series.t_ns, series.position_m, want.markers[name].t_ns, want.markers[name].position_m)
+
+
+def test_tf_chain_is_composed_and_changes_are_reported(tmp_path: Path) -> None:
+    from msg_adapters import TransformSample, build_tf_message, matrix_from_quaternion
+
+    def types(name: str) -> type:
+        return TYPESTORE.types[name]  # type: ignore[no-any-return]
+
+    bag = _rosbags_bag(tmp_path / "tfbag", "geometry_msgs/msg/WrenchStamped")
+    # Re-home the wrench in a frame two TF hops from world: rewrite the bag with /tf_static + /tf.
+    shutil.rmtree(bag)
+    half = np.sqrt(0.5)
+    with RosbagsWriter(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        wrench = writer.add_connection("/ft_sensor/wrench", "geometry_msgs/msg/WrenchStamped", typestore=TYPESTORE)
+        markers = [
+            writer.add_connection(f"/mocap/{n}", "geometry_msgs/msg/PoseStamped", typestore=TYPESTORE)
+            for n in ("shoulder", "elbow", "hand")
+        ]
+        static = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=TYPESTORE)
+        dynamic = writer.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=TYPESTORE)
+        q_static = np.array([0.0, 0.0, half, half])  # 90 deg about z
+        tf_static = build_tf_message(types, [TransformSample(1, "world", "robot", np.zeros(3), q_static)])
+        writer.write(static, 1, TYPESTORE.serialize_cdr(tf_static, "tf2_msgs/msg/TFMessage"))
+        for t, q in ((2, [1.0, 0.0, 0.0, 0.0]), (3, [np.nan, 0.0, 0.0, 1.0]), (4, [half, 0.0, 0.0, half])):
+            msg = build_tf_message(types, [TransformSample(t, "robot", "ft", np.zeros(3), np.array(q))])
+            writer.write(dynamic, t, TYPESTORE.serialize_cdr(msg, "tf2_msgs/msg/TFMessage"))
+        for i in range(1, 6):
+            sample = WrenchSample(10 + i, "ft", np.ones(3), np.zeros(3))
+            writer.write(wrench, 10 + i, TYPESTORE.serialize_cdr(build_wrench_stamped(types, sample), wrench.msgtype))
+            for connection in markers:
+                pose = build_pose_stamped(types, PoseSample(10 + i, "world", np.zeros(3)))
+                writer.write(connection, 10 + i, TYPESTORE.serialize_cdr(pose, connection.msgtype))
+    result = read_session(bag)
+    expected = matrix_from_quaternion(q_static) @ matrix_from_quaternion([half, 0.0, 0.0, half])
+    np.testing.assert_allclose(result.session.rotation_world_from_sensor, expected, atol=1e-12)
+    assert result.report.rotation_source == "tf"
+    assert result.report.topics["/tf"].non_finite == 1
+    assert any("changes during the session" in w for w in result.report.warnings)
