@@ -107,7 +107,13 @@ def _clean_marker(name: str, series: MarkerSeries) -> tuple[np.ndarray, np.ndarr
     if not finite.all():
         notes.append(f"marker {name}: {int((~finite).sum())} frames with non-finite positions removed")
     order = np.argsort(t_ns, kind="stable")
-    if (np.diff(t_ns) < 0).any():
+    steps = np.diff(t_ns)
+    if steps.size and steps.min() < -1_000_000_000:
+        raise DataError(
+            f"marker {name}: stamps jump back by {-steps.min() / 1e9:.3f} s at frame {int(np.argmin(steps)) + 1} "
+            "(a looped replay or a reset clock): split the recording"
+        )
+    if (steps < 0).any():
         notes.append(f"marker {name}: stamps out of order, sorted")
     t_sorted, keep_sorted = t_ns[order], finite[order]
     duplicate = np.concatenate(([False], np.diff(t_sorted) == 0))

@@ -413,7 +413,8 @@ def play_bag(
     domain_id : ROS domain id (``ROS_DOMAIN_ID`` or 0 when omitted).
     wait_subscribers_s : wait up to this long for every topic to have a matched subscriber before playing.
     settle_s : pause after the subscribers matched, s (lets the subscribers' side of discovery finish).
-    ack_timeout_s : wait up to this long at the end for reliable subscribers to acknowledge everything.
+    ack_timeout_s : wait up to this long at the end for reliable subscribers to acknowledge everything
+        (at most 0.5 s when stopped early).
     stop : set it (e.g. from a signal handler) to stop the playback early.
     on_start : called once the publishers exist and playback begins (with the report so far).
 
@@ -468,7 +469,8 @@ def play_bag(
         report.interrupted = stop.is_set()
         reliable = [p for t, p in publishers.items() if plan_of[t].qos.reliable and report.published[t]]
         if reliable:
-            deadline = time.monotonic() + ack_timeout_s
+            # Interrupted: do not hang on a subscriber that may be dead (DDS notices only after its lease).
+            deadline = time.monotonic() + (min(ack_timeout_s, 0.5) if report.interrupted else ack_timeout_s)
             report.acked = all(p.wait_for_acks(max(0.0, deadline - time.monotonic())) for p in reliable)
         time.sleep(0.05)  # best-effort samples just written leave the socket
     finally:

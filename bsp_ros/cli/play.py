@@ -104,7 +104,9 @@ def run(args: argparse.Namespace) -> int:
     for line in report.summary_lines():
         say(line)
     total = sum(report.published.values())
-    say(f"published {total} messages in {report.wall_s:.2f} s" + (" (interrupted)" if report.interrupted else ""))
+    passes = f", {report.loops} complete passes" if args.loop else ""
+    stopped = " (interrupted)" if report.interrupted else ""
+    say(f"published {total} messages in {report.wall_s:.2f} s{passes}{stopped}")
     if report.damaged:
         print("bsp play: warning: the bag is damaged; only its intact part was played", file=sys.stderr)
         return 1

@@ -58,6 +58,10 @@ class IdentificationData:
         )
 
 
+# A step back in stamps larger than this is a clock jump, not jitter or reordering in transport.
+CLOCK_JUMP_NS = 1_000_000_000
+
+
 def wrench_world_yzx(wrench: WrenchSeries, rotation_world_from_sensor: np.ndarray) -> np.ndarray:
     """``[F_y, F_z, M_x]`` in ``world`` from a sensor-frame wrench.
 
@@ -94,8 +98,15 @@ def _clean_wrench(wrench: WrenchSeries) -> tuple[np.ndarray, list[str]]:
     positive = t_ns > 0
     if not positive.all():
         notes.append(f"wrench: {int((~positive).sum())} samples with stamp <= 0 removed")
-    if (np.diff(t_ns) < 0).any():
-        notes.append(f"wrench: {int((np.diff(t_ns) < 0).sum())} stamps go backwards; samples re-ordered by stamp")
+    steps = np.diff(t_ns)
+    if steps.size and steps.min() < -CLOCK_JUMP_NS:
+        at = int(np.argmin(steps)) + 1
+        raise DataError(
+            f"wrench stamps jump back by {-steps.min() / 1e9:.3f} s at sample {at} (a looped replay or a reset "
+            "clock): the parts cannot be told apart; split the recording"
+        )
+    if (steps < 0).any():
+        notes.append(f"wrench: {int((steps < 0).sum())} stamps go backwards; samples re-ordered by stamp")
     order = np.argsort(t_ns, kind="stable")
     duplicate = np.concatenate(([False], np.diff(t_ns[order]) == 0))
     if duplicate.any():

@@ -1,0 +1,122 @@
+"""`bsp simulate` then `bsp identify` end to end on bags written into tmp_path."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bsp_ros.cli import main
+
+
+@pytest.fixture(scope="module")
+def human_bag(tmp_path_factory) -> Path:
+    bag = tmp_path_factory.mktemp("bags") / "session_a"
+    assert main(["simulate", "--out", str(bag), "--subject", "human", "--duration", "120", "--seed", "21"]) == 0
+    return bag
+
+
+def _identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict]:
+    code = main(["identify", str(bag), "--json", str(out), "--format", "none", *extra])
+    return code, json.loads(out.read_text()) if out.exists() else {}
+
+
+def test_identified_parameters_match_the_truth_within_the_core_tolerances(human_bag, tmp_path) -> None:
+    code, estimate = _identify(human_bag, tmp_path / "e.json", "--body-mass", "75", "--height", "1.78")
+    truth = json.loads((human_bag / "truth.json").read_text())
+    assert code == 0
+    assert estimate["schema"] == "bsp_ros/estimate/1"
+    assert estimate["quality"]["valid"]
+    for segment, quantities in estimate["segments"].items():
+        true = truth["segments"][segment]
+        assert quantities["static_moment_kgm"]["value"] == pytest.approx(true["static_moment_kgm"], rel=0.005)
+        assert quantities["length_m"]["value"] == pytest.approx(true["length_m"], abs=1e-3)
+        for key in ("static_moment_kgm", "mass_kg", "com_m", "first_moment_kgm", "length_m"):
+            q = quantities[key]
+            assert set(q) == {"value", "std", "source"}
+            assert abs(q["value"] - true[key]) < 3 * q["std"], (segment, key)
+    for joint, quantities in estimate["joints"].items():
+        assert quantities["coulomb_nm"]["value"] == pytest.approx(truth["joints"][joint]["coulomb_nm"], rel=0.10)
+    assert estimate["session"]["source"] == human_bag.name
+    assert estimate["bag"]["crc_errors"] == 0 and estimate["bag"]["lost_messages"] == 0
+
+
+def test_the_paper_method_runs_from_the_cli(human_bag, tmp_path) -> None:
+    code, estimate = _identify(human_bag, tmp_path / "p.json", "--method", "paper")
+    assert code == 0
+    assert estimate["method"] == "paper"
+    assert any("not identifiable" in w for w in estimate["quality"]["warnings"])
+
+
+def test_a_missing_bag_has_its_own_exit_code(tmp_path) -> None:
+    assert main(["identify", str(tmp_path / "nope")]) == 10
+
+
+def test_a_directory_that_is_not_a_bag_has_its_own_exit_code(tmp_path) -> None:
+    (tmp_path / "notes.txt").write_text("not a bag")
+    assert main(["identify", str(tmp_path)]) == 11
+
+
+def test_a_missing_topic_names_it(human_bag, tmp_path, capsys) -> None:
+    code = main(["identify", str(human_bag), "--marker-topic", "elbow=/vicon/elbow", "--format", "none"])
+    assert code == 13
+    assert "/vicon/elbow" in capsys.readouterr().err
+
+
+def test_a_truncated_bag_is_identified_from_its_intact_part_and_says_so(human_bag, tmp_path) -> None:
+    damaged = tmp_path / "damaged"
+    shutil.copytree(human_bag, damaged)
+    mcap = next(damaged.glob("*.mcap"))
+    data = mcap.read_bytes()
+    mcap.write_bytes(data[: int(len(data) * 0.7)])
+    code, estimate = _identify(damaged, tmp_path / "d.json")
+    assert code == 0
+    assert estimate["bag"]["truncated"]
+    assert estimate["bag"]["lost_messages"] > 0
+    assert estimate["quality"]["warnings"][0].startswith("bag damaged")
+
+
+def test_silly_subject_data_is_refused_with_the_value_named(human_bag, capsys) -> None:
+    assert main(["identify", str(human_bag), "--body-mass", "-70"]) == 2
+    assert "-70" in capsys.readouterr().err
+
+
+def _write_modified(tmp_path: Path, name: str, change) -> Path:
+    import dataclasses
+
+    from bsp_ros import simulation as sim
+    from bsp_ros.bag import write_session_bag
+
+    simulated = sim.simulate_cell(sim.human_arm_cell(seed=8, duration_s=60.0))
+    wrench = change(simulated.session.wrench)
+    session = dataclasses.replace(simulated.session, wrench=wrench)
+    return write_session_bag(tmp_path / name, session, simulated.truth.to_dict())
+
+
+def test_a_bag_with_nan_wrenches_is_identified_without_them_and_says_how_many(tmp_path) -> None:
+    import dataclasses
+
+    def with_nan(wrench):
+        force = wrench.force_n.copy()
+        force[1000:1050] = float("nan")
+        return dataclasses.replace(wrench, force_n=force)
+
+    bag = _write_modified(tmp_path, "nan_bag", with_nan)
+    code, estimate = _identify(bag, tmp_path / "n.json")
+    assert code == 0
+    assert any("50 samples with NaN/Inf removed" in w for w in estimate["quality"]["warnings"])
+
+
+def test_a_bag_whose_clock_jumps_back_is_refused_with_a_clear_message(tmp_path, capsys) -> None:
+    import dataclasses
+
+    def jumped(wrench):
+        t_ns = wrench.t_ns.copy()
+        t_ns[3000:] -= 20_000_000_000
+        return dataclasses.replace(wrench, t_ns=t_ns)
+
+    bag = _write_modified(tmp_path, "jump_bag", jumped)
+    assert main(["identify", str(bag), "--format", "none"]) == 3
+    assert "jump back by" in capsys.readouterr().err
