@@ -33,7 +33,9 @@ def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str =
                 values[key] = q["value"]
                 values[f"{key}.std"] = q["std"]
                 values[f"{key}.source"] = q["source"]
-            statuses.append(DiagnosticStatusData.with_values(level, f"{prefix}/{owner}", quality.get("message", ""), "", values))
+            statuses.append(
+                DiagnosticStatusData.with_values(level, f"{prefix}/{owner}", quality.get("message", ""), "", values)
+            )
     quality_values = {
         "valid": quality["valid"],
         "n_samples": quality["n_samples"],
@@ -41,7 +43,9 @@ def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str =
         **{f"residual_rms_nm.{k}": v for k, v in quality.get("residual_rms_nm", {}).items()},
         **{f"warning.{i}": w for i, w in enumerate(quality.get("warnings", []))},
     }
-    statuses.append(DiagnosticStatusData.with_values(level, f"{prefix}/quality", quality.get("message", ""), "", quality_values))
+    statuses.append(
+        DiagnosticStatusData.with_values(level, f"{prefix}/quality", quality.get("message", ""), "", quality_values)
+    )
     return DiagnosticArraySample(t_ns, "", tuple(statuses))
 
 

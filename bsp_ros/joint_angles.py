@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,7 +104,7 @@ def _clean_marker(name: str, series: MarkerSeries) -> tuple[np.ndarray, np.ndarr
     if position.ndim != 2 or position.shape[1] != 3 or position.shape[0] != t_ns.shape[0]:
         raise InputError(f"marker {name!r}: positions of shape {position.shape} do not match {t_ns.shape[0]} stamps")
     notes = []
-    finite = np.isfinite(position).all(axis=1)
+    finite = np.asarray(np.isfinite(position).all(axis=1))
     if not finite.all():
         notes.append(f"marker {name}: {int((~finite).sum())} frames with non-finite positions removed")
     order = np.argsort(t_ns, kind="stable")
@@ -170,7 +171,7 @@ def _segment_lengths(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Median sagittal distance between consecutive markers over frames where both were seen."""
     lengths, stds = [], []
-    for proximal, distal in zip(names[:-1], names[1:], strict=True):
+    for proximal, distal in itertools.pairwise(names):
         t_a, p_a = cleaned[proximal]
         t_b, p_b = cleaned[distal]
         common, i_a, i_b = np.intersect1d(t_a, t_b, assume_unique=True, return_indices=True)
@@ -263,7 +264,7 @@ def kinematics_from_angles(
     angles = np.asarray(q_rad, dtype=np.float64)
     if stamps.size < 16:
         raise DataError(f"{stamps.size} joint-angle samples: at least 16 are needed")
-    step_ns = int(round(float(np.median(np.diff(stamps)))))
+    step_ns = round(float(np.median(np.diff(stamps))))
     grid_ns = stamps[0] + step_ns * np.arange((stamps[-1] - stamps[0]) // step_ns + 1, dtype=np.int64)
     gridded, _ = _grid_values(grid_ns, stamps, angles, int(config.max_gap_s * 1e9) + step_ns // 2)
     q_grid, velocity, noise, notes = _filtered_runs(gridded, 1e9 / step_ns, config, angle_filter)
@@ -309,7 +310,7 @@ def kinematics_from_markers(
         cleaned[name] = (t_ns, position)
     lengths_m, lengths_std_m = _segment_lengths(cleaned, names)
 
-    step_ns = int(round(float(np.median(np.concatenate([np.diff(t) for t, _ in cleaned.values()])))))
+    step_ns = round(float(np.median(np.concatenate([np.diff(t) for t, _ in cleaned.values()]))))
     start_ns = min(int(t[0]) for t, _ in cleaned.values())
     stop_ns = max(int(t[-1]) for t, _ in cleaned.values())
     grid_ns = start_ns + step_ns * np.arange((stop_ns - start_ns) // step_ns + 1, dtype=np.int64)

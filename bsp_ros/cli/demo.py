@@ -25,7 +25,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return parser
 
 
-def _rows(document: dict[str, Any], truth: dict[str, Any]) -> list[tuple[str, float | None, float | None, float | None]]:
+def _rows(
+    document: dict[str, Any], truth: dict[str, Any]
+) -> list[tuple[str, float | None, float | None, float | None]]:
     rows = []
     for group, key in (("segments", "static_moment_kgm"), ("joints", "coulomb_nm")):
         for owner, quantities in document.get(group, {}).items():
@@ -40,13 +42,17 @@ def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: fl
     if document is None:
         return f"t={elapsed_s:5.1f} s  waiting for the first estimate..."
     quality = document["quality"]
-    lines = [f"t={elapsed_s:5.1f} s  {'VALID' if quality['valid'] else 'invalid'}: {quality.get('message', '')}",
-             f"{'parameter':28s} {'estimate':>10s} {'+- std':>9s} {'truth':>9s} {'error %':>8s}"]
+    lines = [
+        f"t={elapsed_s:5.1f} s  {'VALID' if quality['valid'] else 'invalid'}: {quality.get('message', '')}",
+        f"{'parameter':28s} {'estimate':>10s} {'+- std':>9s} {'truth':>9s} {'error %':>8s}",
+    ]
     for name, value, std, true in _rows(document, truth):
         if value is None:
             continue
         error = "" if not true else f"{100 * (value - true) / true:+8.2f}"
-        lines.append(f"{name:28s} {value:10.4f} {std or 0:9.2g} {true if true is not None else float('nan'):9.4f} {error}")
+        lines.append(
+            f"{name:28s} {value:10.4f} {std or 0:9.2g} {true if true is not None else float('nan'):9.4f} {error}"
+        )
     return "\n".join(lines)
 
 
@@ -58,8 +64,14 @@ def run(args: argparse.Namespace) -> int:
     env = {**os.environ, "BSP_ROS_BACKEND": "dds", "ROS_DOMAIN_ID": str(domain)}
     n_segments = "3" if args.subject == "human" else "2"
     node_args = {
-        "cell_simulator": ["--param", f"speed:={args.speed}", "--param", f"subject:={args.subject}",
-                           "--param", f"seed:={args.seed}"],
+        "cell_simulator": [
+            "--param",
+            f"speed:={args.speed}",
+            "--param",
+            f"subject:={args.subject}",
+            "--param",
+            f"seed:={args.seed}",
+        ],
         "joint_angle_estimator": ["--param", f"n_segments:={n_segments}"],
         "bsp_identifier": ["--param", f"n_segments:={n_segments}", "--param", f"mode:={args.mode}"],
     }
@@ -67,13 +79,20 @@ def run(args: argparse.Namespace) -> int:
     node = context.create_node("bsp_demo_console")
     latest: dict[str, Any] = {}
     truth: dict[str, Any] = {}
-    node.create_subscription("std_msgs/msg/String", "bsp/estimate_json",
-                             lambda m: latest.__setitem__("doc", json.loads(m.data)), "estimates")
-    node.create_subscription("std_msgs/msg/String", "sim/truth", lambda m: truth.update(json.loads(m.data)),
-                             "tf_static_listener")
+    node.create_subscription(
+        "std_msgs/msg/String", "bsp/estimate_json", lambda m: latest.__setitem__("doc", json.loads(m.data)), "estimates"
+    )
+    node.create_subscription(
+        "std_msgs/msg/String", "sim/truth", lambda m: truth.update(json.loads(m.data)), "tf_static_listener"
+    )
     processes = [
-        subprocess.Popen([sys.executable, "-m", f"bsp_ros.nodes.{name}", *node_args[name]], env=env,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        subprocess.Popen(
+            [sys.executable, "-m", f"bsp_ros.nodes.{name}", *node_args[name]],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         for name in NODES
     ]
     interactive = sys.stdout.isatty()

@@ -41,12 +41,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--height", type=float, metavar="M", help="body height (m)")
     parser.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table")
     parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
-    parser.add_argument("--marker-topic", action="append", default=[], metavar="NAME=TOPIC",
-                        help="remap a marker topic, e.g. elbow=/vicon/elbow (repeatable)")
+    parser.add_argument(
+        "--marker-topic",
+        action="append",
+        default=[],
+        metavar="NAME=TOPIC",
+        help="remap a marker topic, e.g. elbow=/vicon/elbow (repeatable)",
+    )
     parser.add_argument("--tf-topic", default="/tf")
     parser.add_argument("--tf-static-topic", default="/tf_static")
-    parser.add_argument("--format", choices=("auto", "table", "tsv", "none"), default="auto",
-                        help="stdout: a table on a terminal, tab-separated values otherwise")
+    parser.add_argument(
+        "--format",
+        choices=("auto", "table", "tsv", "none"),
+        default="auto",
+        help="stdout: a table on a terminal, tab-separated values otherwise",
+    )
     return parser
 
 
@@ -91,9 +100,12 @@ def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
 def format_table(document: dict[str, Any]) -> str:
     """A human-readable table of an estimate document."""
     quality = document["quality"]
-    lines = [f"method: {document['method']}   samples: {quality['n_samples']}   "
-             f"condition number: {quality['condition_number'] if quality['condition_number'] is None else round(quality['condition_number'], 2)}",
-             f"{'':10s} {'parameter':22s} {'value':>12s} {'+- std':>11s}  source"]
+    condition = quality["condition_number"]
+    condition_text = "n/a" if condition is None else f"{condition:.3g}"
+    lines = [
+        f"method: {document['method']}   samples: {quality['n_samples']}   condition number: {condition_text}",
+        f"{'':10s} {'parameter':22s} {'value':>12s} {'+- std':>11s}  source",
+    ]
     for owner, key, value, std, source in rows(document):
         value_text = "n/a" if value is None else f"{value:.5g}"
         std_text = "n/a" if std is None else f"{std:.2g}"

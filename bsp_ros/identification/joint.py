@@ -194,7 +194,7 @@ def _elastic_check(
     base_beta, wide_beta = base.values[:n], fit.values[:n]
     change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
     correlation = fit.covariance / np.sqrt(np.outer(np.diag(fit.covariance), np.diag(fit.covariance)) + 1e-300)
-    for j, joint in enumerate(joints_for(n)):
+    for joint in joints_for(n):
         picks = [
             i
             for i, (key, owner) in enumerate(problem.names)

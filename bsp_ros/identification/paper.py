@@ -119,7 +119,8 @@ def identify_paper(data: IdentificationData, config: PaperConfig | None = None) 
     passive_std = [float(np.std(np.abs(r))) / np.sqrt(n_samples) for r in _residuals(data, values, n)]
     covariance = np.diag(np.concatenate((static_std, passive_std)) ** 2)
     valid = n_samples >= 2 * len(names) and bool(np.isfinite(values).all())
-    warnings = list(data.warnings) + [
+    warnings = [
+        *data.warnings,
         "paper method: m2 and m3 are not identifiable from gravity; the bounded solver's split is arbitrary",
         "paper method: std are classical per-joint errors, ignoring errors carried down the chain",
     ]

@@ -20,7 +20,14 @@ from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier
 from bsp_ros.pipeline import IdentifyOptions, fuse
 from bsp_ros.runtime import run_node
 from bsp_ros.streams import segments_for
-from msg_adapters.diagnostics import ERROR, OK, WARN, DiagnosticArraySample, DiagnosticStatusData, build_diagnostic_array
+from msg_adapters.diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    DiagnosticArraySample,
+    DiagnosticStatusData,
+    build_diagnostic_array,
+)
 from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import JointStateSample, build_joint_state, read_joint_state
 from msg_adapters.tf import read_tf_message, rotation_between
@@ -56,8 +63,14 @@ class BspIdentifierNode:
         sex = p("sex", "male", "anthropometric table: male or female")
         self.world_frame = p("world_frame", "world", "frame of the markers and of gravity (z up)")
         self.wrench_topic = p("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic")
-        self.tf_wait_s = p("tf_wait_s", 2.0, "wait this long for the wrench frame's transform before taking it as world", "s",
-                           lo=0.0, hi=60.0)
+        self.tf_wait_s = p(
+            "tf_wait_s",
+            2.0,
+            "wait this long for the wrench frame's transform before taking it as world",
+            "s",
+            lo=0.0,
+            hi=60.0,
+        )
         self.first_wrench_wall_ns: int | None = None
         subject = SubjectInfo(body_mass or None, height or None, sex)
         self.options = IdentifyOptions(method=method, passive=PassiveModel.parse(passive), subject=subject)
@@ -109,8 +122,10 @@ class BspIdentifierNode:
         """
         if frame_id in self.rotations:
             return self.rotations[frame_id]
-        rotation = np.eye(3) if frame_id == self.world_frame else rotation_between(
-            self.transforms.values(), self.world_frame, frame_id
+        rotation = (
+            np.eye(3)
+            if frame_id == self.world_frame
+            else rotation_between(self.transforms.values(), self.world_frame, frame_id)
         )
         if rotation is None:
             now = self.node.now_ns()
@@ -196,8 +211,13 @@ class BspIdentifierNode:
         result = self.recursive.result()
         assert self.lengths is not None
         data = IdentificationData(
-            np.zeros(0, dtype=np.int64), np.zeros((0, self.n)), np.zeros((0, self.n)), np.zeros((0, self.n)),
-            self.lengths, np.zeros(self.n), np.zeros(self.n),
+            np.zeros(0, dtype=np.int64),
+            np.zeros((0, self.n)),
+            np.zeros((0, self.n)),
+            np.zeros((0, self.n)),
+            self.lengths,
+            np.zeros(self.n),
+            np.zeros(self.n),
         )
         posterior = fuse(result, data, self.options.subject) if result.valid else None
         return estimate_document(result, data, posterior, self.options.subject), self.recursive_guard.last_t_ns or 0
@@ -208,9 +228,21 @@ class BspIdentifierNode:
         if reason is None:
             document, stamp = self.current_document()
         else:
-            document = {"schema": "bsp_ros/estimate/1", "method": self.options.method, "segments": {}, "joints": {},
-                        "quality": {"valid": False, "n_samples": 0, "condition_number": None, "residual_rms_nm": {},
-                                    "warnings": [], "message": reason, "level": "invalid"}}
+            document = {
+                "schema": "bsp_ros/estimate/1",
+                "method": self.options.method,
+                "segments": {},
+                "joints": {},
+                "quality": {
+                    "valid": False,
+                    "n_samples": 0,
+                    "condition_number": None,
+                    "residual_rms_nm": {},
+                    "warnings": [],
+                    "message": reason,
+                    "level": "invalid",
+                },
+            }
             stamp = self.node.now_ns()
         document["mode"] = self.mode
         self.publish(document, stamp)

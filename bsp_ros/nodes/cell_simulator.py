@@ -70,7 +70,9 @@ class CellSimulatorNode:
         }
         tf_pub = node.create_publisher("tf2_msgs/msg/TFMessage", "/tf_static", "tf_static")
         rotation = self.simulator.rotation_world_from_sensor
-        transform = TransformSample(self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion_from_matrix(rotation))
+        transform = TransformSample(
+            self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion_from_matrix(rotation)
+        )
         tf_pub.publish(build_tf_message(types, [transform]))
         truth_pub = node.create_publisher("std_msgs/msg/String", "sim/truth", "tf_static")
         truth = self.simulator.truth.to_dict()
@@ -79,7 +81,10 @@ class CellSimulatorNode:
         node.create_timer(0.005, self.tick)
         node.get_logger().info(
             "simulating a %d-segment arm at %.1fx real time, wrench %.0f Hz, markers %.0f Hz",
-            self.simulator.n_segments, self.speed, wrench_hz, marker_hz,
+            self.simulator.n_segments,
+            self.speed,
+            wrench_hz,
+            marker_hz,
         )
 
     def _sim_now_ns(self) -> int:

@@ -10,7 +10,14 @@ import numpy as np
 from bsp_ros.online.causal_angles import CausalAnglesConfig, CausalJointAngles
 from bsp_ros.runtime import run_node
 from bsp_ros.streams import joints_for, markers_for, segments_for
-from msg_adapters.diagnostics import ERROR, OK, WARN, DiagnosticArraySample, DiagnosticStatusData, build_diagnostic_array
+from msg_adapters.diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    DiagnosticArraySample,
+    DiagnosticStatusData,
+    build_diagnostic_array,
+)
 from msg_adapters.joint_state import JointStateSample, build_joint_state
 from msg_adapters.pose import read_pose_stamped
 

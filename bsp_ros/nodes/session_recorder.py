@@ -61,7 +61,8 @@ class SessionRecorderNode:
                 session_time_ns=session.get("start_time_ns") or self.node.now_ns(),
                 source=session.get("source", "live"),
             )
-        self.stored_ids.append(record.id)
+        if record.id is not None:
+            self.stored_ids.append(record.id)
         self.node.get_logger().info("stored session %s of subject %s", record.id, self.subject)
 
 
