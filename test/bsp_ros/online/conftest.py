@@ -1,0 +1,30 @@
+"""A simulated session fed through the causal angle estimator, as the live nodes would see it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bsp_ros import simulation as sim
+from bsp_ros.identification.data import wrench_world_yzx
+from bsp_ros.online.causal_angles import CausalJointAngles
+
+
+@pytest.fixture(scope="session")
+def live_streams():
+    """(simulated session, wrench stamps, world wrench (N,3), causal angle samples stamped by group delay)."""
+    simulated = sim.simulate_cell(sim.human_arm_cell(seed=13, duration_s=60.0))
+    session = simulated.session
+    frames: dict[int, dict[str, np.ndarray]] = {}
+    for name, series in session.markers.items():
+        for t, p in zip(series.t_ns, series.position_m, strict=True):
+            frames.setdefault(int(t), {})[name] = p
+    estimator = CausalJointAngles(3)
+    delay_ns = int(np.sqrt(2) / (2 * np.pi * 5.0) * 1e9)
+    angles = []
+    for t in sorted(frames):
+        sample = estimator.update(t, frames[t])
+        if sample is not None:
+            angles.append((t - delay_ns, sample))
+    wrench = wrench_world_yzx(session.wrench, session.rotation_world_from_sensor)
+    return simulated, session.wrench.t_ns, wrench, angles

@@ -1,0 +1,67 @@
+"""The sliding-window identifier: accuracy from live-like streams and refusal of bad samples."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier
+
+
+def _feed(identifier: WindowedIdentifier, stamps, wrench, angles, corrupt=None) -> None:
+    events = [(int(t), 0, i) for i, t in enumerate(stamps)] + [(t, 1, k) for k, (t, _) in enumerate(angles)]
+    for t, kind, index in sorted(events):
+        if kind == 0:
+            values = wrench[index] if corrupt is None else corrupt(index, wrench[index])
+            identifier.add_wrench(t, values)
+        else:
+            sample = angles[index][1]
+            identifier.add_joint_state(t, sample.q_rad, sample.lengths_m)
+
+
+def test_window_estimate_matches_the_truth(live_streams) -> None:
+    simulated, stamps, wrench, angles = live_streams
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=30.0))
+    _feed(identifier, stamps, wrench, angles)
+    estimate = identifier.estimate()
+    assert estimate.valid, estimate.document["quality"]
+    truth = simulated.truth.to_dict()
+    for segment, q in estimate.document["segments"].items():
+        assert q["static_moment_kgm"]["value"] == pytest.approx(
+            truth["segments"][segment]["static_moment_kgm"], rel=0.005
+        )
+    for joint, q in estimate.document["joints"].items():
+        assert q["coulomb_nm"]["value"] == pytest.approx(truth["joints"][joint]["coulomb_nm"], rel=0.10)
+    assert estimate.document["session"]["end_time_ns"] - estimate.document["session"]["start_time_ns"] <= 30e9
+
+
+def test_nan_out_of_order_and_duplicate_samples_are_refused_and_counted(live_streams) -> None:
+    _, stamps, wrench, angles = live_streams
+    identifier = WindowedIdentifier(3)
+    _feed(identifier, stamps, wrench, angles, corrupt=lambda i, w: np.full(3, np.nan) if i % 100 == 0 else w)
+    assert identifier.wrench_guard.refused["non_finite"] == len(range(0, len(stamps), 100))
+    last = identifier.wrench.last_t_ns
+    assert not identifier.add_wrench(last, wrench[0])  # duplicate
+    assert not identifier.add_wrench(last - 5_000_000, wrench[0])  # out of order by 5 ms
+    assert identifier.wrench_guard.refused["out_of_order"] == 2
+    assert identifier.estimate().valid
+
+
+def test_a_backwards_clock_jump_restarts_the_window(live_streams) -> None:
+    _, stamps, wrench, angles = live_streams
+    identifier = WindowedIdentifier(3)
+    _feed(identifier, stamps, wrench, angles)
+    assert identifier.add_wrench(int(stamps[0]) - 10_000_000_000, wrench[0])  # 10 s before the session began
+    assert len(identifier.wrench) == 1 and len(identifier.angles) == 0
+    estimate = identifier.estimate()
+    assert not estimate.valid
+
+
+def test_stale_joint_states_make_the_estimate_invalid(live_streams) -> None:
+    _, stamps, wrench, angles = live_streams
+    identifier = WindowedIdentifier(3, WindowConfig(stale_s=0.5))
+    cut = angles[: len(angles) // 2]
+    _feed(identifier, stamps, wrench, cut)
+    estimate = identifier.estimate()
+    assert not estimate.valid
+    assert "stale input: newest joint states" in estimate.document["quality"]["message"]
