@@ -33,7 +33,7 @@ def test_recursive_estimate_converges_to_the_truth(live_streams) -> None:
     truth = simulated.truth
     for j in range(3):
         assert result.values[j] == pytest.approx(truth.static_moments_kgm[j], rel=0.01)
-    for j, joint in enumerate(("shoulder", "elbow", "wrist")):
+    for joint in ("shoulder", "elbow", "wrist"):
         assert result.value("coulomb_nm", joint) == pytest.approx(
             truth.to_dict()["joints"][joint]["coulomb_nm"], rel=0.1
         )
