@@ -65,3 +65,16 @@ def test_stale_joint_states_make_the_estimate_invalid(live_streams) -> None:
     estimate = identifier.estimate()
     assert not estimate.valid
     assert "stale input: newest joint states" in estimate.document["quality"]["message"]
+
+
+def test_block_average_slows_a_fast_stream_and_keeps_its_mean() -> None:
+    from bsp_ros.online.windowed import block_average
+
+    t_ns = 1_000_000_000 + np.arange(1000, dtype=np.int64) * 1_000_000  # 1 kHz
+    values = np.column_stack((np.arange(1000.0), np.ones(1000)))
+    stamps, means = block_average(t_ns, values, 200.0)
+    assert stamps.size == 200
+    np.testing.assert_allclose(means[:, 0], np.arange(1000.0).reshape(-1, 5).mean(axis=1))
+    np.testing.assert_array_equal(stamps, t_ns.reshape(-1, 5)[:, 2])
+    same_t, same_v = block_average(t_ns[::10], values[::10], 200.0)
+    assert same_t.size == 100
