@@ -35,11 +35,11 @@ _OURS = """
 from bsp_ros.bag import read_session
 
 def task(path):
+    if IDENTIFY:  # everything `bsp identify` does but printing: read, angles, identification, prior fusion
+        from bsp_ros.offline import identify_bag
+        document = identify_bag(path)
+        return sum(document["bag"]["messages"].values())
     result = read_session(path)
-    if IDENTIFY:
-        from bsp_ros.identification.data import identification_data_from_session
-        from bsp_ros.identification.joint import identify_joint
-        identify_joint(identification_data_from_session(result.session))
     return result.session.wrench.t_ns.size + sum(m.t_ns.size for m in result.session.markers.values())
 """
 
