@@ -22,7 +22,7 @@ class SessionEndDetector:
     def on_estimate(self, document: dict[str, Any], now_ns: int) -> None:
         """Remember a live estimate (only valid ones can be stored)."""
         self.last_seen_ns = now_ns
-        if document.get("quality", {}).get("valid"):
+        if isinstance(document, dict) and isinstance(quality := document.get("quality"), dict) and quality.get("valid"):
             if self.stored:  # a new session after a stored one
                 self.stored = False
             self.last_valid = document

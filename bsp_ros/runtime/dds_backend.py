@@ -16,6 +16,7 @@ from typing import Any
 
 from cyclonedds.core import (
     DDSException,
+    GuardCondition,
     InstanceState,
     Qos,
     ReadCondition,
@@ -375,6 +376,10 @@ class DdsContext:
             self._publisher = Publisher(self.participant)
             self._subscriber = Subscriber(self.participant)
             self._waitset = WaitSet(self.participant)
+            # A WaitSet with nothing attached returns from wait() at once, so a process without
+            # subscriptions would spin a core; an idle guard condition makes wait() block as intended.
+            self._idle_guard = GuardCondition(self.participant)
+            self._waitset.attach(self._idle_guard)
         except DDSException as exc:
             raise RuntimeBackendError(f"cannot create a DDS participant on domain {domain_id}: {exc}") from exc
         self.gid = _gid(self.participant)

@@ -41,6 +41,9 @@ def publish(ctx: DdsContext, count: int) -> None:
     pub = node.create_publisher(WRENCH, "/ft_sensor/wrench", "default")
     while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
         time.sleep(0.01)
+    # The writer can see the reader before the reader has seen the writer; a volatile reader drops what
+    # arrives from a writer it does not know yet, so let discovery finish on both sides first.
+    time.sleep(0.3)
     for i in range(count):
         pub.publish(_wrench(ctx, i))
         time.sleep(0.001)

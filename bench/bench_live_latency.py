@@ -1,0 +1,411 @@
+"""Benchmark: latency, update rate, CPU, memory and loss of the live node suite on DDS loopback at 1 kHz."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from array import array
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.runtime import make_context
+from msg_adapters.diagnostics import read_diagnostic_array
+from msg_adapters.stamps import stamp_to_ns
+
+WRENCH_HZ, MARKER_HZ, SPEED = 1000.0, 100.0, 1.0
+PERIOD_NS = int(1e9 / WRENCH_HZ)  # the simulator's wrench grid: stamp = start + k * PERIOD_NS
+UPDATE_HZ = 5.0  # the identifier's default estimate rate
+TICK_MS = 5.0  # the simulator publishes every due sample on a 5 ms timer
+NODES = ("joint_angle_estimator", "bsp_identifier", "cell_simulator")
+RECEIVED_KEYS = ("wrench", "refused", "waiting_for_tf")  # every wrench the identifier took off the wire
+CLK_TCK = os.sysconf("SC_CLK_TCK")
+PAGE = os.sysconf("SC_PAGE_SIZE")
+RECURSIVE_P99_MS = 5.0
+# "Flat memory": RSS growth per node over the second half of the measured run below this. The windowed
+# identifier's 30 s window is still filling after a 20 s warm-up, so growth from the start is expected.
+FLAT_MB = 1.0
+
+
+def _cpu_s(stat_path: str) -> tuple[float, float]:
+    with open(stat_path) as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return int(fields[11]) / CLK_TCK, int(fields[12]) / CLK_TCK
+
+
+def proc_cpu_rss(pid: int) -> tuple[float, float, float, float]:
+    """User, system and main-thread CPU seconds and resident set size in MB of a process, from /proc."""
+    user, system = _cpu_s(f"/proc/{pid}/stat")
+    main_thread = sum(_cpu_s(f"/proc/{pid}/task/{pid}/stat"))
+    with open(f"/proc/{pid}/statm") as f:
+        rss_pages = int(f.read().split()[1])
+    return user, system, main_thread, rss_pages * PAGE / 2**20
+
+
+def machine_busy() -> tuple[float, float]:
+    """Busy and total CPU seconds of the whole machine (all cores), from /proc/stat."""
+    with open("/proc/stat") as f:
+        ticks = [int(v) for v in f.readline().split()[1:]]
+    idle = ticks[3] + ticks[4]
+    return (sum(ticks[:8]) - idle) / CLK_TCK, sum(ticks[:8]) / CLK_TCK
+
+
+def pct(values: np.ndarray, q: float) -> float:
+    return float(np.percentile(values, q)) if values.size else float("nan")
+
+
+def stats_ms(values_ns: np.ndarray) -> str:
+    v = values_ns / 1e6
+    if not v.size:
+        return "no samples"
+    return f"p50 {pct(v, 50):8.3f}  p99 {pct(v, 99):8.3f}  max {float(v.max()):8.3f} ms  (n={v.size})"
+
+
+@dataclass
+class Snapshot:
+    """Resources of every node (and of this listener and the machine) at one instant."""
+
+    wall_ns: int
+    cpu_s: dict[str, tuple[float, float, float]]  # user, system, main thread
+    rss_mb: dict[str, float]
+    machine: tuple[float, float]
+
+
+@dataclass
+class Stream:
+    """Stamps, publication times (DDS source timestamps) and listener receive times of one topic."""
+
+    stamp: array = field(default_factory=lambda: array("q"))
+    pub: array = field(default_factory=lambda: array("q"))
+    recv: array = field(default_factory=lambda: array("q"))
+
+    def add(self, stamp_ns: int, msg: Any) -> None:
+        self.recv.append(time.time_ns())
+        self.stamp.append(stamp_ns)
+        info = getattr(msg, "sample_info", None)
+        self.pub.append(int(info.source_timestamp) if info is not None else -1)
+
+    def arrays(self, lo_ns: int, hi_ns: int, by: str = "recv") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(stamp, pub, recv) of the messages whose ``by`` time ("recv" or "stamp") is in [lo_ns, hi_ns)."""
+        stamp, pub, recv = (np.frombuffer(a, dtype=np.int64) for a in (self.stamp, self.pub, self.recv))
+        key = recv if by == "recv" else stamp
+        keep = (key >= lo_ns) & (key < hi_ns)
+        return stamp[keep], pub[keep], recv[keep]
+
+
+class Listener:
+    """In-process DDS listener: wrench, estimates, passive moments, diagnostics and the simulator's start."""
+
+    def __init__(self, domain: int) -> None:
+        self.context = make_context("dds", domain_id=domain, args=[])
+        node = self.context.create_node("bench_listener")
+        self.wrench, self.estimate, self.passive = Stream(), Stream(), Stream()
+        self.estimate_valid = array("b")
+        self.invalid_reasons: dict[str, int] = {}
+        self.diagnostics: dict[str, list[tuple[int, int, dict[str, str]]]] = {}
+        self.start_ns: int | None = None
+        node.create_subscription("geometry_msgs/msg/WrenchStamped", "/ft_sensor/wrench", self._on_wrench, "sensor_data")
+        node.create_subscription("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", self._on_estimate, "estimates")
+        node.create_subscription(
+            "sensor_msgs/msg/JointState",
+            "bsp/passive_moments",
+            lambda m: self.passive.add(stamp_to_ns(m.header.stamp), m),
+            "estimates",
+        )
+        node.create_subscription("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", self._on_diag, "default")
+        node.create_subscription("tf2_msgs/msg/TFMessage", "/tf_static", self._on_tf_static, "tf_static_listener")
+
+    def _on_wrench(self, msg: Any) -> None:
+        self.wrench.add(stamp_to_ns(msg.header.stamp), msg)
+
+    def _on_estimate(self, msg: Any) -> None:
+        self.estimate.add(stamp_to_ns(msg.header.stamp), msg)
+        quality = [s for s in msg.status if s.name.endswith("/quality")]
+        valid = any(kv.key == "valid" and kv.value == "True" for s in quality for kv in s.values)
+        self.estimate_valid.append(int(valid))
+        if not valid and self.start_ns is not None:
+            reason = re.sub(r"[0-9.]+", "#", quality[0].message if quality else "no quality status")
+            self.invalid_reasons[reason] = self.invalid_reasons.get(reason, 0) + 1
+
+    def _on_diag(self, msg: Any) -> None:
+        sample = read_diagnostic_array(msg)
+        for status in sample.status:
+            self.diagnostics.setdefault(status.name, []).append((time.time_ns(), sample.t_ns, dict(status.values)))
+
+    def _on_tf_static(self, msg: Any) -> None:
+        for transform in msg.transforms:
+            if transform.header.frame_id == "world" and self.start_ns is None:
+                self.start_ns = stamp_to_ns(transform.header.stamp)  # the simulator's start wall time
+
+    def spin_until(self, wall_ns: int) -> None:
+        while time.time_ns() < wall_ns:
+            self.context.spin(min(0.2, max(0.001, (wall_ns - time.time_ns()) / 1e9)))
+
+
+class Cell:
+    """The three nodes as processes on one private domain."""
+
+    def __init__(self, domain: int, log_dir: str | None) -> None:
+        self.env = {**os.environ, "BSP_ROS_BACKEND": "dds", "ROS_DOMAIN_ID": str(domain)}
+        self.log_dir = log_dir
+        self.processes: dict[str, subprocess.Popen[bytes]] = {}
+
+    def start(self, name: str, params: list[str]) -> None:
+        args = [a for p in params for a in ("--param", p)]
+        out = open(os.path.join(self.log_dir, f"{name}.log"), "wb") if self.log_dir else subprocess.DEVNULL
+        self.processes[name] = subprocess.Popen(
+            [sys.executable, "-m", f"bsp_ros.nodes.{name}", *args], env=self.env, stdout=out, stderr=out
+        )
+
+    def alive(self) -> dict[str, bool]:
+        return {name: p.poll() is None for name, p in self.processes.items()}
+
+    def close(self) -> None:
+        for process in self.processes.values():
+            if process.poll() is None:
+                process.terminate()
+        for process in self.processes.values():
+            try:
+                process.wait(5)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(5)
+
+
+def snapshot(cell: Cell) -> Snapshot:
+    cpu, rss = {}, {}
+    for name, process in [*cell.processes.items(), ("listener", None)]:
+        try:
+            user, system, main_thread, rss[name] = proc_cpu_rss(process.pid if process is not None else os.getpid())
+            cpu[name] = (user, system, main_thread)
+        except (OSError, IndexError):
+            cpu[name], rss[name] = (float("nan"),) * 3, float("nan")
+    return Snapshot(time.time_ns(), cpu, rss, machine_busy())
+
+
+def identifier_counts(listener: Listener, before_ns: int | None = None) -> tuple[int, dict[str, int]] | None:
+    """(stamp, counters) of the identifier's newest /diagnostics status stamped before ``before_ns``."""
+    rows = [r for r in listener.diagnostics.get("bsp_identifier", []) if before_ns is None or r[1] <= before_ns]
+    if not rows:
+        return None
+    _, stamp, values = rows[-1]
+    return stamp, {k: int(v) for k, v in values.items() if v.lstrip("-").isdigit()}
+
+
+def received(counts: dict[str, int]) -> int:
+    return sum(counts.get(k, 0) for k in RECEIVED_KEYS)
+
+
+def run_mode(mode: str, domain: int, duration_s: float, warmup_s: float, log_dir: str | None) -> dict[str, Any]:
+    """Run the cell in one identifier mode and return what was measured."""
+    listener = Listener(domain)
+    cell = Cell(domain, log_dir)
+    result: dict[str, Any] = {"mode": mode, "domain": domain}
+    try:
+        cell.start("joint_angle_estimator", [f"marker_hz:={MARKER_HZ}"])
+        cell.start("bsp_identifier", [f"mode:={mode}", f"update_hz:={UPDATE_HZ}"])
+        deadline = time.time_ns() + int(60e9)
+        while not {"bsp_identifier", "joint_angle_estimator"} <= listener.diagnostics.keys():
+            if time.time_ns() > deadline or not all(cell.alive().values()):
+                raise RuntimeError(f"nodes did not come up: {cell.alive()} (see --log-dir)")
+            listener.context.spin(0.2)
+        total_s = warmup_s + duration_s
+        cell.start(
+            "cell_simulator",
+            [f"wrench_hz:={WRENCH_HZ}", f"marker_hz:={MARKER_HZ}", f"speed:={SPEED}", f"duration_s:={total_s}"],
+        )
+        deadline = time.time_ns() + int(30e9)
+        while listener.start_ns is None:
+            if time.time_ns() > deadline:
+                raise RuntimeError("no /tf_static from the simulator")
+            listener.context.spin(0.1)
+        start = listener.start_ns
+        t0, t1 = start + int(warmup_s * 1e9), start + int(total_s * 1e9)
+        listener.spin_until(t0)
+        first = snapshot(cell)
+        rss_series = [first]
+        while time.time_ns() < t1:
+            listener.spin_until(min(t1, time.time_ns() + int(5e9)))
+            rss_series.append(snapshot(cell))
+        last = rss_series[-1]
+        listener.spin_until(t1 + int(2.5e9))  # the stream has ended: let the identifier report its final counters
+        result.update(alive=cell.alive())
+    finally:
+        cell.close()
+        listener.context.shutdown()
+    result.update(
+        listener=listener, start=start, t0=t0, t1=t1, first=first, last=last, rss_series=rss_series, total_s=total_s
+    )
+    return result
+
+
+def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
+    """Print one mode's figures; return (target, passed, figure) rows."""
+    listener: Listener = r["listener"]
+    mode, t0, t1, start = r["mode"], r["t0"], r["t1"], r["start"]
+    targets: list[tuple[str, bool, str]] = []
+    print(f"\n=== mode:={mode}  (domain {r['domain']}, measured {duration_s:.0f} s after the warm-up)")
+    if not all(r["alive"].values()):
+        print(f"  WARNING: a node exited during the run: {r['alive']}")
+
+    # -- wrench publication and transport ------------------------------------------------------------
+    w_stamp, w_pub, w_recv = listener.wrench.arrays(t0, t1, by="stamp")
+    seq = (w_stamp - start) // PERIOD_NS
+    expected_in_window = int((t1 - t0) // PERIOD_NS)
+    print("  wrench /ft_sensor/wrench at the listener")
+    print(f"    publication - stamp (5 ms ticks)   {stats_ms(w_pub - w_stamp)}")
+    print(f"    receive - publication (transport)  {stats_ms(w_recv - w_pub)}")
+    print(f"    receive - stamp                    {stats_ms(w_recv - w_stamp)}")
+    uniq = np.unique(seq)
+    gaps = int(uniq[-1] - uniq[0] + 1 - uniq.size) if uniq.size else 0
+    print(f"    received {w_stamp.size} stamped in the measured run (grid: {expected_in_window}), gaps: {gaps}")
+
+    # -- end-to-end latency ----------------------------------------------------------------------------
+    stream = listener.passive if mode == "recursive" else listener.estimate
+    topic = "bsp/passive_moments" if mode == "recursive" else "bsp/estimate"
+    e_stamp, e_pub, e_recv = stream.arrays(t0, t1, by="stamp")
+    all_stamp, all_pub, all_recv = listener.wrench.arrays(0, 2**62)
+    order = np.argsort(all_stamp, kind="stable")
+    ws, wp, wr = all_stamp[order], all_pub[order], all_recv[order]
+    idx = np.clip(np.searchsorted(ws, e_stamp), 0, max(ws.size - 1, 0))
+    matched = (ws[idx] == e_stamp) if ws.size else np.zeros(e_stamp.size, dtype=bool)
+    lat_recv = e_recv[matched] - wr[idx[matched]]
+    lat_stamp = e_recv[matched] - e_stamp[matched]
+    lat_pub = e_pub[matched] - wp[idx[matched]]
+    print(
+        f"  end-to-end latency: wrench -> {topic} stamped with it ({int(matched.sum())} of {e_stamp.size} matched;"
+        " invalid estimates carry the wall clock)"
+    )
+    print(f"    estimate receive - wrench receive  {stats_ms(lat_recv)}   <- primary")
+    print(f"    estimate receive - wrench stamp    {stats_ms(lat_stamp)}")
+    print(f"    estimate pub - wrench pub (nodes)  {stats_ms(lat_pub)}")
+    if mode == "recursive":
+        p99 = pct(lat_recv / 1e6, 99)
+        per_wrench = e_stamp.size / max(expected_in_window, 1)
+        print(f"    updates per published wrench: {per_wrench:.3f} (the filter freezes while the arm is still)")
+        targets.append(("recursive p99 < 5 ms", bool(lat_recv.size) and p99 < RECURSIVE_P99_MS, f"p99 {p99:.2f} ms"))
+
+    # -- update rate -------------------------------------------------------------------------------------
+    _, ea_pub, ea_recv = listener.estimate.arrays(t0, t1)
+    valid = np.frombuffer(listener.estimate_valid, dtype=np.int8)
+    all_recv_est = np.frombuffer(listener.estimate.recv, dtype=np.int64)
+    valid = valid[(all_recv_est >= t0) & (all_recv_est < t1)]
+    period_s = 1.0 / UPDATE_HZ
+    intervals = np.diff(ea_recv) / 1e9
+    pub_intervals = np.diff(ea_pub) / 1e9
+    rate = (ea_recv.size - 1) / ((ea_recv[-1] - ea_recv[0]) / 1e9) if ea_recv.size > 1 else 0.0
+    late = float((intervals > 1.5 * period_s).mean()) if intervals.size else 1.0
+    print(f"  bsp/estimate updates (target {UPDATE_HZ:.0f} Hz), {ea_recv.size} received, {int(valid.sum())} valid")
+    if intervals.size:
+        print(
+            f"    rate {rate:.3f} Hz; interval mean {intervals.mean() * 1e3:.1f} ms, p99 {pct(intervals, 99) * 1e3:.1f}"
+            f" ms, max {intervals.max() * 1e3:.1f} ms; later than 1.5 periods: {late:.2%}"
+            f" (publisher side p99 {pct(pub_intervals, 99) * 1e3:.1f} ms)"
+        )
+    if listener.invalid_reasons:
+        top = sorted(listener.invalid_reasons.items(), key=lambda kv: -kv[1])[:3]
+        print("    invalid (whole run, after the simulator started): " + "; ".join(f"{n}x {m!r}" for m, n in top))
+    if mode == "windowed":
+        ok = rate >= 0.99 * UPDATE_HZ and late <= 0.01 and valid.size > 0 and bool(valid.all())
+        targets.append(
+            ("windowed >= 5 Hz on time (rate >= 4.95 Hz, <= 1% late, all valid)", ok, f"{rate:.2f} Hz, {late:.1%}")
+        )
+
+    # -- CPU and memory ------------------------------------------------------------------------------------
+    first, last = r["first"], r["last"]
+    wall = (last.wall_ns - first.wall_ns) / 1e9
+    busy = (last.machine[0] - first.machine[0]) / wall
+    ours = 0.0
+    print(f"  CPU (share of one core over {wall:.0f} s; other threads = DDS reader thread and Cyclone's) and RSS")
+    flat = True
+    growth_text = []
+    for name in [*NODES, "listener"]:
+        user, system, main_thread = ((b - a) / wall for a, b in zip(first.cpu_s[name], last.cpu_s[name], strict=True))
+        cpu = user + system
+        ours += cpu
+        series = np.array([s.rss_mb[name] for s in r["rss_series"]])
+        growth = last.rss_mb[name] - first.rss_mb[name]
+        half = series[len(series) // 2 :]
+        half_growth = float(half[-1] - half[0])
+        print(
+            f"    {name:22s} CPU {cpu:6.1%} (sys {system:5.1%}, other threads {cpu - main_thread:5.1%})"
+            f"  RSS {first.rss_mb[name]:7.1f} -> {last.rss_mb[name]:7.1f} MB"
+            f" (growth {growth:+6.2f} MB, of which 2nd half {half_growth:+6.2f} MB)"
+        )
+        if name != "listener":
+            flat &= abs(half_growth) < FLAT_MB
+            growth_text.append(f"{half_growth:+.2f}")
+    print(f"    machine busy {busy:.0%} of one core (2 cores = 200%), of which other processes {busy - ours:.0%}")
+    targets.append(
+        (f"flat memory (2nd-half RSS growth < {FLAT_MB:g} MB per node)", flat, " / ".join(growth_text) + " MB")
+    )
+
+    # -- loss ----------------------------------------------------------------------------------------------
+    published = int(r["total_s"] * 1e9) // PERIOD_NS + 1  # duration_s caps the stream: samples 0 .. total/period
+    final = identifier_counts(listener)
+    at_t0 = identifier_counts(listener, t0)
+    if final is None:
+        print("  loss: no /diagnostics from bsp_identifier")
+        targets.append(("zero loss", False, "no counters"))
+        return targets
+    counts = final[1]
+    got = received(counts)
+    all_seq = np.unique((np.frombuffer(listener.wrench.stamp, dtype=np.int64) - start) // PERIOD_NS)
+    listener_got, highest = int(all_seq.size), int(all_seq[-1]) + 1 if all_seq.size else 0
+    print(
+        f"  loss: published {published} (stream capped at {r['total_s']:.0f} s; listener saw {listener_got},"
+        f" highest seq {highest})"
+    )
+    print(
+        f"    identifier counters: {', '.join(f'{k} {v}' for k, v in counts.items())}"
+        f" -> took {got}, lost {published - got} over the whole run"
+    )
+    if at_t0 is not None:
+        stamp0, counts0 = at_t0
+        pub_all = np.frombuffer(listener.wrench.pub, dtype=np.int64)
+        backlog = int((pub_all <= stamp0).sum()) - received(counts0)
+        print(f"    identifier backlog at the end of the warm-up: {backlog} wrench published but not yet counted")
+    targets.append(("zero loss over the whole run", published == got, f"{published - got} lost"))
+    return targets
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--duration", type=float, default=600.0, help="measured seconds per mode (after warm-up)")
+    parser.add_argument("--warmup", type=float, default=20.0, help="seconds before measuring")
+    parser.add_argument("--modes", default="windowed,recursive", help="comma-separated identifier modes")
+    parser.add_argument("--domain", type=int, default=60 + (os.getpid() % 40) * 2, help="first private domain id")
+    parser.add_argument("--log-dir", default=None, help="keep the nodes' output here")
+    args = parser.parse_args()
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # unwind, so that the nodes are stopped too
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # also when started in the background
+    modes = [m.strip() for m in args.modes.split(",") if m.strip()]
+    if args.log_dir:
+        os.makedirs(args.log_dir, exist_ok=True)
+    with open("/proc/loadavg") as f:
+        load = f.read().split()[:3]
+    print(
+        f"live cell: wrench {WRENCH_HZ:.0f} Hz, markers {MARKER_HZ:.0f} Hz, speed {SPEED}, {args.duration:.0f} s"
+        f" per mode after {args.warmup:.0f} s warm-up; {os.cpu_count()} cores, load average {' '.join(load)}"
+    )
+    rows: list[tuple[str, str, bool, str]] = []
+    for k, mode in enumerate(modes):
+        log_dir = os.path.join(args.log_dir, mode) if args.log_dir else None
+        if log_dir:
+            os.makedirs(log_dir, exist_ok=True)
+        result = run_mode(mode, args.domain + k, args.duration, args.warmup, log_dir)
+        rows += [(mode, *t) for t in report(result, args.duration)]
+    print("\ntargets")
+    for mode, name, ok, figure in rows:
+        print(f"  {'PASS' if ok else 'FAIL'}  {mode:9s} {name:62s} {figure}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
