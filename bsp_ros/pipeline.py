@@ -47,11 +47,17 @@ class IdentifyOptions:
         }
 
 
-def identify_data(data: IdentificationData, options: IdentifyOptions) -> IdentificationResult:
-    """Run the chosen identification method on prepared samples."""
+def identify_data(
+    data: IdentificationData, options: IdentifyOptions, check_elastic: bool = True
+) -> IdentificationResult:
+    """Run the chosen identification method on prepared samples.
+
+    ``check_elastic`` runs the test for an unmodelled elastic passive term (a second fit): a live window
+    may run it on only some updates.
+    """
     if options.method == "paper":
         return identify_paper(data, PaperConfig())
-    return identify_joint(data, JointConfig(passive=options.passive))
+    return identify_joint(data, JointConfig(passive=options.passive, check_elastic=check_elastic))
 
 
 def fuse(result: IdentificationResult, data: IdentificationData, subject: SubjectInfo) -> Posterior | None:

@@ -36,11 +36,13 @@ class WindowConfig:
     stale_s: float = 0.5
     options: IdentifyOptions = field(default_factory=IdentifyOptions)
     max_rate_hz: float = 200.0
+    elastic_check_every: int = 5
 
     def __post_init__(self) -> None:
         check_positive("window_s", self.window_s, 3600.0)
         check_finite_scalar("stale_s", self.stale_s, 0.01, 60.0)
         check_positive("max_rate_hz", self.max_rate_hz, 1e5)
+        check_positive("elastic_check_every", self.elastic_check_every, 1000)
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,8 @@ class WindowedIdentifier:
         self.wrench = TimedBuffer(3, horizon_ns)
         self.angles = TimedBuffer(2 * n_segments, horizon_ns)
         self.wrench_guard = StreamGuard("wrench")
+        self._updates = 0
+        self._elastic_warnings: list[str] = []
         self.angle_guard = StreamGuard("joint_states")
 
     def add_wrench(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
@@ -176,7 +180,13 @@ class WindowedIdentifier:
                 int(t_w.size),
                 [],
             )
-            result = identify_data(data, self.config.options)
+            check = self._updates % self.config.elastic_check_every == 0
+            self._updates += 1
+            result = identify_data(data, self.config.options, check_elastic=check)
+            if check:
+                self._elastic_warnings = [w for w in result.warnings if w.startswith("elastic")]
+            else:
+                result.warnings += self._elastic_warnings
         except BspError as error:
             return self._invalid(str(error))
         posterior = fuse(result, data, self.config.options.subject) if result.valid else None
