@@ -31,9 +31,7 @@ def check_positive(name: str, value: Any, hi: float = math.inf) -> float:
     return number
 
 
-def check_finite_array(
-    name: str, array: npt.ArrayLike, shape: tuple[int | None, ...] | None = None
-) -> np.ndarray:
+def check_finite_array(name: str, array: npt.ArrayLike, shape: tuple[int | None, ...] | None = None) -> np.ndarray:
     """Return ``array`` as a float64 ndarray if all its entries are finite and its shape matches.
 
     ``None`` in ``shape`` accepts any length along that axis.

@@ -76,5 +76,5 @@ def test_block_average_slows_a_fast_stream_and_keeps_its_mean() -> None:
     assert stamps.size == 200
     np.testing.assert_allclose(means[:, 0], np.arange(1000.0).reshape(-1, 5).mean(axis=1))
     np.testing.assert_array_equal(stamps, t_ns.reshape(-1, 5)[:, 2])
-    same_t, same_v = block_average(t_ns[::10], values[::10], 200.0)
+    same_t, _ = block_average(t_ns[::10], values[::10], 200.0)
     assert same_t.size == 100
