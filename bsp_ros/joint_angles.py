@@ -225,18 +225,21 @@ def _filtered_runs(
         notes.append(f"angle cutoff {config.cutoff_hz} Hz is above the Nyquist {rate_hz / 2:g} Hz: not filtered")
     valid = np.isfinite(raw_q).all(axis=1)
     q_rad = np.full_like(raw_q, np.nan)
+    smooth = np.full_like(raw_q, np.nan)
     velocity = np.full_like(raw_q, np.nan)
     min_frames = max(int(config.min_run_s * rate_hz), 16)
     for begin, end in _valid_runs(valid):
         if end - begin < min_frames:
             continue
         run = np.unwrap(raw_q[begin:end], axis=0)
-        q_rad[begin:end] = _zero_phase_lowpass(run, config.cutoff_hz, rate_hz, order=4) if angle_filter else run
+        smooth[begin:end] = _zero_phase_lowpass(run, config.cutoff_hz, rate_hz, order=4)
+        q_rad[begin:end] = smooth[begin:end] if angle_filter else run
         slow = _zero_phase_lowpass(run, config.direction_cutoff_hz, rate_hz, order=2)
         velocity[begin:end] = np.gradient(slow, 1.0 / rate_hz, axis=0)
     if not np.isfinite(q_rad).any():
         raise DataError("no stretch of marker data is long enough to give joint angles")
-    noise = _direction_velocity_noise(raw_q, q_rad, config, rate_hz)
+    # The noise is judged against the smoothed angles even when those are not returned.
+    noise = _direction_velocity_noise(raw_q, smooth, config, rate_hz)
     return q_rad, velocity, noise, notes
 
 

@@ -11,20 +11,34 @@ class SessionEndDetector:
     """Tracks the live estimates of a session and says when to store its final valid estimate.
 
     A session ends when estimates stop arriving for ``end_timeout_s`` or an end-of-session message arrives.
-    The final valid estimate is handed out once; a later valid estimate opens a new session.
+    The final valid estimate is handed out once. A later valid estimate opens a new session only if it is
+    built on data after the stored one (``session.start_time_ns`` past the stored ``end_time_ns``): the
+    identifier goes on publishing the old session's estimate until its inputs turn stale.
     """
 
     end_timeout_s: float = 5.0
     last_valid: dict[str, Any] | None = None
     last_seen_ns: int | None = None
     stored: bool = False
+    stored_document: dict[str, Any] | None = None
+
+    def _belongs_to_stored_session(self, document: dict[str, Any]) -> bool:
+        if self.stored_document is None:
+            return False
+        start = document.get("session", {}).get("start_time_ns")
+        stored_end = self.stored_document.get("session", {}).get("end_time_ns")
+        if isinstance(start, int) and isinstance(stored_end, int):
+            return start <= stored_end
+        return document == self.stored_document
 
     def on_estimate(self, document: dict[str, Any], now_ns: int) -> None:
         """Remember a live estimate (only valid ones can be stored)."""
         self.last_seen_ns = now_ns
         if isinstance(document, dict) and isinstance(quality := document.get("quality"), dict) and quality.get("valid"):
-            if self.stored:  # a new session after a stored one
-                self.stored = False
+            if self.stored:
+                if self._belongs_to_stored_session(document):
+                    return
+                self.stored = False  # a new session after a stored one
             self.last_valid = document
 
     def due(self, now_ns: int, end_requested: bool = False) -> dict[str, Any] | None:
@@ -34,5 +48,6 @@ class SessionEndDetector:
         if end_requested or now_ns - self.last_seen_ns > self.end_timeout_s * 1e9:
             self.stored = True
             document, self.last_valid = self.last_valid, None
+            self.stored_document = document
             return document
         return None

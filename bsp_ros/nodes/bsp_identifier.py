@@ -95,6 +95,7 @@ class BspIdentifierNode:
         self.diag_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", "default")
         node.create_subscription("geometry_msgs/msg/WrenchStamped", self.wrench_topic, self.on_wrench, "sensor_data")
         node.create_subscription("sensor_msgs/msg/JointState", "arm/joint_states", self.on_joint_state, "estimates")
+        node.create_subscription("sensor_msgs/msg/JointState", "arm/joint_angles_raw", self.on_raw_angles, "estimates")
         node.create_subscription("sensor_msgs/msg/JointState", "arm/segment_lengths", self.on_lengths, "estimates")
         node.create_subscription("tf2_msgs/msg/TFMessage", "/tf_static", self.on_tf, "tf_static_listener")
         node.create_subscription("tf2_msgs/msg/TFMessage", "/tf", self.on_tf, "tf")
@@ -143,16 +144,32 @@ class BspIdentifierNode:
         if sample.position.size == self.n and np.isfinite(sample.position).all() and (sample.position > 0).all():
             self.lengths = sample.position
 
-    def on_joint_state(self, msg: Any) -> None:
-        """Joint angles (and the causal direction velocity for the recursive mode)."""
+    def on_raw_angles(self, msg: Any) -> None:
+        """Unfiltered joint angles: the windowed mode filters them with zero phase, like `bsp identify`."""
         sample = read_joint_state(msg)
+        if self.mode != "windowed":
+            return
         self.last_receive["joint_states"] = self.node.now_ns()
         if self.lengths is None or sample.position.size != self.n:
             return
-        velocity = sample.velocity if sample.velocity.size == self.n else np.zeros(self.n)
-        if not self.windowed.add_joint_state(sample.t_ns, sample.position, self.lengths):
+        accepted = self.windowed.add_joint_state(sample.t_ns, sample.position, self.lengths)
+        self.counts["joint_states" if accepted else "refused"] += 1
+
+    def on_joint_state(self, msg: Any) -> None:
+        """Causally filtered joint angles and direction velocities (the recursive mode)."""
+        sample = read_joint_state(msg)
+        if self.mode != "recursive":
+            return
+        self.last_receive["joint_states"] = self.node.now_ns()
+        if sample.position.size != self.n or not np.isfinite(sample.position).all():
             self.counts["refused"] += 1
             return
+        velocity = sample.velocity if sample.velocity.size == self.n else np.zeros(self.n)
+        if self.joint_states and sample.t_ns <= self.joint_states[-1][0]:
+            if self.joint_states[-1][0] - sample.t_ns <= 1e9:  # out of order or duplicate; a jump restarts
+                self.counts["refused"] += 1
+                return
+            self.joint_states = []
         self.counts["joint_states"] += 1
         self.joint_states = [*self.joint_states[-1:], (sample.t_ns, sample.position, velocity)]
 
@@ -174,7 +191,7 @@ class BspIdentifierNode:
 
     def update_recursive(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
         verdict = self.recursive_guard.check(t_ns, wrench_yzx)
-        if verdict == "jump":
+        if verdict in ("jump", "gap"):
             self.recursive.reset()
         if verdict == "refused" or self.lengths is None or not self.joint_states:
             return verdict != "refused"

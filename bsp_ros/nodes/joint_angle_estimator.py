@@ -24,21 +24,15 @@ from msg_adapters.pose import read_pose_stamped
 NAME = "joint_angle_estimator"
 
 
-def group_delay_s(cutoff_hz: float) -> float:
-    """Low-frequency group delay of the 2nd-order Butterworth low-pass: sqrt(2) / (2 pi f_c).
-
-    Joint states are stamped this much before their mocap frame, the instant the filtered angle
-    describes, so that angles and wrench line up (an uncompensated lag biases the Coulomb terms).
-    """
-    return float(np.sqrt(2.0) / (2.0 * np.pi * cutoff_hz))
-
-
 class JointAngleEstimatorNode:
     """Collects each mocap frame's markers, estimates the angles causally and publishes them.
 
     A frame is processed once all of its markers arrived; a newer complete frame drops older incomplete
-    ones (occlusion). `arm/segment_lengths` carries the running-median segment lengths (JointState with
-    segment names, position = length in m).
+    ones (occlusion). `arm/joint_states` are stamped by the angle filter's group delay before their frame,
+    the instant the filtered angle describes, so that angles and wrench line up (an uncompensated lag
+    biases the Coulomb terms). `arm/joint_angles_raw` carries each frame's unfiltered angles at the frame
+    stamp (the windowed identifier filters them with zero phase, as offline); `arm/segment_lengths` the
+    running-median segment lengths (JointState with segment names, position = length in m).
     """
 
     def __init__(self, node: Any) -> None:
@@ -56,7 +50,7 @@ class JointAngleEstimatorNode:
         self.estimator = CausalJointAngles(
             n_segments, CausalAnglesConfig(rate_hz, cutoff_hz, min(direction_hz, cutoff_hz), max_gap_s)
         )
-        self.delay_ns = int(group_delay_s(cutoff_hz) * 1e9)
+        self.delay_ns = int(self.estimator.group_delay_s() * 1e9)
         self.frames: dict[int, dict[str, np.ndarray]] = {}
         self.last_frame_ns: int | None = None
         self.last_receive_wall_ns: int | None = None
@@ -65,6 +59,7 @@ class JointAngleEstimatorNode:
         self.types = types
         self.state_pub = node.create_publisher("sensor_msgs/msg/JointState", "arm/joint_states", "estimates")
         self.length_pub = node.create_publisher("sensor_msgs/msg/JointState", "arm/segment_lengths", "estimates")
+        self.raw_pub = node.create_publisher("sensor_msgs/msg/JointState", "arm/joint_angles_raw", "estimates")
         self.diag_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", "default")
         for name in self.names:
             node.create_subscription(
@@ -105,15 +100,19 @@ class JointAngleEstimatorNode:
         self.last_frame_ns = t_ns
         self.counts["frames"] += 1
         sample = self.estimator.update(t_ns, frame)
+        raw, lengths = self.estimator.last_raw_q_rad, self.estimator.lengths_m
+        if raw is not None and lengths is not None and self.estimator.accepted(t_ns):
+            raw_state = JointStateSample(t_ns, "", joints_for(self.n), raw, np.zeros(0), np.zeros(0))
+            self.raw_pub.publish(build_joint_state(self.types, raw_state))
+            if self.last_lengths is None or self.counts["frames"] % 50 == 0:
+                self.last_lengths = lengths
+                length_state = JointStateSample(t_ns, "", segments_for(self.n), lengths, np.zeros(0), np.zeros(0))
+                self.length_pub.publish(build_joint_state(self.types, length_state))
         if sample is None:
             return
         stamp = t_ns - self.delay_ns
         state = JointStateSample(stamp, "", joints_for(self.n), sample.q_rad, sample.velocity_rad_s, np.zeros(0))
         self.state_pub.publish(build_joint_state(self.types, state))
-        if self.last_lengths is None or self.counts["frames"] % 50 == 0:
-            self.last_lengths = sample.lengths_m
-            lengths = JointStateSample(stamp, "", segments_for(self.n), sample.lengths_m, np.zeros(0), np.zeros(0))
-            self.length_pub.publish(build_joint_state(self.types, lengths))
 
     def on_watchdog(self) -> None:
         """Publish the node's health on /diagnostics; stale when frames stopped."""

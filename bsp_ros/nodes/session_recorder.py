@@ -6,6 +6,7 @@ import json
 import sys
 from typing import Any
 
+from bsp_ros.errors import BspError
 from bsp_ros.runtime import run_node
 from bsp_ros.session_end import SessionEndDetector
 from bsp_ros.store import check_subject_id, open_store
@@ -53,14 +54,18 @@ class SessionRecorderNode:
         self.end_requested = False
         if document is None:
             return
-        with open_store(self.store_location) as store:
-            session = document.get("session", {})
-            record = store.add_estimate(
-                document,
-                self.subject,
-                session_time_ns=session.get("start_time_ns") or self.node.now_ns(),
-                source=session.get("source", "live"),
-            )
+        session = document.get("session", {})
+        try:
+            with open_store(self.store_location) as store:
+                record = store.add_estimate(
+                    document,
+                    self.subject,
+                    session_time_ns=session.get("start_time_ns") or self.node.now_ns(),
+                    source=session.get("source", "live"),
+                )
+        except BspError as error:  # a refused estimate must not stop the recorder of later sessions
+            self.node.get_logger().error("session not stored: %s", error)
+            return
         if record.id is not None:
             self.stored_ids.append(record.id)
         self.node.get_logger().info("stored session %s of subject %s", record.id, self.subject)

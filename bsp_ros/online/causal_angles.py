@@ -70,6 +70,7 @@ class CausalJointAngles:
         self._lengths: deque[np.ndarray] = deque(maxlen=c.length_frames)
         self._reset()
         self.n_restarts = 0
+        self.last_raw_q_rad: np.ndarray | None = None  # unfiltered angles of the last accepted frame
 
     def _reset(self) -> None:
         self._zi_q: np.ndarray | None = None
@@ -79,8 +80,21 @@ class CausalJointAngles:
         self._previous_slow: np.ndarray | None = None
         self._previous_raw: np.ndarray | None = None
 
+    @property
+    def lengths_m(self) -> np.ndarray | None:
+        """Running-median segment lengths (m), None before the first frame."""
+        return np.median(np.array(self._lengths), axis=0) if self._lengths else None
+
+    def group_delay_s(self) -> float:
+        """Low-frequency group delay (s) of the angle filter: the age of what a filtered angle describes."""
+        b, a = signal.sos2tf(self._sos_q)
+        _, delay = signal.group_delay((b, a), w=[1e-3], fs=self.config.rate_hz)
+        return float(delay[0]) / self.config.rate_hz
+
     def update(self, t_ns: int, positions_m: dict[str, np.ndarray]) -> AngleSample | None:
         """Feed one mocap frame; return the causal estimate once the filters have settled.
+
+        The frame's unfiltered angles are kept in :attr:`last_raw_q_rad` whenever it is accepted.
 
         Parameters
         ----------
@@ -100,6 +114,7 @@ class CausalJointAngles:
         if self._previous_raw is not None:  # keep angles continuous across +-pi
             raw = self._previous_raw + np.angle(np.exp(1j * (raw - self._previous_raw)))
         self._previous_raw = raw
+        self.last_raw_q_rad = raw
         if self._zi_q is None:
             zi = signal.sosfilt_zi(self._sos_q)
             self._zi_q = zi[:, :, None] * raw[None, None, :]
@@ -116,3 +131,7 @@ class CausalJointAngles:
         if t_ns - self._start_t_ns < self.config.settle_s * 1e9:
             return None
         return AngleSample(t_ns, q[0], velocity, np.median(np.array(self._lengths), axis=0))
+
+    def accepted(self, t_ns: int) -> bool:
+        """True if the frame stamped ``t_ns`` was the last one taken in."""
+        return self._last_t_ns == t_ns

@@ -13,17 +13,19 @@ class StreamGuard:
 
     A stamp at or before the previous one is refused (out of order or duplicate); a stamp more than
     ``jump_back_s`` before it is a backwards clock jump (a bag replayed with ``--loop``, a reset clock):
-    the caller must restart, since nothing before the jump belongs with what follows.
+    the caller must restart, since nothing before the jump belongs with what follows. A forward gap longer
+    than ``session_gap_s`` starts a new session: the caller restarts too.
     """
 
     name: str
     jump_back_s: float = 1.0
+    session_gap_s: float = 5.0
     last_t_ns: int | None = None
     refused: dict[str, int] = field(default_factory=lambda: {"non_finite": 0, "out_of_order": 0, "bad_stamp": 0})
     clock_jumps: int = 0
 
     def check(self, t_ns: int, values: np.ndarray) -> str:
-        """``"ok"``, ``"refused"`` or ``"jump"`` (then the sample is accepted as the first of a new epoch)."""
+        """``"ok"``, ``"refused"``, or ``"jump"`` / ``"gap"`` (the sample is accepted as the first of a new epoch)."""
         if t_ns <= 0:
             self.refused["bad_stamp"] += 1
             return "refused"
@@ -37,5 +39,6 @@ class StreamGuard:
                 return "jump"
             self.refused["out_of_order"] += 1
             return "refused"
+        gap = self.last_t_ns is not None and t_ns - self.last_t_ns > self.session_gap_s * 1e9
         self.last_t_ns = t_ns
-        return "ok"
+        return "gap" if gap else "ok"

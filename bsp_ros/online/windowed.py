@@ -81,7 +81,9 @@ def block_average(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> t
 
 
 class WindowedIdentifier:
-    """Wrench and joint-state samples in, an estimate of the last ``window_s`` seconds out.
+    """Wrench and unfiltered joint-angle samples in, an estimate of the last ``window_s`` seconds out.
+
+    The angles are filtered here with zero phase over the window, exactly as `bsp identify` does offline.
 
     Samples that are non-finite, out of order or duplicated are refused and counted; a backwards clock
     jump clears both buffers, so no estimate mixes samples from either side of it.
@@ -101,7 +103,7 @@ class WindowedIdentifier:
     def add_wrench(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
         """Add ``[F_y, F_z, M_x]`` in ``world`` at ``t_ns``; False if refused."""
         verdict = self.wrench_guard.check(t_ns, wrench_yzx)
-        if verdict == "jump":
+        if verdict in ("jump", "gap"):
             self.reset()
             self.wrench_guard.last_t_ns = t_ns
         if verdict == "refused":
@@ -113,7 +115,7 @@ class WindowedIdentifier:
         """Add joint angles (rad) and segment lengths (m) at ``t_ns``; False if refused."""
         row = np.concatenate((q_rad, lengths_m))
         verdict = self.angle_guard.check(t_ns, row)
-        if verdict == "jump":
+        if verdict in ("jump", "gap"):
             self.reset()
             self.angle_guard.last_t_ns = t_ns
         if verdict == "refused":
@@ -164,7 +166,9 @@ class WindowedIdentifier:
         t_a, rows = self.angles.since(start - int(2e9))
         try:
             lengths = np.median(rows[:, self.n :], axis=0)
-            kinematics = kinematics_from_angles(t_a, rows[:, : self.n], lengths, self.config.options.kinematics)
+            kinematics = kinematics_from_angles(
+                t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
+            )
             q, velocity, valid = resample_kinematics(kinematics, t_w)
             if valid.sum() < 2:
                 return self._invalid("no wrench sample in the window has joint angles")

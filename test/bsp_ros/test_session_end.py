@@ -124,7 +124,8 @@ def test_sessions_ended_by_request_and_by_silence_alternate() -> None:
     stored: list[dict[str, Any]] = []
     t = T0
     for k in range(6):
-        t = _feed(detector, [_valid(float(k)), _invalid()], t + 10 * S)
+        start = t + 10 * S  # each session on data after the previous one's
+        t = _feed(detector, [_valid(float(k), start, start + S), _invalid()], start)
         document = detector.due(t, end_requested=True) if k % 2 else detector.due(t + 2 * S)
         assert document is not None, k
         stored.append(document)
@@ -139,11 +140,6 @@ def test_a_backwards_clock_does_not_end_the_session() -> None:
     assert detector.due(T0 + 2 * S) == _valid(1.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a later valid estimate reopens a session even when it is the stored session's own estimate again "
-    "(the identifier publishes it until its inputs turn stale): the recorder then stores it twice or dies",
-)
 def test_the_stored_estimate_received_again_is_not_handed_out_again() -> None:
     detector = SessionEndDetector(end_timeout_s=1.0)
     final = _valid(1.0)

@@ -56,11 +56,6 @@ def _settled_stale(estimates: list[tuple[float, dict[str, Any]]], after: float, 
 # is then exactly 0, so the 4-sigma deadband around turning points shrinks to its 10 %-of-speed floor and the slow
 # wrist keeps rows whose direction of motion is ambiguous. With the offline noise injected, live and offline agree
 # within 0.17 % (measured over DDS too).
-@pytest.mark.xfail(
-    raises=LiveOfflineMismatchError,
-    strict=True,
-    reason="live direction-velocity noise is 0 (bsp_ros/joint_angles.py kinematics_from_angles, angle_filter=False)",
-)
 def test_real_time_replay_into_the_nodes_matches_the_offline_identification(tmp_path: Path) -> None:
     simulated = simulate_cell(human_arm_cell(seed=SEED, duration_s=DURATION_S))
     bag = write_session_bag(tmp_path / "session", simulated.session)

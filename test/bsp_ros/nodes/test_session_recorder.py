@@ -224,12 +224,6 @@ class RecorderBugError(AssertionError):
     """A known session_recorder defect (see the xfail reasons)."""
 
 
-@pytest.mark.xfail(
-    raises=RecorderBugError,
-    strict=True,
-    reason="SessionEndDetector reopens a session on any later valid estimate; the store then refuses the "
-    "duplicate (StoreError) and the exception stops the node (session_recorder.on_timer)",
-)
 def test_the_identifiers_trailing_estimates_after_session_end_are_not_stored_again(
     recorder: Callable[[int], Recorder], base_estimate: dict[str, Any]
 ) -> None:
@@ -257,11 +251,6 @@ def test_the_identifiers_trailing_estimates_after_session_end_are_not_stored_aga
         raise RecorderBugError(f"one session stored {len(sessions)} times: {[s.session_time_ns for s in sessions]}")
 
 
-@pytest.mark.xfail(
-    raises=RecorderBugError,
-    strict=True,
-    reason="a StoreError from store.add_estimate escapes session_recorder.on_timer and stops the node",
-)
 def test_a_valid_estimate_the_store_refuses_does_not_stop_the_recorder(
     recorder: Callable[[int], Recorder], base_estimate: dict[str, Any]
 ) -> None:

@@ -12,7 +12,8 @@ from bsp_ros.online.causal_angles import CausalJointAngles
 
 @pytest.fixture(scope="session")
 def live_streams():
-    """(simulated session, wrench stamps, world wrench (N,3), causal angle samples stamped by group delay)."""
+    """(simulated session, wrench stamps, world wrench (N,3), causal angle samples stamped by group delay,
+    unfiltered angles (t_ns, q_rad, lengths_m) per accepted frame)."""
     simulated = sim.simulate_cell(sim.human_arm_cell(seed=13, duration_s=60.0))
     session = simulated.session
     frames: dict[int, dict[str, np.ndarray]] = {}
@@ -20,11 +21,13 @@ def live_streams():
         for t, p in zip(series.t_ns, series.position_m, strict=True):
             frames.setdefault(int(t), {})[name] = p
     estimator = CausalJointAngles(3)
-    delay_ns = int(np.sqrt(2) / (2 * np.pi * 5.0) * 1e9)
-    angles = []
+    delay_ns = int(estimator.group_delay_s() * 1e9)
+    angles, raw = [], []
     for t in sorted(frames):
         sample = estimator.update(t, frames[t])
+        if estimator.accepted(t):
+            raw.append((t, estimator.last_raw_q_rad, estimator.lengths_m))
         if sample is not None:
             angles.append((t - delay_ns, sample))
     wrench = wrench_world_yzx(session.wrench, session.rotation_world_from_sensor)
-    return simulated, session.wrench.t_ns, wrench, angles
+    return simulated, session.wrench.t_ns, wrench, angles, raw

@@ -9,7 +9,7 @@ from bsp_ros.online.causal_angles import CausalJointAngles
 
 
 def test_group_delay_compensated_angles_follow_the_trajectory(live_streams) -> None:
-    simulated, _, _, angles = live_streams
+    simulated, _, _, angles, _ = live_streams
     simulator = sim.CellSimulator(sim.human_arm_cell(seed=13, duration_s=60.0))
     stamps = np.array([t for t, _ in angles])
     q = np.array([a.q_rad for _, a in angles])
@@ -20,7 +20,7 @@ def test_group_delay_compensated_angles_follow_the_trajectory(live_streams) -> N
 
 
 def test_a_long_gap_restarts_the_filters_and_withholds_angles_until_settled(live_streams) -> None:
-    simulated, _, _, _ = live_streams
+    simulated, _, _, _, _ = live_streams
     markers = simulated.session.markers
     estimator = CausalJointAngles(3)
     stamps = markers["shoulder"].t_ns
@@ -37,7 +37,7 @@ def test_a_long_gap_restarts_the_filters_and_withholds_angles_until_settled(live
 
 
 def test_a_frame_with_a_missing_or_nan_marker_is_skipped(live_streams) -> None:
-    simulated, _, _, _ = live_streams
+    simulated, _, _, _, _ = live_streams
     estimator = CausalJointAngles(3)
     frame = {name: series.position_m[0] for name, series in simulated.session.markers.items()}
     assert estimator.update(1_000, {k: v for k, v in frame.items() if k != "wrist"}) is None

@@ -25,7 +25,7 @@ def _run(identifier: RecursiveIdentifier, stamps, wrench, angles, still_after_s:
 
 
 def test_recursive_estimate_converges_to_the_truth(live_streams) -> None:
-    simulated, stamps, wrench, angles = live_streams
+    simulated, stamps, wrench, angles, _raw = live_streams
     identifier = RecursiveIdentifier(3)
     _run(identifier, stamps, wrench, angles)
     result = identifier.result()
@@ -40,7 +40,7 @@ def test_recursive_estimate_converges_to_the_truth(live_streams) -> None:
 
 
 def test_without_excitation_the_estimate_and_its_covariance_are_frozen(live_streams) -> None:
-    _, stamps, wrench, angles = live_streams
+    _, stamps, wrench, angles, _raw = live_streams
     identifier = RecursiveIdentifier(3)
     _run(identifier, stamps[: len(stamps) // 2], wrench, angles)
     before_values, before_cov = identifier.theta.copy(), identifier.covariance.copy()
@@ -52,7 +52,7 @@ def test_without_excitation_the_estimate_and_its_covariance_are_frozen(live_stre
 
 
 def test_reset_forgets_everything(live_streams) -> None:
-    _, stamps, wrench, angles = live_streams
+    _, stamps, wrench, angles, _raw = live_streams
     identifier = RecursiveIdentifier(3)
     _run(identifier, stamps[:2000], wrench, angles)
     identifier.reset()

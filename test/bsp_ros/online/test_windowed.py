@@ -8,21 +8,21 @@ import pytest
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier
 
 
-def _feed(identifier: WindowedIdentifier, stamps, wrench, angles, corrupt=None) -> None:
-    events = [(int(t), 0, i) for i, t in enumerate(stamps)] + [(t, 1, k) for k, (t, _) in enumerate(angles)]
+def _feed(identifier: WindowedIdentifier, stamps, wrench, raw, corrupt=None) -> None:
+    events = [(int(t), 0, i) for i, t in enumerate(stamps)] + [(t, 1, k) for k, (t, _, _) in enumerate(raw)]
     for t, kind, index in sorted(events):
         if kind == 0:
             values = wrench[index] if corrupt is None else corrupt(index, wrench[index])
             identifier.add_wrench(t, values)
         else:
-            sample = angles[index][1]
-            identifier.add_joint_state(t, sample.q_rad, sample.lengths_m)
+            _, q_rad, lengths_m = raw[index]
+            identifier.add_joint_state(t, q_rad, lengths_m)
 
 
 def test_window_estimate_matches_the_truth(live_streams) -> None:
-    simulated, stamps, wrench, angles = live_streams
+    simulated, stamps, wrench, _, raw = live_streams
     identifier = WindowedIdentifier(3, WindowConfig(window_s=30.0))
-    _feed(identifier, stamps, wrench, angles)
+    _feed(identifier, stamps, wrench, raw)
     estimate = identifier.estimate()
     assert estimate.valid, estimate.document["quality"]
     truth = simulated.truth.to_dict()
@@ -36,9 +36,9 @@ def test_window_estimate_matches_the_truth(live_streams) -> None:
 
 
 def test_nan_out_of_order_and_duplicate_samples_are_refused_and_counted(live_streams) -> None:
-    _, stamps, wrench, angles = live_streams
+    _, stamps, wrench, _, raw = live_streams
     identifier = WindowedIdentifier(3)
-    _feed(identifier, stamps, wrench, angles, corrupt=lambda i, w: np.full(3, np.nan) if i % 100 == 0 else w)
+    _feed(identifier, stamps, wrench, raw, corrupt=lambda i, w: np.full(3, np.nan) if i % 100 == 0 else w)
     assert identifier.wrench_guard.refused["non_finite"] == len(range(0, len(stamps), 100))
     last = identifier.wrench.last_t_ns
     assert not identifier.add_wrench(last, wrench[0])  # duplicate
@@ -48,9 +48,9 @@ def test_nan_out_of_order_and_duplicate_samples_are_refused_and_counted(live_str
 
 
 def test_a_backwards_clock_jump_restarts_the_window(live_streams) -> None:
-    _, stamps, wrench, angles = live_streams
+    _, stamps, wrench, _, raw = live_streams
     identifier = WindowedIdentifier(3)
-    _feed(identifier, stamps, wrench, angles)
+    _feed(identifier, stamps, wrench, raw)
     assert identifier.add_wrench(int(stamps[0]) - 10_000_000_000, wrench[0])  # 10 s before the session began
     assert len(identifier.wrench) == 1 and len(identifier.angles) == 0
     estimate = identifier.estimate()
@@ -58,9 +58,9 @@ def test_a_backwards_clock_jump_restarts_the_window(live_streams) -> None:
 
 
 def test_stale_joint_states_make_the_estimate_invalid(live_streams) -> None:
-    _, stamps, wrench, angles = live_streams
+    _, stamps, wrench, _, raw = live_streams
     identifier = WindowedIdentifier(3, WindowConfig(stale_s=0.5))
-    cut = angles[: len(angles) // 2]
+    cut = raw[: len(raw) // 2]
     _feed(identifier, stamps, wrench, cut)
     estimate = identifier.estimate()
     assert not estimate.valid
