@@ -5,12 +5,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+# Quality messages of `bsp_identifier` that mean its inputs stopped (see BspIdentifierNode.stale_reason).
+INPUT_STOPPED = ("stale input", "waiting for")
+
 
 @dataclass
 class SessionEndDetector:
     """Tracks the live estimates of a session and says when to store its final valid estimate.
 
-    A session ends when estimates stop arriving for ``end_timeout_s`` or an end-of-session message arrives.
+    A session ends when estimates stop arriving for ``end_timeout_s`` (or arrive only to say that their
+    inputs stopped) or an end-of-session message arrives.
     The final valid estimate is handed out once. A later valid estimate opens a new session only if it is
     built on data after the stored one (``session.start_time_ns`` past the stored ``end_time_ns``): the
     identifier goes on publishing the old session's estimate until its inputs turn stale.
@@ -32,8 +36,15 @@ class SessionEndDetector:
         return document == self.stored_document
 
     def on_estimate(self, document: dict[str, Any], now_ns: int) -> None:
-        """Remember a live estimate (only valid ones can be stored)."""
-        self.last_seen_ns = now_ns
+        """Remember a live estimate (only valid ones can be stored).
+
+        An estimate the identifier marks as built on stale or missing input says the streams stopped: it
+        counts as silence, not as activity.
+        """
+        quality = document.get("quality") if isinstance(document, dict) else None
+        message = quality.get("message", "") if isinstance(quality, dict) else ""
+        if not (isinstance(message, str) and message.startswith(INPUT_STOPPED)):
+            self.last_seen_ns = now_ns
         if isinstance(document, dict) and isinstance(quality := document.get("quality"), dict) and quality.get("valid"):
             if self.stored:
                 if self._belongs_to_stored_session(document):

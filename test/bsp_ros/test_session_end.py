@@ -48,7 +48,13 @@ def test_defaults() -> None:
 
 def test_silence_hands_out_the_last_valid_estimate_once_after_the_timeout() -> None:
     detector = SessionEndDetector(end_timeout_s=1.0)
-    documents = [_invalid("waiting for wrench"), _valid(1.0), _invalid("poor excitation"), _valid(2.0), _invalid()]
+    documents = [
+        _invalid("waiting for wrench"),
+        _valid(1.0),
+        _invalid("poor excitation"),
+        _valid(2.0),
+        _invalid("the elbow moved in one direction only"),
+    ]
     last = _feed(detector, documents, T0)
     assert detector.due(last) is None
     assert detector.due(last + S) is None  # exactly the timeout: not yet
@@ -59,13 +65,21 @@ def test_silence_hands_out_the_last_valid_estimate_once_after_the_timeout() -> N
     assert detector.due(last + 100 * S, end_requested=True) is None
 
 
-def test_the_timeout_counts_from_the_last_estimate_of_any_kind() -> None:
+def test_the_timeout_counts_from_the_last_estimate_built_on_live_input() -> None:
     detector = SessionEndDetector(end_timeout_s=1.0)
     detector.on_estimate(_valid(1.0), T0)
-    last = _feed(detector, [_invalid()] * 20, T0 + S // 5)  # 4 s of invalid estimates: the topic is not silent
+    # 4 s of invalid estimates on live but poor data (the arm held still): the session goes on.
+    last = _feed(detector, [_invalid("poor excitation: condition number 2e4 > 1e4")] * 20, T0 + S // 5)
     for t in range(T0, last + 1, S // 10):
         assert detector.due(t) is None
     assert detector.due(last + S + 1) == _valid(1.0)
+
+
+def test_stale_input_estimates_count_as_silence_so_stopped_streams_end_the_session() -> None:
+    detector = SessionEndDetector(end_timeout_s=1.0)
+    detector.on_estimate(_valid(1.0), T0)
+    _feed(detector, [_invalid()] * 20, T0 + S // 5)  # the identifier reports its inputs stale, 5 per s
+    assert detector.due(T0 + S + 1) == _valid(1.0)
 
 
 def test_an_end_request_hands_it_out_at_once() -> None:

@@ -139,8 +139,13 @@ def recorder(tmp_path: Path) -> Iterator[Callable[[int], Recorder]]:
         r.close()
 
 
-def _keep_alive(r: Recorder, seconds: float, message: str = "stale input: no wrench for 1.00 s") -> None:
-    """Invalid estimates at the identifier's rate for ``seconds``: the topic is not silent."""
+def _keep_alive(
+    r: Recorder, seconds: float, message: str = "poor excitation: static moments not yet determined"
+) -> None:
+    """Invalid estimates on live input at the identifier's rate for ``seconds``: the session goes on.
+
+    (Estimates saying the input is stale count as silence: see test_session_end.)
+    """
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
         r.estimate(_invalid(message))
@@ -160,8 +165,8 @@ def test_silence_stores_the_last_valid_estimate_and_session_end_ends_the_next_se
         first[1],
         "not json {",
         first[2],
-        _invalid("stale input: no wrench for 0.50 s"),
-        _invalid("stale input: no wrench for 0.70 s"),
+        _invalid("the wrist moved in one direction only"),
+        _invalid("poor excitation: condition number 2e4 > 1e4"),
     ):
         r.estimate(message)
         time.sleep(PERIOD_S)
