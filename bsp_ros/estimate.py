@@ -25,6 +25,25 @@ def quantity(value: float, std: float, source: str) -> dict[str, Any]:
     return {"value": clean(value), "std": clean(std), "source": source}
 
 
+def invalid_document(method: str, message: str) -> dict[str, Any]:
+    """An estimate document with no parameters, marked invalid with ``message`` (live inputs not usable)."""
+    return {
+        "schema": SCHEMA,
+        "method": method,
+        "segments": {},
+        "joints": {},
+        "quality": {
+            "valid": False,
+            "n_samples": 0,
+            "condition_number": None,
+            "residual_rms_nm": {},
+            "warnings": [],
+            "message": message,
+            "level": "invalid",
+        },
+    }
+
+
 def estimate_document(
     result: IdentificationResult,
     data: IdentificationData,

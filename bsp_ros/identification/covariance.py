@@ -86,3 +86,9 @@ def hac_covariance(design: np.ndarray, scores: np.ndarray, lags: int | None = No
     inverse = np.linalg.pinv(design)
     covariance = inverse @ long_run @ inverse
     return 0.5 * (covariance + covariance.T), lags
+
+
+def correlation_from_covariance(covariance: np.ndarray) -> np.ndarray:
+    """(p, p) correlation matrix; a parameter with zero variance gets correlation 0 (not NaN)."""
+    variances = np.diag(covariance)
+    return np.asarray(covariance / np.sqrt(np.outer(variances, variances) + 1e-300))

@@ -8,7 +8,7 @@ import numpy as np
 from scipy.optimize import lsq_linear
 from scipy.stats import chi2
 
-from bsp_ros.identification.covariance import hac_covariance
+from bsp_ros.identification.covariance import correlation_from_covariance, hac_covariance
 from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.passive import TERMS, PassiveModel
 from bsp_ros.identification.result import IdentificationResult, ParameterName
@@ -193,7 +193,7 @@ def _elastic_check(
     notes = []
     base_beta, wide_beta = base.values[:n], fit.values[:n]
     change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
-    correlation = fit.covariance / np.sqrt(np.outer(np.diag(fit.covariance), np.diag(fit.covariance)) + 1e-300)
+    correlation = correlation_from_covariance(fit.covariance)
     for joint in joints_for(n):
         picks = [
             i
@@ -252,7 +252,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     warnings = list(data.warnings) + notes
     if fit.condition > config.max_condition:
         problems.append(f"poor excitation: condition number {fit.condition:.3g} > {config.max_condition:g}")
-    correlation = fit.covariance / np.sqrt(np.outer(np.diag(fit.covariance), np.diag(fit.covariance)) + 1e-300)
+    correlation = correlation_from_covariance(fit.covariance)
     max_corr_with_gravity = {}
     for i, (key, owner) in enumerate(problem.names):
         if i >= n:

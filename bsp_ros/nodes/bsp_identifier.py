@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.estimate import estimate_document
+from bsp_ros.estimate import estimate_document, invalid_document
 from bsp_ros.estimate_messages import diagnostics_from_estimate, inertias_from_estimate, passive_moments_from_estimate
 from bsp_ros.fusion import SubjectInfo
 from bsp_ros.identification.data import IdentificationData
@@ -245,21 +245,7 @@ class BspIdentifierNode:
         if reason is None:
             document, stamp = self.current_document()
         else:
-            document = {
-                "schema": "bsp_ros/estimate/1",
-                "method": self.options.method,
-                "segments": {},
-                "joints": {},
-                "quality": {
-                    "valid": False,
-                    "n_samples": 0,
-                    "condition_number": None,
-                    "residual_rms_nm": {},
-                    "warnings": [],
-                    "message": reason,
-                    "level": "invalid",
-                },
-            }
+            document = invalid_document(self.options.method, reason)
             stamp = self.node.now_ns()
         document["mode"] = self.mode
         self.publish(document, stamp)

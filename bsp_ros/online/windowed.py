@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.errors import BspError
-from bsp_ros.estimate import estimate_document
+from bsp_ros.estimate import estimate_document, invalid_document
 from bsp_ros.identification.data import IdentificationData
 from bsp_ros.joint_angles import kinematics_from_angles, resample_kinematics
 from bsp_ros.model import contact_torques_nm
@@ -129,21 +129,7 @@ class WindowedIdentifier:
         self.angles.clear()
 
     def _invalid(self, message: str) -> WindowEstimate:
-        document = {
-            "schema": "bsp_ros/estimate/1",
-            "method": self.config.options.method,
-            "segments": {},
-            "joints": {},
-            "quality": {
-                "valid": False,
-                "n_samples": 0,
-                "condition_number": None,
-                "residual_rms_nm": {},
-                "warnings": [],
-                "message": message,
-                "level": "invalid",
-            },
-        }
+        document = invalid_document(self.config.options.method, message)
         return WindowEstimate(document, False, self.wrench.last_t_ns)
 
     def estimate(self, now_ns: int | None = None) -> WindowEstimate:
