@@ -65,13 +65,20 @@ def test_windowed_estimate_converges_to_the_truth(cell) -> None:
 
 def test_killed_simulator_turns_estimates_invalid_within_three_periods_and_restart_recovers(cell) -> None:
     c = cell(1, ["speed:=2.0", "seed:=5"])
-    assert c.spin_until(lambda: _valid(c), 60), c.latest()
+
+    def steadily_valid() -> bool:  # early windows may still flip on excitation: kill a settled estimate
+        return len(c.estimates) >= 10 and all(d["quality"]["valid"] for _, d in c.estimates[-10:])
+
+    assert c.spin_until(steadily_valid, 90), c.latest()
     killed_at = time.monotonic()
     c.kill("cell_simulator")
-    assert c.spin_until(lambda: not _valid(c), 10)
-    invalid_at = next(t for t, d in c.estimates if t > killed_at and not d["quality"]["valid"])
+    assert c.spin_until(lambda: "stale" in c.latest()["quality"]["message"], 10), c.latest()
+    after = [(t, d) for t, d in c.estimates if t > killed_at]
+    invalid_at = next(t for t, d in after if not d["quality"]["valid"])
     assert invalid_at - killed_at <= 3 * 0.2 + 0.15, invalid_at - killed_at  # 3 periods at 5 Hz, + delivery
-    assert "stale" in c.latest()["quality"]["message"]
+    stale_at = next(t for t, d in after if "stale" in d["quality"]["message"])
+    assert stale_at - killed_at <= 3 * 0.2 + 0.15, stale_at - killed_at
+    assert not any(d["quality"]["valid"] for t, d in after if t >= invalid_at)
     c.start("cell_simulator", ["speed:=2.0", "seed:=6"])
     assert c.spin_until(lambda: _valid(c), 60), c.latest()
 
