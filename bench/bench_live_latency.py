@@ -308,6 +308,15 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
             f" ms, max {intervals.max() * 1e3:.1f} ms; later than 1.5 periods: {late:.2%}"
             f" (publisher side p99 {pct(pub_intervals, 99) * 1e3:.1f} ms)"
         )
+    timing = [
+        r[2] for r in listener.diagnostics.get("bsp_identifier", []) if t0 <= r[1] < t1 and "update_ms_max" in r[2]
+    ]
+    if timing:
+        means = [float(v["update_ms_mean"]) for v in timing]
+        print(
+            f"    identifier update compute time (its /diagnostics, 10 s windows): mean {np.mean(means):.1f} ms,"
+            f" worst window mean {max(means):.1f} ms, max {max(float(v['update_ms_max']) for v in timing):.1f} ms"
+        )
     if listener.invalid_reasons:
         top = sorted(listener.invalid_reasons.items(), key=lambda kv: -kv[1])[:3]
         print("    invalid (whole run, after the simulator started): " + "; ".join(f"{n}x {m!r}" for m, n in top))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass, field
 
@@ -152,6 +153,13 @@ def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
+@functools.lru_cache(maxsize=64)
+def _butter_sos(order: int, cutoff_hz: float, rate_hz: float) -> np.ndarray:
+    """Butterworth low-pass sections, cached: a live window redesigns the same filter 5 times a second."""
+    sos: np.ndarray = signal.butter(order, cutoff_hz, fs=rate_hz, output="sos")
+    return sos
+
+
 def _zero_phase_lowpass(values: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.ndarray:
     """Butterworth low-pass run forwards and backwards (no phase lag), padded by odd extension.
 
@@ -161,7 +169,7 @@ def _zero_phase_lowpass(values: np.ndarray, cutoff_hz: float, rate_hz: float, or
     nyquist = rate_hz / 2.0
     if cutoff_hz >= nyquist:
         return values.copy()
-    sos = signal.butter(order, cutoff_hz, fs=rate_hz, output="sos")
+    sos = _butter_sos(order, cutoff_hz, rate_hz).copy()  # a copy: scipy's sosfilt wants a writable array
     padlen = min(values.shape[0] - 1, int(3.0 * rate_hz / cutoff_hz))
     return signal.sosfiltfilt(sos, values, axis=0, padtype="odd", padlen=padlen)
 
@@ -201,11 +209,17 @@ def _direction_velocity_noise(
         return np.full(raw_q.shape[1], np.nan)
     band_share = max(1.0 - 2.0 * config.cutoff_hz / rate_hz, 0.05)
     angle_sd = high.std(axis=0) / np.sqrt(band_share)
-    length = int(20.0 * rate_hz / config.direction_cutoff_hz) | 1
+    return np.asarray(angle_sd * _direction_noise_gain(config.direction_cutoff_hz, rate_hz))
+
+
+@functools.lru_cache(maxsize=64)
+def _direction_noise_gain(direction_cutoff_hz: float, rate_hz: float) -> float:
+    """Norm of the impulse response of filtering (zero phase) then differentiating, (rad/s) per rad."""
+    length = int(20.0 * rate_hz / direction_cutoff_hz) | 1
     impulse = np.zeros((length, 1))
     impulse[length // 2] = 1.0
-    response = np.gradient(_zero_phase_lowpass(impulse, config.direction_cutoff_hz, rate_hz, 2), 1.0 / rate_hz, axis=0)
-    return np.asarray(angle_sd * float(np.linalg.norm(response)))
+    response = np.gradient(_zero_phase_lowpass(impulse, direction_cutoff_hz, rate_hz, 2), 1.0 / rate_hz, axis=0)
+    return float(np.linalg.norm(response))
 
 
 def _filtered_runs(

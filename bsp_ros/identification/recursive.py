@@ -67,6 +67,12 @@ class RecursiveIdentifier:
         self.names += [(TERMS[t][0], j) for j in joints_for(n_segments) for t in terms]
         self.lower = np.array([0.0] * n_segments + [TERMS[t][2] for _ in range(n_segments) for t in terms])
         self._ridge = np.eye(len(self.names)) / self.config.initial_std**2
+        # Where joint j's passive columns go in the (n, p) row block: row j, columns n + j k ... n + (j+1) k.
+        k = len(terms)
+        self._passive_index = (
+            np.repeat(np.arange(n_segments), k),
+            n_segments + np.arange(n_segments * k),
+        )
         self.reset()
 
     def reset(self) -> None:
@@ -96,20 +102,20 @@ class RecursiveIdentifier:
         forget = np.exp(-dt_s / self.config.memory_s)
         self._information *= forget
         self._weighted_target *= forget
-        gravity = gravity_regressor(q_rad[None, :])[0]
-        passive = self.config.passive.columns_all(q_rad, velocity_rad_s)
-        k = len(self.config.passive.terms)
-        for j in np.flatnonzero(moving):
-            row = np.zeros(len(self.names))
-            row[: self.n] = gravity[j]
-            row[self.n + j * k : self.n + (j + 1) * k] = passive[j]
-            residual = tau_nm[j] - row @ self.theta
-            # Per-joint noise tracks the residuals, clipped at 5 sd so a poor start cannot swamp it.
-            self._noise_var[j] = 0.999 * self._noise_var[j] + 0.001 * min(residual**2, 25 * self._noise_var[j])
-            weight = 1.0 / self._noise_var[j]
-            self._information += weight * np.outer(row, row)
-            self._weighted_target += weight * row * tau_nm[j]
-            self._directions[j, 0 if velocity_rad_s[j] > 0 else 1] += 1
+        joints = np.flatnonzero(moving)
+        rows = np.zeros((self.n, len(self.names)))
+        rows[:, : self.n] = gravity_regressor(q_rad[None, :])[0]
+        rows[self._passive_index] = self.config.passive.columns_all(q_rad, velocity_rad_s).ravel()
+        rows = rows[joints]
+        residual = tau_nm[joints] - rows @ self.theta
+        # Per-joint noise tracks the residuals, clipped at 5 sd so a poor start cannot swamp it.
+        noise_var = self._noise_var[joints]
+        noise_var = 0.999 * noise_var + 0.001 * np.minimum(residual**2, 25 * noise_var)
+        self._noise_var[joints] = noise_var
+        weighted_rows = rows / noise_var[:, None]
+        self._information += weighted_rows.T @ rows
+        self._weighted_target += weighted_rows.T @ tau_nm[joints]
+        self._directions[joints, np.where(velocity_rad_s[joints] > 0, 0, 1)] += 1
         solution = np.linalg.solve(self._information + self._ridge, self._weighted_target)
         self.theta = np.maximum(solution, self.lower)
         self.n_updates += 1

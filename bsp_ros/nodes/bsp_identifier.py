@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import sys
+import time
+from collections import deque
 from typing import Any
 
 import numpy as np
@@ -84,6 +86,7 @@ class BspIdentifierNode:
         self.joint_states: list[tuple[int, np.ndarray, np.ndarray]] = []
         self.last_receive = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0, "published": 0}
+        self.update_s: deque[float] = deque(maxlen=int(10 * update_hz) + 1)  # compute time of the last ~10 s
         self.types = node.message_class
         self.estimate_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", "estimates")
         self.json_pub = node.create_publisher("std_msgs/msg/String", "bsp/estimate_json", "estimates")
@@ -241,6 +244,7 @@ class BspIdentifierNode:
 
     def on_update(self) -> None:
         """Publish the estimate (invalid if an input is stale) and the node's health."""
+        started = time.perf_counter()
         reason = self.stale_reason()
         if reason is None:
             document, stamp = self.current_document()
@@ -249,6 +253,7 @@ class BspIdentifierNode:
             stamp = self.node.now_ns()
         document["mode"] = self.mode
         self.publish(document, stamp)
+        self.update_s.append(time.perf_counter() - started)
 
     def publish(self, document: dict[str, Any], stamp: int) -> None:
         types = self.types
@@ -262,7 +267,14 @@ class BspIdentifierNode:
                 self.passive_pub.publish(build_joint_state(types, passive))
         self.counts["published"] += 1
         level = OK if document["quality"]["valid"] else (WARN if "waiting" in document["quality"]["message"] else ERROR)
-        status = DiagnosticStatusData.with_values(level, NAME, document["quality"]["message"], "", self.counts)
+        timing = {}
+        if self.update_s:  # how long an update takes: near the period, the node cannot keep up
+            timing = {
+                "update_ms_mean": f"{1e3 * np.mean(self.update_s):.1f}",
+                "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
+            }
+        values = {**self.counts, **timing}
+        status = DiagnosticStatusData.with_values(level, NAME, document["quality"]["message"], "", values)
         self.diag_pub.publish(build_diagnostic_array(types, DiagnosticArraySample(self.node.now_ns(), "", (status,))))
 
 

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import signal
 
 from bsp_ros.joint_angles import joint_angles_from_positions, sagittal_from_world
+from bsp_ros.online.streaming_filter import StreamingFilter
 from bsp_ros.streams import markers_for
 from bsp_ros.validation import check_finite_scalar, check_positive
 
@@ -66,15 +66,21 @@ class CausalJointAngles:
         self.n = n_segments
         c = self.config
         self._sos_q = signal.butter(2, c.cutoff_hz, fs=c.rate_hz, output="sos")
-        self._sos_v = signal.butter(2, c.direction_cutoff_hz, fs=c.rate_hz, output="sos")
-        self._lengths: deque[np.ndarray] = deque(maxlen=c.length_frames)
+        self._filter_q = StreamingFilter(self._sos_q)
+        self._filter_v = StreamingFilter(signal.butter(2, c.direction_cutoff_hz, fs=c.rate_hz, output="sos"))
+        # Ring buffer of the newest frames' segment lengths, and their median, recomputed at most every
+        # 1% of the buffer: one frame barely moves a median over thousands (it costs ~50 us per call).
+        self._length_rows = np.zeros((c.length_frames, n_segments))
+        self._length_count = 0
+        self._median_m: np.ndarray | None = None
+        self._median_at = 0
         self._reset()
         self.n_restarts = 0
         self.last_raw_q_rad: np.ndarray | None = None  # unfiltered angles of the last accepted frame
 
     def _reset(self) -> None:
-        self._zi_q: np.ndarray | None = None
-        self._zi_v: np.ndarray | None = None
+        self._filter_q.reset()
+        self._filter_v.reset()
         self._last_t_ns: int | None = None
         self._start_t_ns: int | None = None
         self._previous_slow: np.ndarray | None = None
@@ -82,8 +88,17 @@ class CausalJointAngles:
 
     @property
     def lengths_m(self) -> np.ndarray | None:
-        """Running-median segment lengths (m), None before the first frame."""
-        return np.median(np.array(self._lengths), axis=0) if self._lengths else None
+        """Running-median segment lengths (m) of the newest ``length_frames`` frames, None before the first."""
+        return self._median_m
+
+    def _add_lengths(self, lengths_m: np.ndarray) -> None:
+        size = self._length_rows.shape[0]
+        self._length_rows[self._length_count % size] = lengths_m
+        self._length_count += 1
+        held = min(self._length_count, size)
+        if self._median_m is None or self._length_count - self._median_at >= max(1, held // 100):
+            self._median_m = np.median(self._length_rows[:held], axis=0)
+            self._median_at = self._length_count
 
     def group_delay_s(self) -> float:
         """Low-frequency group delay (s) of the angle filter: the age of what a filtered angle describes."""
@@ -101,36 +116,36 @@ class CausalJointAngles:
         t_ns : frame stamp (ns); a stamp not after the previous one is ignored.
         positions_m : marker name -> (3,) world position (m); missing or non-finite markers skip the frame.
         """
-        if any(name not in positions_m or not np.isfinite(positions_m[name]).all() for name in self.names):
-            return None
+        points = np.empty((len(self.names), 2))
+        for k, name in enumerate(self.names):
+            position = positions_m.get(name)
+            if position is None or not np.isfinite(position).all():
+                return None
+            points[k] = sagittal_from_world(position)
         if self._last_t_ns is not None and t_ns <= self._last_t_ns:
             return None
         if self._last_t_ns is not None and (t_ns - self._last_t_ns) > self.config.max_gap_s * 1e9:
             self._reset()
             self.n_restarts += 1
-        points = np.array([sagittal_from_world(positions_m[name]) for name in self.names])
-        self._lengths.append(np.linalg.norm(np.diff(points, axis=0), axis=1))
+        self._add_lengths(np.hypot(*np.diff(points, axis=0).T))
         raw = joint_angles_from_positions(points[None])[0]
         if self._previous_raw is not None:  # keep angles continuous across +-pi
             raw = self._previous_raw + np.angle(np.exp(1j * (raw - self._previous_raw)))
         self._previous_raw = raw
         self.last_raw_q_rad = raw
-        if self._zi_q is None:
-            zi = signal.sosfilt_zi(self._sos_q)
-            self._zi_q = zi[:, :, None] * raw[None, None, :]
-            self._zi_v = signal.sosfilt_zi(self._sos_v)[:, :, None] * raw[None, None, :]
+        if self._start_t_ns is None:
             self._start_t_ns = t_ns
-        q, self._zi_q = signal.sosfilt(self._sos_q, raw[None, :], axis=0, zi=self._zi_q)
-        slow, self._zi_v = signal.sosfilt(self._sos_v, raw[None, :], axis=0, zi=self._zi_v)
+        q = self._filter_q.step(raw)
+        slow = self._filter_v.step(raw)
         velocity = np.zeros(self.n)
         if self._previous_slow is not None and self._last_t_ns is not None:
-            velocity = (slow[0] - self._previous_slow) / ((t_ns - self._last_t_ns) / 1e9)
-        self._previous_slow = slow[0]
+            velocity = (slow - self._previous_slow) / ((t_ns - self._last_t_ns) / 1e9)
+        self._previous_slow = slow
         self._last_t_ns = t_ns
-        assert self._start_t_ns is not None
         if t_ns - self._start_t_ns < self.config.settle_s * 1e9:
             return None
-        return AngleSample(t_ns, q[0], velocity, np.median(np.array(self._lengths), axis=0))
+        assert self._median_m is not None
+        return AngleSample(t_ns, q, velocity, self._median_m)
 
     def accepted(self, t_ns: int) -> bool:
         """True if the frame stamped ``t_ns`` was the last one taken in."""

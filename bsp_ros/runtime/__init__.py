@@ -146,7 +146,7 @@ def message_class(type_name: str, backend: Literal["rclpy", "dds"] = "dds") -> A
     type_name : str
         ROS type, e.g. ``"geometry_msgs/msg/WrenchStamped"``.
     backend : {"dds", "rclpy"}
-        ``dds``: the generated cyclonedds ``IdlStruct``; ``rclpy``: the rosidl class.
+        ``dds``: the rosbags Jazzy class the DDS backend (de)serialises; ``rclpy``: the rosidl class.
 
     Returns
     -------
@@ -159,9 +159,10 @@ def message_class(type_name: str, backend: Literal["rclpy", "dds"] = "dds") -> A
         return _message_class(type_name)
     if backend != "dds":
         raise RuntimeBackendError(f"backend must be 'rclpy' or 'dds', got {backend!r}")
-    from bsp_ros.runtime.dds_types import dds_class
+    from bsp_ros.runtime.dds_types import dds_class, typestore
 
-    return dds_class(type_name)
+    dds_class(type_name)  # an unknown type fails here, naming it
+    return typestore().types[type_name]
 
 
 def run_node(
@@ -190,9 +191,13 @@ def run_node(
         Process exit code: 0, or the ``exit_code`` of a bsp_ros error raised by ``setup``.
     """
     import logging
+    import sys
 
     from bsp_ros.errors import BspError
 
+    # A callback thread waiting for the GIL waits up to the switch interval (5 ms by default) while
+    # another thread computes; 1 ms keeps a 1 kHz stream's latency low at little cost.
+    sys.setswitchinterval(min(sys.getswitchinterval(), 0.001))
     ctx = make_context(backend, args=args)
     try:
         node = ctx.create_node(name, namespace)

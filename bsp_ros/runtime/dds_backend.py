@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from cyclonedds._clayer import ddspy_take, ddspy_write
 from cyclonedds.core import (
     DDSException,
     GuardCondition,
@@ -42,6 +43,8 @@ QosLike = str | int | QosSpec
 
 #: Reader history depth at least this deep: the buffer between arrival and take (matching ignores it).
 READER_DEPTH = 1000
+_TAKE_N = 256
+_ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
 _DISCOVERY_TOPIC = "ros_discovery_info"
 _DISCOVERY_TYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 _NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
@@ -97,12 +100,18 @@ def _gid(entity: Any) -> bytes:
 
 
 class DdsPublisher:
-    """A ROS 2 publisher on a DDS writer; create it with :meth:`DdsNode.create_publisher`."""
+    """A ROS 2 publisher on a DDS writer; create it with :meth:`DdsNode.create_publisher`.
+
+    Messages are serialised with the rosbags Jazzy typestore (plain CDR, byte-identical to the DDS type's
+    own serialiser, which a test proves) and written raw: about five times faster than cyclonedds-python's
+    serialiser, which matters at 1 kHz.
+    """
 
     def __init__(self, node: DdsNode, type_name: str, topic: str, qos: QosLike) -> None:
         self.type_name = type_name
         self.topic_name = resolve_topic(topic, node.namespace, node.name)
         self._cls = dds_types.dds_class(type_name)
+        self._serialize = dds_types.typestore().serialize_cdr
         ctx = node.context
         dds_topic = ctx._topic("rt" + self.topic_name, type_name)
         self._writer: DataWriter[Any] = DataWriter(
@@ -111,25 +120,30 @@ class DdsPublisher:
         self.gid = _gid(self._writer)
 
     def publish(self, msg: Any) -> None:
-        """Publish a message of :meth:`DdsNode.message_class` (or a rosbags message of the same type).
+        """Publish a message of :meth:`DdsNode.message_class` (a rosbags message) or of the DDS class.
 
         Parameters
         ----------
         msg : object
-            The message; numpy arrays in numeric array fields are accepted.
+            The message; numeric sequences as numpy arrays (lists are converted, more slowly).
         """
-        if not isinstance(msg, self._cls):
-            if getattr(msg, "__msgtype__", None) != self.type_name:
-                raise RuntimeBackendError(
-                    f"publisher of {self.type_name} on {self.topic_name} got a {type(msg).__name__}"
-                )
-            msg = dds_types.ros_to_dds(msg, self.type_name)
+        if isinstance(msg, self._cls):
+            msg = dds_types.dds_to_ros(msg, self.type_name)
+        elif getattr(msg, "__msgtype__", None) != self.type_name:
+            raise RuntimeBackendError(f"publisher of {self.type_name} on {self.topic_name} got a {type(msg).__name__}")
+        data: bytes | memoryview
         try:
-            self._writer.write(dds_types.plain_sequences(msg, self.type_name))
-        except DDSException as exc:
-            raise RuntimeBackendError(f"publishing on {self.topic_name} failed: {exc}") from exc
-        except Exception as exc:  # cyclonedds reports a bad field value as a bare Exception
-            raise RuntimeBackendError(f"cannot serialise {self.type_name} for {self.topic_name}: {exc}") from exc
+            data = self._serialize(msg, self.type_name)
+        except Exception:
+            try:
+                data = self._serialize(dds_types.dds_to_ros(dds_types.ros_to_dds(msg)), self.type_name)
+            except Exception as exc:
+                raise RuntimeBackendError(f"cannot serialise {self.type_name} for {self.topic_name}: {exc}") from exc
+        if len(data) % 4:
+            data = bytes(data).ljust((len(data) + 3) & ~3, b"\0")  # as cyclonedds' DataWriter.write pads
+        ret = ddspy_write(self._writer._ref, bytes(data))
+        if ret < 0:
+            raise RuntimeBackendError(f"publishing on {self.topic_name} failed: {DDSException(ret)}")
 
     def get_subscription_count(self) -> int:
         """Return the number of matched readers (all vendors)."""
@@ -160,7 +174,9 @@ class DdsSubscription:
             dds_topic,
             qos=dds_qos(qos, reader_depth=READER_DEPTH, user_data=_typehash_user_data(type_name)),
         )
-        self._condition = ReadCondition(self._reader, SampleState.Any | ViewState.Any | InstanceState.Any)
+        self._condition = ReadCondition(self._reader, _ANY_STATE)
+        self._deserialize = dds_types.typestore().deserialize_cdr
+        self._malformed = 0
         self.gid = _gid(self._reader)
 
     def get_publisher_count(self) -> int:
@@ -168,11 +184,26 @@ class DdsSubscription:
         return len(self._reader.get_matched_publications())
 
     def _take(self) -> list[Any]:
+        """Every waiting sample, deserialised with the rosbags typestore; ``sample_info`` set on each."""
         samples: list[Any] = []
         while True:
-            batch = self._reader.take(N=256)
-            samples += [s for s in batch if hasattr(s, "sample_info") and s.sample_info.valid_data]
-            if len(batch) < 256:
+            batch = ddspy_take(self._reader._ref, _ANY_STATE, _TAKE_N)
+            if isinstance(batch, int):
+                raise DDSException(batch, f"taking samples of {self.topic_name}")
+            for data, info in batch:
+                if not info.valid_data:
+                    continue
+                try:
+                    msg: Any = self._deserialize(data, self.type_name)
+                except Exception as exc:
+                    self._malformed += 1
+                    logging.getLogger("bsp_ros.dds").warning(
+                        "dropped a malformed %s on %s: %s", self.type_name, self.topic_name, exc
+                    )
+                    continue
+                msg.sample_info = info
+                samples.append(msg)
+            if len(batch) < _TAKE_N:
                 return samples
 
 
@@ -219,8 +250,8 @@ class DdsNode:
         context._add_node(self)
 
     def message_class(self, type_name: str) -> type[Any]:
-        """Return the message class of a ROS type (keyword construction, every field given)."""
-        return dds_types.dds_class(type_name)
+        """Return the rosbags message class of a ROS type (keyword construction, every field given)."""
+        return self.context.message_class(type_name)
 
     def create_publisher(self, type_name: str, topic: str, qos: QosLike = 10) -> DdsPublisher:
         """Create a publisher.
@@ -420,8 +451,16 @@ class DdsContext:
         return DdsNode(self, name, namespace)
 
     def message_class(self, type_name: str) -> type[Any]:
-        """Return the DDS message class of a ROS type (keyword construction, every field given)."""
-        return dds_types.dds_class(type_name)
+        """Return the rosbags message class of a ROS type (keyword construction, every field given).
+
+        Raises
+        ------
+        RuntimeBackendError
+            If the Jazzy typestore does not know the type.
+        """
+        dds_types.dds_class(type_name)  # an unknown type fails here, naming it
+        cls: type[Any] = dds_types.typestore().types[type_name]
+        return cls
 
     def _topic(self, dds_name: str, type_name: str) -> Topic[Any]:
         with self._lock:

@@ -151,7 +151,7 @@ def test_make_context_auto_is_dds_without_rclpy() -> None:
     assert "rclpy" not in sys.modules
 
 
-def test_publish_accepts_numpy_and_rosbags_messages_and_writes_xcdr1() -> None:
+def test_publish_accepts_rosbags_and_dds_messages_and_writes_xcdr1() -> None:
     joint_state = "sensor_msgs/msg/JointState"
     with DdsContext(_domain(2), args=[]) as ctx:
         node = ctx.create_node("loopback")
@@ -161,6 +161,7 @@ def test_publish_accepts_numpy_and_rosbags_messages_and_writes_xcdr1() -> None:
         representation = pub._writer.get_qos()[Policy.DataRepresentation]
         assert representation.use_cdrv0_representation and not representation.use_xcdrv2_representation
         cls = ctx.message_class
+        assert cls(joint_state) is dds_types.typestore().types[joint_state]
         header = cls("std_msgs/msg/Header")(stamp=cls("builtin_interfaces/msg/Time")(sec=3, nanosec=4), frame_id="")
         deadline = time.monotonic() + 5.0
         while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
@@ -168,13 +169,17 @@ def test_publish_accepts_numpy_and_rosbags_messages_and_writes_xcdr1() -> None:
         pub.publish(
             cls(joint_state)(header=header, name=["q1"], position=np.array([-0.5]), velocity=[], effort=np.zeros(1))
         )
-        pub.publish(dds_types.dds_to_ros(cls(joint_state)(header=header, name=[], position=[], velocity=[], effort=[])))
+        dds_cls = dds_types.dds_class
+        dds_header = dds_types.ros_to_dds(header)
+        pub.publish(dds_cls(joint_state)(header=dds_header, name=["q2"], position=[1.5], velocity=[], effort=[]))
         with pytest.raises(RuntimeBackendError, match="JointState"):
             pub.publish(cls("std_msgs/msg/String")(data="wrong"))
         with pytest.raises(RuntimeBackendError, match="cannot serialise"):
             pub.publish(cls(joint_state)(header=header, name="q1", position=None, velocity=[], effort=[]))
         ctx.spin(until=lambda: len(got) >= 2 or time.monotonic() > deadline)
-    assert [(m.position, m.effort) for m in got] == [([-0.5], [0.0]), ([], [])]  # type: ignore[attr-defined]
+    received = [(m.name, m.position.tolist(), m.effort.tolist()) for m in got]  # type: ignore[attr-defined]
+    assert received == [(["q1"], [-0.5], [0.0]), (["q2"], [1.5], [])]
+    assert all(m.sample_info.source_timestamp > 0 for m in got)  # type: ignore[attr-defined]
 
 
 # --- parameters ---
