@@ -6,6 +6,7 @@ import json
 import sys
 import time
 from collections import deque
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -16,11 +17,13 @@ from bsp_ros.fusion import SubjectInfo
 from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.passive import PassiveModel
 from bsp_ros.identification.recursive import RecursiveConfig, RecursiveIdentifier
+from bsp_ros.identification.result import IdentificationResult
 from bsp_ros.model import contact_torques_nm
 from bsp_ros.online.guard import StreamGuard
-from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier
+from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate, WindowSamples
 from bsp_ros.pipeline import IdentifyOptions, fuse
 from bsp_ros.runtime import run_node
+from bsp_ros.runtime.worker import LatestJobWorker
 from bsp_ros.streams import segments_for
 from msg_adapters.diagnostics import (
     ERROR,
@@ -85,7 +88,9 @@ class BspIdentifierNode:
         self.lengths: np.ndarray | None = None
         self.joint_states: list[tuple[int, np.ndarray, np.ndarray]] = []
         self.last_receive = {"wrench": None, "joint_states": None}
-        self.counts = {"wrench": 0, "joint_states": 0, "refused": 0, "published": 0}
+        self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
+        self.published = 0
+        self.worker = LatestJobWorker(f"{NAME}-estimate")
         self.update_s: deque[float] = deque(maxlen=int(10 * update_hz) + 1)  # compute time of the last ~10 s
         self.types = node.message_class
         self.estimate_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", "estimates")
@@ -224,38 +229,58 @@ class BspIdentifierNode:
             return "waiting for segment lengths"
         return None
 
-    def current_document(self) -> tuple[dict[str, Any], int]:
-        if self.mode == "windowed":
-            estimate = self.windowed.estimate()
-            return estimate.document, estimate.last_wrench_t_ns or 0
-        result = self.recursive.result()
-        assert self.lengths is not None
+    def recursive_document(self, result: IdentificationResult, lengths_m: np.ndarray) -> dict[str, Any]:
+        """The estimate document of a recursive result (fused with the prior when valid)."""
         data = IdentificationData(
             np.zeros(0, dtype=np.int64),
             np.zeros((0, self.n)),
             np.zeros((0, self.n)),
             np.zeros((0, self.n)),
-            self.lengths,
+            lengths_m,
             np.zeros(self.n),
             np.zeros(self.n),
         )
         posterior = fuse(result, data, self.options.subject) if result.valid else None
-        return estimate_document(result, data, posterior, self.options.subject), self.recursive_guard.last_t_ns or 0
+        return estimate_document(result, data, posterior, self.options.subject)
 
     def on_update(self) -> None:
-        """Publish the estimate (invalid if an input is stale) and the node's health."""
-        started = time.perf_counter()
+        """Copy what the estimate needs (cheap, here on the executor thread) and let the worker compute and
+        publish it, so that the wrench callbacks never wait for an estimate; invalid if an input is stale."""
         reason = self.stale_reason()
-        if reason is None:
-            document, stamp = self.current_document()
+        counts = dict(self.counts)
+        job: Callable[[], tuple[dict[str, Any], int]]
+        if reason is not None:
+            document, now = invalid_document(self.options.method, reason), self.node.now_ns()
+            job = lambda: (document, now)  # noqa: E731 - through the worker, so it cannot overtake an estimate
+        elif self.mode == "windowed":
+            window = self.windowed.snapshot()
+            if isinstance(window, WindowEstimate):
+                job = lambda: (window.document, window.last_wrench_t_ns or 0)  # noqa: E731
+            else:
+                job = lambda: self._window_job(window)  # noqa: E731
         else:
-            document = invalid_document(self.options.method, reason)
-            stamp = self.node.now_ns()
+            assert self.lengths is not None  # stale_reason() waits for them
+            result, lengths, stamp = self.recursive.result(), self.lengths.copy(), self.recursive_guard.last_t_ns or 0
+            job = lambda: (self.recursive_document(result, lengths), stamp)  # noqa: E731
+        self.worker.submit(lambda: self._run_update(job, counts))
+
+    def _window_job(self, window: WindowSamples) -> tuple[dict[str, Any], int]:
+        estimate = self.windowed.estimate_window(window)
+        return estimate.document, estimate.last_wrench_t_ns or 0
+
+    def _run_update(self, job: Callable[[], tuple[dict[str, Any], int]], counts: dict[str, int]) -> None:
+        """On the worker thread: compute the document, publish it, time it."""
+        started = time.perf_counter()
+        try:
+            document, stamp = job()
+        except Exception as exc:  # an estimate that failed unexpectedly is published as invalid, not lost
+            self.node.get_logger().exception("estimate failed")
+            document, stamp = invalid_document(self.options.method, f"internal error: {exc!r}"), self.node.now_ns()
         document["mode"] = self.mode
-        self.publish(document, stamp)
+        self.publish(document, stamp, counts)
         self.update_s.append(time.perf_counter() - started)
 
-    def publish(self, document: dict[str, Any], stamp: int) -> None:
+    def publish(self, document: dict[str, Any], stamp: int, counts: dict[str, int]) -> None:
         types = self.types
         self.estimate_pub.publish(build_diagnostic_array(types, diagnostics_from_estimate(document, stamp)))
         self.json_pub.publish(types("std_msgs/msg/String")(data=json.dumps(document, allow_nan=False)))
@@ -265,7 +290,7 @@ class BspIdentifierNode:
             passive = passive_moments_from_estimate(document, stamp)
             if passive is not None and self.mode == "windowed":
                 self.passive_pub.publish(build_joint_state(types, passive))
-        self.counts["published"] += 1
+        self.published += 1
         level = OK if document["quality"]["valid"] else (WARN if "waiting" in document["quality"]["message"] else ERROR)
         timing = {}
         if self.update_s:  # how long an update takes: near the period, the node cannot keep up
@@ -273,7 +298,7 @@ class BspIdentifierNode:
                 "update_ms_mean": f"{1e3 * np.mean(self.update_s):.1f}",
                 "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
             }
-        values = {**self.counts, **timing}
+        values = {**counts, "published": self.published, "updates_dropped": self.worker.dropped, **timing}
         status = DiagnosticStatusData.with_values(level, NAME, document["quality"]["message"], "", values)
         self.diag_pub.publish(build_diagnostic_array(types, DiagnosticArraySample(self.node.now_ns(), "", (status,))))
 

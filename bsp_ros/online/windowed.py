@@ -54,6 +54,26 @@ class WindowEstimate:
     last_wrench_t_ns: int | None
 
 
+@dataclass(frozen=True)
+class WindowSamples:
+    """A copy of one window's samples, taken by :meth:`WindowedIdentifier.snapshot`.
+
+    Attributes
+    ----------
+    wrench_t_ns : (N,) wrench stamps (ns); wrench_yzx : (N, 3) ``[F_y, F_z, M_x]`` in ``world``.
+    angle_t_ns : (M,) joint-angle stamps (ns), from 2 s before the window (filter run-in);
+    angle_rows : (M, 2n) unfiltered angles (rad) then segment lengths (m).
+    refused : refused samples by input and reason; clock_jumps : clock jumps seen so far.
+    """
+
+    wrench_t_ns: np.ndarray
+    wrench_yzx: np.ndarray
+    angle_t_ns: np.ndarray
+    angle_rows: np.ndarray
+    refused: dict[str, int]
+    clock_jumps: int
+
+
 def block_average(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
     """Means of consecutive blocks of samples so that the rate is at most ``max_rate_hz``.
 
@@ -128,12 +148,24 @@ class WindowedIdentifier:
         self.wrench.clear()
         self.angles.clear()
 
-    def _invalid(self, message: str) -> WindowEstimate:
+    def _invalid(self, message: str, last_wrench_t_ns: int | None = None) -> WindowEstimate:
         document = invalid_document(self.config.options.method, message)
-        return WindowEstimate(document, False, self.wrench.last_t_ns)
+        return WindowEstimate(document, False, last_wrench_t_ns or self.wrench.last_t_ns)
 
     def estimate(self, now_ns: int | None = None) -> WindowEstimate:
-        """Identify over the newest window.
+        """Identify over the newest window: :meth:`snapshot` then :meth:`estimate_window`.
+
+        Parameters
+        ----------
+        now_ns : the caller's clock, in the stamps' time base; None judges staleness between the inputs only.
+        """
+        window = self.snapshot(now_ns)
+        return window if isinstance(window, WindowEstimate) else self.estimate_window(window)
+
+    def snapshot(self, now_ns: int | None = None) -> WindowSamples | WindowEstimate:
+        """Copy the newest window's samples (cheap), or an invalid estimate when an input is missing or stale.
+
+        The copy can be identified on another thread (:meth:`estimate_window`) while samples keep arriving.
 
         Parameters
         ----------
@@ -148,8 +180,25 @@ class WindowedIdentifier:
             if newest - last > stale_ns:
                 return self._invalid(f"stale input: newest {name} is {(newest - last) / 1e9:.2f} s old")
         start = last_wrench - int(self.config.window_s * 1e9)
-        t_w, wrench = block_average(*self.wrench.since(start), self.config.max_rate_hz)
-        t_a, rows = self.angles.since(start - int(2e9))
+        refused = {
+            **{f"wrench_{k}": v for k, v in self.wrench_guard.refused.items()},
+            **{f"joint_states_{k}": v for k, v in self.angle_guard.refused.items()},
+        }
+        return WindowSamples(
+            *self.wrench.since(start),
+            *self.angles.since(start - int(2e9)),
+            refused,
+            self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
+        )
+
+    def estimate_window(self, window: WindowSamples) -> WindowEstimate:
+        """Identify a window copied by :meth:`snapshot` (the slow part: ~30-100 ms for 30 s at 1 kHz).
+
+        Only one thread at a time may call this (it keeps the elastic-check schedule).
+        """
+        last_wrench = int(window.wrench_t_ns[-1])
+        t_w, wrench = block_average(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
+        t_a, rows = window.angle_t_ns, window.angle_rows
         try:
             lengths = np.median(rows[:, self.n :], axis=0)
             kinematics = kinematics_from_angles(
@@ -157,7 +206,7 @@ class WindowedIdentifier:
             )
             q, velocity, valid = resample_kinematics(kinematics, t_w)
             if valid.sum() < 2:
-                return self._invalid("no wrench sample in the window has joint angles")
+                return self._invalid("no wrench sample in the window has joint angles", last_wrench)
             tau = contact_torques_nm(q[valid], lengths, wrench[valid])
             data = IdentificationData(
                 t_w[valid],
@@ -178,18 +227,14 @@ class WindowedIdentifier:
             else:
                 result.warnings += self._elastic_warnings
         except BspError as error:
-            return self._invalid(str(error))
+            return self._invalid(str(error), last_wrench)
         posterior = fuse(result, data, self.config.options.subject) if result.valid else None
-        refused = {
-            **{f"wrench_{k}": v for k, v in self.wrench_guard.refused.items()},
-            **{f"joint_states_{k}": v for k, v in self.angle_guard.refused.items()},
-        }
         info = {
             "start_time_ns": int(t_w[0]),
             "end_time_ns": int(t_w[-1]),
             "window_s": self.config.window_s,
-            "refused_samples": refused,
-            "clock_jumps": self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
+            "refused_samples": window.refused,
+            "clock_jumps": window.clock_jumps,
             "config": self.config.options.config(),
         }
         document = estimate_document(result, data, posterior, self.config.options.subject, info)
