@@ -278,6 +278,8 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
     lat_recv = e_recv[matched] - wr[idx[matched]]
     lat_stamp = e_recv[matched] - e_stamp[matched]
     lat_pub = e_pub[matched] - wp[idx[matched]]
+    if r.get("dump"):
+        np.savez(f"{r['dump']}_{mode}.npz", stamp=e_stamp[matched], lat_recv=lat_recv, lat_pub=lat_pub, start=start)
     print(
         f"  end-to-end latency: wrench -> {topic} stamped with it ({int(matched.sum())} of {e_stamp.size} matched;"
         " invalid estimates carry the wall clock)"
@@ -321,10 +323,10 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
         top = sorted(listener.invalid_reasons.items(), key=lambda kv: -kv[1])[:3]
         print("    invalid (whole run, after the simulator started): " + "; ".join(f"{n}x {m!r}" for m, n in top))
     if mode == "windowed":
-        ok = rate >= 0.99 * UPDATE_HZ and late <= 0.01 and valid.size > 0 and bool(valid.all())
-        targets.append(
-            ("windowed >= 5 Hz on time (rate >= 4.95 Hz, <= 1% late, all valid)", ok, f"{rate:.2f} Hz, {late:.1%}")
-        )
+        # Validity is the data's verdict (a window where a joint moved one way only is rightly invalid), so it
+        # is reported above but is not part of "on time".
+        ok = rate >= 0.99 * UPDATE_HZ and late <= 0.01
+        targets.append(("windowed >= 5 Hz on time (rate >= 4.95 Hz, <= 1% late)", ok, f"{rate:.2f} Hz, {late:.1%}"))
 
     # -- CPU and memory ------------------------------------------------------------------------------------
     first, last = r["first"], r["last"]
@@ -348,7 +350,7 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
             f" (growth {growth:+6.2f} MB, of which 2nd half {half_growth:+6.2f} MB)"
         )
         if name != "listener":
-            flat &= abs(half_growth) < FLAT_MB
+            flat &= half_growth < FLAT_MB  # growth: a shrinking RSS is no leak
             growth_text.append(f"{half_growth:+.2f}")
     print(f"    machine busy {busy:.0%} of one core (2 cores = 200%), of which other processes {busy - ours:.0%}")
     targets.append(
@@ -391,6 +393,7 @@ def main() -> int:
     parser.add_argument("--modes", default="windowed,recursive", help="comma-separated identifier modes")
     parser.add_argument("--domain", type=int, default=60 + (os.getpid() % 40) * 2, help="first private domain id")
     parser.add_argument("--log-dir", default=None, help="keep the nodes' output here")
+    parser.add_argument("--dump", default=None, help="save per-wrench latencies to <DUMP>_<mode>.npz")
     args = parser.parse_args()
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # unwind, so that the nodes are stopped too
     signal.signal(signal.SIGINT, signal.default_int_handler)  # also when started in the background
@@ -409,6 +412,7 @@ def main() -> int:
         if log_dir:
             os.makedirs(log_dir, exist_ok=True)
         result = run_mode(mode, args.domain + k, args.duration, args.warmup, log_dir)
+        result["dump"] = args.dump
         rows += [(mode, *t) for t in report(result, args.duration)]
     print("\ntargets")
     for mode, name, ok, figure in rows:

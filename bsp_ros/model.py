@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import functools
+import math
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -11,6 +13,9 @@ from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_array
 
 GRAVITY_M_S2 = 9.81
+
+#: One sample's values: a float sequence or a 1-D array.
+FloatVector = Sequence[float] | np.ndarray
 
 
 def check_lengths_m(lengths_m: npt.ArrayLike) -> np.ndarray:
@@ -91,6 +96,48 @@ def contact_torques_nm(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike, wrench_yz
     jacobian = contact_jacobian(q_rad, lengths_m)
     wrench = np.atleast_2d(np.asarray(wrench_yzx, dtype=np.float64))
     return -np.einsum("nki,nk->ni", jacobian, wrench)
+
+
+def contact_torques_one_nm(q_rad: FloatVector, lengths_m: FloatVector, wrench_yzx: FloatVector) -> list[float]:
+    """:func:`contact_torques_nm` of one sample, in plain floats: ~3 us where the array version takes ~40.
+
+    The live recursive filter calls it for every wrench (1 kHz).
+
+    Parameters
+    ----------
+    q_rad : (n,) joint angles (rad).
+    lengths_m : (n,) segment lengths (m).
+    wrench_yzx : ``[F_y (N), F_z (N), M_x (Nm)]`` in ``world``.
+
+    Returns
+    -------
+    (n,) torques (Nm).
+    """
+    force_y, force_z, moment_x = (float(v) for v in wrench_yzx)
+    phi = 0.0
+    dy, dz = [], []
+    for q, length in zip(q_rad, lengths_m, strict=True):
+        phi += float(q)
+        dy.append(-float(length) * math.sin(phi))
+        dz.append(float(length) * math.cos(phi))
+    torques = []
+    sum_y = sum_z = 0.0
+    for j in range(len(dy) - 1, -1, -1):  # d p / d q_j sums the distal segments k >= j
+        sum_y += dy[j]
+        sum_z += dz[j]
+        torques.append(-(sum_y * force_y + sum_z * force_z + moment_x))
+    return torques[::-1]
+
+
+def gravity_regressor_one(q_rad: FloatVector) -> list[list[float]]:
+    """:func:`gravity_regressor` of one sample as nested lists of floats (n, n), for the 1 kHz live filter."""
+    cos_phi = []
+    phi = 0.0
+    for q in q_rad:
+        phi += float(q)
+        cos_phi.append(GRAVITY_M_S2 * math.cos(phi))
+    n = len(cos_phi)
+    return [[cos_phi[j] if j >= i else 0.0 for j in range(n)] for i in range(n)]
 
 
 def gravity_regressor(q_rad: npt.ArrayLike) -> np.ndarray:

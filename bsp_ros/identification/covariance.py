@@ -78,14 +78,34 @@ def hac_covariance(design: np.ndarray, scores: np.ndarray, lags: int | None = No
         # correlation length keeps the Bartlett weights near 1 where the correlation really is.
         lags = max(bartlett_bandwidth(scores), 2 * correlation_length(scores))
         lags = min(lags, max(scores.shape[0] // 4, 1))
-    centred = scores - scores.mean(axis=0)
-    long_run = centred.T @ centred
-    for lag in range(1, lags + 1):
-        gamma = centred[lag:].T @ centred[:-lag]
-        long_run += (1.0 - lag / (lags + 1.0)) * (gamma + gamma.T)
+    long_run = bartlett_long_run(scores - scores.mean(axis=0), lags)
     inverse = np.linalg.pinv(design)
     covariance = inverse @ long_run @ inverse
     return 0.5 * (covariance + covariance.T), lags
+
+
+def bartlett_long_run(centred: np.ndarray, lags: int) -> np.ndarray:
+    """``Gamma_0 + sum_{l=1..L} (1 - l / (L + 1)) (Gamma_l + Gamma_l^T)`` with ``Gamma_l = sum_t x_t x_{t+l}^T``.
+
+    Computed as ``S^T S / (L + 1)`` where the rows of ``S`` are the sums of ``L + 1`` consecutive scores
+    (zero-padded at both ends): each pair of samples ``l <= L`` apart appears in ``L + 1 - l`` of those
+    sums, which is exactly the Bartlett weight. O(N p^2) whatever the lag, where the sum over lags is
+    O(L N p^2): at 200 Hz the lag reaches hundreds of samples.
+
+    Parameters
+    ----------
+    centred : (N, p) centred scores.
+    lags : Bartlett truncation L >= 0.
+
+    Returns
+    -------
+    (p, p) long-run covariance (unnormalised, like the Gamma_l).
+    """
+    n, p = centred.shape
+    padded = np.concatenate((np.zeros((lags + 1, p)), centred, np.zeros((lags, p))))
+    cumulative = np.cumsum(padded, axis=0)
+    sums = cumulative[lags + 1 :] - cumulative[: n + lags]
+    return np.asarray(sums.T @ sums / (lags + 1.0))
 
 
 def correlation_from_covariance(covariance: np.ndarray) -> np.ndarray:

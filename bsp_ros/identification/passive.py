@@ -49,6 +49,12 @@ class PassiveModel:
         table = {"coulomb": np.sign(v), "viscous": v, "offset": np.ones_like(q), "stiffness": q}
         return np.column_stack([table[term] for term in self.terms])
 
+    def row_one(self, q_rad: float, velocity_rad_s: float) -> list[float]:
+        """One joint's passive columns at one instant, as floats (the 1 kHz live filter's fast path)."""
+        sign = (velocity_rad_s > 0) - (velocity_rad_s < 0)
+        table = {"coulomb": float(sign), "viscous": velocity_rad_s, "offset": 1.0, "stiffness": q_rad}
+        return [table[term] for term in self.terms]
+
     def columns_all(self, q_rad: np.ndarray, velocity_rad_s: np.ndarray) -> np.ndarray:
         """Passive columns of every joint at one instant: (n,) angles and velocities -> (n, n_terms)."""
         table = {

@@ -11,18 +11,18 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.estimate import estimate_document, invalid_document
+from bsp_ros.estimate import invalid_document
 from bsp_ros.estimate_messages import diagnostics_from_estimate, inertias_from_estimate, passive_moments_from_estimate
 from bsp_ros.fusion import SubjectInfo
-from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.passive import PassiveModel
 from bsp_ros.identification.recursive import RecursiveConfig, RecursiveIdentifier
-from bsp_ros.identification.result import IdentificationResult
-from bsp_ros.model import contact_torques_nm
+from bsp_ros.model import contact_torques_one_nm
+from bsp_ros.nodes import estimate_jobs as jobs
 from bsp_ros.online.guard import StreamGuard
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate, WindowSamples
-from bsp_ros.pipeline import IdentifyOptions, fuse
+from bsp_ros.pipeline import IdentifyOptions
 from bsp_ros.runtime import run_node
+from bsp_ros.runtime.offload import ProcessOffload
 from bsp_ros.runtime.worker import LatestJobWorker
 from bsp_ros.streams import segments_for
 from msg_adapters.diagnostics import (
@@ -86,11 +86,19 @@ class BspIdentifierNode:
         self.rotations: dict[str, np.ndarray] = {}
         self.assumed_world: set[str] = set()
         self.lengths: np.ndarray | None = None
+        self.passive_joints: tuple[str, ...] | None = None
         self.joint_states: list[tuple[int, np.ndarray, np.ndarray]] = []
         self.last_receive = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
         self.worker = LatestJobWorker(f"{NAME}-estimate")
+        # The estimates run in a child process (see ProcessOffload); a worker thread waits for them.
+        # In recursive mode the per-sample filter here comes first; the child only fuses at 5 Hz: nice it.
+        niceness = 10 if self.mode == "recursive" else 0
+        self.offload = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, niceness))
+        self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
+        self.ready: tuple[int, dict[str, Any], int] | None = None
+        self.offload.run(jobs.ping)
         self.update_s: deque[float] = deque(maxlen=int(10 * update_hz) + 1)  # compute time of the last ~10 s
         self.types = node.message_class
         self.estimate_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", "estimates")
@@ -206,14 +214,15 @@ class BspIdentifierNode:
         (t0, q0, v0), (t1, q1, v1) = self.joint_states[0], self.joint_states[-1]
         if t_ns - t1 > 0.1e9 or t_ns < t0 - 0.1e9:  # no angle near this wrench
             return True
-        w = 0.0 if t1 == t0 else float(np.clip((t_ns - t0) / (t1 - t0), 0.0, 1.0))
+        w = 0.0 if t1 == t0 else min(max((t_ns - t0) / (t1 - t0), 0.0), 1.0)
         q, v = (1 - w) * q0 + w * q1, (1 - w) * v0 + w * v1
-        tau = contact_torques_nm(q[None, :], self.lengths, wrench_yzx[None, :])[0]
+        tau = contact_torques_one_nm(q, self.lengths, wrench_yzx)
         if self.recursive.update(t_ns, q, v, tau):
             passive = self.recursive.theta[self.n :: len(self.options.passive.terms)]
-            joints = [name for key, name in self.recursive.names if key == "coulomb_nm"]
-            if len(joints) == len(passive):
-                sample = JointStateSample(t_ns, "", tuple(joints), np.zeros(0), np.zeros(0), passive)
+            if self.passive_joints is None:
+                self.passive_joints = tuple(name for key, name in self.recursive.names if key == "coulomb_nm")
+            if len(self.passive_joints) == len(passive):
+                sample = JointStateSample(t_ns, "", self.passive_joints, np.zeros(0), np.zeros(0), passive)
                 self.passive_pub.publish(build_joint_state(self.types, sample))
         return True
 
@@ -229,46 +238,65 @@ class BspIdentifierNode:
             return "waiting for segment lengths"
         return None
 
-    def recursive_document(self, result: IdentificationResult, lengths_m: np.ndarray) -> dict[str, Any]:
-        """The estimate document of a recursive result (fused with the prior when valid)."""
-        data = IdentificationData(
-            np.zeros(0, dtype=np.int64),
-            np.zeros((0, self.n)),
-            np.zeros((0, self.n)),
-            np.zeros((0, self.n)),
-            lengths_m,
-            np.zeros(self.n),
-            np.zeros(self.n),
-        )
-        posterior = fuse(result, data, self.options.subject) if result.valid else None
-        return estimate_document(result, data, posterior, self.options.subject)
-
     def on_update(self) -> None:
-        """Copy what the estimate needs (cheap, here on the executor thread) and let the worker compute and
-        publish it, so that the wrench callbacks never wait for an estimate; invalid if an input is stale."""
+        """Publish the estimate (invalid if an input is stale) and the node's health.
+
+        The slow part runs in a worker process, waited for by a worker thread, so that the wrench callbacks
+        never wait for an estimate; here, on the executor thread, only what it needs is copied.
+        """
         reason = self.stale_reason()
         counts = dict(self.counts)
+        if self.mode == "windowed":
+            self._update_windowed(reason, counts)
+        else:
+            self._update_recursive(reason, counts)
+
+    def _update_windowed(self, reason: str | None, counts: dict[str, int]) -> None:
+        """Publish on the timer grid: the estimate computed since the last tick (of that tick's window), then
+        start the next one. Consumers get an update every period, one period after the window it describes
+        (its stamp says which). A quick verdict (stale, waiting) goes out at once and supersedes any estimate
+        still computing."""
+        window = self.windowed.snapshot() if reason is None else None
+        if window is None or isinstance(window, WindowEstimate):
+            self.generation += 1
+            if window is None:
+                document, stamp = invalid_document(self.options.method, str(reason)), self.node.now_ns()
+            else:
+                document, stamp = window.document, window.last_wrench_t_ns or self.node.now_ns()
+            document["mode"] = self.mode
+            self.publish(document, stamp, counts)
+            return
+        ready, self.ready = self.ready, None
+        if ready is not None and ready[0] == self.generation:
+            self.publish(ready[1], ready[2], counts)
+        generation = self.generation
+        self.worker.submit(lambda: self._compute_window(window, generation))
+
+    def _compute_window(self, window: WindowSamples, generation: int) -> None:
+        """On the worker thread: identify a window in the worker process; keep it for the next tick."""
+        started = time.perf_counter()
+        try:
+            document, stamp = self.offload.run(jobs.window_estimate, window)
+        except Exception as exc:  # an estimate that failed unexpectedly is published as invalid, not lost
+            self.node.get_logger().exception("estimate failed")
+            document, stamp = invalid_document(self.options.method, f"internal error: {exc!r}"), self.node.now_ns()
+        document["mode"] = self.mode
+        self.update_s.append(time.perf_counter() - started)
+        self.ready = (generation, document, stamp)
+
+    def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
+        """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
         job: Callable[[], tuple[dict[str, Any], int]]
         if reason is not None:
             document, now = invalid_document(self.options.method, reason), self.node.now_ns()
             job = lambda: (document, now)  # noqa: E731 - through the worker, so it cannot overtake an estimate
-        elif self.mode == "windowed":
-            window = self.windowed.snapshot()
-            if isinstance(window, WindowEstimate):
-                job = lambda: (window.document, window.last_wrench_t_ns or 0)  # noqa: E731
-            else:
-                job = lambda: self._window_job(window)  # noqa: E731
         else:
             assert self.lengths is not None  # stale_reason() waits for them
             result, lengths, stamp = self.recursive.result(), self.lengths.copy(), self.recursive_guard.last_t_ns or 0
-            job = lambda: (self.recursive_document(result, lengths), stamp)  # noqa: E731
-        self.worker.submit(lambda: self._run_update(job, counts))
+            job = lambda: (self.offload.run(jobs.recursive_document, result, lengths, self.options), stamp)  # noqa: E731
+        self.worker.submit(lambda: self._run_recursive(job, counts))
 
-    def _window_job(self, window: WindowSamples) -> tuple[dict[str, Any], int]:
-        estimate = self.windowed.estimate_window(window)
-        return estimate.document, estimate.last_wrench_t_ns or 0
-
-    def _run_update(self, job: Callable[[], tuple[dict[str, Any], int]], counts: dict[str, int]) -> None:
+    def _run_recursive(self, job: Callable[[], tuple[dict[str, Any], int]], counts: dict[str, int]) -> None:
         """On the worker thread: compute the document, publish it, time it."""
         started = time.perf_counter()
         try:
@@ -277,8 +305,8 @@ class BspIdentifierNode:
             self.node.get_logger().exception("estimate failed")
             document, stamp = invalid_document(self.options.method, f"internal error: {exc!r}"), self.node.now_ns()
         document["mode"] = self.mode
-        self.publish(document, stamp, counts)
         self.update_s.append(time.perf_counter() - started)
+        self.publish(document, stamp, counts)
 
     def publish(self, document: dict[str, Any], stamp: int, counts: dict[str, int]) -> None:
         types = self.types

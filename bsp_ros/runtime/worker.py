@@ -65,7 +65,7 @@ class LatestJobWorker:
             try:
                 assert job is not None
                 job()
-            except Exception as exc:  # noqa: BLE001 - a failed estimate must not stop the next ones
+            except Exception as exc:
                 self._on_error(exc)
             finally:
                 with self._condition:

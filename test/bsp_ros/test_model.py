@@ -58,3 +58,18 @@ def test_static_moments_jacobian_matches_finite_differences() -> None:
 def test_silly_lengths_are_refused_with_the_value_named(lengths) -> None:
     with pytest.raises(InputError, match="length"):
         model.check_lengths_m(lengths)
+
+
+def test_one_sample_torques_and_regressor_match_the_array_versions() -> None:
+    from bsp_ros.model import contact_torques_nm, contact_torques_one_nm, gravity_regressor, gravity_regressor_one
+
+    rng = np.random.default_rng(21)
+    for n in (2, 3):
+        q, wrench = rng.normal(size=n), rng.normal(size=3)
+        lengths = rng.uniform(0.1, 0.4, size=n)
+        np.testing.assert_allclose(
+            contact_torques_one_nm(q, lengths, wrench),
+            contact_torques_nm(q[None], lengths, wrench[None])[0],
+            atol=1e-12,
+        )
+        np.testing.assert_allclose(gravity_regressor_one(q), gravity_regressor(q[None])[0], atol=1e-12)
