@@ -3,12 +3,28 @@
 from __future__ import annotations
 
 import multiprocessing
+import os
+import threading
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from bsp_ros.errors import RuntimeBackendError
+
+
+def _child_init(parent_pid: int, initializer: Callable[..., None] | None, initargs: tuple[Any, ...]) -> None:
+    """In the child: exit when the parent is gone (a node killed by a signal runs no clean-up), then set up."""
+
+    def watch_parent() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(0.5)
+        os._exit(0)
+
+    threading.Thread(target=watch_parent, name="bsp_ros-offload-parent-watch", daemon=True).start()
+    if initializer is not None:
+        initializer(*initargs)
 
 
 class ProcessOffload:
@@ -33,8 +49,8 @@ class ProcessOffload:
         return ProcessPoolExecutor(
             max_workers=1,
             mp_context=multiprocessing.get_context("spawn"),
-            initializer=self._initializer,
-            initargs=self._initargs,
+            initializer=_child_init,
+            initargs=(os.getpid(), self._initializer, self._initargs),
         )
 
     def run(self, fn: Callable[..., Any], *args: Any) -> Any:
