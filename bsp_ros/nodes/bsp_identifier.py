@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from collections import deque
@@ -12,7 +11,6 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.estimate import invalid_document
-from bsp_ros.estimate_messages import diagnostics_from_estimate, inertias_from_estimate, passive_moments_from_estimate
 from bsp_ros.fusion import SubjectInfo
 from bsp_ros.identification.passive import PassiveModel
 from bsp_ros.identification.recursive import RecursiveConfig, RecursiveIdentifier
@@ -33,7 +31,6 @@ from msg_adapters.diagnostics import (
     DiagnosticStatusData,
     build_diagnostic_array,
 )
-from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import JointStateSample, build_joint_state, read_joint_state
 from msg_adapters.tf import read_tf_message, rotation_between
 from msg_adapters.wrench import read_wrench_stamped
@@ -97,7 +94,7 @@ class BspIdentifierNode:
         niceness = 10 if self.mode == "recursive" else 0
         self.offload = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, niceness))
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
-        self.ready: tuple[int, dict[str, Any], int] | None = None
+        self.ready: tuple[int, jobs.EstimateOutputs] | None = None
         self.offload.run(jobs.ping)
         self.update_s: deque[float] = deque(maxlen=int(10 * update_hz) + 1)  # compute time of the last ~10 s
         self.types = node.message_class
@@ -264,11 +261,11 @@ class BspIdentifierNode:
             else:
                 document, stamp = window.document, window.last_wrench_t_ns or self.node.now_ns()
             document["mode"] = self.mode
-            self.publish(document, stamp, counts)
+            self.publish(jobs.outputs_from_document(document, stamp, with_passive=True), counts)
             return
         ready, self.ready = self.ready, None
         if ready is not None and ready[0] == self.generation:
-            self.publish(ready[1], ready[2], counts)
+            self.publish(ready[1], counts)
         generation = self.generation
         self.worker.submit(lambda: self._compute_window(window, generation))
 
@@ -276,50 +273,52 @@ class BspIdentifierNode:
         """On the worker thread: identify a window in the worker process; keep it for the next tick."""
         started = time.perf_counter()
         try:
-            document, stamp = self.offload.run(jobs.window_estimate, window)
+            outputs = self.offload.run(jobs.window_estimate, window)
         except Exception as exc:  # an estimate that failed unexpectedly is published as invalid, not lost
-            self.node.get_logger().exception("estimate failed")
-            document, stamp = invalid_document(self.options.method, f"internal error: {exc!r}"), self.node.now_ns()
-        document["mode"] = self.mode
+            outputs = self._failed(exc)
         self.update_s.append(time.perf_counter() - started)
-        self.ready = (generation, document, stamp)
+        self.ready = (generation, outputs)
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
         """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
-        job: Callable[[], tuple[dict[str, Any], int]]
+        job: Callable[[], jobs.EstimateOutputs]
         if reason is not None:
             document, now = invalid_document(self.options.method, reason), self.node.now_ns()
-            job = lambda: (document, now)  # noqa: E731 - through the worker, so it cannot overtake an estimate
+            document["mode"] = self.mode
+            job = lambda: jobs.outputs_from_document(document, now, with_passive=False)  # noqa: E731 - in order
         else:
             assert self.lengths is not None  # stale_reason() waits for them
             result, lengths, stamp = self.recursive.result(), self.lengths.copy(), self.recursive_guard.last_t_ns or 0
-            job = lambda: (self.offload.run(jobs.recursive_document, result, lengths, self.options), stamp)  # noqa: E731
+            job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp)  # noqa: E731
         self.worker.submit(lambda: self._run_recursive(job, counts))
 
-    def _run_recursive(self, job: Callable[[], tuple[dict[str, Any], int]], counts: dict[str, int]) -> None:
-        """On the worker thread: compute the document, publish it, time it."""
+    def _run_recursive(self, job: Callable[[], jobs.EstimateOutputs], counts: dict[str, int]) -> None:
+        """On the worker thread: compute the estimate, publish it, time it."""
         started = time.perf_counter()
         try:
-            document, stamp = job()
+            outputs = job()
         except Exception as exc:  # an estimate that failed unexpectedly is published as invalid, not lost
-            self.node.get_logger().exception("estimate failed")
-            document, stamp = invalid_document(self.options.method, f"internal error: {exc!r}"), self.node.now_ns()
-        document["mode"] = self.mode
+            outputs = self._failed(exc)
         self.update_s.append(time.perf_counter() - started)
-        self.publish(document, stamp, counts)
+        self.publish(outputs, counts)
 
-    def publish(self, document: dict[str, Any], stamp: int, counts: dict[str, int]) -> None:
-        types = self.types
-        self.estimate_pub.publish(build_diagnostic_array(types, diagnostics_from_estimate(document, stamp)))
-        self.json_pub.publish(types("std_msgs/msg/String")(data=json.dumps(document, allow_nan=False)))
-        if document["quality"]["valid"]:
-            for segment, inertia in inertias_from_estimate(document, stamp).items():
-                self.inertia_pubs[segment].publish(build_inertia_stamped(types, inertia))
-            passive = passive_moments_from_estimate(document, stamp)
-            if passive is not None and self.mode == "windowed":
-                self.passive_pub.publish(build_joint_state(types, passive))
+    def _failed(self, exc: Exception) -> jobs.EstimateOutputs:
+        self.node.get_logger().exception("estimate failed")
+        document = invalid_document(self.options.method, f"internal error: {exc!r}")
+        document["mode"] = self.mode
+        return jobs.outputs_from_document(document, self.node.now_ns(), with_passive=False)
+
+    def publish(self, outputs: jobs.EstimateOutputs, counts: dict[str, int]) -> None:
+        """Write an estimate's serialised messages, then the node's health on /diagnostics."""
+        self.estimate_pub.publish(outputs.cdr["estimate"])
+        self.json_pub.publish(outputs.cdr["json"])
+        for key, data in outputs.cdr.items():
+            if key.startswith("inertia/"):
+                self.inertia_pubs[key.removeprefix("inertia/")].publish(data)
+        if "passive" in outputs.cdr:
+            self.passive_pub.publish(outputs.cdr["passive"])
         self.published += 1
-        level = OK if document["quality"]["valid"] else (WARN if "waiting" in document["quality"]["message"] else ERROR)
+        level = OK if outputs.valid else (WARN if "waiting" in outputs.message else ERROR)
         timing = {}
         if self.update_s:  # how long an update takes: near the period, the node cannot keep up
             timing = {
@@ -327,8 +326,9 @@ class BspIdentifierNode:
                 "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
             }
         values = {**counts, "published": self.published, "updates_dropped": self.worker.dropped, **timing}
-        status = DiagnosticStatusData.with_values(level, NAME, document["quality"]["message"], "", values)
-        self.diag_pub.publish(build_diagnostic_array(types, DiagnosticArraySample(self.node.now_ns(), "", (status,))))
+        status = DiagnosticStatusData.with_values(level, NAME, outputs.message, "", values)
+        diagnostics = DiagnosticArraySample(self.node.now_ns(), "", (status,))
+        self.diag_pub.publish(build_diagnostic_array(self.types, diagnostics))
 
 
 def main(args: list[str] | None = None) -> int:

@@ -2,16 +2,23 @@
 
 from __future__ import annotations
 
+import json
 import os
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from bsp_ros.estimate import estimate_document
+from bsp_ros.estimate_messages import diagnostics_from_estimate, inertias_from_estimate, passive_moments_from_estimate
 from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.result import IdentificationResult
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowSamples
 from bsp_ros.pipeline import IdentifyOptions, fuse
+from bsp_ros.runtime.dds_types import typestore
+from msg_adapters.diagnostics import build_diagnostic_array
+from msg_adapters.inertia import build_inertia_stamped
+from msg_adapters.joint_state import build_joint_state
 
 _windowed: WindowedIdentifier | None = None  # the child's own: it keeps the elastic-check schedule
 
@@ -29,11 +36,63 @@ def ping() -> bool:
     return True
 
 
-def window_estimate(window: WindowSamples) -> tuple[dict[str, Any], int]:
-    """The estimate document of a window copied by ``WindowedIdentifier.snapshot`` and its newest wrench stamp."""
+@dataclass(frozen=True)
+class EstimateOutputs:
+    """One estimate, serialised for its topics: what the node's worker thread only has to write.
+
+    Building and serialising the messages here, in the worker process, keeps the node's interpreter lock
+    free for the 1 kHz wrench path. ``cdr`` maps an output (``estimate``, ``json``, ``inertia/<segment>``,
+    ``passive``) to serialised CDR, which rclpy's ``Publisher.publish`` and the DDS runtime both accept.
+    """
+
+    valid: bool
+    message: str
+    cdr: dict[str, bytes]
+
+
+def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive: bool) -> EstimateOutputs:
+    """Serialise an estimate document (CONTRACT.md schema) for ``bsp/estimate``, ``bsp/estimate_json``,
+    ``bsp/<segment>/inertia`` and, when ``with_passive``, ``bsp/passive_moments``."""
+    store = typestore()
+
+    def types(name: str) -> Any:
+        return store.types[name]
+
+    def cdr(msg: Any, type_name: str) -> bytes:
+        return bytes(store.serialize_cdr(msg, type_name))
+
+    out = {
+        "estimate": cdr(
+            build_diagnostic_array(types, diagnostics_from_estimate(document, stamp_ns)),
+            "diagnostic_msgs/msg/DiagnosticArray",
+        ),
+        "json": cdr(types("std_msgs/msg/String")(data=json.dumps(document, allow_nan=False)), "std_msgs/msg/String"),
+    }
+    valid = bool(document["quality"]["valid"])
+    if valid:
+        for segment, inertia in inertias_from_estimate(document, stamp_ns).items():
+            out[f"inertia/{segment}"] = cdr(build_inertia_stamped(types, inertia), "geometry_msgs/msg/InertiaStamped")
+        passive = passive_moments_from_estimate(document, stamp_ns)
+        if passive is not None and with_passive:
+            out["passive"] = cdr(build_joint_state(types, passive), "sensor_msgs/msg/JointState")
+    return EstimateOutputs(valid, str(document["quality"]["message"]), out)
+
+
+def window_estimate(window: WindowSamples) -> EstimateOutputs:
+    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench."""
     assert _windowed is not None, "init_worker was not run"
     estimate = _windowed.estimate_window(window)
-    return estimate.document, estimate.last_wrench_t_ns or 0
+    estimate.document["mode"] = "windowed"
+    return outputs_from_document(estimate.document, estimate.last_wrench_t_ns or 0, with_passive=True)
+
+
+def recursive_estimate(
+    result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, stamp_ns: int
+) -> EstimateOutputs:
+    """The estimate of a recursive filter state (its passive moments go out per sample, not here)."""
+    document = recursive_document(result, lengths_m, options)
+    document["mode"] = "recursive"
+    return outputs_from_document(document, stamp_ns, with_passive=False)
 
 
 def recursive_document(result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions) -> dict[str, Any]:

@@ -124,14 +124,18 @@ class DdsPublisher:
 
         Parameters
         ----------
-        msg : object
-            The message; numeric sequences as numpy arrays (lists are converted, more slowly).
+        msg : object or bytes
+            The message; numeric sequences as numpy arrays (lists are converted, more slowly). Or, as with
+            rclpy's ``Publisher.publish``, ``bytes`` already serialised (CDR with its encapsulation header).
         """
+        data: bytes | memoryview
+        if isinstance(msg, bytes | bytearray):
+            self._write(bytes(msg))
+            return
         if isinstance(msg, self._cls):
             msg = dds_types.dds_to_ros(msg, self.type_name)
         elif getattr(msg, "__msgtype__", None) != self.type_name:
             raise RuntimeBackendError(f"publisher of {self.type_name} on {self.topic_name} got a {type(msg).__name__}")
-        data: bytes | memoryview
         try:
             data = self._serialize(msg, self.type_name)
         except Exception:
@@ -139,9 +143,14 @@ class DdsPublisher:
                 data = self._serialize(dds_types.dds_to_ros(dds_types.ros_to_dds(msg)), self.type_name)
             except Exception as exc:
                 raise RuntimeBackendError(f"cannot serialise {self.type_name} for {self.topic_name}: {exc}") from exc
+        self._write(bytes(data))
+
+    def _write(self, data: bytes) -> None:
+        if len(data) < 4 or data[:2] not in (b"\0\1", b"\0\0"):  # CDR_LE / CDR_BE encapsulation
+            raise RuntimeBackendError(f"publishing on {self.topic_name}: {len(data)} bytes are not plain CDR")
         if len(data) % 4:
-            data = bytes(data).ljust((len(data) + 3) & ~3, b"\0")  # as cyclonedds' DataWriter.write pads
-        ret = ddspy_write(self._writer._ref, bytes(data))
+            data = data.ljust((len(data) + 3) & ~3, b"\0")  # as cyclonedds' DataWriter.write pads
+        ret = ddspy_write(self._writer._ref, data)
         if ret < 0:
             raise RuntimeBackendError(f"publishing on {self.topic_name} failed: {DDSException(ret)}")
 

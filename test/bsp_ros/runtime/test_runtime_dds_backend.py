@@ -151,7 +151,7 @@ def test_make_context_auto_is_dds_without_rclpy() -> None:
     assert "rclpy" not in sys.modules
 
 
-def test_publish_accepts_rosbags_and_dds_messages_and_writes_xcdr1() -> None:
+def test_publish_accepts_rosbags_dds_and_serialized_messages_and_writes_xcdr1() -> None:
     joint_state = "sensor_msgs/msg/JointState"
     with DdsContext(_domain(2), args=[]) as ctx:
         node = ctx.create_node("loopback")
@@ -172,13 +172,18 @@ def test_publish_accepts_rosbags_and_dds_messages_and_writes_xcdr1() -> None:
         dds_cls = dds_types.dds_class
         dds_header = dds_types.ros_to_dds(header)
         pub.publish(dds_cls(joint_state)(header=dds_header, name=["q2"], position=[1.5], velocity=[], effort=[]))
+        store = dds_types.typestore()
+        serialized = cls(joint_state)(header=header, name=["q3"], position=np.array([2.5]), velocity=[], effort=[])
+        pub.publish(bytes(store.serialize_cdr(dds_types.dds_to_ros(dds_types.ros_to_dds(serialized)), joint_state)))
+        with pytest.raises(RuntimeBackendError, match="not plain CDR"):
+            pub.publish(b"\xff\xff\0\0garbage")
         with pytest.raises(RuntimeBackendError, match="JointState"):
             pub.publish(cls("std_msgs/msg/String")(data="wrong"))
         with pytest.raises(RuntimeBackendError, match="cannot serialise"):
             pub.publish(cls(joint_state)(header=header, name="q1", position=None, velocity=[], effort=[]))
-        ctx.spin(until=lambda: len(got) >= 2 or time.monotonic() > deadline)
+        ctx.spin(until=lambda: len(got) >= 3 or time.monotonic() > deadline)
     received = [(m.name, m.position.tolist(), m.effort.tolist()) for m in got]  # type: ignore[attr-defined]
-    assert received == [(["q1"], [-0.5], [0.0]), (["q2"], [1.5], [])]
+    assert received == [(["q1"], [-0.5], [0.0]), (["q2"], [1.5], []), (["q3"], [2.5], [])]
     assert all(m.sample_info.source_timestamp > 0 for m in got)  # type: ignore[attr-defined]
 
 
