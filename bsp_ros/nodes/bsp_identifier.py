@@ -90,9 +90,10 @@ class BspIdentifierNode:
         self.published = 0
         self.worker = LatestJobWorker(f"{NAME}-estimate")
         # The estimates run in a child process (see ProcessOffload); a worker thread waits for them.
-        # In recursive mode the per-sample filter here comes first; the child only fuses at 5 Hz: nice it.
-        niceness = 10 if self.mode == "recursive" else 0
-        self.offload = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, niceness))
+        # In recursive mode the per-sample filter here comes first and the child only fuses at 5 Hz: it runs
+        # in the background. A windowed estimate is the main work and keeps a normal priority.
+        background = self.mode == "recursive"
+        self.offload = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, background))
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
         self.offload.run(jobs.ping)

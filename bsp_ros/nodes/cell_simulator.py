@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import json
 import os
 import sys
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -18,6 +20,14 @@ from msg_adapters.tf import TransformSample, build_tf_message
 from msg_adapters.wrench import WrenchSample, build_wrench_stamped
 
 NAME = "cell_simulator"
+
+
+@dataclasses.dataclass
+class _Queue:
+    """Messages simulated ahead, (simulated time ns, message), and the next time to simulate."""
+
+    next_ns: int
+    items: collections.deque[tuple[int, Any]] = dataclasses.field(default_factory=collections.deque)
 
 
 class CellSimulatorNode:
@@ -45,6 +55,9 @@ class CellSimulatorNode:
         self.jump_s = p("clock_jump_s", 10.0, "size of the backwards jump", "s", lo=0.0, hi=1e6)
         self.wrench_topic = p("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic")
         self.marker_prefix = p("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name")
+        # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
+        # 1 kHz (a coarser tick publishes bursts, which delay the last sample of each burst downstream).
+        tick_s = p("tick_s", 0.001, "publish the samples that fell due every this long", "s", lo=0.0005, hi=0.1)
         self.start_wall_ns = node.now_ns()
         base = sim.human_arm_cell() if subject == "human" else sim.paper_mechanical_arm_cell()
         spec = dataclasses.replace(
@@ -59,8 +72,8 @@ class CellSimulatorNode:
         self.frame_id = spec.sensor.frame_id
         self.wrench_period_ns = int(1e9 / wrench_hz)
         self.marker_period_ns = int(1e9 / marker_hz)
-        self.next_wrench_ns = self.start_wall_ns
-        self.next_marker_ns = self.start_wall_ns
+        self.wrench_queue = _Queue(self.start_wall_ns)
+        self.marker_queue = _Queue(self.start_wall_ns)
         types = node.message_class
         self.types = types
         self.wrench_pub = node.create_publisher("geometry_msgs/msg/WrenchStamped", self.wrench_topic, "sensor_data")
@@ -78,7 +91,7 @@ class CellSimulatorNode:
         truth = self.simulator.truth.to_dict()
         truth_pub.publish(types("std_msgs/msg/String")(data=json.dumps(truth)))
         self._keep = (tf_pub, truth_pub)
-        node.create_timer(0.005, self.tick)
+        node.create_timer(tick_s, self.tick)
         node.get_logger().info(
             "simulating a %d-segment arm at %.1fx real time, wrench %.0f Hz, markers %.0f Hz",
             self.simulator.n_segments,
@@ -106,17 +119,28 @@ class CellSimulatorNode:
             os._exit(3)
         if self.duration_s and elapsed_s >= self.duration_s:
             now = min(now, self.start_wall_ns + int(self.duration_s * 1e9))
-        wrench_t = np.arange(self.next_wrench_ns, now + 1, self.wrench_period_ns, dtype=np.int64)
-        marker_t = np.arange(self.next_marker_ns, now + 1, self.marker_period_ns, dtype=np.int64)
-        if wrench_t.size:
-            self.next_wrench_ns = int(wrench_t[-1]) + self.wrench_period_ns
-            if not (self.stall_at_s and elapsed_s >= self.stall_at_s):
-                self._publish_wrench(wrench_t)
-        if marker_t.size:
-            self.next_marker_ns = int(marker_t[-1]) + self.marker_period_ns
-            self._publish_markers(marker_t)
+        stalled = bool(self.stall_at_s and elapsed_s >= self.stall_at_s)
+        for wrench in self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench):
+            if not stalled:
+                self.wrench_pub.publish(build_wrench_stamped(self.types, wrench))
+        for name, pose in self._due(self.marker_queue, now, self.marker_period_ns, self._simulate_markers):
+            self.marker_pubs[name].publish(build_pose_stamped(self.types, pose))
 
-    def _publish_wrench(self, t_ns: np.ndarray) -> None:
+    def _due(
+        self, queue: _Queue, now_ns: int, period_ns: int, simulate: Callable[[np.ndarray], list[Any]]
+    ) -> list[Any]:
+        """The queued messages stamped up to ``now_ns``; the physics is simulated ahead in 0.1 s chunks, since
+        one vectorised call per sample would cost more than publishing it."""
+        while queue.next_ns <= now_ns:
+            chunk = np.arange(queue.next_ns, queue.next_ns + max(int(0.1e9), period_ns), period_ns, dtype=np.int64)
+            queue.next_ns = int(chunk[-1]) + period_ns
+            queue.items.extend(simulate(chunk))
+        due = []
+        while queue.items and queue.items[0][0] <= now_ns:
+            due.append(queue.items.popleft()[1])
+        return due
+
+    def _simulate_wrench(self, t_ns: np.ndarray) -> list[tuple[int, Any]]:
         series = self.simulator.sample_wrench(t_ns)
         force, torque = series.force_n.copy(), series.torque_nm.copy()
         if self.nan_burst_period_s > 0:
@@ -124,17 +148,19 @@ class CellSimulatorNode:
             burst = phase > self.nan_burst_period_s - self.nan_burst_s
             force[burst] = np.nan
         stamps = self._stamp(series.t_ns)
-        for k in range(stamps.size):
-            sample = WrenchSample(int(stamps[k]), self.frame_id, force[k], torque[k])
-            self.wrench_pub.publish(build_wrench_stamped(self.types, sample))
+        samples = [WrenchSample(int(stamps[k]), self.frame_id, force[k], torque[k]) for k in range(stamps.size)]
+        return list(zip(t_ns.tolist(), samples, strict=True))  # messages are built when published
 
-    def _publish_markers(self, t_ns: np.ndarray) -> None:
+    def _simulate_markers(self, t_ns: np.ndarray) -> list[tuple[int, tuple[str, Any]]]:
         identity = np.array([0.0, 0.0, 0.0, 1.0])
+        out = []
         for name, series in self.simulator.sample_markers(t_ns).items():
             stamps = self._stamp(series.t_ns)
             for k in range(stamps.size):
                 pose = PoseSample(int(stamps[k]), "world", series.position_m[k], identity)
-                self.marker_pubs[name].publish(build_pose_stamped(self.types, pose))
+                out.append((int(series.t_ns[k]), (name, pose)))
+        out.sort(key=lambda item: item[0])  # frames in time order, markers of a frame together
+        return out
 
 
 def main(args: list[str] | None = None) -> int:

@@ -23,11 +23,18 @@ from msg_adapters.joint_state import build_joint_state
 _windowed: WindowedIdentifier | None = None  # the child's own: it keeps the elastic-check schedule
 
 
-def init_worker(n_segments: int, config: WindowConfig, niceness: int = 0) -> None:
-    """Set up the worker process; ``niceness`` lowers its scheduling priority (``os.nice``)."""
+def init_worker(n_segments: int, config: WindowConfig, background: bool = False) -> None:
+    """Set up the worker process; ``background`` runs it only on otherwise idle CPU time.
+
+    Linux's ``SCHED_IDLE`` never takes a core from a normal thread, such as the recursive filter's
+    1 kHz path in the node; elsewhere the lowest ``nice`` does what it can.
+    """
     global _windowed
-    if niceness:
-        os.nice(niceness)
+    if background:
+        try:
+            os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+        except (AttributeError, OSError):
+            os.nice(19)
     _windowed = WindowedIdentifier(n_segments, config)
 
 
