@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Sequence
 
@@ -152,15 +151,9 @@ def gravity_regressor(q_rad: npt.ArrayLike) -> np.ndarray:
     (N, n, n) ``Y`` with ``tau_G[:, i] = Y[:, i, :] @ beta``: ``Y[:, i, j] = g cos(phi_j)`` for j >= i, else 0.
     """
     cos_phi = GRAVITY_M_S2 * np.cos(absolute_angles_rad(q_rad))
-    return cos_phi[:, None, :] * _upper_triangle(cos_phi.shape[1])[None, :, :]
-
-
-@functools.lru_cache(maxsize=8)
-def _upper_triangle(n: int) -> np.ndarray:
-    """(n, n) ones on and above the diagonal; cached, as the live filter asks for it per sample."""
+    n = cos_phi.shape[1]
     upper = np.triu(np.ones((n, n)))
-    upper.setflags(write=False)
-    return upper
+    return cos_phi[:, None, :] * upper[None, :, :]
 
 
 def static_moments_kgm(lengths_m: npt.ArrayLike, masses_kg: npt.ArrayLike, com_m: npt.ArrayLike) -> np.ndarray:

@@ -54,13 +54,3 @@ class PassiveModel:
         sign = (velocity_rad_s > 0) - (velocity_rad_s < 0)
         table = {"coulomb": float(sign), "viscous": velocity_rad_s, "offset": 1.0, "stiffness": q_rad}
         return [table[term] for term in self.terms]
-
-    def columns_all(self, q_rad: np.ndarray, velocity_rad_s: np.ndarray) -> np.ndarray:
-        """Passive columns of every joint at one instant: (n,) angles and velocities -> (n, n_terms)."""
-        table = {
-            "coulomb": np.sign(velocity_rad_s),
-            "viscous": velocity_rad_s,
-            "offset": np.ones_like(q_rad),
-            "stiffness": q_rad,
-        }
-        return np.column_stack([table[term] for term in self.terms])

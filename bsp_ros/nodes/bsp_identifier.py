@@ -272,13 +272,7 @@ class BspIdentifierNode:
 
     def _compute_window(self, window: WindowSamples, generation: int) -> None:
         """On the worker thread: identify a window in the worker process; keep it for the next tick."""
-        started = time.perf_counter()
-        try:
-            outputs = self.offload.run(jobs.window_estimate, window)
-        except Exception as exc:  # an estimate that failed unexpectedly is published as invalid, not lost
-            outputs = self._failed(exc)
-        self.update_s.append(time.perf_counter() - started)
-        self.ready = (generation, outputs)
+        self.ready = (generation, self._timed(lambda: self.offload.run(jobs.window_estimate, window)))
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
         """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
@@ -291,23 +285,21 @@ class BspIdentifierNode:
             assert self.lengths is not None  # stale_reason() waits for them
             result, lengths, stamp = self.recursive.result(), self.lengths.copy(), self.recursive_guard.last_t_ns or 0
             job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp)  # noqa: E731
-        self.worker.submit(lambda: self._run_recursive(job, counts))
+        self.worker.submit(lambda: self.publish(self._timed(job), counts))
 
-    def _run_recursive(self, job: Callable[[], jobs.EstimateOutputs], counts: dict[str, int]) -> None:
-        """On the worker thread: compute the estimate, publish it, time it."""
+    def _timed(self, job: Callable[[], jobs.EstimateOutputs]) -> jobs.EstimateOutputs:
+        """On the worker thread: run an estimate job and record how long it took; a job that fails
+        unexpectedly gives an invalid estimate (published, not lost) and a logged traceback."""
         started = time.perf_counter()
         try:
             outputs = job()
-        except Exception as exc:  # an estimate that failed unexpectedly is published as invalid, not lost
-            outputs = self._failed(exc)
+        except Exception as exc:
+            self.node.get_logger().exception("estimate failed")
+            document = invalid_document(self.options.method, f"internal error: {exc!r}")
+            document["mode"] = self.mode
+            outputs = jobs.outputs_from_document(document, self.node.now_ns(), with_passive=False)
         self.update_s.append(time.perf_counter() - started)
-        self.publish(outputs, counts)
-
-    def _failed(self, exc: Exception) -> jobs.EstimateOutputs:
-        self.node.get_logger().exception("estimate failed")
-        document = invalid_document(self.options.method, f"internal error: {exc!r}")
-        document["mode"] = self.mode
-        return jobs.outputs_from_document(document, self.node.now_ns(), with_passive=False)
+        return outputs
 
     def publish(self, outputs: jobs.EstimateOutputs, counts: dict[str, int]) -> None:
         """Write an estimate's serialised messages, then the node's health on /diagnostics."""

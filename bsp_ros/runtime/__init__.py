@@ -159,10 +159,9 @@ def message_class(type_name: str, backend: Literal["rclpy", "dds"] = "dds") -> A
         return _message_class(type_name)
     if backend != "dds":
         raise RuntimeBackendError(f"backend must be 'rclpy' or 'dds', got {backend!r}")
-    from bsp_ros.runtime.dds_types import dds_class, typestore
+    from bsp_ros.runtime import dds_types
 
-    dds_class(type_name)  # an unknown type fails here, naming it
-    return typestore().types[type_name]
+    return dds_types.message_class(type_name)
 
 
 def run_node(

@@ -185,7 +185,6 @@ class DdsSubscription:
         )
         self._condition = ReadCondition(self._reader, _ANY_STATE)
         self._deserialize = dds_types.typestore().deserialize_cdr
-        self._malformed = 0
         self.gid = _gid(self._reader)
 
     def get_publisher_count(self) -> int:
@@ -204,8 +203,7 @@ class DdsSubscription:
                     continue
                 try:
                     msg: Any = self._deserialize(data, self.type_name)
-                except Exception as exc:
-                    self._malformed += 1
+                except Exception as exc:  # a malformed sample from a foreign writer: dropped, and said
                     logging.getLogger("bsp_ros.dds").warning(
                         "dropped a malformed %s on %s: %s", self.type_name, self.topic_name, exc
                     )
@@ -467,9 +465,7 @@ class DdsContext:
         RuntimeBackendError
             If the Jazzy typestore does not know the type.
         """
-        dds_types.dds_class(type_name)  # an unknown type fails here, naming it
-        cls: type[Any] = dds_types.typestore().types[type_name]
-        return cls
+        return dds_types.message_class(type_name)
 
     def _topic(self, dds_name: str, type_name: str) -> Topic[Any]:
         with self._lock:

@@ -20,6 +20,7 @@ __all__ = [
     "dds_class",
     "dds_to_ros",
     "dds_type_name",
+    "message_class",
     "plain_sequences",
     "ros_to_dds",
     "type_hash",
@@ -185,6 +186,19 @@ def dds_class(type_name: str) -> type[Any]:
             built.__ros_type__ = type_name
             _classes[type_name] = cls = built
         return cls
+
+
+def message_class(type_name: str) -> type[Any]:
+    """Return the rosbags Jazzy message class of a ROS type, the one the DDS runtime (de)serialises.
+
+    Raises
+    ------
+    RuntimeBackendError
+        If the type is unknown, naming it.
+    """
+    dds_class(type_name)  # an unknown type fails here, naming it
+    cls: type[Any] = typestore().types[type_name]
+    return cls
 
 
 def type_hash(type_name: str) -> str:

@@ -187,6 +187,43 @@ def test_publish_accepts_rosbags_dds_and_serialized_messages_and_writes_xcdr1() 
     assert all(m.sample_info.source_timestamp > 0 for m in got)  # type: ignore[attr-defined]
 
 
+def test_a_sample_that_fails_to_decode_is_dropped_with_a_warning_and_the_next_one_delivered(caplog) -> None:
+    # Cyclone itself refuses malformed CDR (a raw write of a truncated body fails), so a decoding failure
+    # is forced here: the first sample's decoder raises, as rosbags would on data it cannot read.
+    joint_state = "sensor_msgs/msg/JointState"
+    with DdsContext(_domain(2), args=[]) as ctx:
+        node = ctx.create_node("malformed")
+        got: list[object] = []
+        pub = node.create_publisher(joint_state, "joints", "estimates")
+        sub = node.create_subscription(joint_state, "joints", got.append, "estimates")
+        decode, calls = sub._deserialize, []
+
+        def fails_first(data: object, type_name: str) -> object:
+            calls.append(type_name)
+            if len(calls) == 1:
+                raise ValueError("truncated sequence")
+            return decode(data, type_name)
+
+        sub._deserialize = fails_first  # type: ignore[method-assign]
+        deadline = time.monotonic() + 5.0
+        while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        cls = ctx.message_class
+        empty = np.zeros(0)
+        for sec in (1, 2):
+            header = cls("std_msgs/msg/Header")(
+                stamp=cls("builtin_interfaces/msg/Time")(sec=sec, nanosec=0), frame_id=""
+            )
+            pub.publish(cls(joint_state)(header=header, name=[], position=empty, velocity=empty, effort=empty))
+        ctx.spin(until=lambda: len(got) >= 1 or time.monotonic() > deadline)
+        ctx.spin(0.2)
+    assert [m.header.stamp.sec for m in got] == [2]  # type: ignore[attr-defined]
+    assert any(
+        "dropped a malformed sensor_msgs/msg/JointState on /joints: truncated sequence" in r.getMessage()
+        for r in caplog.records
+    )
+
+
 # --- parameters ---
 
 YAML = """
