@@ -5,6 +5,15 @@ from glob import glob
 from setuptools import find_packages, setup
 
 PACKAGE = "bsp_ros"
+LIVE = [
+    "ros-jazzy-rclpy[fastrtps]",
+    "ros-jazzy-geometry-msgs",
+    "ros-jazzy-sensor-msgs",
+    "ros-jazzy-std-msgs",
+    "ros-jazzy-diagnostic-msgs",
+    "ros-jazzy-nav-msgs",
+    "ros-jazzy-trajectory-msgs",
+]
 NODES = ["cell_simulator", "joint_angle_estimator", "bsp_identifier", "session_recorder"]
 
 setup(
@@ -19,18 +28,25 @@ setup(
         ("share/" + PACKAGE + "/config", glob("bsp_ros/config/*.yaml")),
     ],
     python_requires=">=3.10",
+    # Every third-party module the package imports, by distribution (test/test_packaging.py checks it).
+    # Lower bounds admit what Ubuntu 24.04 (Jazzy's platform) ships from apt: NumPy 1.26, matplotlib 3.6.3.
     install_requires=[
         "numpy>=1.26",
         "scipy>=1.11",
+        "pyyaml>=6.0",
         "rosbags>=0.10",
         "mcap>=1.1",
         "mcap-ros2-support>=0.5",
+        "lz4>=4.0",
+        "zstandard>=0.21",
+        "matplotlib>=3.6",
         "cyclonedds>=0.10.5",
-        "matplotlib>=3.7",
-        "setuptools",
     ],
     extras_require={
-        "test": ["pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1"],
+        # Real Jazzy rclpy with Fast DDS and the message packages, from PyPI wheels (Linux x86_64, CPython
+        # 3.10-3.13). A cell with apt's ROS 2 Jazzy needs no extra: colcon and rosdep provide them.
+        "live": LIVE,
+        "test": ["pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1", "colcon-core", "colcon-ros"],
         "postgres": ["psycopg[binary]>=3.1"],
     },
     zip_safe=True,
