@@ -6,8 +6,6 @@ import argparse
 from typing import Any
 
 from bsp_ros.errors import InputError
-from bsp_ros.report import analyse, write_csv, write_html, write_pngs
-from bsp_ros.store import open_store
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -32,6 +30,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Write the requested outputs; return the exit code."""
+    from bsp_ros.report import analyse, write_csv, write_html, write_pngs  # matplotlib: only when run
+    from bsp_ros.store import open_store
+
     if not (args.out or args.png or args.csv):
         raise InputError("nothing to write: give --out FILE, --png DIR and/or --csv FILE")
     with open_store(args.store) as store:
