@@ -35,6 +35,14 @@ def run(args: argparse.Namespace) -> int:
 
     if not (args.out or args.png or args.csv):
         raise InputError("nothing to write: give --out FILE, --png DIR and/or --csv FILE")
+    from bsp_ros.validation import check_output_dir, check_output_file
+
+    # Before opening the store and plotting: every output must be writable.
+    for option, path in (("--out", args.out), ("--csv", args.csv)):
+        if path:
+            check_output_file(option, path)
+    if args.png:
+        check_output_dir("--png", args.png)
     with open_store(args.store) as store:
         analysis = analyse(args.subject, store.sessions(args.subject))
     if args.out:

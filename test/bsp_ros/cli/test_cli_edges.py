@@ -143,3 +143,17 @@ def test_a_valid_estimate_still_ends_in_the_json(bag: Path, tmp_path: Path) -> N
     code = main(["identify", str(bag), "--json", str(out), "--format", "none"])
     assert code in (0, 1)
     assert json.loads(out.read_text())["schema"] == "bsp_ros/estimate/1"
+
+
+@pytest.mark.parametrize("option", ["--out", "--csv", "--png"])
+def test_report_outputs_are_checked_before_the_store_is_opened(
+    option: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "plain").write_text("x")
+    target = tmp_path / "plain" / "r"
+    store = tmp_path / "s.sqlite"
+    code = main(["report", "S01", option, str(target), "--store", str(store)])
+    line = _one_error_line(capsys.readouterr().err, "report")
+    assert code == BAD_OPTION  # an unknown subject in the (new) store would be 5
+    assert f"{option} {target}" in line
+    assert not store.exists()
