@@ -127,7 +127,7 @@ def test_deeply_nested_json_is_refused_with_a_message(tmp_path: Path, capsys: py
     assert str(deep) in line and "nested deeper" in line
 
 
-@pytest.mark.parametrize(("option", "value"), [("--duration", "-1"), ("--speed", "0"), ("--speed", "nan")])
+@pytest.mark.parametrize(("option", "value"), [("--duration", "-1"), ("--speed", "0"), ("--speed", "nan"), ("--speed", "1000")])
 def test_demo_refuses_a_non_positive_duration_or_speed(
     option: str, value: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
