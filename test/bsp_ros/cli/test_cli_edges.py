@@ -127,8 +127,10 @@ def test_deeply_nested_json_is_refused_with_a_message(tmp_path: Path, capsys: py
     assert str(deep) in line and "nested deeper" in line
 
 
-@pytest.mark.parametrize(("option", "value"), [("--duration", "-1"), ("--speed", "0"), ("--speed", "nan"), ("--speed", "1000")])
-def test_demo_refuses_a_non_positive_duration_or_speed(
+@pytest.mark.parametrize(
+    ("option", "value"), [("--duration", "-1"), ("--speed", "0"), ("--speed", "nan"), ("--speed", "1000")]
+)
+def test_demo_refuses_a_duration_or_speed_out_of_range(
     option: str, value: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     with pytest.raises(SystemExit) as stop:
