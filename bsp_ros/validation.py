@@ -1,8 +1,12 @@
-"""`check_*` validators: accept a value only if finite and in range, and return it."""
+"""`check_*` validators: accept a value only if finite and in range (or a path only if writable), and return it."""
 
 from __future__ import annotations
 
 import math
+import os
+import stat
+import tempfile
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -67,3 +71,69 @@ def check_stamps_ns(name: str, t_ns: npt.ArrayLike) -> np.ndarray:
             f"follows {int(stamps[first])} ns"
         )
     return stamps
+
+
+def _nearest_existing(path: Path) -> Path:
+    """``path`` or its closest ancestor that exists (``.`` for a relative path with no existing part)."""
+    for candidate in (path, *path.parents):
+        if os.path.lexists(candidate):
+            return candidate
+    return Path(".")
+
+
+def _check_creatable_under(name: str, path: Path) -> None:
+    """Raise InputError unless ``path`` (not existing yet) can be created: every existing ancestor on the way
+    is a directory that accepts a new file. Probed by creating an anonymous file there, since permission bits
+    say nothing when running as root, on /proc or on a read-only mount."""
+    ancestor = _nearest_existing(path.parent)
+    if not ancestor.is_dir():
+        raise InputError(f"{name} {path}: {ancestor} is a file, not a directory")
+    try:
+        tempfile.TemporaryFile(dir=ancestor).close()
+    except OSError as error:
+        raise InputError(f"{name} {path}: cannot create files in {ancestor} ({error.strerror})") from None
+
+
+def check_output_file(name: str, path: str | os.PathLike[str]) -> Path:
+    """Return ``path`` as a Path if a file can be written there; raise InputError naming it otherwise.
+
+    Checked before any slow work, so a result is never computed only to be lost: ``path`` must not be a
+    directory, an existing regular file must be writable, and a new one creatable (missing parent directories
+    are fine if they can be created). Existing devices and pipes (``/dev/stdout``) are accepted as they are.
+    Nothing is created or changed.
+    """
+    target = Path(path).expanduser()
+    if target.is_dir():
+        raise InputError(f"{name} {target} is a directory, expected a file name")
+    if not os.path.lexists(target):
+        _check_creatable_under(name, target)
+        return target
+    if not target.exists():
+        raise InputError(f"{name} {target} is a dangling symbolic link")
+    if stat.S_ISREG(target.stat().st_mode):
+        try:
+            with open(target, "ab"):  # append mode: opens for writing without touching the content
+                pass
+        except OSError as error:
+            raise InputError(f"{name} {target}: cannot write this file ({error.strerror})") from None
+    return target
+
+
+def check_output_dir(name: str, path: str | os.PathLike[str]) -> Path:
+    """Return ``path`` as a Path if a directory can be written there; raise InputError naming it otherwise.
+
+    An existing ``path`` must be a directory that accepts new files; a new one must be creatable (its nearest
+    existing ancestor a directory that accepts new entries). Whether an existing directory may be written into
+    is the writer's decision (the bag writers refuse it). Nothing is created.
+    """
+    target = Path(path).expanduser()
+    if os.path.lexists(target) and not target.is_dir():
+        raise InputError(f"{name} {target} is a file, expected a directory")
+    if target.is_dir():
+        try:
+            tempfile.TemporaryFile(dir=target).close()
+        except OSError as error:
+            raise InputError(f"{name} {target}: cannot create files in it ({error.strerror})") from None
+        return target
+    _check_creatable_under(name, target)
+    return target

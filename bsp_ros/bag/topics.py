@@ -34,7 +34,12 @@ class TopicMap:
     tf: str = "/tf"
 
     def expected_types(self) -> dict[str, str]:
-        """Topic -> required message type, for every topic of the map."""
-        types = {self.wrench: WRENCH_TYPE, self.tf_static: TF_TYPE, self.tf: TF_TYPE}
-        types.update({topic: POSE_TYPE for topic in self.markers.values()})
+        """Topic -> required message type, for every topic of the map.
+
+        A topic named for two roles keeps the wrench (or tf) type, not the marker one: a marker topic given as
+        the wrench topic then fails the reader's type check (MessageTypeError) instead of having its poses
+        decoded as wrenches.
+        """
+        types = {topic: POSE_TYPE for topic in self.markers.values()}
+        types.update({self.tf_static: TF_TYPE, self.tf: TF_TYPE, self.wrench: WRENCH_TYPE})
         return types

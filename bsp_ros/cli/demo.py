@@ -10,14 +10,21 @@ import sys
 import time
 from typing import Any
 
+from bsp_ros.cli.argtypes import float_within, positive_float
+
 NODES = ("cell_simulator", "joint_angle_estimator", "bsp_identifier")
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register `bsp demo`."""
     parser = subparsers.add_parser("demo", help="run the simulated cell and the nodes live, estimates vs truth")
-    parser.add_argument("--duration", type=float, default=60.0, help="wall-clock seconds to run (default 60)")
-    parser.add_argument("--speed", type=float, default=2.0, help="simulated seconds per wall second (default 2)")
+    parser.add_argument("--duration", type=positive_float, default=60.0, help="wall-clock seconds to run (default 60)")
+    parser.add_argument(
+        "--speed",
+        type=float_within(0.01, 100.0),  # the cell_simulator's `speed` parameter range
+        default=2.0,
+        help="simulated seconds per wall second, 0.01-100 (default 2)",
+    )
     parser.add_argument("--subject", choices=("human", "paper-arm"), default="human")
     parser.add_argument("--mode", choices=("windowed", "recursive"), default="windowed")
     parser.add_argument("--seed", type=int, default=0)

@@ -8,10 +8,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.errors import BspError
-from bsp_ros.fusion import SubjectInfo
-from bsp_ros.identification.passive import PassiveModel
-from bsp_ros.pipeline import METHODS, IdentifyOptions
+from bsp_ros.errors import BspError, InputError
+
+# bsp_ros.pipeline.METHODS, spelled out here so the parser needs no scipy (a test keeps the two equal).
+METHODS = ("joint", "paper")
 
 # Distinct exit codes per failure, so scripts can tell them apart (0 valid, 1 written but invalid).
 EXIT_INVALID = 1
@@ -61,14 +61,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def _topics(args: argparse.Namespace) -> Any:
     from bsp_ros.bag import TopicMap
-    from bsp_ros.errors import InputError
 
     markers = dict(TopicMap().markers)
     for item in args.marker_topic:
         name, _, topic = item.partition("=")
         if name not in markers or not topic:
             raise InputError(f"--marker-topic takes NAME=TOPIC with NAME in {sorted(markers)}, got {item!r}")
+        if topic in (args.wrench_topic, args.tf_topic, args.tf_static_topic):
+            raise InputError(f"--marker-topic {item}: {topic} is already the wrench or a tf topic")
         markers[name] = topic
+    # A --wrench-topic that names a marker topic stays the wrench topic (TopicMap.expected_types), so a
+    # PoseStamped topic given there fails the bag's type check (exit 14) before anything is decoded.
     return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
 
 
@@ -119,8 +122,14 @@ def format_table(document: dict[str, Any]) -> str:
 def run(args: argparse.Namespace) -> int:
     """Identify the bag; print the result; write the JSON."""
     from bsp_ros.bag.errors import BagError
+    from bsp_ros.fusion import SubjectInfo
+    from bsp_ros.identification.passive import PassiveModel
     from bsp_ros.offline import identify_bag
+    from bsp_ros.pipeline import IdentifyOptions
+    from bsp_ros.validation import check_output_file
 
+    # Before the identification: a result that cannot be written is not worth computing.
+    json_path = None if args.json is None else check_output_file("--json", args.json)
     options = IdentifyOptions(
         method=args.method,
         passive=PassiveModel.parse(args.passive),
@@ -133,9 +142,13 @@ def run(args: argparse.Namespace) -> int:
         return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)
     except BspError:
         raise
-    if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(document, indent=2, allow_nan=False) + "\n")
+    if json_path is not None:
+        text = json.dumps(document, indent=2, allow_nan=False) + "\n"
+        try:
+            json_path.parent.mkdir(parents=True, exist_ok=True)
+            json_path.write_text(text)
+        except OSError as error:  # checked above; this is a disk that filled or changed since
+            raise InputError(f"--json {json_path}: cannot write ({error.strerror})") from None
     output = args.format if args.format != "auto" else ("table" if sys.stdout.isatty() else "tsv")
     if output == "table":
         print(format_table(document))

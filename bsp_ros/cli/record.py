@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from bsp_ros.cli.argtypes import positive_float
 from bsp_ros.cli.play import stop_on_signals
 
 
@@ -24,7 +25,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("topics", nargs="+", metavar="TOPIC", help="topic, or TOPIC:pkg/msg/Type")
     parser.add_argument("--out", "-o", required=True, type=Path, metavar="DIR", help="bag directory to create")
     parser.add_argument("--domain", type=int, metavar="N", help="ROS domain id (default: ROS_DOMAIN_ID or 0)")
-    parser.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
+    parser.add_argument("--duration", type=positive_float, metavar="S", help="stop after S seconds")
     parser.add_argument("--chunk-kib", type=int, default=48, metavar="KIB", help="MCAP chunk size (default 48)")
     parser.add_argument(
         "--flush-interval", type=float, default=0.25, metavar="S", help="longest time data stays unwritten"
@@ -35,7 +36,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Record until stopped; return the exit code."""
     from bsp_ros.recorder import parse_topic_specs, record
+    from bsp_ros.validation import check_output_dir
 
+    check_output_dir("--out", args.out)  # a clear error before subscribing (the recorder refuses an existing bag)
     specs = parse_topic_specs(args.topics)
 
     def subscribed(topic: str, msgtype: str) -> None:

@@ -6,8 +6,6 @@ import argparse
 from typing import Any
 
 from bsp_ros.errors import InputError
-from bsp_ros.report import analyse, write_csv, write_html, write_pngs
-from bsp_ros.store import open_store
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -32,8 +30,19 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Write the requested outputs; return the exit code."""
+    from bsp_ros.report import analyse, write_csv, write_html, write_pngs  # matplotlib: only when run
+    from bsp_ros.store import open_store
+
     if not (args.out or args.png or args.csv):
         raise InputError("nothing to write: give --out FILE, --png DIR and/or --csv FILE")
+    from bsp_ros.validation import check_output_dir, check_output_file
+
+    # Before opening the store and plotting: every output must be writable.
+    for option, path in (("--out", args.out), ("--csv", args.csv)):
+        if path:
+            check_output_file(option, path)
+    if args.png:
+        check_output_dir("--png", args.png)
     with open_store(args.store) as store:
         analysis = analyse(args.subject, store.sessions(args.subject))
     if args.out:

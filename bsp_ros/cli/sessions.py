@@ -98,12 +98,22 @@ def _identify_bag(path: Path) -> dict[str, Any]:
     return estimate
 
 
+def _load_result(path: Path) -> dict[str, Any]:
+    try:
+        return load_estimate_file(path)
+    except RecursionError:  # json's decoder gives up on nesting deeper than the interpreter's recursion limit
+        raise StoreError(
+            f"cannot read estimate {path}: its JSON is nested deeper than {sys.getrecursionlimit()} levels; "
+            "not a `bsp identify --json` result"
+        ) from None
+
+
 def _add(store: Store, args: argparse.Namespace) -> int:
     subject = check_subject_id(args.subject)  # before any slow identification
     path = Path(args.input)
     if not path.exists():
         raise InputError(f"{path} does not exist")
-    estimate = _identify_bag(path) if is_bag(path) else load_estimate_file(path)
+    estimate = _identify_bag(path) if is_bag(path) else _load_result(path)
     session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}
     source = args.source or (None if session and session.get("source") else path.name)
     record = store.add_estimate(

@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.bag import TRUTH_FILE, BagWriteError, write_session_bag
 from bsp_ros.errors import InputError
 
 
@@ -108,11 +107,14 @@ def _spec(args: argparse.Namespace) -> Any:
 
 def run(args: argparse.Namespace) -> int:
     """Simulate and write the bag; return the exit code."""
+    from bsp_ros.bag import TRUTH_FILE, BagWriteError, write_session_bag
     from bsp_ros.simulation import simulate_cell
+    from bsp_ros.validation import check_output_dir
 
     out: Path = args.out
     if out.exists():
         raise BagWriteError(f"{out} exists already: refusing to overwrite (choose another --out)")
+    check_output_dir("--out", out)  # before simulating: under a regular file or where nothing can be created
     if args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
     simulated = simulate_cell(_spec(args))

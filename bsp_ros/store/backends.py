@@ -47,6 +47,25 @@ class Backend(ABC):
         """Close the connection."""
 
 
+SQLITE_HEADER = b"SQLite format 3\x00"
+"""The first 16 bytes of every SQLite 3 database file."""
+
+
+def _check_sqlite_header(file: Path) -> None:
+    """Refuse an existing file that is not a SQLite database, before SQLite could take it for an empty one
+    (it does so for files shorter than a page) and write a store over it."""
+    try:
+        with open(file, "rb") as stream:
+            head = stream.read(len(SQLITE_HEADER))
+    except FileNotFoundError:
+        return
+    except OSError as error:
+        raise StoreError(f"cannot read store {file}: {error.strerror}") from None
+    if head != SQLITE_HEADER:
+        what = "an empty file" if not head else f"a {file.stat().st_size}-byte file without the SQLite header"
+        raise StoreError(f"cannot open store {file}: it is {what}, not a bsp_ros session store; not touching it")
+
+
 class SqliteBackend(Backend):
     """A SQLite file in WAL mode with ``synchronous=FULL`` and ``secure_delete=ON``."""
 
@@ -57,6 +76,7 @@ class SqliteBackend(Backend):
         file = Path(path).expanduser()
         if file.is_dir():
             raise StoreError(f"store {file} is a directory, expected a SQLite file")
+        _check_sqlite_header(file)
         try:
             file.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
             fresh = not file.exists()
