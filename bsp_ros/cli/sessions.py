@@ -11,15 +11,16 @@ from typing import Any
 
 from bsp_ros.errors import InputError, StoreError
 from bsp_ros.store import (
+    WALL_CLOCK_START_NS,
     SessionRecord,
     Store,
-    check_subject_id,
     format_time,
     load_estimate_file,
     open_store,
     parse_time_ns,
     write_sessions_csv,
 )
+from bsp_ros.store.subject import check_pseudonymous_id
 
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 
@@ -41,8 +42,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add = actions.add_parser("add", parents=[common], help="store a result JSON or identify and store a bag")
     add.add_argument("input", metavar="RESULT.json|BAG", help="a `bsp identify --json` result or a bag")
     add.add_argument("--subject", required=True, metavar="ID", help="pseudonymous subject id [A-Za-z0-9_-]{1,64}")
-    add.add_argument("--time", metavar="TIME", help="session start (ISO 8601 UTC or ns), if the input lacks it")
+    add.add_argument(
+        "--time",
+        metavar="TIME",
+        help="session start: a date (2024-03-01), ISO 8601 (2024-03-01T09:30Z, naive = UTC) or epoch seconds; "
+        "needed when the recording is not stamped by a wall clock",
+    )
     add.add_argument("--source", metavar="NAME", help="recording name, if the input lacks it (default: file name)")
+    add.add_argument(
+        "--allow-identifying-id",
+        action="store_true",
+        help="store a subject id even though it looks like a person's name or a birth date",
+    )
     actions.add_parser("list", parents=[common], help="list subjects and their session counts")
     show = actions.add_parser("show", parents=[common], help="show a subject's sessions and parameters")
     show.add_argument("subject", metavar="SUBJECT")
@@ -98,8 +109,54 @@ def _identify_bag(path: Path) -> dict[str, Any]:
     return estimate
 
 
+def recorded_start_ns(path: Path) -> int | None:
+    """The bag's recorded start (its first receive time, ns), or None if it records none.
+
+    A rosbag2 directory's ``metadata.yaml`` ``starting_time``, else an MCAP file's summary statistics.
+    """
+    try:
+        if path.is_dir():
+            import yaml
+
+            info = yaml.safe_load((path / "metadata.yaml").read_text("utf-8"))["rosbag2_bagfile_information"]
+            return int(info["starting_time"]["nanoseconds_since_epoch"])
+        from mcap.reader import make_reader
+
+        with path.open("rb") as stream:
+            summary = make_reader(stream).get_summary()
+        if summary is None or summary.statistics is None or not summary.statistics.message_count:
+            return None
+        return int(summary.statistics.message_start_time)
+    except Exception:
+        return None
+
+
+def _session_time_ns(args: argparse.Namespace, path: Path, estimate: dict[str, Any]) -> int | None:
+    """The session time to store: ``--time``, else the estimate's if wall-clock, else the bag's recorded start."""
+    if args.time is not None:
+        return parse_time_ns(args.time)
+    session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}
+    stamped = session.get("start_time_ns")
+    if not isinstance(stamped, int) or isinstance(stamped, bool) or stamped >= WALL_CLOCK_START_NS:
+        return None  # the estimate's own time (or its absence) is checked when it is parsed
+    recorded = recorded_start_ns(path) if is_bag(path) else None
+    if recorded is not None and recorded >= WALL_CLOCK_START_NS:
+        print(
+            f"note: the data are stamped from {stamped / 1e9:.6g} s (boot or simulated time, not a wall clock); "
+            f"using the bag's recorded start {format_time(recorded)}"
+        )
+        return recorded
+    where = "its recorded start is not wall-clock either" if is_bag(path) else "a result JSON has no other clock"
+    raise InputError(
+        f"{path.name}: the data are stamped from {stamped / 1e9:.6g} s after 1970-01-01 (a controller's boot "
+        f"time or simulated time, not a wall clock) and {where}; give the session start with --time "
+        "(a date 2024-03-01, ISO 8601 2024-03-01T09:30Z or epoch seconds)"
+    )
+
+
 def _add(store: Store, args: argparse.Namespace) -> int:
-    subject = check_subject_id(args.subject)  # before any slow identification
+    # Before any slow identification.
+    subject = check_pseudonymous_id(args.subject, allow_identifying=args.allow_identifying_id)
     path = Path(args.input)
     if not path.exists():
         raise InputError(f"{path} does not exist")
@@ -109,7 +166,7 @@ def _add(store: Store, args: argparse.Namespace) -> int:
     record = store.add_estimate(
         estimate,
         subject,
-        session_time_ns=None if args.time is None else parse_time_ns(args.time),
+        session_time_ns=_session_time_ns(args, path, estimate),
         source=source,
     )
     # Printed only after the commit returned: the session is durable.
