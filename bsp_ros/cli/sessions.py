@@ -135,8 +135,8 @@ def _session_time_ns(args: argparse.Namespace, path: Path, estimate: dict[str, A
     """The session time to store: ``--time``, else the estimate's if wall-clock, else the bag's recorded start."""
     if args.time is not None:
         return parse_time_ns(args.time)
-    session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}
-    stamped = session.get("start_time_ns")
+    block = estimate.get("session")
+    stamped = block.get("start_time_ns") if isinstance(block, dict) else None
     if not isinstance(stamped, int) or isinstance(stamped, bool) or stamped >= WALL_CLOCK_START_NS:
         return None  # the estimate's own time (or its absence) is checked when it is parsed
     recorded = recorded_start_ns(path) if is_bag(path) else None
