@@ -159,6 +159,7 @@ def parse_estimate(
         estimate_schema=schema,
         quality=quality,
         parameters=_parameters(data, refuse_non_finite=quality.valid),
+        repeatability=_repeatability(data.get("repeatability")),
     )
 
 
@@ -263,13 +264,59 @@ def _quality(block: Any) -> Quality:
     warnings = block.get("warnings", []) or []
     if not isinstance(warnings, list) or not all(isinstance(w, str) for w in warnings):
         raise StoreError("quality.warnings must be a list of strings")
+    tare = block.get("tare") or {}
+    if not isinstance(tare, dict) or not isinstance(tare.get("applied", False), bool):
+        raise StoreError(f"quality.tare must be an object with 'applied': true or false, got {tare!r:.80}")
+    tare_file = tare.get("file")
     return Quality(
         valid=valid,
+        tare_applied=tare.get("applied") is True,
+        tare_file=_basename(tare_file) if isinstance(tare_file, str) and tare_file.strip() else None,
         n_samples=n_samples,
         condition_number=_finite_or_none(block.get("condition_number"), "quality.condition_number"),
         residual_rms_nm={k: v for k, v in rms.items() if v is not None},
         warnings=tuple(warnings),
     )
+
+
+def _repeatability(block: Any) -> dict[str, Any]:
+    """The estimate's ``repeatability`` block (see bsp_ros.mdc), checked; entries without a finite SEM dropped."""
+    if block is None:
+        return {}
+    if not isinstance(block, dict):
+        raise StoreError(f"'repeatability' must be an object, got {type(block).__name__}")
+    method = block.get("method")
+    if not isinstance(method, str) or not method.strip():
+        raise StoreError("repeatability.method must name how the SEM was obtained")
+    entries = block.get("parameters", {}) or {}
+    if not isinstance(entries, dict):
+        raise StoreError("repeatability.parameters must be an object of parameter: {sem, mdc95, n}")
+    parameters: dict[str, Any] = {}
+    for key, entry in entries.items():
+        parts = str(key).split(".")
+        if len(parts) != 3 or parts[0] not in GROUPS or not all(_NAME.fullmatch(p) for p in parts[1:]):
+            raise StoreError(f"repeatability.parameters has a malformed key {key!r:.70} (want group.part.quantity)")
+        if not isinstance(entry, dict):
+            raise StoreError(f"repeatability.parameters.{key} must be an object")
+        sem = _finite_or_none(entry.get("sem"), f"repeatability.parameters.{key}.sem")
+        if sem is None:
+            continue
+        if sem < 0:
+            raise StoreError(f"repeatability.parameters.{key}.sem must not be negative, got {sem}")
+        n = entry.get("n")
+        parameters[key] = {
+            "sem": sem,
+            "mdc95": 1.96 * math.sqrt(2.0) * sem,
+            "n": n if isinstance(n, int) and not isinstance(n, bool) else None,
+        }
+    counts = {k: block.get(k) for k in ("n_cycles", "n_valid_cycles")}
+    message = block.get("message", "")
+    return {
+        "method": method[:2000],
+        "parameters": parameters,
+        **{k: v for k, v in counts.items() if isinstance(v, int) and not isinstance(v, bool)},
+        "message": message[:2000] if isinstance(message, str) else "",
+    }
 
 
 def _json_safe(value: Any, name: str) -> Any:
