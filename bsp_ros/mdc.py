@@ -69,7 +69,7 @@ def direction_reversals(velocity_rad_s: npt.ArrayLike, hysteresis: float = 0.2) 
 
     Returns
     -------
-    (R,) int indices: the last zero crossing before each confirmed change of direction.
+    (R,) int indices: the middle of the zero crossings before each confirmed change of direction.
     """
     v = np.asarray(velocity_rad_s, dtype=np.float64)
     finite = np.isfinite(v)
@@ -79,18 +79,21 @@ def direction_reversals(velocity_rad_s: npt.ArrayLike, hysteresis: float = 0.2) 
     if threshold <= 0:
         return np.zeros(0, dtype=np.int64)
     state = 0
-    last_zero = 0
+    first_zero = last_zero = -1  # sign changes since the last confirmed direction
     reversals = []
     for i, value in enumerate(v):
         if not math.isfinite(value):
             continue
         if i > 0 and math.isfinite(v[i - 1]) and (v[i - 1] > 0) != (value > 0):
+            first_zero = i if first_zero < 0 else first_zero
             last_zero = i
         direction = 1 if value > threshold else -1 if value < -threshold else 0
         if direction and direction != state:
-            if state:
-                reversals.append(last_zero)
+            if state and first_zero >= 0:
+                reversals.append((first_zero + last_zero) // 2)  # noise crosses zero several times: the middle
             state = direction
+        if direction:
+            first_zero = last_zero = -1
     return np.asarray(reversals, dtype=np.int64)
 
 
