@@ -106,7 +106,34 @@ def _identify_bag(path: Path) -> dict[str, Any]:
     estimate = identify_bag(path)
     if not isinstance(estimate, dict):
         raise StoreError(f"identify_bag({path}) returned a {type(estimate).__name__}, not an estimate dict")
+    if "repeatability" not in estimate:
+        estimate["repeatability"] = bag_repeatability(path)
     return estimate
+
+
+def bag_repeatability(path: Path) -> dict[str, Any] | None:
+    """The ``repeatability`` block (SEM and MDC95 per parameter, :mod:`bsp_ros.mdc`) of a bag, or None.
+
+    Each full cycle of motion is identified on its own with the default settings of `bsp identify`;
+    a bag that cannot be read for this gives None (and a note), not an error: the estimate is stored anyway.
+    """
+    from bsp_ros.bag import read_session
+    from bsp_ros.errors import BspError
+    from bsp_ros.identification.data import identification_data_from_session
+    from bsp_ros.identification.joint import JointConfig
+    from bsp_ros.mdc import repeatability
+    from bsp_ros.pipeline import IdentifyOptions
+
+    options = IdentifyOptions()
+    try:
+        data = identification_data_from_session(read_session(path).session, options.kinematics)
+        found = repeatability(data, JointConfig(passive=options.passive))
+    except BspError as error:
+        print(f"note: no repeatability (MDC) for {path.name}: {error}")
+        return None
+    if found.message:
+        print(f"note: no repeatability (MDC) for {path.name}: {found.message}")
+    return found.to_json()
 
 
 def recorded_start_ns(path: Path) -> int | None:
