@@ -146,7 +146,10 @@ def test_report_analysis_reads_either_backend(store_location: str) -> None:
     with open_store(store_location) as store:
         for day in range(3):
             estimate = sample_estimate(
-                day, start_time_ns=SAMPLE_START_NS + day * DAY_NS, overrides=planted if day == 2 else None
+                day,
+                start_time_ns=SAMPLE_START_NS + day * DAY_NS,
+                overrides=planted if day == 2 else None,
+                sem_rel=0.05,
             )
             store.add_estimate(estimate, "R1")
         analysis = analyse("R1", store.sessions("R1"))
