@@ -266,6 +266,7 @@ def record_to_json(record: SessionRecord) -> dict[str, Any]:
             "condition_number": record.quality.condition_number,
             "residual_rms_nm": record.quality.residual_rms_nm,
             "warnings": list(record.quality.warnings),
+            "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
         },
         "session": {
             "subject": record.subject,
@@ -276,6 +277,8 @@ def record_to_json(record: SessionRecord) -> dict[str, Any]:
         },
         "subject": record.subject_info,
     }
+    if record.repeatability:
+        body["repeatability"] = record.repeatability
     for (group, part, quantity), q in record.parameters.items():
         body[group].setdefault(part, {})[quantity] = {"value": q.value, "std": q.std, "source": q.source}
     return body

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from bsp_ros.cli.sessions import record_to_json
 from bsp_ros.errors import StoreError
 from bsp_ros.store import SCHEMA_VERSION, open_store
 from bsp_ros.store.backends import connect
@@ -75,6 +76,10 @@ def test_repeatability_and_tare_round_trip(store_location: str) -> None:
     with open_store(store_location) as store:
         (back,) = store.sessions("S01")
     assert back.quality.tare_applied is True and back.quality.tare_file == "tare_0301.yaml"
+    shown = record_to_json(back)  # `bsp sessions show --json` round-trips through the store
+    with open_store(store_location) as store:
+        again = store.add_estimate(shown, "S02")
+    assert again.quality.tare_applied and again.repeatability == back.repeatability
     assert back.repeatability["n_valid_cycles"] == 4
     # The MDC is recomputed from the SEM (1.96 sqrt 2 SEM), and an entry without a finite SEM is dropped.
     assert back.repeatability["parameters"] == {
