@@ -143,6 +143,25 @@ class SupportDecision:
     wrench: SupportWrench | None
     reason: str
 
+    def diagnostics(self) -> dict[str, str]:
+        """Key-values for a ``/diagnostics`` status: the wrench, its one-std uncertainty and the reason."""
+        values = {"reason": self.reason}
+        if self.wrench is not None:
+            values["support_fraction"] = f"{self.wrench.support_fraction:g}"
+            values["elbow_sin"] = f"{self.wrench.elbow_sin:.3f}"
+            for name, value, std in zip(
+                ("F_y_N", "F_z_N", "M_x_Nm"), self.wrench.wrench_yzx, self.wrench.std, strict=True
+            ):
+                values[name] = f"{value:.4g}"
+                values[f"{name}_std"] = f"{std:.2g}"
+        return values
+
+
+def estimate_from_result(result: Any) -> dict[str, Any]:
+    """The ``estimate`` argument of :func:`live_support` from an ``IdentificationResult``."""
+    _, values, covariance = result.block("static_moment_kgm")
+    return {"valid": bool(result.valid), "static_moments_kgm": values, "covariance": covariance}
+
 
 def live_support(
     estimate: Mapping[str, Any] | None,

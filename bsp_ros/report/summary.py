@@ -209,8 +209,13 @@ def headline(analysis: Analysis) -> str:
         judged = f" The latest session changed beyond the MDC95 in: {', '.join(_plain(analysis, changed))}."
     else:
         judged = " The latest session shows no change beyond the minimal detectable change."
+    last = analysis.sessions[-1]
+    if not last.quality.valid:
+        valid = [r for r in analysis.sessions if r.quality.valid]
+        used = f"the latest valid one ({day(valid[-1].session_time_ns)})" if valid else "none (no session is valid)"
+        judged = f" The latest session ({day(last.session_time_ns)}) is NOT VALID; compared instead: {used}." + judged
     return f"{len(analysis.sessions)} session(s) from {day(analysis.sessions[0].session_time_ns)} to " + (
-        f"{day(analysis.sessions[-1].session_time_ns)}.{judged}"
+        f"{day(last.session_time_ns)}.{judged}"
     )
 
 

@@ -9,7 +9,7 @@ import pytest
 
 from bsp_ros import model
 from bsp_ros.errors import InputError
-from bsp_ros.weight_support import SingularPoseError, live_support, support_wrench
+from bsp_ros.weight_support import SingularPoseError, estimate_from_result, live_support, support_wrench
 
 G = 9.81
 
@@ -79,3 +79,20 @@ def test_live_support_publishes_only_for_a_valid_estimate() -> None:
     assert live_support(None, [0.0, 1.0], [0.3, 0.3], 0.5).wrench is None
     straight = live_support(estimate, [0.0, 0.0], [0.3, 0.3], 0.5)
     assert straight.wrench is None and "straight" in straight.reason
+
+
+def test_live_support_from_an_identification_and_its_diagnostics() -> None:
+    from bsp_ros.identification.data import identification_data_from_session
+    from bsp_ros.identification.joint import identify_joint
+    from bsp_ros.simulation import paper_mechanical_arm_cell, simulate_cell
+
+    simulated = simulate_cell(paper_mechanical_arm_cell(duration_s=60.0, seed=2))
+    result = identify_joint(identification_data_from_session(simulated.session))
+    q, lengths = [-0.6, 0.6], simulated.truth.lengths_m
+    decision = live_support(estimate_from_result(result), q, lengths, 1.0)
+    assert decision.wrench is not None
+    exact = support_wrench(q, lengths, simulated.truth.static_moments_kgm, 1.0).wrench_yzx
+    # The identified static moments carry the truth within 3 std, and so does the wrench.
+    assert (np.abs(decision.wrench.wrench_yzx - exact)[:2] < 3 * decision.wrench.std[:2] + 1e-9).all()
+    diagnostics = decision.diagnostics()
+    assert set(diagnostics) >= {"reason", "F_y_N", "F_y_N_std", "F_z_N", "F_z_N_std", "M_x_Nm", "support_fraction"}

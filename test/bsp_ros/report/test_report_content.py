@@ -143,3 +143,18 @@ def test_pdf_export_has_summary_and_plots(report_store: str, tmp_path: Path) -> 
     assert data.startswith(b"%PDF-")
     pages = len(re.findall(rb"/Type\s*/Page\b", data))
     assert pages >= 1 + 18  # text page(s) and one page per plotted parameter
+
+
+def test_an_invalid_latest_session_is_named_and_not_compared(tmp_path: Path) -> None:
+    key = ("joints", "elbow", "coulomb_nm")
+    with open_store(tmp_path / "s.sqlite") as store:
+        for i, valid in enumerate((True, True, False)):
+            planted = {key: (2.0, 0.01)} if i == 2 else None  # a wild value in the invalid session
+            estimate = sample_estimate(
+                i, start_time_ns=SAMPLE_START_NS + i * 86_400 * 10**9, valid=valid, overrides=planted, sem_rel=0.05
+            )
+            store.add_estimate(estimate, "L1")
+        analysis = analyse("L1", store.sessions("L1"))
+    assert analysis.latest_changes == [] and analysis.changes == []
+    page = render_html(analysis, {})
+    assert "is NOT VALID; compared instead: the latest valid one (2024-06-02)" in page
