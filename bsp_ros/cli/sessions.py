@@ -11,15 +11,16 @@ from typing import Any
 
 from bsp_ros.errors import InputError, StoreError
 from bsp_ros.store import (
+    WALL_CLOCK_START_NS,
     SessionRecord,
     Store,
-    check_subject_id,
     format_time,
     load_estimate_file,
     open_store,
     parse_time_ns,
     write_sessions_csv,
 )
+from bsp_ros.store.subject import check_pseudonymous_id
 
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 
@@ -41,8 +42,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add = actions.add_parser("add", parents=[common], help="store a result JSON or identify and store a bag")
     add.add_argument("input", metavar="RESULT.json|BAG", help="a `bsp identify --json` result or a bag")
     add.add_argument("--subject", required=True, metavar="ID", help="pseudonymous subject id [A-Za-z0-9_-]{1,64}")
-    add.add_argument("--time", metavar="TIME", help="session start (ISO 8601 UTC or ns), if the input lacks it")
+    add.add_argument(
+        "--time",
+        metavar="TIME",
+        help="session start: a date (2024-03-01), ISO 8601 (2024-03-01T09:30Z, naive = UTC) or epoch seconds; "
+        "needed when the recording is not stamped by a wall clock",
+    )
     add.add_argument("--source", metavar="NAME", help="recording name, if the input lacks it (default: file name)")
+    add.add_argument(
+        "--allow-identifying-id",
+        action="store_true",
+        help="store a subject id even though it looks like a person's name or a birth date",
+    )
     actions.add_parser("list", parents=[common], help="list subjects and their session counts")
     show = actions.add_parser("show", parents=[common], help="show a subject's sessions and parameters")
     show.add_argument("subject", metavar="SUBJECT")
@@ -95,31 +106,94 @@ def _identify_bag(path: Path) -> dict[str, Any]:
     estimate = identify_bag(path)
     if not isinstance(estimate, dict):
         raise StoreError(f"identify_bag({path}) returned a {type(estimate).__name__}, not an estimate dict")
+    if "repeatability" not in estimate:
+        estimate["repeatability"] = bag_repeatability(path)
     return estimate
 
 
-def _load_result(path: Path) -> dict[str, Any]:
+def bag_repeatability(path: Path) -> dict[str, Any] | None:
+    """The ``repeatability`` block (SEM and MDC95 per parameter, :mod:`bsp_ros.mdc`) of a bag, or None.
+
+    Each full cycle of motion is identified on its own with the default settings of `bsp identify`;
+    a bag that cannot be read for this gives None (and a note), not an error: the estimate is stored anyway.
+    """
+    from bsp_ros.bag import read_session
+    from bsp_ros.errors import BspError
+    from bsp_ros.identification.data import identification_data_from_session
+    from bsp_ros.identification.joint import JointConfig
+    from bsp_ros.mdc import repeatability
+    from bsp_ros.pipeline import IdentifyOptions
+
+    options = IdentifyOptions()
     try:
-        return load_estimate_file(path)
-    except RecursionError:  # json's decoder gives up on nesting deeper than the interpreter's recursion limit
-        raise StoreError(
-            f"cannot read estimate {path}: its JSON is nested deeper than {sys.getrecursionlimit()} levels; "
-            "not a `bsp identify --json` result"
-        ) from None
+        data = identification_data_from_session(read_session(path).session, options.kinematics)
+        found = repeatability(data, JointConfig(passive=options.passive))
+    except BspError as error:
+        print(f"note: no repeatability (MDC) for {path.name}: {error}")
+        return None
+    if found.message:
+        print(f"note: no repeatability (MDC) for {path.name}: {found.message}")
+    return found.to_json()
+
+
+def recorded_start_ns(path: Path) -> int | None:
+    """The bag's recorded start (its first receive time, ns), or None if it records none.
+
+    A rosbag2 directory's ``metadata.yaml`` ``starting_time``, else an MCAP file's summary statistics.
+    """
+    try:
+        if path.is_dir():
+            import yaml
+
+            info = yaml.safe_load((path / "metadata.yaml").read_text("utf-8"))["rosbag2_bagfile_information"]
+            return int(info["starting_time"]["nanoseconds_since_epoch"])
+        from mcap.reader import make_reader
+
+        with path.open("rb") as stream:
+            summary = make_reader(stream).get_summary()
+        if summary is None or summary.statistics is None or not summary.statistics.message_count:
+            return None
+        return int(summary.statistics.message_start_time)
+    except Exception:
+        return None
+
+
+def _session_time_ns(args: argparse.Namespace, path: Path, estimate: dict[str, Any]) -> int | None:
+    """The session time to store: ``--time``, else the estimate's if wall-clock, else the bag's recorded start."""
+    if args.time is not None:
+        return parse_time_ns(args.time)
+    block = estimate.get("session")
+    stamped = block.get("start_time_ns") if isinstance(block, dict) else None
+    if not isinstance(stamped, int) or isinstance(stamped, bool) or stamped >= WALL_CLOCK_START_NS:
+        return None  # the estimate's own time (or its absence) is checked when it is parsed
+    recorded = recorded_start_ns(path) if is_bag(path) else None
+    if recorded is not None and recorded >= WALL_CLOCK_START_NS:
+        print(
+            f"note: the data are stamped from {stamped / 1e9:.6g} s (boot or simulated time, not a wall clock); "
+            f"using the bag's recorded start {format_time(recorded)}"
+        )
+        return recorded
+    where = "its recorded start is not wall-clock either" if is_bag(path) else "a result JSON has no other clock"
+    raise InputError(
+        f"{path.name}: the data are stamped from {stamped / 1e9:.6g} s after 1970-01-01 (a controller's boot "
+        f"time or simulated time, not a wall clock) and {where}; give the session start with --time "
+        "(a date 2024-03-01, ISO 8601 2024-03-01T09:30Z or epoch seconds)"
+    )
 
 
 def _add(store: Store, args: argparse.Namespace) -> int:
-    subject = check_subject_id(args.subject)  # before any slow identification
+    # Before any slow identification.
+    subject = check_pseudonymous_id(args.subject, allow_identifying=args.allow_identifying_id)
     path = Path(args.input)
     if not path.exists():
         raise InputError(f"{path} does not exist")
-    estimate = _identify_bag(path) if is_bag(path) else _load_result(path)
+    estimate = _identify_bag(path) if is_bag(path) else load_estimate_file(path)
     session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}
     source = args.source or (None if session and session.get("source") else path.name)
     record = store.add_estimate(
         estimate,
         subject,
-        session_time_ns=None if args.time is None else parse_time_ns(args.time),
+        session_time_ns=_session_time_ns(args, path, estimate),
         source=source,
     )
     # Printed only after the commit returned: the session is durable.
@@ -192,6 +266,7 @@ def record_to_json(record: SessionRecord) -> dict[str, Any]:
             "condition_number": record.quality.condition_number,
             "residual_rms_nm": record.quality.residual_rms_nm,
             "warnings": list(record.quality.warnings),
+            "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
         },
         "session": {
             "subject": record.subject,
@@ -202,6 +277,8 @@ def record_to_json(record: SessionRecord) -> dict[str, Any]:
         },
         "subject": record.subject_info,
     }
+    if record.repeatability:
+        body["repeatability"] = record.repeatability
     for (group, part, quantity), q in record.parameters.items():
         body[group].setdefault(part, {})[quantity] = {"value": q.value, "std": q.std, "source": q.source}
     return body

@@ -1,18 +1,18 @@
-"""Therapist-facing reports of a subject's sessions: one self-contained HTML page, PNG plots, CSV."""
+"""Therapist-facing reports of a subject's sessions: one self-contained HTML page, a PDF, PNG plots, CSV."""
 
-from bsp_ros.report.analysis import CHANGE_SIGMAS, Analysis, Change, Point, Series, analyse, flag_changes
+from bsp_ros.report.analysis import Analysis, Change, Point, Series, analyse, compare, flag_changes
 from bsp_ros.report.labels import label, unit
 from bsp_ros.report.priors import Prior, session_prior
-from bsp_ros.report.writers import render_report, write_csv, write_html, write_pngs
+from bsp_ros.report.writers import render_report, write_csv, write_html, write_pdf, write_pngs
 
 __all__ = [
-    "CHANGE_SIGMAS",
     "Analysis",
     "Change",
     "Point",
     "Prior",
     "Series",
     "analyse",
+    "compare",
     "flag_changes",
     "label",
     "render_report",
@@ -20,5 +20,6 @@ __all__ = [
     "unit",
     "write_csv",
     "write_html",
+    "write_pdf",
     "write_pngs",
 ]

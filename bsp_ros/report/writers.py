@@ -1,12 +1,13 @@
-"""Write a subject's report: the HTML page, one PNG per parameter, and a CSV of the plotted numbers."""
+"""Write a subject's report: the HTML page, a PDF, one PNG per parameter, and a CSV of the plotted numbers."""
 
 from __future__ import annotations
 
 import csv
+import itertools
 from pathlib import Path
 
 from bsp_ros.errors import InputError
-from bsp_ros.report.analysis import Analysis
+from bsp_ros.report.analysis import Analysis, compare
 from bsp_ros.report.html import render_html
 from bsp_ros.store.records import ParamKey, format_time
 
@@ -27,8 +28,10 @@ REPORT_CSV_COLUMNS = (
     "value_source",
     "prior_mean",
     "prior_std",
+    "sem",
+    "mdc95_from_previous",
     "change_from_previous_flagged",
-    "change_sigmas",
+    "change_over_mdc95",
 )
 
 
@@ -63,9 +66,21 @@ def write_pngs(analysis: Analysis, directory: str | Path) -> list[Path]:
     return written
 
 
+def write_pdf(analysis: Analysis, path: str | Path) -> Path:
+    """Write the report as a PDF for the patient file (summary first, as in the HTML); return the path."""
+    from bsp_ros.report.pdf import write_report_pdf  # matplotlib is imported only when plotting
+
+    return write_report_pdf(analysis, Path(path))
+
+
 def write_csv(analysis: Analysis, path: str | Path) -> Path:
     """Write every plotted number (values, ±2 std bounds, priors, change flags) as CSV."""
     flagged = {(c.key, c.after.session_id): c for c in analysis.changes}
+    previous = {}
+    for series in analysis.series:
+        usable = [p for p in series.points if p.valid and p.value is not None]
+        for before, after in itertools.pairwise(usable):
+            previous[(series.key, after.session_id)] = compare(series.key, before, after)
     try:
         with open(path, "w", newline="", encoding="utf-8") as stream:
             writer = csv.writer(stream, lineterminator="\n")
@@ -74,6 +89,7 @@ def write_csv(analysis: Analysis, path: str | Path) -> Path:
                 group, part, quantity = series.key
                 for p in series.points:
                     change = flagged.get((series.key, p.session_id))
+                    step = previous.get((series.key, p.session_id))
                     bounds = (
                         ("", "") if p.value is None or p.std is None else (p.value - 2 * p.std, p.value + 2 * p.std)
                     )
@@ -94,8 +110,10 @@ def write_csv(analysis: Analysis, path: str | Path) -> Path:
                             p.source,
                             "" if p.prior is None else p.prior.mean,
                             "" if p.prior is None else p.prior.std,
+                            _cell(p.sem),
+                            "" if step is None or step.mdc95 is None else step.mdc95,
                             int(change is not None),
-                            "" if change is None else f"{change.sigmas:.2f}",
+                            "" if step is None or step.mdc_ratio is None else f"{step.mdc_ratio:.2f}",
                         ]
                     )
     except OSError as error:

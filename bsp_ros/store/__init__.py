@@ -1,7 +1,13 @@
 """The session store: identified sessions per pseudonymous subject, in SQLite (default) or PostgreSQL."""
 
 from bsp_ros.store.csv_export import CSV_COLUMNS, write_sessions_csv
-from bsp_ros.store.estimate import ESTIMATE_SCHEMA, load_estimate_file, parse_estimate, parse_time_ns
+from bsp_ros.store.estimate import (
+    ESTIMATE_SCHEMA,
+    WALL_CLOCK_START_NS,
+    load_estimate_file,
+    parse_estimate,
+    parse_time_ns,
+)
 from bsp_ros.store.location import default_location, is_database_url
 from bsp_ros.store.records import ParamKey, Quality, Quantity, SessionRecord, SubjectSummary, format_time
 from bsp_ros.store.schema import SCHEMA_VERSION
@@ -12,6 +18,7 @@ __all__ = [
     "CSV_COLUMNS",
     "ESTIMATE_SCHEMA",
     "SCHEMA_VERSION",
+    "WALL_CLOCK_START_NS",
     "ParamKey",
     "Quality",
     "Quantity",

@@ -42,6 +42,8 @@ class Quality:
     condition_number : condition number of the regression, None if not finite or not reported.
     residual_rms_nm : RMS residual moment per joint (N m).
     warnings : the estimator's warnings, in order.
+    tare_applied : whether a tare (sensor offset and handle payload) was subtracted; False when not recorded.
+    tare_file : the tare file's name, if one was applied.
     """
 
     valid: bool
@@ -49,6 +51,8 @@ class Quality:
     condition_number: float | None = None
     residual_rms_nm: dict[str, float] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
+    tare_applied: bool = False
+    tare_file: str | None = None
 
 
 @dataclass(frozen=True)
@@ -68,6 +72,8 @@ class SessionRecord:
     parameters : every quantity, keyed by ``(group, part, quantity)``.
     id : row id once stored, else None.
     added_ns : when the session was stored, ns since the epoch; None before.
+    repeatability : the estimate's ``repeatability`` block (method, per-parameter SEM and MDC95, see
+        :mod:`bsp_ros.mdc`), keyed by estimate path ``group.part.quantity``; empty if none was computed.
     """
 
     subject: str
@@ -81,6 +87,7 @@ class SessionRecord:
     parameters: dict[ParamKey, Quantity]
     id: int | None = None
     added_ns: int | None = None
+    repeatability: dict[str, Any] = field(default_factory=dict)
 
     @property
     def session_time(self) -> dt.datetime:

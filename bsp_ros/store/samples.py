@@ -28,6 +28,7 @@ def sample_estimate(
     warnings: Iterable[str] = (),
     overrides: Mapping[ParamKey, tuple[float | None, float | None]] | None = None,
     rel_std: float = 0.03,
+    sem_rel: float | None = None,
 ) -> dict[str, Any]:
     """Build a valid estimate dict.
 
@@ -49,6 +50,8 @@ def sample_estimate(
         ``(group, part, quantity) -> (value, std)``; may add quantities (e.g. ``viscous_nms``).
     rel_std : float
         Standard deviation relative to the value.
+    sem_rel : float, optional
+        Adds a ``repeatability`` block: SEM of every ``data`` quantity = ``sem_rel`` x its value.
 
     Returns
     -------
@@ -94,4 +97,17 @@ def sample_estimate(
         estimate["session"] = session
     if subject is not None:
         estimate["subject"] = dict(subject)
+    if sem_rel is not None:
+        estimate["repeatability"] = {
+            "method": "sample: SEM set to a fixed fraction of each value",
+            "n_cycles": 5,
+            "n_valid_cycles": 5,
+            "parameters": {
+                f"{group}.{part}.{name}": {"sem": abs(q["value"]) * sem_rel, "n": 5}
+                for group in ("segments", "joints")
+                for part, quantities in estimate[group].items()
+                for name, q in quantities.items()
+                if q["source"] == "data" and isinstance(q["value"], float) and q["value"] == q["value"]
+            },
+        }
     return estimate

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 """The schema version this code writes; older stores are migrated up to it, newer ones refused."""
 
 APPLICATION = "bsp_ros.store"
@@ -49,6 +49,10 @@ MIGRATIONS: list[list[str]] = [
     [
         "ALTER TABLE sessions ADD COLUMN subject_info_json TEXT NOT NULL DEFAULT '{{}}'",
         "CREATE INDEX sessions_by_subject ON sessions (subject, session_time_ns)",
+    ],
+    # 3: per-session repeatability (SEM and MDC95 per parameter, and the method), see bsp_ros.mdc.
+    [
+        "ALTER TABLE sessions ADD COLUMN repeatability_json TEXT NOT NULL DEFAULT '{{}}'",
     ],
 ]
 

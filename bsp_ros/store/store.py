@@ -21,7 +21,7 @@ from bsp_ros.store.subject import check_subject_id
 _MIGRATION_LOCK = 0x6273_7073  # PostgreSQL advisory lock key ("bsps") serialising migrations
 _SESSION_COLUMNS = (
     "id, subject, session_time_ns, source, method, config_json, subject_info_json, estimate_schema, "
-    "valid, n_samples, condition_number, quality_json, added_ns"
+    "valid, n_samples, condition_number, quality_json, added_ns, repeatability_json"
 )
 
 
@@ -101,7 +101,11 @@ class Store:
         """
         check_subject_id(record.subject)
         added_ns = time.time_ns()
-        quality = {"residual_rms_nm": record.quality.residual_rms_nm, "warnings": list(record.quality.warnings)}
+        quality: dict[str, Any] = {
+            "residual_rms_nm": record.quality.residual_rms_nm,
+            "warnings": list(record.quality.warnings),
+            "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
+        }
         duplicate = StoreError(
             f"duplicate session: subject {record.subject} already has a session at "
             f"{format_time(record.session_time_ns)} from {record.source!r}; nothing was added"
@@ -116,7 +120,7 @@ class Store:
                 rows = self._backend.query(
                     "INSERT INTO sessions (subject, session_time_ns, source, method, config_json, "
                     "subject_info_json, estimate_schema, valid, n_samples, condition_number, quality_json, "
-                    "added_ns) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
+                    "added_ns, repeatability_json) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
                     (
                         record.subject,
                         record.session_time_ns,
@@ -130,6 +134,7 @@ class Store:
                         record.quality.condition_number,
                         _dumps(quality),
                         added_ns,
+                        _dumps(record.repeatability),
                     ),
                 )
                 session_id = int(rows[0][0])
@@ -278,8 +283,9 @@ def _float(value: Any) -> float | None:
 
 
 def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> SessionRecord:
-    sid, subject, time_ns, source, method, config, info, schema, valid, n, cond, quality, added = row
+    sid, subject, time_ns, source, method, config, info, schema, valid, n, cond, quality, added, repeat = row
     extra = json.loads(quality)
+    tare = extra.get("tare") if isinstance(extra.get("tare"), dict) else {}
     return SessionRecord(
         subject=subject,
         session_time_ns=int(time_ns),
@@ -294,8 +300,11 @@ def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> Sessi
             condition_number=_float(cond),
             residual_rms_nm=dict(extra.get("residual_rms_nm", {})),
             warnings=tuple(extra.get("warnings", [])),
+            tare_applied=tare.get("applied") is True,
+            tare_file=tare.get("file") if isinstance(tare.get("file"), str) else None,
         ),
         parameters=parameters,
         id=int(sid),
         added_ns=int(added),
+        repeatability=json.loads(repeat),
     )

@@ -17,7 +17,7 @@ BODY = {"body_mass_kg": 75.0, "sex": "male", "height_m": 1.78}
 
 @pytest.fixture
 def report_store(tmp_path: Path) -> str:
-    """A SQLite store: P007 with 6 weekly sessions (session 3 not valid, elbow friction jumps at session 5)."""
+    """A SQLite store: P007 with 6 weekly sessions (2 without tare, 3 not valid, elbow friction jumps at 5)."""
     path = str(tmp_path / "sessions.sqlite")
     with open_store(path) as store:
         for i in range(6):
@@ -30,7 +30,10 @@ def report_store(tmp_path: Path) -> str:
                 overrides=planted,
                 valid=i != 2,
                 warnings=["too little wrist motion"] if i == 2 else [],
+                sem_rel=0.05,
             )
+            if i != 1:  # session 2 was recorded without a tare
+                estimate["quality"]["tare"] = {"applied": True, "file": f"tare_{i:03d}.yaml"}
             store.add_estimate(estimate, SUBJECT)
         store.add_estimate(sample_estimate(7, source="other_subject.mcap"), OTHER)
     return path

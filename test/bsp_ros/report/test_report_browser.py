@@ -59,6 +59,7 @@ def test_report_renders_with_plots_and_flags(report_store: str, tmp_path: Path) 
 
     dom = _chromium(tmp_path, "--dump-dom", page.as_uri()).stdout
     assert f'Arm parameters of subject <span id="subject">{SUBJECT}</span>' in dom
-    assert dom.count("<tr><td>") == 6  # one quality row per session
+    sessions_table = dom.split('<table id="sessions">')[1].split("</table>")[0]
+    assert sessions_table.count("<tr><td>") == 6  # one quality row per session
     assert "Elbow friction (passive moment) rose from" in dom and "NOT VALID" in dom
     assert dom.count("data:image/png;base64,") == 18

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from bsp_ros.cli.sessions import record_to_json
 from bsp_ros.errors import StoreError
 from bsp_ros.store import SCHEMA_VERSION, open_store
 from bsp_ros.store.backends import connect
@@ -48,13 +49,42 @@ def _set_version(location: str, version: str) -> None:
 def test_old_schema_is_migrated_with_its_data(store_location: str) -> None:
     _make_version_1_store(store_location)
     with open_store(store_location) as store:
-        assert store.schema_version == SCHEMA_VERSION == 2
+        assert store.schema_version == SCHEMA_VERSION == 3
         (old,) = store.sessions("OLD1")
         assert old.parameters[("joints", "elbow", "coulomb_nm")].value == 0.31
         assert old.quality.warnings == ("old",) and old.subject_info == {}
+        assert old.repeatability == {} and old.quality.tare_applied is False  # not recorded then
         store.add_estimate(sample_estimate(1, subject={"body_mass_kg": 80.0, "sex": "male"}), "OLD1")
     with open_store(store_location) as store:  # migrating is done once
         assert [r.subject_info for r in store.sessions("OLD1")] == [{}, {"body_mass_kg": 80.0, "sex": "male"}]
+
+
+def test_repeatability_and_tare_round_trip(store_location: str) -> None:
+    estimate = sample_estimate(1)
+    estimate["quality"]["tare"] = {"applied": True, "file": "/cell/tares/tare_0301.yaml"}
+    estimate["repeatability"] = {
+        "method": "SEM from the within-session cycle-to-cycle spread",
+        "n_cycles": 5,
+        "n_valid_cycles": 4,
+        "parameters": {
+            "joints.elbow.coulomb_nm": {"sem": 0.01, "mdc95": 0.0277, "n": 4},
+            "segments.forearm.static_moment_kgm": {"sem": float("nan"), "mdc95": None, "n": 4},
+        },
+    }
+    with open_store(store_location) as store:
+        store.add_estimate(estimate, "S01")
+    with open_store(store_location) as store:
+        (back,) = store.sessions("S01")
+    assert back.quality.tare_applied is True and back.quality.tare_file == "tare_0301.yaml"
+    shown = record_to_json(back)  # `bsp sessions show --json` round-trips through the store
+    with open_store(store_location) as store:
+        again = store.add_estimate(shown, "S02")
+    assert again.quality.tare_applied and again.repeatability == back.repeatability
+    assert back.repeatability["n_valid_cycles"] == 4
+    # The MDC is recomputed from the SEM (1.96 sqrt 2 SEM), and an entry without a finite SEM is dropped.
+    assert back.repeatability["parameters"] == {
+        "joints.elbow.coulomb_nm": {"sem": 0.01, "mdc95": pytest.approx(0.0277186), "n": 4}
+    }
 
 
 def test_newer_schema_is_refused_untouched(store_location: str) -> None:

@@ -1,0 +1,159 @@
+"""`bsp sessions add`: session times that are not wall-clock, what users type for --time, pseudonymity, NaN."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from bsp_ros.bag.writer import write_session_bag
+from bsp_ros.cli import main
+from bsp_ros.simulation import paper_mechanical_arm_cell, simulate_cell
+from bsp_ros.store import open_store
+from bsp_ros.store.samples import sample_estimate
+
+BOOT_START_NS = 1000 * 10**9  # a controller clock counting from boot: 1000 s
+WALL_START_NS = 1_717_225_200 * 10**9  # 2024-06-01T07:00:00Z
+
+
+def _bsp(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _boot_stamped_bag(tmp_path: Path, *, receive_wall_clock: bool) -> Path:
+    simulated = simulate_cell(paper_mechanical_arm_cell(duration_s=60.0, start_ns=BOOT_START_NS, seed=5))
+    # A recorder on the wall clock receives the boot-stamped messages: receive time = stamp + (wall - boot).
+    delay = WALL_START_NS - BOOT_START_NS if receive_wall_clock else 1_000_000
+    bag = write_session_bag(tmp_path / "rec_boot", simulated.session, transport_delay_ns=delay)
+    if receive_wall_clock:
+        # Our writer logs /tf_static at its stamp; a wall-clock recorder would have received it then too.
+        metadata = bag / "metadata.yaml"
+        info = yaml.safe_load(metadata.read_text())
+        info["rosbag2_bagfile_information"]["starting_time"]["nanoseconds_since_epoch"] = WALL_START_NS
+        metadata.write_text(yaml.safe_dump(info))
+    return bag
+
+
+def _stored(store: Path, subject: str = "S1") -> list[Any]:
+    with open_store(store) as opened:
+        return opened.sessions(subject)
+
+
+@pytest.mark.slow
+def test_boot_stamped_bag_takes_the_wall_clock_recorded_start(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bag = _boot_stamped_bag(tmp_path, receive_wall_clock=True)
+    store = tmp_path / "s.sqlite"
+    code, out, err = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store))
+    assert code == 0, err
+    assert "recorded start 2024-06-01T07:00:00Z" in out
+    (record,) = _stored(store)
+    assert record.session_time_ns == WALL_START_NS
+
+
+@pytest.mark.slow
+def test_boot_stamped_bag_without_a_wall_clock_asks_for_time(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bag = _boot_stamped_bag(tmp_path, receive_wall_clock=False)
+    store = tmp_path / "s.sqlite"
+    code, _, err = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store))
+    assert code != 0 and "--time" in err and "stamped from 1000" in err and "seconds or ms" not in err
+    assert not store.exists() or not _stored_any(store)
+    code, _, err = _bsp(
+        capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store), "--time", "2024-06-01"
+    )
+    assert code == 0, err
+    (record,) = _stored(store)
+    assert record.session_time_ns == WALL_START_NS - 7 * 3600 * 10**9
+
+
+def _stored_any(store: Path) -> bool:
+    with open_store(store) as opened:
+        return bool(opened.subjects())
+
+
+def test_boot_stamped_result_json_names_time_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(sample_estimate(1, start_time_ns=BOOT_START_NS)))
+    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(tmp_path / "s.sq"))
+    assert code != 0 and "--time" in err and "not a wall clock" in err
+
+
+@pytest.mark.parametrize(
+    "typed", ["2024-06-01T07:00:00Z", "2024-06-01 09:00:00+02:00", "2024-06-01T07:00", "1717225200", "1717225200.0"]
+)
+def test_time_accepts_what_users_type(tmp_path: Path, capsys: pytest.CaptureFixture[str], typed: str) -> None:
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(sample_estimate(1, start_time_ns=None)))
+    store = tmp_path / "s.sqlite"
+    code, _, err = _bsp(
+        capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store), "--time", typed
+    )
+    assert code == 0, err
+    assert _stored(store)[0].session_time_ns == WALL_START_NS
+
+
+def test_time_accepts_a_date(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(sample_estimate(1, start_time_ns=None)))
+    store = tmp_path / "s.sqlite"
+    assert (
+        _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store), "--time", "2024-06-01")[
+            0
+        ]
+        == 0
+    )
+    assert _stored(store)[0].session_time_ns == 1_717_200_000 * 10**9
+
+
+@pytest.mark.parametrize("subject", ["Maria_Garcia_1984-03-12", "MariaGarcia", "P_19840312"])
+def test_identifying_subject_ids_are_refused_with_the_reason(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], subject: str
+) -> None:
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(sample_estimate(1)))
+    store = tmp_path / "s.sqlite"
+    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", subject, "--store", str(store))
+    assert code != 0 and "--allow-identifying-id" in err and ("date" in err or "name" in err)
+    code, _, err = _bsp(
+        capsys, "sessions", "add", str(result), "--subject", subject, "--store", str(store), "--allow-identifying-id"
+    )
+    assert code == 0, err
+    assert len(_stored(store, subject)) == 1
+
+
+def test_pseudonyms_pass(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(sample_estimate(1)))
+    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "P007", "--store", str(tmp_path / "s.sq"))
+    assert code == 0, err
+
+
+def test_nan_inside_a_valid_estimate_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    estimate = sample_estimate(1, overrides={("joints", "elbow", "coulomb_nm"): (math.nan, 0.01)})
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(estimate))  # Python writes the NaN literal, as a careless exporter would
+    store = tmp_path / "s.sqlite"
+    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store))
+    assert code != 0 and "joints.elbow.coulomb_nm.value is nan" in err and "marked valid" in err
+    assert not _stored_any(store)
+
+
+def test_invalid_estimate_is_stored_as_not_valid(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    estimate = sample_estimate(1, valid=False, overrides={("joints", "elbow", "coulomb_nm"): (math.nan, None)})
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(estimate))
+    store = tmp_path / "s.sqlite"
+    code, out, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store))
+    assert code == 0 and "NOT VALID" in out, err
+    (record,) = _stored(store)
+    assert record.quality.valid is False
+    assert record.parameters[("joints", "elbow", "coulomb_nm")].value is None
