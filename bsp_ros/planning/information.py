@@ -190,7 +190,7 @@ def _angle_noise_covariance(q_rad: np.ndarray, lengths: np.ndarray, marker_noise
             cov_phi[:, j, j + 1] = shared
             cov_phi[:, j + 1, j] = shared
     relative = np.eye(n) - np.eye(n, k=-1)  # q1 = phi1, q_j = phi_j - phi_{j-1}
-    return np.einsum("ij,njk,lk->nil", relative, cov_phi, relative)
+    return np.asarray(relative @ cov_phi @ relative.T)
 
 
 def _residual_gain(q_rad: np.ndarray, lengths: np.ndarray, beta: np.ndarray) -> np.ndarray:
@@ -282,9 +282,9 @@ def predict_covariance(
     # per-sample torque noise covariance: force (white, per wrench sample) and angles (per marker frame)
     jacobian = contact_jacobian(q, lengths)
     wrench_var = np.array([noise.force_noise_n**2, noise.force_noise_n**2, noise.torque_noise_nm**2])
-    force_cov = np.einsum("nki,k,nkj->nij", jacobian, wrench_var, jacobian)
+    force_cov = np.transpose(jacobian, (0, 2, 1)) @ (wrench_var[None, :, None] * jacobian)
     gain = _residual_gain(q, lengths, beta)
-    marker_cov = np.einsum("nik,nkl,njl->nij", gain, angle_cov, gain)
+    marker_cov = gain @ angle_cov @ np.transpose(gain, (0, 2, 1))
     # the estimator weights each joint by its residual variance (filtered angle noise keeps ~2 fc / f of it)
     band = min(2.0 * kinematics.cutoff_hz / noise.marker_hz, 1.0)
     sigma2 = np.einsum("nii->ni", force_cov).mean(axis=0) + band * np.einsum("nii->ni", marker_cov).mean(axis=0)
@@ -292,18 +292,20 @@ def predict_covariance(
     w = np.where(rows, weights[None, :], 0.0)
     wx = x * w[..., None]  # (N, n, p)
     per_wrench = noise.wrench_hz / grid
-    design = per_wrench * np.einsum("tip,tiq->pq", x, wx)
-    long_run = per_wrench * np.einsum("tip,tij,tjq->pq", wx, force_cov, wx)
-    long_run += noise.wrench_hz**2 / (noise.marker_hz * grid) * np.einsum("tip,tij,tjq->pq", wx, marker_cov, wx)
+    p = x.shape[2]
+    flat = wx.reshape(-1, p)
+    design = per_wrench * (x.reshape(-1, p).T @ flat)
+    noise_cov = per_wrench * force_cov + noise.wrench_hz**2 / (noise.marker_hz * grid) * marker_cov
+    long_run = flat.T @ (noise_cov @ wx).reshape(-1, p)
     inverse = np.linalg.pinv(design)
     covariance = inverse @ long_run @ inverse
     covariance = 0.5 * (covariance + covariance.T)
 
     names = parameter_names(n, passive)
-    a = (x * np.sqrt(weights)[None, :, None])[rows]
-    scale = np.linalg.norm(a, axis=0)
-    singular = np.linalg.svd(a / np.where(scale > 0, scale, 1.0), compute_uv=False)
-    condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+    # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
+    gram = design / np.outer(np.sqrt(np.diag(design)), np.sqrt(np.diag(design)) + 1e-300)
+    eigen = np.linalg.eigvalsh(0.5 * (gram + gram.T))
+    condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
     variances = np.diag(covariance)
     correlation = covariance / np.sqrt(np.outer(variances, variances) + 1e-300)
     max_corr = {f"{key}/{owner}": float(np.max(np.abs(correlation[i, :n]))) for i, (key, owner) in enumerate(names) if i >= n}

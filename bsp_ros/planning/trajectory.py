@@ -58,9 +58,14 @@ class PlannedTrajectory:
         self._qdot = qdot
         self._spline = CubicHermiteSpline(t, q, qdot, axis=0, extrapolate=False)
         self._velocity = self._spline.derivative()
-        dense = self.dense_times_s()
-        self._dense_q = self.angles_rad(dense)
-        self._dense_v = self.velocities_rad_s(dense)
+        self._dense: tuple[np.ndarray, np.ndarray] | None = None
+
+    def _dense_path(self) -> tuple[np.ndarray, np.ndarray]:
+        """Angles and velocities on :meth:`dense_times_s` (computed once, on first use)."""
+        if self._dense is None:
+            dense = self.dense_times_s()
+            self._dense = (self.angles_rad(dense), self.velocities_rad_s(dense))
+        return self._dense
 
     # the TrajectorySpec interface ---------------------------------------------------------------------
     @property
@@ -71,7 +76,7 @@ class PlannedTrajectory:
     @property
     def peak_speed_rad_s(self) -> tuple[float, ...]:
         """(n,) largest joint speed along the path, rad/s."""
-        return tuple(float(v) for v in np.abs(self._dense_v).max(axis=0))
+        return tuple(float(v) for v in np.abs(self._dense_path()[1]).max(axis=0))
 
     def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
         """Joint angles at ``t_s`` (s since the session start): (N,) -> (N, n) rad; held at the end knots."""
@@ -100,7 +105,8 @@ class PlannedTrajectory:
     @property
     def range_rad(self) -> tuple[np.ndarray, np.ndarray]:
         """(n,) lowest and (n,) highest angle each joint reaches along the path, rad."""
-        return self._dense_q.min(axis=0), self._dense_q.max(axis=0)
+        angles = self._dense_path()[0]
+        return angles.min(axis=0), angles.max(axis=0)
 
     def dense_times_s(self, per_piece: int = _SAMPLES_PER_PIECE) -> np.ndarray:
         """Times that resolve every cubic piece (``per_piece`` per knot interval), s."""
