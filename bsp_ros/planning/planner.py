@@ -11,11 +11,12 @@ from scipy.optimize import differential_evolution
 
 from bsp_ros.errors import InputError
 from bsp_ros.identification.passive import PassiveModel
-from bsp_ros.model import GRAVITY_M_S2, check_lengths_m, gravity_regressor
+from bsp_ros.model import check_lengths_m, gravity_regressor, static_moments_kgm
 from bsp_ros.planning.information import NoiseSpec, NominalArm, Prediction, predict_covariance
 from bsp_ros.planning.safety import JointLimits, check_reachable, check_trajectory_within, usable_elbow_range_deg
 from bsp_ros.planning.trajectory import PlannedTrajectory
-from bsp_ros.streams import joints_for
+from bsp_ros.anthropometry import segment_norm
+from bsp_ros.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_array, check_positive
 
 #: Given amplitudes: the default share of each joint's range, capped in deg. Optimised: the smallest.
@@ -375,9 +376,6 @@ def inertial_torque_ratio(
     -------
     (n,) ratios (quasi-static when well below 0.01).
     """
-    from bsp_ros.anthropometry import segment_norm
-    from bsp_ros.streams import segments_for
-
     lengths = check_lengths_m(nominal.lengths_m)
     n = lengths.size
     norms = [segment_norm(sex, name) for name in segments_for(n)]
@@ -411,23 +409,5 @@ def inertial_torque_ratio(
         momentum[:, i] = (kinetic(q, qdot + e) - kinetic(q, qdot - e)) / (2 * step)
         force[:, i] = (kinetic(q + e, qdot) - kinetic(q - e, qdot)) / (2 * step)
     inertial = np.gradient(momentum, t, axis=0) - force
-    gravity = np.einsum("tij,j->ti", gravity_regressor(q), static_moments_from_table(lengths, masses, com))
+    gravity = np.einsum("tij,j->ti", gravity_regressor(q), static_moments_kgm(lengths, masses, com))
     return np.abs(inertial).max(axis=0) / np.maximum(np.abs(gravity).max(axis=0), 1e-12)
-
-
-def static_moments_from_table(lengths: np.ndarray, masses: np.ndarray, com: np.ndarray) -> np.ndarray:
-    """Grouped static moments (kg m) of given masses and COMs (``bsp_ros.model.static_moments_kgm``)."""
-    from bsp_ros.model import static_moments_kgm
-
-    return static_moments_kgm(lengths, masses, com)
-
-
-__all__ = [
-    "GRAVITY_M_S2",
-    "OBJECTIVES",
-    "Plan",
-    "PlanRequest",
-    "inertial_torque_ratio",
-    "plan_protocol",
-    "trajectory_from_points",
-]

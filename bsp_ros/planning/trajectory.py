@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -107,6 +108,18 @@ class PlannedTrajectory:
         """(n,) lowest and (n,) highest angle each joint reaches along the path, rad."""
         angles = self._dense_path()[0]
         return angles.min(axis=0), angles.max(axis=0)
+
+    def to_dict(self) -> dict[str, list[float] | list[list[float]]]:
+        """The knots as plain lists: ``t_s``, ``q_rad``, ``qdot_rad_s``."""
+        return {"t_s": self._t.tolist(), "q_rad": self._q.tolist(), "qdot_rad_s": self._qdot.tolist()}
+
+    @classmethod
+    def from_dict(cls, data: Any) -> PlannedTrajectory:
+        """Read back what :meth:`to_dict` wrote; InputError on a missing key."""
+        try:
+            return cls(data["t_s"], data["q_rad"], data["qdot_rad_s"])
+        except (KeyError, TypeError) as error:
+            raise InputError(f"planned trajectory: missing or malformed field {error}") from None
 
     def dense_times_s(self, per_piece: int = _SAMPLES_PER_PIECE) -> np.ndarray:
         """Times that resolve every cubic piece (``per_piece`` per knot interval), s."""
