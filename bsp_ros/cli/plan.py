@@ -163,11 +163,15 @@ def _publish(plan: Any, args: argparse.Namespace) -> None:
     import rclpy  # only here: offline `bsp plan` never imports rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from rosidl_runtime_py.utilities import get_message
+    import importlib
 
     from bsp_ros.planning.files import sampled_path
     from bsp_ros.streams import joints_for
     from msg_adapters.trajectory import build_handle_path, build_joint_trajectory
+
+    def get_message(type_name: str) -> Any:  # "pkg/msg/Type" -> the rosidl class (no rosidl_runtime_py needed)
+        package, kind, name = type_name.split("/")
+        return getattr(importlib.import_module(f"{package}.{kind}"), name)
 
     rclpy.init()
     node = rclpy.create_node("protocol_publisher")
