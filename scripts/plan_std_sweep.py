@@ -33,7 +33,9 @@ def main() -> int:
     args = parser.parse_args()
     base = sim.human_arm_cell()
     model = PassiveModel.parse("coulomb+offset+stiffness")
-    plan = plan_protocol(PlanRequest(NominalArm.from_anthropometry(base.subject.lengths_m), (0.0, 1.2), JointLimits(RANGES_DEG)))
+    plan = plan_protocol(
+        PlanRequest(NominalArm.from_anthropometry(base.subject.lengths_m), (0.0, 1.2), JointLimits(RANGES_DEG))
+    )
     results, truths = [], None
     for seed in range(args.seeds):
         session = sim.simulate_cell(sim.human_arm_cell(seed=seed, passive=PASSIVE, trajectory=plan.trajectory))
@@ -45,8 +47,10 @@ def main() -> int:
     values = np.array([r.values for r in results])
     stds = np.array([r.std for r in results])
     print(f"{args.seeds} sessions of {plan.trajectory.duration_s:.0f} s; valid: {sum(r.valid for r in results)}")
-    print(f"{'parameter':34s} {'truth':>9s} {'mean':>9s} {'predicted':>10s} {'scatter':>10s} {'reported':>10s} "
-          f"{'scat/pred':>9s} {'rep/pred':>8s} {'|z|<3':>6s}")
+    print(
+        f"{'parameter':34s} {'truth':>9s} {'mean':>9s} {'predicted':>10s} {'scatter':>10s} {'reported':>10s} "
+        f"{'scat/pred':>9s} {'rep/pred':>8s} {'|z|<3':>6s}"
+    )
     worst = 1.0
     for i, row in enumerate(rows):
         key, owner = str(row["quantity"]), str(row["owner"])
@@ -55,9 +59,11 @@ def main() -> int:
         within = float(np.mean(np.abs(values[:, i] - truth) < 3 * stds[:, i]))
         ratio = float(row["ratio"])
         worst = max(worst, ratio, 1 / ratio)
-        print(f"{key + '/' + owner:34s} {truth:9.4g} {values[:, i].mean():9.4g} {row['predicted_std']:10.3g} "
-              f"{row['achieved_std']:10.3g} {row['reported_std']:10.3g} {ratio:9.2f} "
-              f"{float(row['reported_std']) / float(row['predicted_std']):8.2f} {within:6.2f}")
+        print(
+            f"{key + '/' + owner:34s} {truth:9.4g} {values[:, i].mean():9.4g} {row['predicted_std']:10.3g} "
+            f"{row['achieved_std']:10.3g} {row['reported_std']:10.3g} {ratio:9.2f} "
+            f"{float(row['reported_std']) / float(row['predicted_std']):8.2f} {within:6.2f}"
+        )
     print(f"worst factor between predicted std and scatter: {worst:.2f}")
     return 0
 

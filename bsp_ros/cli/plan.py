@@ -25,58 +25,138 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     arm = parser.add_argument_group("the arm (segment lengths: measured, a previous estimate, or the table)")
     arm.add_argument(
-        "--lengths", type=float, nargs="+", metavar="M",
+        "--lengths",
+        type=float,
+        nargs="+",
+        metavar="M",
         help="segment lengths shoulder->elbow, elbow->wrist[, wrist->handle centre], m (default: de Leva table "
         "scaled to --height)",
     )
-    arm.add_argument("--segments", type=int, choices=(2, 3), default=3, help="segments when --lengths is not given (default 3)")
-    arm.add_argument("--height", type=float, default=1.78, metavar="M", help="stature for table lengths, m (default 1.78)")
-    arm.add_argument("--body-mass", type=float, default=75.0, metavar="KG", help="body mass for the table inertia and static moments the prediction assumes (default 75)")
+    arm.add_argument(
+        "--segments", type=int, choices=(2, 3), default=3, help="segments when --lengths is not given (default 3)"
+    )
+    arm.add_argument(
+        "--height", type=float, default=1.78, metavar="M", help="stature for table lengths, m (default 1.78)"
+    )
+    arm.add_argument(
+        "--body-mass",
+        type=float,
+        default=75.0,
+        metavar="KG",
+        help="body mass for the table inertia and static moments the prediction assumes (default 75)",
+    )
     arm.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table (default male)")
     arm.add_argument(
-        "--shoulder", type=float, nargs=2, required=True, metavar=("Y", "Z"),
+        "--shoulder",
+        type=float,
+        nargs=2,
+        required=True,
+        metavar=("Y", "Z"),
         help="shoulder position in world, m (y anterior, z up)",
     )
     limits = parser.add_argument_group("the therapist's limits (required: never extrapolated)")
-    limits.add_argument("--shoulder-range", type=float, nargs=2, required=True, metavar=("LOW", "HIGH"),
-                        help="q1, upper arm from the horizontal, deg (hanging forward-down is negative)")
-    limits.add_argument("--elbow-range", type=float, nargs=2, required=True, metavar=("LOW", "HIGH"),
-                        help="q2, forearm relative to the upper arm, deg (kept 5 deg from straight/folded)")
-    limits.add_argument("--wrist-range", type=float, nargs=2, metavar=("LOW", "HIGH"),
-                        help="q3, hand relative to the forearm, deg (required for 3 segments)")
-    limits.add_argument("--max-speed", type=float, default=0.03, metavar="RAD_S",
-                        help="largest joint speed, rad/s (default 0.03: quasi-static)")
+    limits.add_argument(
+        "--shoulder-range",
+        type=float,
+        nargs=2,
+        required=True,
+        metavar=("LOW", "HIGH"),
+        help="q1, upper arm from the horizontal, deg (hanging forward-down is negative)",
+    )
+    limits.add_argument(
+        "--elbow-range",
+        type=float,
+        nargs=2,
+        required=True,
+        metavar=("LOW", "HIGH"),
+        help="q2, forearm relative to the upper arm, deg (kept 5 deg from straight/folded)",
+    )
+    limits.add_argument(
+        "--wrist-range",
+        type=float,
+        nargs=2,
+        metavar=("LOW", "HIGH"),
+        help="q3, hand relative to the forearm, deg (required for 3 segments)",
+    )
+    limits.add_argument(
+        "--max-speed",
+        type=float,
+        default=0.03,
+        metavar="RAD_S",
+        help="largest joint speed, rad/s (default 0.03: quasi-static)",
+    )
     session = parser.add_argument_group("the session")
     session.add_argument("--duration", type=float, default=120.0, metavar="S", help="session length, s (default 120)")
-    session.add_argument("--passive", default="coulomb+offset+stiffness", metavar="MODEL",
-                         help="passive model to identify: coulomb, coulomb+offset, coulomb+offset+stiffness "
-                         "(default coulomb+offset+stiffness)")
-    session.add_argument("--operating-points", type=int, metavar="K",
-                         help="operating points (1-20; default: the best of 1, 2 and 3)")
-    session.add_argument("--amplitude", type=float, nargs="+", metavar="DEG",
-                         help="oscillation amplitude per joint about each operating point, deg (default optimised)")
-    session.add_argument("--objective", choices=("d-optimal", "static"), default="d-optimal",
-                         help="d-optimal: log-determinant of the predicted covariance; static: largest predicted "
-                         "relative std of the static moments (default d-optimal)")
-    session.add_argument("--max-evaluations", type=int, default=400, metavar="N",
-                         help="optimiser budget per number of operating points (default 400)")
+    session.add_argument(
+        "--passive",
+        default="coulomb+offset+stiffness",
+        metavar="MODEL",
+        help="passive model to identify: coulomb, coulomb+offset, coulomb+offset+stiffness "
+        "(default coulomb+offset+stiffness)",
+    )
+    session.add_argument(
+        "--operating-points", type=int, metavar="K", help="operating points (1-20; default: the best of 1, 2 and 3)"
+    )
+    session.add_argument(
+        "--amplitude",
+        type=float,
+        nargs="+",
+        metavar="DEG",
+        help="oscillation amplitude per joint about each operating point, deg (default optimised)",
+    )
+    session.add_argument(
+        "--objective",
+        choices=("d-optimal", "static"),
+        default="d-optimal",
+        help="d-optimal: log-determinant of the predicted covariance; static: largest predicted "
+        "relative std of the static moments (default d-optimal)",
+    )
+    session.add_argument(
+        "--max-evaluations",
+        type=int,
+        default=400,
+        metavar="N",
+        help="optimiser budget per number of operating points (default 400)",
+    )
     noise = parser.add_argument_group("sensor noise for the predicted stds")
-    noise.add_argument("--force-noise", type=float, default=0.05, metavar="N", help="force noise per axis, N (default 0.05)")
-    noise.add_argument("--torque-noise", type=float, default=0.005, metavar="NM", help="moment noise per axis, Nm (default 0.005)")
-    noise.add_argument("--marker-noise", type=float, default=1e-4, metavar="M", help="marker noise per axis, m (default 1e-4)")
+    noise.add_argument(
+        "--force-noise", type=float, default=0.05, metavar="N", help="force noise per axis, N (default 0.05)"
+    )
+    noise.add_argument(
+        "--torque-noise", type=float, default=0.005, metavar="NM", help="moment noise per axis, Nm (default 0.005)"
+    )
+    noise.add_argument(
+        "--marker-noise", type=float, default=1e-4, metavar="M", help="marker noise per axis, m (default 1e-4)"
+    )
     noise.add_argument("--wrench-hz", type=float, default=100.0, metavar="HZ", help="wrench rate (default 100)")
     noise.add_argument("--marker-hz", type=float, default=50.0, metavar="HZ", help="marker frame rate (default 50)")
     out = parser.add_argument_group("output")
-    out.add_argument("--json", type=Path, metavar="FILE", help="write the plan (knots, samples, predicted stds) as JSON")
-    out.add_argument("--csv", type=Path, metavar="FILE", help="write t, joint angles and velocities, handle y z pitch as CSV")
+    out.add_argument(
+        "--json", type=Path, metavar="FILE", help="write the plan (knots, samples, predicted stds) as JSON"
+    )
+    out.add_argument(
+        "--csv", type=Path, metavar="FILE", help="write t, joint angles and velocities, handle y z pitch as CSV"
+    )
     out.add_argument("--rate", type=float, default=10.0, metavar="HZ", help="sample rate of the files, Hz (default 10)")
-    out.add_argument("--publish", action="store_true",
-                     help="publish trajectory_msgs/JointTrajectory and nav_msgs/Path (latched) with rclpy until Ctrl-C")
-    out.add_argument("--topic-prefix", default="bsp/plan", metavar="NS",
-                     help="topics NS/joint_trajectory and NS/handle_path (default bsp/plan)")
+    out.add_argument(
+        "--publish",
+        action="store_true",
+        help="publish trajectory_msgs/JointTrajectory and nav_msgs/Path (latched) with rclpy until Ctrl-C",
+    )
+    out.add_argument(
+        "--topic-prefix",
+        default="bsp/plan",
+        metavar="NS",
+        help="topics NS/joint_trajectory and NS/handle_path (default bsp/plan)",
+    )
     out.add_argument("--frame-id", default="world", help="frame of the handle path (default world)")
-    out.add_argument("--plane-x", type=float, default=0.0, metavar="M",
-                     help="x of the movement plane (the shoulder's x) for the published path, m (default 0)")
+    out.add_argument(
+        "--plane-x",
+        type=float,
+        default=0.0,
+        metavar="M",
+        help="x of the movement plane (the shoulder's x) for the published path, m (default 0)",
+    )
     return parser
 
 
@@ -160,10 +240,11 @@ def _publish(plan: Any, args: argparse.Namespace) -> None:
 
     A cell that starts later still receives it: that is the "on request" behaviour without a service.
     """
+    import importlib
+
     import rclpy  # only here: offline `bsp plan` never imports rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    import importlib
 
     from bsp_ros.planning.files import sampled_path
     from bsp_ros.streams import joints_for
@@ -180,15 +261,21 @@ def _publish(plan: Any, args: argparse.Namespace) -> None:
             depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
         )
         prefix = args.topic_prefix.rstrip("/")
-        joint_pub = node.create_publisher(get_message("trajectory_msgs/msg/JointTrajectory"), f"{prefix}/joint_trajectory", latched)
+        joint_pub = node.create_publisher(
+            get_message("trajectory_msgs/msg/JointTrajectory"), f"{prefix}/joint_trajectory", latched
+        )
         path_pub = node.create_publisher(get_message("nav_msgs/msg/Path"), f"{prefix}/handle_path", latched)
         samples = sampled_path(plan, args.rate)
         start_ns = node.get_clock().now().nanoseconds
         joints = joints_for(plan.request.nominal.n_joints)
         joint_pub.publish(
-            build_joint_trajectory(get_message, start_ns, joints, samples["t_s"], samples["q_rad"], samples["qdot_rad_s"])
+            build_joint_trajectory(
+                get_message, start_ns, joints, samples["t_s"], samples["q_rad"], samples["qdot_rad_s"]
+            )
         )
-        path_pub.publish(build_handle_path(get_message, start_ns, args.frame_id, samples["t_s"], samples["handle"], args.plane_x))
+        path_pub.publish(
+            build_handle_path(get_message, start_ns, args.frame_id, samples["t_s"], samples["handle"], args.plane_x)
+        )
         print(f"publishing {prefix}/joint_trajectory and {prefix}/handle_path (latched); Ctrl-C to stop", flush=True)
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):

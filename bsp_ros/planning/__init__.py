@@ -9,7 +9,7 @@ from bsp_ros.planning.files import (
     write_plan_json,
 )
 from bsp_ros.planning.information import NoiseSpec, NominalArm, Prediction, predict_covariance
-from bsp_ros.planning.planner import InfeasiblePlan, Plan, PlanRequest, plan_protocol, trajectory_from_points
+from bsp_ros.planning.planner import InfeasiblePlanError, Plan, PlanRequest, plan_protocol, trajectory_from_points
 from bsp_ros.planning.safety import (
     JointLimits,
     check_reachable,
@@ -20,7 +20,7 @@ from bsp_ros.planning.trajectory import PlannedTrajectory, handle_poses_world
 
 __all__ = [
     "PLAN_SCHEMA",
-    "InfeasiblePlan",
+    "InfeasiblePlanError",
     "JointLimits",
     "NoiseSpec",
     "NominalArm",

@@ -55,7 +55,10 @@ def plan_to_dict(plan: Plan, rate_hz: float = SAMPLE_HZ) -> dict[str, Any]:
         "lengths_m": list(request.nominal.lengths_m),
         "shoulder_yz_m": list(request.shoulder_yz_m),
         "limits": {
-            "range_deg": {joint: {"low_deg": lo, "high_deg": hi} for joint, (lo, hi) in zip(joints, request.limits.range_deg, strict=True)},
+            "range_deg": {
+                joint: {"low_deg": lo, "high_deg": hi}
+                for joint, (lo, hi) in zip(joints, request.limits.range_deg, strict=True)
+            },
             "max_speed_rad_s": request.limits.max_speed_rad_s,
         },
         "duration_s": plan.trajectory.duration_s,
@@ -125,7 +128,9 @@ def _from_json(data: Any, where: str) -> PlannedTrajectory:
         knots = data["knots"]
         trajectory = PlannedTrajectory(knots["t_s"], knots["q_rad"], knots["qdot_rad_s"])
         joints = joints_for(trajectory.n_joints)
-        ranges = tuple((data["limits"]["range_deg"][j]["low_deg"], data["limits"]["range_deg"][j]["high_deg"]) for j in joints)
+        ranges = tuple(
+            (data["limits"]["range_deg"][j]["low_deg"], data["limits"]["range_deg"][j]["high_deg"]) for j in joints
+        )
         limits = JointLimits(ranges, data["limits"]["max_speed_rad_s"])
         lengths, shoulder = data["lengths_m"], data["shoulder_yz_m"]
     except (KeyError, TypeError) as error:

@@ -147,7 +147,9 @@ class Prediction:
         for (key, owner), sd, value in zip(self.names, self.std, self.nominal, strict=True):
             relative = float(sd / abs(value)) if np.isfinite(value) and value != 0 else None
             nominal = float(value) if np.isfinite(value) else None
-            rows.append({"quantity": key, "owner": owner, "std": float(sd), "nominal": nominal, "relative_std": relative})
+            rows.append(
+                {"quantity": key, "owner": owner, "std": float(sd), "nominal": nominal, "relative_std": relative}
+            )
         return rows
 
 
@@ -211,7 +213,9 @@ def _residual_gain(q_rad: np.ndarray, lengths: np.ndarray, beta: np.ndarray) -> 
     for k in range(n):
         shift = np.zeros(n)
         shift[k] = step
-        plus = contact_torques_nm(q_rad + shift, lengths, wrench) - np.einsum("nij,j->ni", gravity_regressor(q_rad + shift), beta)
+        plus = contact_torques_nm(q_rad + shift, lengths, wrench) - np.einsum(
+            "nij,j->ni", gravity_regressor(q_rad + shift), beta
+        )
         minus = contact_torques_nm(q_rad - shift, lengths, wrench) - np.einsum(
             "nij,j->ni", gravity_regressor(q_rad - shift), beta
         )
@@ -274,7 +278,9 @@ def predict_covariance(
     if "coulomb" in passive.terms:
         angle_sd = np.sqrt(np.einsum("nii->ni", angle_cov).mean(axis=0))
         velocity_noise = angle_sd * _direction_noise_gain(kinematics.direction_cutoff_hz, noise.marker_hz)
-        deadband = np.maximum(config.deadband_fraction * np.percentile(speed, 95, axis=0), config.deadband_noise_sd * velocity_noise)
+        deadband = np.maximum(
+            config.deadband_fraction * np.percentile(speed, 95, axis=0), config.deadband_noise_sd * velocity_noise
+        )
         rows = speed > deadband[None, :]
     else:
         rows = np.ones_like(speed, dtype=bool)
@@ -308,11 +314,13 @@ def predict_covariance(
     condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
     variances = np.diag(covariance)
     correlation = covariance / np.sqrt(np.outer(variances, variances) + 1e-300)
-    max_corr = {f"{key}/{owner}": float(np.max(np.abs(correlation[i, :n]))) for i, (key, owner) in enumerate(names) if i >= n}
+    max_corr = {
+        f"{key}/{owner}": float(np.max(np.abs(correlation[i, :n]))) for i, (key, owner) in enumerate(names) if i >= n
+    }
     nominal_values = np.full(len(names), np.nan)
     nominal_values[:n] = beta
     for i, name in enumerate(names):
         if name in nominal.passive:
             nominal_values[i] = nominal.passive[name]
-    rows_used = {joint: int(round(per_wrench * rows[:, j].sum())) for j, joint in enumerate(joints_for(n))}
+    rows_used = {joint: round(per_wrench * rows[:, j].sum()) for j, joint in enumerate(joints_for(n))}
     return Prediction(names, covariance, nominal_values, condition, max_corr, rows_used)

@@ -9,13 +9,13 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 from scipy.optimize import differential_evolution
 
+from bsp_ros.anthropometry import segment_norm
 from bsp_ros.errors import InputError
 from bsp_ros.identification.passive import PassiveModel
 from bsp_ros.model import check_lengths_m, gravity_regressor, static_moments_kgm
 from bsp_ros.planning.information import NoiseSpec, NominalArm, Prediction, predict_covariance
 from bsp_ros.planning.safety import JointLimits, check_reachable, check_trajectory_within, usable_elbow_range_deg
 from bsp_ros.planning.trajectory import PlannedTrajectory
-from bsp_ros.anthropometry import segment_norm
 from bsp_ros.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_array, check_positive
 
@@ -133,7 +133,7 @@ class Plan:
     notes: list[str]
 
 
-class InfeasiblePlan(InputError):
+class InfeasiblePlanError(InputError):
     """The operating points cannot all be visited with reversals in the session at the speed limit."""
 
     def __init__(self, message: str, excess_s: float) -> None:
@@ -176,9 +176,7 @@ def _moves(centres: np.ndarray, amplitude: float, speed: float, ramp_s: float) -
     return np.array(firsts), np.array(transfers), _move_time(2 * amplitude, speed, ramp_s)
 
 
-def _joint_knots(
-    centres: np.ndarray, amplitude: float, windows: np.ndarray, speed: float, ramp_s: float
-) -> np.ndarray:
+def _joint_knots(centres: np.ndarray, amplitude: float, windows: np.ndarray, speed: float, ramp_s: float) -> np.ndarray:
     """One joint's knots: per window, move next to the operating point, then oscillate about it.
 
     An even number of half-cycles per window (at the speed limit, then stretched to fill the window, so
@@ -188,7 +186,7 @@ def _joint_knots(
     edges = np.concatenate(([0.0], np.cumsum(windows)))
     knots = [(0.0, float(firsts[0]), 0.0)]
     for k, centre in enumerate(centres):
-        count = 2 * int(math.floor((windows[k] - transfers[k]) / (2 * half_cycle) + 1e-9))
+        count = 2 * math.floor((windows[k] - transfers[k]) / (2 * half_cycle) + 1e-9)
         stretch = windows[k] / (transfers[k] + count * half_cycle)
         t = edges[k]
         if transfers[k] > 0:
@@ -228,7 +226,7 @@ def trajectory_from_points(
 
     Raises
     ------
-    InfeasiblePlan
+    InfeasiblePlanError
         The points cannot all be visited, with two reversals each, in ``duration_s``.
     """
     k_points, n = centres_rad.shape
@@ -236,7 +234,7 @@ def trajectory_from_points(
     moves = [_moves(centres_rad[:, j], float(amplitudes_rad[j]), speed, ramp_s) for j in range(n)]
     needed = np.max([transfers + 2 * half for _, transfers, half in moves], axis=0)
     if needed.sum() > duration_s:
-        raise InfeasiblePlan(
+        raise InfeasiblePlanError(
             f"the session is too short: visiting {k_points} operating points with two direction reversals each at "
             f"{max_speed_rad_s:g} rad/s takes {needed.sum():.1f} s, the session has {duration_s:g} s (fewer "
             "operating points, smaller amplitudes, or a longer session)",
@@ -292,7 +290,7 @@ def plan_protocol(request: PlanRequest, grid_hz: float = 2.0) -> Plan:
     for k_points in (1, 2, 3):
         try:
             plans.append(_plan_points(request, k_points, grid_hz))
-        except InfeasiblePlan as error:
+        except InfeasiblePlanError as error:
             errors.append(error)
     if not plans:
         raise errors[0]
@@ -339,7 +337,7 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     def cost(unit: np.ndarray) -> float:
         try:
             trajectory = build(unit)
-        except InfeasiblePlan as error:
+        except InfeasiblePlanError as error:
             return _INFEASIBLE + error.excess_s
         prediction = predict_covariance(
             trajectory, request.duration_s, request.nominal, request.passive, request.noise, grid_hz=grid_hz
@@ -352,7 +350,7 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
         cost, [(0.0, 1.0)] * dims, seed=0, popsize=_POPULATION, maxiter=generations, tol=1e-4, polish=False
     )
     if result.fun >= _INFEASIBLE:
-        build(result.x)  # raises the InfeasiblePlan that names what does not fit
+        build(result.x)  # raises the InfeasiblePlanError that names what does not fit
     best = result.x
     trajectory = build(best)
     check_trajectory_within(trajectory, request.limits)

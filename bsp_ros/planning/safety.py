@@ -84,8 +84,7 @@ def usable_elbow_range_deg(low_deg: float, high_deg: float) -> tuple[float, floa
     """
     if low_deg < 0.0 < high_deg:
         raise InputError(
-            f"the elbow range ({low_deg!r}, {high_deg!r}) deg crosses a straight arm (0 deg): give a range on "
-            "one side"
+            f"the elbow range ({low_deg!r}, {high_deg!r}) deg crosses a straight arm (0 deg): give a range on one side"
         )
     sign = 1.0 if high_deg > 0.0 else -1.0
     magnitudes = sorted((abs(low_deg), abs(high_deg)))
@@ -160,8 +159,9 @@ def joint_angles_from_handle_poses(
     bad = np.flatnonzero(np.abs(cos_q2) > limit)
     if bad.size:
         i = int(bad[0])
+        point = "wrist" if n == 3 else "contact point"
         raise InputError(
-            f"handle pose {i} {poses[i].round(4).tolist()} is out of reach: the {'wrist' if n == 3 else 'contact point'}"
+            f"handle pose {i} {poses[i].round(4).tolist()} is out of reach: the {point}"
             f" is {distance[i]:.4f} m from the shoulder, the chain reaches {abs(a1 - a2):.4f}..{a1 + a2:.4f} m "
             f"(keeping the elbow {ELBOW_MARGIN_DEG:g} deg from straight or folded)"
         )
@@ -195,5 +195,7 @@ def check_reachable(
     error = np.abs(again[:, :2] - poses[:, :2]).max(axis=1)
     if error.max() > tolerance_m:
         i = int(np.argmax(error))
-        raise InputError(f"the handle path does not map back to the joint path at t = {times[i]:.2f} s ({error[i]:.3g} m)")
+        raise InputError(
+            f"the handle path does not map back to the joint path at t = {times[i]:.2f} s ({error[i]:.3g} m)"
+        )
     return trajectory

@@ -51,7 +51,9 @@ class PlannedTrajectory:
             at = int(np.argmin(steps)) + 1
             raise InputError(f"knot times must increase strictly: t[{at}] = {t[at]!r} after {t[at - 1]!r}")
         if np.abs(qdot[[0, -1]]).max() > 0:
-            raise InputError(f"a planned trajectory starts and ends at rest, got end velocities {qdot[[0, -1]].tolist()}")
+            raise InputError(
+                f"a planned trajectory starts and ends at rest, got end velocities {qdot[[0, -1]].tolist()}"
+            )
         if np.abs(q).max() > 2 * math.pi:
             raise InputError(f"knot angles must be within +-2 pi rad, got {float(np.abs(q).max())!r}")
         self._t = t
@@ -137,7 +139,7 @@ class PlannedTrajectory:
 
     def sample_times_s(self, rate_hz: float) -> np.ndarray:
         """A uniform grid from 0 to the end (included) at ``rate_hz``, s."""
-        count = int(math.floor(self.duration_s * rate_hz + 1e-9)) + 1
+        count = math.floor(self.duration_s * rate_hz + 1e-9) + 1
         times = np.arange(count) / rate_hz
         return times if times[-1] == self.duration_s else np.append(times, self.duration_s)
 

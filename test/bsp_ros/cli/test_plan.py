@@ -25,8 +25,19 @@ def test_help_documents_every_input() -> None:
     parser = _plan_parser()
     options = [a for a in parser._actions if a.option_strings and a.dest != "help"]
     assert {a.option_strings[0] for a in options} >= {
-        "--lengths", "--shoulder", "--shoulder-range", "--elbow-range", "--wrist-range", "--max-speed", "--duration",
-        "--passive", "--force-noise", "--marker-noise", "--json", "--csv", "--publish",
+        "--lengths",
+        "--shoulder",
+        "--shoulder-range",
+        "--elbow-range",
+        "--wrist-range",
+        "--max-speed",
+        "--duration",
+        "--passive",
+        "--force-noise",
+        "--marker-noise",
+        "--json",
+        "--csv",
+        "--publish",
     }
     for action in options:
         assert action.help and len(action.help) > 10, action.option_strings
@@ -69,16 +80,31 @@ def test_offline_plan_does_not_import_rclpy(tmp_path: Path) -> None:
 @pytest.mark.dds
 def test_publish_sends_latched_messages_a_late_subscriber_receives(tmp_path: Path) -> None:
     rclpy = pytest.importorskip("rclpy")
+    import os
+
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from trajectory_msgs.msg import JointTrajectory
 
-    import os
-
     env = dict(os.environ, ROS_DOMAIN_ID=str(90 + os.getpid() % 50))
     publisher = subprocess.Popen(
-        [sys.executable, "-m", "bsp_ros", "plan", *LIMITS, "--wrist-range", "-5", "5", "--operating-points", "1",
-         "--max-evaluations", "50", "--publish"],
-        env=env, stdout=subprocess.PIPE, text=True,
+        [
+            sys.executable,
+            "-m",
+            "bsp_ros",
+            "plan",
+            *LIMITS,
+            "--wrist-range",
+            "-5",
+            "5",
+            "--operating-points",
+            "1",
+            "--max-evaluations",
+            "50",
+            "--publish",
+        ],
+        env=env,
+        stdout=subprocess.PIPE,
+        text=True,
     )
     try:
         assert publisher.stdout is not None
@@ -89,7 +115,9 @@ def test_publish_sends_latched_messages_a_late_subscriber_receives(tmp_path: Pat
         rclpy.init()
         node = rclpy.create_node("plan_listener")
         received = []
-        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        latched = QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        )
         node.create_subscription(JointTrajectory, "bsp/plan/joint_trajectory", received.append, latched)
         for _ in range(100):
             rclpy.spin_once(node, timeout_sec=0.1)

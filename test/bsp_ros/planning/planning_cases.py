@@ -17,4 +17,3 @@ ELASTIC_TRUTH = sim.PassiveTruth(
 def nominal_arm() -> NominalArm:
     """The anthropometric arm for the simulator's default subject's lengths (the planner's prior)."""
     return NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
-

@@ -49,7 +49,7 @@ def test_a_tampered_plan_beyond_its_limits_is_refused(plan: Plan, tmp_path) -> N
     data = json.loads(path.read_text())
     data["limits"]["range_deg"]["wrist"]["high_deg"] = 1.0
     path.write_text(json.dumps(data))
-    with pytest.raises(InputError, match="wrist reaches .* above its limit 1 deg"):
+    with pytest.raises(InputError, match=r"wrist reaches .* above its limit 1 deg"):
         planned_trajectory_from_file(path)
 
 

@@ -16,7 +16,9 @@ from bsp_ros.planning import Plan, compare_with_result, compare_with_scatter
 ELASTIC_MODEL = PassiveModel.parse("coulomb+offset+stiffness")
 
 
-def _identify(trajectory: object, seed: int, passive: sim.PassiveTruth = ELASTIC_TRUTH) -> tuple[IdentificationResult, dict]:
+def _identify(
+    trajectory: object, seed: int, passive: sim.PassiveTruth = ELASTIC_TRUTH
+) -> tuple[IdentificationResult, dict]:
     session = sim.simulate_cell(sim.human_arm_cell(seed=seed, passive=passive, trajectory=trajectory))
     result = identify_joint(identification_data_from_session(session.session), JointConfig(passive=ELASTIC_MODEL))
     return result, session.truth.to_dict()

@@ -10,7 +10,7 @@ from planning_cases import RANGES_DEG, SHOULDER_YZ_M, nominal_arm
 
 from bsp_ros.errors import InputError
 from bsp_ros.planning import (
-    InfeasiblePlan,
+    InfeasiblePlanError,
     JointLimits,
     PlannedTrajectory,
     PlanRequest,
@@ -89,8 +89,10 @@ def test_elbow_range_across_a_straight_arm_is_refused() -> None:
 
 
 def test_a_session_too_short_for_the_reversals_is_refused() -> None:
-    request = PlanRequest(nominal_arm(), SHOULDER_YZ_M, JointLimits(RANGES_DEG), duration_s=20.0, amplitude_deg=(20, 30, 10), n_points=2)
-    with pytest.raises(InfeasiblePlan, match="session is too short"):
+    request = PlanRequest(
+        nominal_arm(), SHOULDER_YZ_M, JointLimits(RANGES_DEG), duration_s=20.0, amplitude_deg=(20, 30, 10), n_points=2
+    )
+    with pytest.raises(InfeasiblePlanError, match="session is too short"):
         plan_protocol(request)
 
 

@@ -26,7 +26,11 @@ def typestore():
 def test_joint_trajectory_round_trips_through_cdr(plan: Plan, typestore) -> None:
     samples = sampled_path(plan, 2.0)
     msg = build_joint_trajectory(
-        lambda n: typestore.types[n], START_NS, ("shoulder", "elbow", "wrist"), samples["t_s"], samples["q_rad"],
+        lambda n: typestore.types[n],
+        START_NS,
+        ("shoulder", "elbow", "wrist"),
+        samples["t_s"],
+        samples["q_rad"],
         samples["qdot_rad_s"],
     )
     raw = typestore.serialize_cdr(msg, "trajectory_msgs/msg/JointTrajectory")
