@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -11,7 +12,7 @@ from bsp_ros.identification.result import IdentificationResult
 from bsp_ros.planning.information import Prediction
 
 
-def compare_with_result(prediction: Prediction, result: IdentificationResult) -> list[dict[str, object]]:
+def compare_with_result(prediction: Prediction, result: IdentificationResult) -> list[dict[str, Any]]:
     """Per parameter: predicted std, the std the identification reported (HAC), and their ratio.
 
     Parameters
@@ -48,7 +49,7 @@ def compare_with_result(prediction: Prediction, result: IdentificationResult) ->
     return rows
 
 
-def compare_with_scatter(prediction: Prediction, results: Sequence[IdentificationResult]) -> list[dict[str, object]]:
+def compare_with_scatter(prediction: Prediction, results: Sequence[IdentificationResult]) -> list[dict[str, Any]]:
     """Per parameter: predicted std against the scatter (sample std) of estimates over repeated sessions.
 
     Returns

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -141,7 +141,7 @@ class Prediction:
         picks = [i for i, (key, _) in enumerate(self.names) if key == "static_moment_kgm"]
         return float(np.max(self.std[picks] / np.abs(self.nominal[picks])))
 
-    def table(self) -> list[dict[str, object]]:
+    def table(self) -> list[dict[str, Any]]:
         """One row per parameter: ``quantity``, ``owner``, ``std``, ``nominal``, ``relative_std``."""
         rows = []
         for (key, owner), sd, value in zip(self.names, self.std, self.nominal, strict=True):
@@ -309,9 +309,12 @@ def predict_covariance(
 
     names = parameter_names(n, passive)
     # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
-    gram = design / np.outer(np.sqrt(np.diag(design)), np.sqrt(np.diag(design)) + 1e-300)
-    eigen = np.linalg.eigvalsh(0.5 * (gram + gram.T))
-    condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
+    norms = np.sqrt(np.clip(np.diag(design), 0.0, None))
+    condition = float("inf")
+    if (norms > 0).all() and np.isfinite(design).all():  # a column without rows: nothing to condition
+        gram = design / np.outer(norms, norms)
+        eigen = np.linalg.eigvalsh(0.5 * (gram + gram.T))
+        condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
     variances = np.diag(covariance)
     correlation = covariance / np.sqrt(np.outer(variances, variances) + 1e-300)
     max_corr = {

@@ -28,6 +28,10 @@ MIN_AMPLITUDE_DEG = 1.0
 #: stiffness scatter 2x the prediction over 40 seeds), with 1 s none (0.9x). 0.03 rad/s in 1 s is 0.03
 #: rad/s^2: the inertial torques stay below 1 % of gravity (``inertial_torque_ratio``).
 RAMP_S = 1.0
+#: Shortest move between reversals, s: the direction of motion is read from angles low-passed at 0.5 Hz.
+MIN_MOVE_S = 4.0
+#: Inertial torques above this share of the gravity torques break the quasi-static model (noted in the plan).
+QUASI_STATIC_SHARE = 0.01
 #: Planned speeds stay this share below the limit, so the check never rests on round-off.
 _SPEED_MARGIN = 0.98
 #: The objectives the planner minimises.
@@ -145,8 +149,12 @@ class InfeasiblePlanError(InputError):
 
 
 def _move_time(distance: float, speed: float, ramp_s: float) -> float:
-    """Shortest rest-to-rest time over ``distance`` (rad) at ``speed`` (rad/s) with ramps of ``ramp_s``."""
-    return distance / speed + ramp_s if distance >= speed * ramp_s else 2.0 * distance / speed
+    """Shortest rest-to-rest time over ``distance`` (rad) at ``speed`` (rad/s) with ramps of ``ramp_s``.
+
+    Never below ``MIN_MOVE_S``: the estimator's direction velocity (0.5 Hz) cannot follow faster reversals.
+    """
+    fastest = distance / speed + ramp_s if distance >= speed * ramp_s else 2.0 * distance / speed
+    return max(fastest, MIN_MOVE_S)
 
 
 def _move_knots(start: float, stop: float, t0: float, t1: float, ramp_s: float) -> list[tuple[float, float, float]]:
@@ -345,7 +353,8 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
         prediction = predict_covariance(
             trajectory, request.duration_s, request.nominal, request.passive, request.noise, grid_hz=grid_hz
         )
-        return _objective_value(prediction, request.objective)
+        value = _objective_value(prediction, request.objective)
+        return value if math.isfinite(value) else _INFEASIBLE
 
     dims = n * k_points + (n if fixed is None else 0)
     generations = max(request.max_evaluations // (_POPULATION * dims) - 1, 1)
@@ -361,6 +370,12 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     centres, amplitudes = decode(best)
     prediction = predict_covariance(trajectory, request.duration_s, request.nominal, request.passive, request.noise)
     ratio = inertial_torque_ratio(trajectory, request.nominal)
+    for joint, share in zip(joints_for(n), ratio, strict=True):
+        if share >= QUASI_STATIC_SHARE:
+            notes.append(
+                f"not quasi-static: inertial torques at the {joint} reach {100 * share:.2f}% of gravity (limit "
+                f"{100 * QUASI_STATIC_SHARE:g}%): lower --max-speed"
+            )
     notes.append(f"optimiser: {result.nfev} evaluations, objective {request.objective} {cost(best):.4g}")
     return Plan(request, trajectory, np.degrees(centres), np.degrees(amplitudes), prediction, ratio, notes)
 

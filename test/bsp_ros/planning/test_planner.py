@@ -45,3 +45,15 @@ def test_planning_is_deterministic(wrist_limited_plan: Plan) -> None:
 
     again = plan_protocol(wrist_limited_plan.request)
     np.testing.assert_array_equal(again.trajectory.knots[1], wrist_limited_plan.trajectory.knots[1])
+
+
+def test_a_two_segment_chain_is_planned_within_its_limits() -> None:
+    from bsp_ros.planning import NominalArm, PlanRequest, plan_protocol
+
+    limits = JointLimits(((-60.0, -15.0), (20.0, 80.0)))
+    plan = plan_protocol(
+        PlanRequest(NominalArm.from_anthropometry((0.3, 0.3)), SHOULDER_YZ_M, limits, n_points=1, max_evaluations=60)
+    )
+    assert plan.trajectory.n_joints == 2
+    check_trajectory_within(plan.trajectory, limits)
+    assert [name for name, _ in plan.prediction.names].count("offset_nm") == 2
