@@ -6,7 +6,7 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +35,7 @@ __all__ = [
     "TRUTH_SCHEMA",
     "CellSimulator",
     "CellSpec",
+    "JointTrajectory",
     "MarkerSpec",
     "PassiveTruth",
     "SensorSpec",
@@ -371,6 +372,21 @@ class TrajectorySpec:
         )
 
 
+@runtime_checkable
+class JointTrajectory(Protocol):
+    """Any joint motion the simulator can follow: ``TrajectorySpec`` or ``bsp_ros.planning.PlannedTrajectory``."""
+
+    @property
+    def n_joints(self) -> int: ...
+
+    @property
+    def peak_speed_rad_s(self) -> tuple[float, ...]: ...
+
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+
+
 @dataclass(frozen=True)
 class SensorSpec:
     """The force/torque sensor stream.
@@ -479,7 +495,8 @@ class CellSpec:
     ----------
     subject : segment geometry and masses.
     passive : passive joint moments (one entry per joint).
-    trajectory : joint motion (one entry per joint).
+    trajectory : joint motion (one entry per joint): a ``TrajectorySpec`` or any ``JointTrajectory``
+        (e.g. a planned one from ``bsp_ros.planning``).
     sensor : the wrench stream.
     markers : the marker streams.
     duration_s : session length, s (0 < d <= 86400).
@@ -495,7 +512,7 @@ class CellSpec:
 
     subject: SubjectTruth
     passive: PassiveTruth
-    trajectory: TrajectorySpec
+    trajectory: TrajectorySpec | JointTrajectory
     sensor: SensorSpec = field(default_factory=SensorSpec)
     markers: MarkerSpec = field(default_factory=MarkerSpec)
     duration_s: float = 120.0
@@ -506,7 +523,7 @@ class CellSpec:
         for name, kind in (
             ("subject", SubjectTruth),
             ("passive", PassiveTruth),
-            ("trajectory", TrajectorySpec),
+            ("trajectory", JointTrajectory),
             ("sensor", SensorSpec),
             ("markers", MarkerSpec),
         ):
@@ -520,8 +537,12 @@ class CellSpec:
         object.__setattr__(self, "duration_s", check_positive("duration_s", self.duration_s, _MAX_DURATION_S))
         object.__setattr__(self, "start_ns", _check_int("start_ns", self.start_ns, 1, 2**62))
         object.__setattr__(self, "seed", _check_int("seed", self.seed, 0))
-        centre, amp = self.trajectory.center_deg[1], self.trajectory.amplitude_deg[1]
-        elbow = np.radians(np.linspace(centre - amp, centre + amp, 721))
+        if isinstance(self.trajectory, TrajectorySpec):
+            centre, amp = self.trajectory.center_deg[1], self.trajectory.amplitude_deg[1]
+            elbow = np.radians(np.linspace(centre - amp, centre + amp, 721))
+        else:  # any other motion: the elbow angles it takes over the session
+            elbow = self.trajectory.angles_rad(np.linspace(0.0, self.duration_s, 7201))[:, 1]
+            centre, amp = float(np.degrees(elbow.mean())), float(np.degrees(np.ptp(elbow)) / 2)
         worst = float(np.abs(np.sin(elbow)).min())
         if worst < _MIN_ELBOW_SIN:
             raise InputError(
@@ -640,7 +661,7 @@ class SessionTruth:
 
     subject: SubjectTruth
     passive: PassiveTruth
-    trajectory: TrajectorySpec
+    trajectory: TrajectorySpec | JointTrajectory
     simulation: Mapping[str, Any] = field(default_factory=dict)
 
     @property
@@ -715,15 +736,18 @@ class SessionTruth:
             }
             for j, name in enumerate(self.joint_names)
         }
-        trajectory = {
-            name: {
-                "center_deg": t.center_deg[j],
-                "amplitude_deg": t.amplitude_deg[j],
-                "period_s": t.period_s[j],
-                "phase_rad": t.phase_rad[j],
+        if not isinstance(t, TrajectorySpec):  # a planned trajectory: its knots (bsp_ros.planning)
+            trajectory: dict[str, Any] = {"planned": t.to_dict() if hasattr(t, "to_dict") else repr(t)}
+        else:
+            trajectory = {
+                name: {
+                    "center_deg": t.center_deg[j],
+                    "amplitude_deg": t.amplitude_deg[j],
+                    "period_s": t.period_s[j],
+                    "phase_rad": t.phase_rad[j],
+                }
+                for j, name in enumerate(self.joint_names)
             }
-            for j, name in enumerate(self.joint_names)
-        }
         return {
             "schema": TRUTH_SCHEMA,
             "segments": segments,
@@ -772,6 +796,11 @@ class SessionTruth:
             offset_nm=tuple(x.get("offset_nm", 0.0) for x in jnt),
         )
         traj = _require(data, "trajectory", "")
+        if isinstance(traj, Mapping) and "planned" in traj:
+            from bsp_ros.planning.trajectory import PlannedTrajectory
+
+            planned = PlannedTrajectory.from_dict(traj["planned"])
+            return cls(subject, passive, planned, dict(data.get("simulation", {})))
         trj = [_require(traj, name, "trajectory.") for name in joints_for(n)]
         trajectory = TrajectorySpec(
             center_deg=tuple(_require(x, "center_deg", "trajectory ") for x in trj),

@@ -1,0 +1,285 @@
+"""`bsp plan`: design a robot trajectory that makes every reported parameter identifiable."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from bsp_ros.errors import InputError
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register `bsp plan`."""
+    parser = subparsers.add_parser(
+        "plan",
+        help="plan an identification protocol (trajectory + predicted stds)",
+        description=(
+            "Design the trajectory the robot imposes on the arm: operating points and direction reversals in "
+            "every joint, within the therapist's ranges and the speed limit, optimised so that the static "
+            "moments and the passive moments can be told apart. Writes the handle poses in world (y, z, pitch) "
+            "and the joint angles over time as JSON and CSV, and prints every parameter's predicted std for the "
+            "given sensor noise. Refuses ranges, speeds or sessions it cannot honour, with the value named."
+        ),
+    )
+    arm = parser.add_argument_group("the arm (segment lengths: measured, a previous estimate, or the table)")
+    arm.add_argument(
+        "--lengths",
+        type=float,
+        nargs="+",
+        metavar="M",
+        help="segment lengths shoulder->elbow, elbow->wrist[, wrist->handle centre], m (default: de Leva table "
+        "scaled to --height)",
+    )
+    arm.add_argument(
+        "--segments", type=int, choices=(2, 3), default=3, help="segments when --lengths is not given (default 3)"
+    )
+    arm.add_argument(
+        "--height", type=float, default=1.78, metavar="M", help="stature for table lengths, m (default 1.78)"
+    )
+    arm.add_argument(
+        "--body-mass",
+        type=float,
+        default=75.0,
+        metavar="KG",
+        help="body mass for the table inertia and static moments the prediction assumes (default 75)",
+    )
+    arm.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table (default male)")
+    arm.add_argument(
+        "--shoulder",
+        type=float,
+        nargs=2,
+        required=True,
+        metavar=("Y", "Z"),
+        help="shoulder position in world, m (y anterior, z up)",
+    )
+    limits = parser.add_argument_group("the therapist's limits (required: never extrapolated)")
+    limits.add_argument(
+        "--shoulder-range",
+        type=float,
+        nargs=2,
+        required=True,
+        metavar=("LOW", "HIGH"),
+        help="q1, upper arm from the horizontal, deg (hanging forward-down is negative)",
+    )
+    limits.add_argument(
+        "--elbow-range",
+        type=float,
+        nargs=2,
+        required=True,
+        metavar=("LOW", "HIGH"),
+        help="q2, forearm relative to the upper arm, deg (kept 5 deg from straight/folded)",
+    )
+    limits.add_argument(
+        "--wrist-range",
+        type=float,
+        nargs=2,
+        metavar=("LOW", "HIGH"),
+        help="q3, hand relative to the forearm, deg (required for 3 segments)",
+    )
+    limits.add_argument(
+        "--max-speed",
+        type=float,
+        default=0.03,
+        metavar="RAD_S",
+        help="largest joint speed, rad/s (default 0.03: quasi-static)",
+    )
+    session = parser.add_argument_group("the session")
+    session.add_argument("--duration", type=float, default=120.0, metavar="S", help="session length, s (default 120)")
+    session.add_argument(
+        "--passive",
+        default="coulomb+offset+stiffness",
+        metavar="MODEL",
+        help="passive model to identify: coulomb, coulomb+offset, coulomb+offset+stiffness "
+        "(default coulomb+offset+stiffness)",
+    )
+    session.add_argument(
+        "--operating-points", type=int, metavar="K", help="operating points (1-20; default: the best of 1, 2 and 3)"
+    )
+    session.add_argument(
+        "--amplitude",
+        type=float,
+        nargs="+",
+        metavar="DEG",
+        help="oscillation amplitude per joint about each operating point, deg (default optimised)",
+    )
+    session.add_argument(
+        "--objective",
+        choices=("d-optimal", "static"),
+        default="d-optimal",
+        help="d-optimal: log-determinant of the predicted covariance; static: largest predicted "
+        "relative std of the static moments (default d-optimal)",
+    )
+    session.add_argument(
+        "--max-evaluations",
+        type=int,
+        default=400,
+        metavar="N",
+        help="optimiser budget per number of operating points (default 400)",
+    )
+    noise = parser.add_argument_group("sensor noise for the predicted stds")
+    noise.add_argument(
+        "--force-noise", type=float, default=0.05, metavar="N", help="force noise per axis, N (default 0.05)"
+    )
+    noise.add_argument(
+        "--torque-noise", type=float, default=0.005, metavar="NM", help="moment noise per axis, Nm (default 0.005)"
+    )
+    noise.add_argument(
+        "--marker-noise", type=float, default=1e-4, metavar="M", help="marker noise per axis, m (default 1e-4)"
+    )
+    noise.add_argument("--wrench-hz", type=float, default=100.0, metavar="HZ", help="wrench rate (default 100)")
+    noise.add_argument("--marker-hz", type=float, default=50.0, metavar="HZ", help="marker frame rate (default 50)")
+    out = parser.add_argument_group("output")
+    out.add_argument(
+        "--json", type=Path, metavar="FILE", help="write the plan (knots, samples, predicted stds) as JSON"
+    )
+    out.add_argument(
+        "--csv", type=Path, metavar="FILE", help="write t, joint angles and velocities, handle y z pitch as CSV"
+    )
+    out.add_argument("--rate", type=float, default=10.0, metavar="HZ", help="sample rate of the files, Hz (default 10)")
+    out.add_argument(
+        "--publish",
+        action="store_true",
+        help="publish trajectory_msgs/JointTrajectory and nav_msgs/Path (latched) with rclpy until Ctrl-C",
+    )
+    out.add_argument(
+        "--topic-prefix",
+        default="bsp/plan",
+        metavar="NS",
+        help="topics NS/joint_trajectory and NS/handle_path (default bsp/plan)",
+    )
+    out.add_argument("--frame-id", default="world", help="frame of the handle path (default world)")
+    out.add_argument(
+        "--plane-x",
+        type=float,
+        default=0.0,
+        metavar="M",
+        help="x of the movement plane (the shoulder's x) for the published path, m (default 0)",
+    )
+    return parser
+
+
+def _request(args: argparse.Namespace) -> Any:
+    from bsp_ros.anthropometry import length_from_height_m
+    from bsp_ros.identification.passive import PassiveModel
+    from bsp_ros.planning import JointLimits, NoiseSpec, NominalArm, PlanRequest
+    from bsp_ros.streams import segments_for
+
+    if args.lengths:
+        lengths = tuple(args.lengths)
+    else:
+        lengths = tuple(length_from_height_m(args.sex, name, args.height) for name in segments_for(args.segments))
+    n = len(lengths)
+    ranges = [tuple(args.shoulder_range), tuple(args.elbow_range)]
+    if n == 3:
+        if args.wrist_range is None:
+            raise InputError("a 3-segment arm needs --wrist-range LOW HIGH (deg): the planner never assumes a limit")
+        ranges.append(tuple(args.wrist_range))
+    elif args.wrist_range is not None:
+        raise InputError("--wrist-range given for a 2-segment chain (no wrist)")
+    return PlanRequest(
+        nominal=NominalArm.from_anthropometry(lengths, args.sex, args.body_mass),
+        shoulder_yz_m=tuple(args.shoulder),
+        limits=JointLimits(tuple(ranges), args.max_speed),
+        duration_s=args.duration,
+        passive=PassiveModel.parse(args.passive),
+        n_points=args.operating_points,
+        amplitude_deg=tuple(args.amplitude) if args.amplitude else None,
+        noise=NoiseSpec(args.force_noise, args.torque_noise, args.marker_noise, args.wrench_hz, args.marker_hz),
+        objective=args.objective,
+        max_evaluations=args.max_evaluations,
+    )
+
+
+def format_plan(plan: Any) -> str:
+    """The plan summary and predicted std table, as printed."""
+    from bsp_ros.streams import joints_for
+
+    joints = joints_for(plan.request.nominal.n_joints)
+    lines = [
+        f"planned {plan.trajectory.duration_s:.0f} s, {plan.centres_deg.shape[0]} operating point(s), "
+        f"passive model {plan.request.passive.label}",
+        "operating points (deg): " + "; ".join(", ".join(f"{v:.1f}" for v in row) for row in plan.centres_deg),
+        "amplitudes (deg): " + ", ".join(f"{j} {a:.1f}" for j, a in zip(joints, plan.amplitudes_deg, strict=True)),
+        "peak speed (rad/s): "
+        + ", ".join(f"{j} {v:.4f}" for j, v in zip(joints, plan.trajectory.peak_speed_rad_s, strict=True)),
+        "inertial / gravity torque (anthropometric inertia): "
+        + ", ".join(f"{j} {100 * r:.3f}%" for j, r in zip(joints, plan.inertia_ratio, strict=True)),
+        f"predicted condition number {plan.prediction.condition_number:.3g}",
+        f"{'parameter':36s} {'nominal':>10s} {'predicted std':>14s} {'relative':>9s}",
+    ]
+    for row in plan.prediction.table():
+        nominal = "" if row["nominal"] is None else f"{row['nominal']:.4g}"
+        relative = "" if row["relative_std"] is None else f"{100 * row['relative_std']:.3f}%"
+        lines.append(f"{row['quantity'] + '/' + row['owner']:36s} {nominal:>10s} {row['std']:14.3g} {relative:>9s}")
+    lines += [f"note: {note}" for note in plan.notes]
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Plan, write the files, print the predicted stds; publish on request."""
+    from bsp_ros.planning import plan_protocol, write_plan_csv, write_plan_json
+
+    plan = plan_protocol(_request(args))
+    print(format_plan(plan))
+    if args.json:
+        write_plan_json(args.json, plan, args.rate)
+        print(f"wrote {args.json}")
+    if args.csv:
+        write_plan_csv(args.csv, plan, args.rate)
+        print(f"wrote {args.csv}")
+    if args.publish:
+        _publish(plan, args)
+    sys.stdout.flush()
+    return 0
+
+
+def _publish(plan: Any, args: argparse.Namespace) -> None:
+    """Publish the plan latched (reliable, transient local, depth 1) with plain rclpy until Ctrl-C.
+
+    A cell that starts later still receives it: that is the "on request" behaviour without a service.
+    """
+    import importlib
+
+    import rclpy  # only here: offline `bsp plan` never imports rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    from bsp_ros.planning.files import sampled_path
+    from bsp_ros.streams import joints_for
+    from msg_adapters.trajectory import build_handle_path, build_joint_trajectory
+
+    def get_message(type_name: str) -> Any:  # "pkg/msg/Type" -> the rosidl class (no rosidl_runtime_py needed)
+        package, kind, name = type_name.split("/")
+        return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+    rclpy.init()
+    node = rclpy.create_node("protocol_publisher")
+    try:
+        latched = QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        )
+        prefix = args.topic_prefix.rstrip("/")
+        joint_pub = node.create_publisher(
+            get_message("trajectory_msgs/msg/JointTrajectory"), f"{prefix}/joint_trajectory", latched
+        )
+        path_pub = node.create_publisher(get_message("nav_msgs/msg/Path"), f"{prefix}/handle_path", latched)
+        samples = sampled_path(plan, args.rate)
+        start_ns = node.get_clock().now().nanoseconds
+        joints = joints_for(plan.request.nominal.n_joints)
+        joint_pub.publish(
+            build_joint_trajectory(
+                get_message, start_ns, joints, samples["t_s"], samples["q_rad"], samples["qdot_rad_s"]
+            )
+        )
+        path_pub.publish(
+            build_handle_path(get_message, start_ns, args.frame_id, samples["t_s"], samples["handle"], args.plane_x)
+        )
+        print(f"publishing {prefix}/joint_trajectory and {prefix}/handle_path (latched); Ctrl-C to stop", flush=True)
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()

@@ -1,0 +1,132 @@
+"""`bsp plan`: documented inputs, files a cell can use, clear refusals, no rclpy offline."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bsp_ros.cli import build_parser, main
+from bsp_ros.planning import planned_trajectory_from_file
+
+LIMITS = ["--shoulder", "0", "1.2", "--shoulder-range", "-70", "-10", "--elbow-range", "10", "100"]
+
+
+def _plan_parser():
+    parser = build_parser()
+    subparsers = next(a for a in parser._actions if a.dest == "command")
+    return subparsers.choices["plan"]
+
+
+def test_help_documents_every_input() -> None:
+    parser = _plan_parser()
+    options = [a for a in parser._actions if a.option_strings and a.dest != "help"]
+    assert {a.option_strings[0] for a in options} >= {
+        "--lengths",
+        "--shoulder",
+        "--shoulder-range",
+        "--elbow-range",
+        "--wrist-range",
+        "--max-speed",
+        "--duration",
+        "--passive",
+        "--force-noise",
+        "--marker-noise",
+        "--json",
+        "--csv",
+        "--publish",
+    }
+    for action in options:
+        assert action.help and len(action.help) > 10, action.option_strings
+    text = parser.format_help()
+    assert "rad/s" in text and "deg" in text
+
+
+def test_plan_writes_json_and_csv_a_cell_can_load(tmp_path: Path, capsys) -> None:
+    out_json, out_csv = tmp_path / "protocol.json", tmp_path / "protocol.csv"
+    args = [*LIMITS, "--wrist-range", "-5", "5", "--operating-points", "1", "--max-evaluations", "100"]
+    assert main(["plan", *args, "--json", str(out_json), "--csv", str(out_csv)]) == 0
+    printed = capsys.readouterr().out
+    assert "offset_nm/shoulder" in printed and "predicted std" in printed and "inertial / gravity" in printed
+    data = json.loads(out_json.read_text())
+    assert data["limits"]["range_deg"]["wrist"] == {"low_deg": -5.0, "high_deg": 5.0}
+    assert planned_trajectory_from_file(out_json).duration_s == 120.0
+    assert planned_trajectory_from_file(out_csv).n_joints == 3
+
+
+def test_missing_wrist_range_is_refused_with_exit_code_2(capsys) -> None:
+    assert main(["plan", *LIMITS]) == 2
+    assert "--wrist-range" in capsys.readouterr().err
+
+
+def test_speed_limit_out_of_range_is_refused(capsys) -> None:
+    assert main(["plan", *LIMITS, "--wrist-range", "-5", "5", "--max-speed", "3"]) == 2
+    assert "max joint speed" in capsys.readouterr().err
+
+
+def test_offline_plan_does_not_import_rclpy(tmp_path: Path) -> None:
+    code = (
+        "import sys\nfrom bsp_ros.cli import main\n"
+        f"rc = main(['plan', *{LIMITS!r}, '--wrist-range', '-5', '5', '--operating-points', '1', "
+        f"'--max-evaluations', '50', '--json', {str(tmp_path / 'p.json')!r}])\n"
+        "assert rc == 0, rc\nassert 'rclpy' not in sys.modules\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=120)
+
+
+@pytest.mark.dds
+def test_publish_sends_latched_messages_a_late_subscriber_receives(tmp_path: Path) -> None:
+    rclpy = pytest.importorskip("rclpy")
+    import os
+
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from trajectory_msgs.msg import JointTrajectory
+
+    env = dict(os.environ, ROS_DOMAIN_ID=str(90 + os.getpid() % 50))
+    publisher = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "bsp_ros",
+            "plan",
+            *LIMITS,
+            "--wrist-range",
+            "-5",
+            "5",
+            "--operating-points",
+            "1",
+            "--max-evaluations",
+            "50",
+            "--publish",
+        ],
+        env=env,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert publisher.stdout is not None
+        for line in publisher.stdout:
+            if line.startswith("publishing"):
+                break
+        os.environ["ROS_DOMAIN_ID"] = env["ROS_DOMAIN_ID"]
+        rclpy.init()
+        node = rclpy.create_node("plan_listener")
+        received = []
+        latched = QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        )
+        node.create_subscription(JointTrajectory, "bsp/plan/joint_trajectory", received.append, latched)
+        for _ in range(100):
+            rclpy.spin_once(node, timeout_sec=0.1)
+            if received:
+                break
+        node.destroy_node()
+        rclpy.try_shutdown()
+        assert received and list(received[0].joint_names) == ["shoulder", "elbow", "wrist"]
+        assert len(received[0].points) == 1201
+    finally:
+        publisher.terminate()
+        publisher.wait(timeout=20)
