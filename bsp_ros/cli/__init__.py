@@ -16,6 +16,7 @@ from bsp_ros.errors import BspError
 COMMANDS: tuple[str, ...] = (
     "demo",
     "identify",
+    "plan",
     "play",
     "record",
     "report",
