@@ -103,6 +103,7 @@ def estimate_document(
         "warnings": list(result.warnings) + (list(posterior.notes) if posterior else []),
         "message": result.message,
         "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
+        "removed_samples": removed_samples(result, data),
     }
     correlation = _correlation(result.covariance)
     document: dict[str, Any] = {
@@ -123,6 +124,15 @@ def estimate_document(
     if session:
         document["session"] = session
     return document
+
+
+def removed_samples(result: IdentificationResult, data: IdentificationData) -> dict[str, int]:
+    """Implausible samples removed before or during the fit, by kind (``wrench_spikes``, ``marker_elbow``...)."""
+    found = result.diagnostics.get("removed_samples", {})
+    merged = dict(data.removed_samples)
+    if isinstance(found, dict):
+        merged.update({str(k): int(v) for k, v in found.items()})
+    return merged
 
 
 def _finite(number: float) -> float | None:
