@@ -303,9 +303,12 @@ def _direction_noise_gain(direction_cutoff_hz: float, rate_hz: float) -> float:
 
 
 def _filtered_runs(
-    raw_q: np.ndarray, rate_hz: float, config: KinematicsConfig, angle_filter: bool = True
+    raw_q: np.ndarray, rate_hz: float, config: KinematicsConfig, angle_filter: bool = True, trim_edges: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """Zero-phase filtered angles and direction velocities over each long-enough run of valid frames.
+
+    With ``trim_edges`` the direction velocity is left out (NaN) within half a period of its cutoff of
+    each run's ends: there the padding makes it noise, and its sign, the direction of motion, a guess.
 
     Returns angles, velocities (NaN outside usable runs), the direction-velocity noise (n,), and notes.
 
@@ -330,6 +333,10 @@ def _filtered_runs(
         q_rad[begin:end] = smooth[begin:end] if angle_filter else run
         slow = _zero_phase_lowpass(run, config.direction_cutoff_hz, rate_hz, order=2)
         velocity[begin:end] = np.gradient(slow, 1.0 / rate_hz, axis=0)
+        if trim_edges:
+            edge = min(int(0.5 * rate_hz / config.direction_cutoff_hz), (end - begin) // 4)
+            velocity[begin : begin + edge] = np.nan
+            velocity[end - edge : end] = np.nan
     if not np.isfinite(q_rad).any():
         raise DataError("no stretch of marker data is long enough to give joint angles")
     # The noise is judged against the smoothed angles even when those are not returned.
@@ -422,7 +429,7 @@ def kinematics_from_markers(
         gridded, bridged[name] = _grid_values(grid_ns, t_ns, sagittal_from_world(position), max_gap_ns)
         points[:, k] = gridded
     raw_q = joint_angles_from_positions(points)
-    q_rad, velocity, noise, notes = _filtered_runs(raw_q, 1e9 / step_ns, config)
+    q_rad, velocity, noise, notes = _filtered_runs(raw_q, 1e9 / step_ns, config, trim_edges=True)
     warnings += notes
     n_invalid = int((~np.isfinite(q_rad).all(axis=1)).sum())
     if n_invalid:

@@ -43,3 +43,30 @@ def test_a_frame_with_a_missing_or_nan_marker_is_skipped(live_streams) -> None:
     assert estimator.update(1_000, {k: v for k, v in frame.items() if k != "wrist"}) is None
     frame["elbow"] = np.array([np.nan, 0.0, 0.0])
     assert estimator.update(2_000, frame) is None
+
+
+def _run(estimator: CausalJointAngles, markers: dict, frames: int) -> np.ndarray:
+    stamps = markers["shoulder"].t_ns
+    out = []
+    for k, t in enumerate(stamps[:frames]):
+        sample = estimator.update(int(t), {name: series.position_m[k] for name, series in markers.items()})
+        out.append(np.full(3, np.nan) if sample is None else sample.q_rad)
+    return np.array(out)
+
+
+def test_a_frame_off_the_rigid_chain_is_rejected_and_counted(live_streams) -> None:
+    from bsp_ros import glitches
+
+    simulated, _, _, _, _ = live_streams
+    clean = _run(CausalJointAngles(3), simulated.session.markers, 600)
+    for glitched in (
+        glitches.displace_marker(simulated.session, "elbow", 300, (0.0, 0.67, 0.0)),
+        glitches.displace_marker(simulated.session, "hand", 300, (0.0, 0.0, 0.06)),
+        glitches.swap_markers(simulated.session, "elbow", "hand", 300),
+    ):
+        estimator = CausalJointAngles(3)
+        q = _run(estimator, glitched.markers, 600)
+        assert estimator.n_rejected == 1 and estimator.n_restarts == 0
+        assert np.isnan(q[300]).all()
+        # The filters saw one frame fewer: the angles barely differ from the clean run's.
+        assert np.nanmax(np.abs(q[301:] - clean[301:])) < 2e-3
