@@ -6,8 +6,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
 from bag_surgery import flip_bit_of_value, rewrite_without_crcs
+
 from bsp_ros import glitches
 from bsp_ros.bag import write_session_bag
 from bsp_ros.offline import identify_bag
