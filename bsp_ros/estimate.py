@@ -105,6 +105,16 @@ def estimate_document(
         "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
         "removed_samples": removed_samples(result, data),
     }
+    sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
+    if sensitivity:
+        # What the data cannot test at one operating point, and what it would cost if false.
+        quality["assumptions"] = [
+            {
+                "assumption": "no elastic passive offset at any joint (a constant passive moment is confounded "
+                "with gravity over a small range of motion)",
+                "static_moment_shift_kgm_per_0_05_nm": sensitivity,
+            }
+        ]
     correlation = _correlation(result.covariance)
     document: dict[str, Any] = {
         "schema": SCHEMA,

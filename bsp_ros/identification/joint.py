@@ -90,6 +90,8 @@ class _Fit:
     sigma: np.ndarray  # (n,)
     condition: float
     lags: int
+    design: np.ndarray  # (p, p) X^T W X over the used rows
+    weights: np.ndarray  # (n,) per-joint weights 1 / sigma^2
 
 
 def _build_problem(data: IdentificationData, passive: PassiveModel, rows: np.ndarray) -> _Problem:
@@ -161,7 +163,8 @@ def _fit(problem: _Problem) -> _Fit:
     # Singular values of the column-scaled matrix are those of its triangular factor.
     singular = np.linalg.svd(_triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0], compute_uv=False)
     condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
-    return _Fit(values, covariance, np.where(problem.rows, residual, np.nan), sigma, condition, lags)
+    residual_used = np.where(problem.rows, residual, np.nan)
+    return _Fit(values, covariance, residual_used, sigma, condition, lags, design, weights)
 
 
 def _motion_rows(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
@@ -275,6 +278,28 @@ def _misfit(fit: _Fit) -> tuple[np.ndarray, np.ndarray]:
     return noise, rms / np.maximum(noise, 1e-12)
 
 
+# The elastic offset whose effect on the static moments the estimate states (Nm).
+SENSITIVITY_OFFSET_NM = 0.05
+
+
+def _offset_sensitivity(problem: _Problem, fit: _Fit, n: int) -> dict[str, dict[str, float]]:
+    """Joint -> segment -> how far an unmodelled constant passive offset of 0.05 Nm at that joint moves the
+    static moment (kg m), to first order: ``A^-1 X^T W u`` with ``u`` the offset's torque column."""
+    joints, segments = joints_for(n), segments_for(n)
+    out: dict[str, dict[str, float]] = {}
+    if any(key == "offset_nm" for key, _ in problem.names):
+        return out  # the offset is modelled: nothing assumed
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    try:
+        for j, joint in enumerate(joints):
+            rhs = SENSITIVITY_OFFSET_NM * problem.regressor[:, j, :].T @ w[:, j]
+            shift = np.linalg.solve(fit.design, rhs)[:n]
+            out[joint] = {segment: float(v) for segment, v in zip(segments, shift, strict=True)}
+    except np.linalg.LinAlgError:
+        return {}
+    return out
+
+
 def _failed(
     data: IdentificationData, names: list[ParameterName], problems: list[str], warnings: list[str]
 ) -> IdentificationResult:
@@ -384,7 +409,14 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
     if config.check_elastic and not problems:
-        warnings += _elastic_check(data, config, problem.rows, fit, problem.names)
+        elastic = _elastic_check(data, config, problem.rows, fit, problem.names)
+        warnings += elastic
+        if elastic:
+            problems.append(
+                "an elastic passive moment the model lacks is supported by the data and biases the static moments "
+                "(see warnings)"
+            )
+    sensitivity = _offset_sensitivity(problem, fit, n)
     valid = not problems and bool(np.isfinite(fit.values).all())
     message = "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples"
     residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)}
@@ -409,5 +441,6 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "sensor_noise_nm": {j: float(v) for j, v in zip(joints, noise, strict=True)},
             "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},
             "removed_samples": {k: v for k, v in removed.items() if v},
+            "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
         },
     )
