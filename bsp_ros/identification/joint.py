@@ -94,7 +94,10 @@ class _Fit:
     weights: np.ndarray  # (n,) per-joint weights 1 / sigma^2
 
 
-def _build_problem(data: IdentificationData, passive: PassiveModel, rows: np.ndarray) -> _Problem:
+def _build_problem(
+    data: IdentificationData, passive: PassiveModel, rows: np.ndarray, widths: np.ndarray | None = None
+) -> _Problem:
+    """The stacked problem; ``widths`` (n,) rad/s > 0 replace a joint's Coulomb ``sign(v)`` by ``tanh(v / w)``."""
     n = data.n_joints
     joints, segments = joints_for(n), segments_for(n)
     k = len(passive.terms)
@@ -108,6 +111,9 @@ def _build_problem(data: IdentificationData, passive: PassiveModel, rows: np.nda
             key, _, bound = TERMS[term]
             names.append((key, joint))
             lower.append(bound)
+        if widths is not None and widths[j] > 0 and "coulomb" in passive.terms:
+            column = n + j * k + passive.terms.index("coulomb")
+            regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
     return _Problem(names, regressor, data.tau_nm, rows, np.array(lower), np.full(len(names), np.inf))
 
 
@@ -203,14 +209,14 @@ def _excitation_problems(data: IdentificationData, rows: np.ndarray, config: Joi
 
 
 def _elastic_check(
-    data: IdentificationData, config: JointConfig, rows: np.ndarray, base: _Fit, names: list[ParameterName]
+    data: IdentificationData, config: JointConfig, rows: np.ndarray, base: _Fit, widths: np.ndarray
 ) -> list[str]:
     """Warn when an elastic term the model lacks is supported by the data and moves the static moments."""
     missing = [t for t in ("offset", "stiffness") if t not in config.passive.terms]
     if not missing:
         return []
     wider = PassiveModel(config.passive.terms + tuple(missing))
-    problem = _build_problem(data, wider, rows)
+    problem = _build_problem(data, wider, rows, widths)
     fit = _fit(problem)
     n = data.n_joints
     notes = []
@@ -244,6 +250,55 @@ def _elastic_check(
 # Torque deviations and misfits below this never count (Nm): no rehab cell's sensor resolves them, and a
 # noise-free simulation would otherwise be judged against its rounding errors.
 MIN_OUTLIER_NM = 1e-3
+
+
+# Candidate widths of a smooth friction transition, tanh(v / w) (rad/s): 0.25 to 16 mrad/s.
+TRANSITION_WIDTHS_RAD_S = 0.00025 * 2.0 ** (np.arange(25) / 4.0)
+# A smooth transition is detected when it lowers the weighted residual sum of squares by this much (a
+# chi-square-like figure; clean sessions with a sign step give at most ~1, a 1 mrad/s transition >= 100).
+TRANSITION_MIN_GAIN = 25.0
+
+
+def _transition_widths(problem: _Problem, fit: _Fit, data: IdentificationData, config: JointConfig) -> np.ndarray:
+    """(n,) width of a smooth Coulomb transition at each joint (rad/s), 0 where a sign step fits as well.
+
+    A profile over :data:`TRANSITION_WIDTHS_RAD_S`, one joint at a time, on the weighted normal equations:
+    swapping one column costs O(N), not a new fit.
+    """
+    n = data.n_joints
+    widths = np.zeros(n)
+    if "coulomb" not in config.passive.terms:
+        return widths
+    k = len(config.passive.terms)
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    total = float((w * problem.torque**2).sum())
+
+    def ssr(a: np.ndarray, b: np.ndarray) -> float:
+        try:
+            return total - float(b @ np.linalg.solve(a, b))
+        except np.linalg.LinAlgError:
+            return np.inf
+
+    base = ssr(design, moment)
+    for j in range(n):
+        column = n + j * k + config.passive.terms.index("coulomb")
+        x_j, w_j, y_j = problem.regressor[:, j, :], w[:, j], problem.torque[:, j]
+        best, best_width = base, 0.0
+        for width in TRANSITION_WIDTHS_RAD_S:
+            c = np.tanh(data.velocity_rad_s[:, j] / width)
+            a, b = design.copy(), moment.copy()
+            cross = (x_j * (w_j * c)[:, None]).sum(axis=0)
+            cross[column] = (w_j * c * c).sum()
+            a[column, :], a[:, column] = cross, cross
+            b[column] = (w_j * c * y_j).sum()
+            value = ssr(a, b)
+            if value < best:
+                best, best_width = value, float(width)
+        if base - best > TRANSITION_MIN_GAIN:
+            widths[j] = best_width
+    return widths
 
 
 def _spikes(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
@@ -356,6 +411,23 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                     "tell the direction of motion"
                 )
     fit = _fit(problem)
+    widths = _transition_widths(problem, fit, data, config)
+    if widths.any():
+        problem = _build_problem(data, config.passive, rows, widths)
+        fit = _fit(problem)
+        for j, joint in enumerate(joints):
+            if widths[j] == 0:
+                continue
+            beyond = float((np.abs(data.velocity_rad_s[rows[:, j], j]) > 3 * widths[j]).sum()) / max(usable, 1)
+            warnings.append(
+                f"friction at the {joint} changes direction smoothly (tanh width about {1e3 * widths[j]:.2g} mrad/s, "
+                f"modelled); {100 * beyond:.0f}% of samples move faster than 3 widths"
+            )
+            if beyond < config.min_row_share:
+                problems.append(
+                    f"the {joint} hardly leaves its friction transition (width about {1e3 * widths[j]:.2g} mrad/s, "
+                    f"{100 * beyond:.0f}% of samples beyond 3 widths): its Coulomb amplitude is not identified"
+                )
     far = _fit_outliers(fit, config)
     n_far = int(far.sum())
     n_removed = 0
@@ -364,7 +436,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
         )
     elif n_far:
-        kept = _build_problem(data, config.passive, rows & ~far[:, None])
+        kept = _build_problem(data, config.passive, rows & ~far[:, None], widths)
         refit = _fit(kept)
         # Against the larger std of the two fits: samples far off the fit (a filter's edge, a glitch) also
         # inflate the std of the fit that keeps them.
@@ -409,7 +481,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
     if config.check_elastic and not problems:
-        elastic = _elastic_check(data, config, problem.rows, fit, problem.names)
+        elastic = _elastic_check(data, config, problem.rows, fit, widths)
         warnings += elastic
         if elastic:
             problems.append(
@@ -442,5 +514,6 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},
             "removed_samples": {k: v for k, v in removed.items() if v},
             "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
+            "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
         },
     )

@@ -1,0 +1,98 @@
+"""Coverage and warning false-alarm rates of `bsp identify` over seeded simulated sessions.
+
+For each seed and scenario a human arm cell is simulated and identified (joint method, defaults). Reported:
+the share of valid estimates, for valid ones the share of data-sourced parameters whose truth lies within
+3 std, and how often each kind of warning fires. Run:
+
+    python bench/coverage.py --sessions 200 --duration 120 --scenario clean
+    python bench/coverage.py --sessions 50 --scenario elastic
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import dataclasses
+import json
+import re
+import time
+from typing import Any
+
+import numpy as np
+
+from bsp_ros import simulation as sim
+from bsp_ros.pipeline import identify_session
+
+SCENARIOS = ("clean", "elastic", "elastic_small", "random_subject")
+
+
+def _spec(scenario: str, seed: int, duration_s: float) -> sim.CellSpec:
+    rng = np.random.default_rng(10_000 + seed)
+    spec = sim.human_arm_cell(seed=seed, duration_s=duration_s)
+    if scenario == "random_subject":
+        subject = sim.SubjectTruth.from_anthropometry("male", float(rng.uniform(55, 100)), 1.78, 3, rng=rng)
+        spec = dataclasses.replace(spec, subject=subject)
+    if scenario.startswith("elastic"):
+        offset = 0.2 if scenario == "elastic" else 0.05
+        passive = dataclasses.replace(spec.passive, offset_nm=(offset, offset, offset))
+        spec = dataclasses.replace(spec, passive=passive)
+    return spec
+
+
+def _kind(warning: str) -> str:
+    """A warning's kind: its text up to the first number or colon (counts, names of joints vary)."""
+    return re.sub(r"[0-9][0-9.e+-]*", "#", warning)[:60]
+
+
+def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dict[str, Any]:
+    valid = 0
+    z_all: list[float] = []
+    worst: list[tuple[float, int, str]] = []
+    kinds: collections.Counter[str] = collections.Counter()
+    messages: collections.Counter[str] = collections.Counter()
+    started = time.perf_counter()
+    for seed in range(first_seed, first_seed + sessions):
+        simulated = sim.simulate_cell(_spec(scenario, seed, duration_s))
+        document = identify_session(simulated.session)
+        truth = simulated.truth.to_dict()
+        for kind in {_kind(w) for w in document["quality"]["warnings"]}:
+            kinds[kind] += 1
+        if not document["quality"]["valid"]:
+            messages[_kind(document["quality"]["message"])] += 1
+            continue
+        valid += 1
+        for group in ("segments", "joints"):
+            for owner, quantities in document[group].items():
+                for key, q in quantities.items():
+                    if q["source"] != "data" or key not in truth[group][owner] or not q["std"]:
+                        continue
+                    z = abs(q["value"] - truth[group][owner][key]) / q["std"]
+                    z_all.append(z)
+                    worst.append((z, seed, f"{key}/{owner}"))
+    z = np.array(z_all)
+    return {
+        "scenario": scenario,
+        "sessions": sessions,
+        "duration_s": duration_s,
+        "valid": valid,
+        "parameters": int(z.size),
+        "within_3_std": float((z < 3).mean()) if z.size else None,
+        "worst": sorted(worst, reverse=True)[:5],
+        "warning_rate": {k: v / sessions for k, v in kinds.most_common()},
+        "invalid_reasons": dict(messages),
+        "seconds": round(time.perf_counter() - started, 1),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sessions", type=int, default=200)
+    parser.add_argument("--duration", type=float, default=120.0)
+    parser.add_argument("--scenario", choices=SCENARIOS, default="clean")
+    parser.add_argument("--first-seed", type=int, default=0)
+    args = parser.parse_args()
+    print(json.dumps(run(args.scenario, args.sessions, args.duration, args.first_seed), indent=1))
+
+
+if __name__ == "__main__":
+    main()
