@@ -95,7 +95,7 @@ def estimate_document(
     for i, (key, owner) in enumerate(result.names):
         if owner in joints:
             joints[owner][key] = quantity(result.values[i], result.std[i], "data")
-    quality = {
+    quality: dict[str, Any] = {
         "valid": bool(result.valid),
         "n_samples": int(result.n_samples),
         "condition_number": float(result.condition_number) if math.isfinite(result.condition_number) else None,
