@@ -307,7 +307,7 @@ def _filtered_runs(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """Zero-phase filtered angles and direction velocities over each long-enough run of valid frames.
 
-    With ``trim_edges`` the direction velocity is left out (NaN) within half a period of its cutoff of
+    With ``trim_edges`` the direction velocity is left out (NaN) within a quarter period of its cutoff of
     each run's ends: there the padding makes it noise, and its sign, the direction of motion, a guess.
 
     Returns angles, velocities (NaN outside usable runs), the direction-velocity noise (n,), and notes.
@@ -334,7 +334,7 @@ def _filtered_runs(
         slow = _zero_phase_lowpass(run, config.direction_cutoff_hz, rate_hz, order=2)
         velocity[begin:end] = np.gradient(slow, 1.0 / rate_hz, axis=0)
         if trim_edges:
-            edge = min(int(0.5 * rate_hz / config.direction_cutoff_hz), (end - begin) // 4)
+            edge = min(int(0.25 * rate_hz / config.direction_cutoff_hz), (end - begin) // 4)
             velocity[begin : begin + edge] = np.nan
             velocity[end - edge : end] = np.nan
     if not np.isfinite(q_rad).any():

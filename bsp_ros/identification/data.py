@@ -164,9 +164,12 @@ def identification_data_from_session(
     q_rad, velocity, valid = resample_kinematics(kinematics, wrench.t_ns)
     if not valid.any():
         raise DataError("no wrench sample falls where the markers give joint angles (streams do not overlap)")
-    dropped = int((~valid).sum())
+    # Samples before the first and after the last angle are the session's edges (filter run-in): expected,
+    # not worth a warning. Those lost inside the session are.
+    inside = np.flatnonzero(valid)
+    dropped = int((~valid[inside[0] : inside[-1] + 1]).sum())
     if dropped:
-        notes.append(f"{dropped} of {keep.size} wrench samples have no joint angles (marker gaps or edges)")
+        notes.append(f"{dropped} of {keep.size} wrench samples inside the session have no joint angles (marker gaps)")
     tau = contact_torques_nm(q_rad[valid], kinematics.lengths_m, wrench_yzx[valid])
     return IdentificationData(
         wrench.t_ns[valid],
