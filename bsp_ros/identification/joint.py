@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -261,16 +262,58 @@ TRANSITION_WIDTHS_RAD_S = 0.00025 * 2.0 ** (np.arange(25) / 4.0)
 TRANSITION_MIN_GAIN = 100.0
 
 
-def _transition_widths(problem: _Problem, fit: _Fit, data: IdentificationData, config: JointConfig) -> np.ndarray:
-    """(n,) width of a smooth Coulomb transition at each joint (rad/s), 0 where a sign step fits as well.
+def _transition_widths(
+    problem: _Problem, fit: _Fit, data: IdentificationData, config: JointConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """Width of a smooth Coulomb transition at each joint, and how uncertain that leaves the amplitude.
 
-    A profile over :data:`TRANSITION_WIDTHS_RAD_S`, one joint at a time, on the weighted normal equations:
-    swapping one column costs O(N), not a new fit.
+    A profile over :data:`TRANSITION_WIDTHS_RAD_S` (and the sign step, width 0), one joint at a time, on
+    the weighted normal equations: swapping one column costs O(N), not a new fit.
+
+    Returns
+    -------
+    widths : (n,) rad/s; 0 where a sign step fits as well (gain below :data:`TRANSITION_MIN_GAIN`).
+    spread : (n,) half the range (Nm) of the Coulomb amplitudes over the widths the data cannot tell from
+        the chosen one (residual within :data:`TRANSITION_MIN_GAIN` of it): a model uncertainty the
+        covariance of one fit does not hold.
     """
     n = data.n_joints
-    widths = np.zeros(n)
+    widths, spread = np.zeros(n), np.zeros(n)
     if "coulomb" not in config.passive.terms:
-        return widths
+        return widths, spread
+    k = len(config.passive.terms)
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    total = float((w * problem.torque**2).sum())
+
+    def solve(a: np.ndarray, b: np.ndarray) -> tuple[float, np.ndarray]:
+        try:
+            x = np.linalg.solve(a, b)
+        except np.linalg.LinAlgError:
+            return np.inf, np.full(b.size, np.nan)
+        return total - float(b @ x), x
+
+    base, base_x = solve(design, moment)
+    for j in range(n):
+        column = n + j * k + config.passive.terms.index("coulomb")
+        x_j, w_j, y_j = problem.regressor[:, j, :], w[:, j], problem.torque[:, j]
+        profile = [(base, 0.0, float(base_x[column]))]
+        for width in TRANSITION_WIDTHS_RAD_S:
+            c = np.tanh(data.velocity_rad_s[:, j] / width)
+            a, b = design.copy(), moment.copy()
+            cross = (x_j * (w_j * c)[:, None]).sum(axis=0)
+            cross[column] = (w_j * c * c).sum()
+            a[column, :], a[:, column] = cross, cross
+            b[column] = (w_j * c * y_j).sum()
+            value, x = solve(a, b)
+            profile.append((value, float(width), float(x[column])))
+        best = min(profile)
+        chosen = best if base - best[0] > TRANSITION_MIN_GAIN else profile[0]
+        widths[j] = chosen[1]
+        near = [c for value, _, c in profile if value <= chosen[0] + TRANSITION_MIN_GAIN and np.isfinite(c)]
+        spread[j] = 0.5 * (max(near) - min(near)) if near else 0.0
+    return widths, spread
     k = len(config.passive.terms)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
@@ -413,7 +456,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                     "tell the direction of motion"
                 )
     fit = _fit(problem)
-    widths = _transition_widths(problem, fit, data, config)
+    widths, spread = _transition_widths(problem, fit, data, config)
     if widths.any():
         problem = _build_problem(data, config.passive, rows, widths)
         fit = _fit(problem)
@@ -456,6 +499,15 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 f"{shift[worst]:.1f} std"
             )
         problem, fit, n_removed = kept, refit, n_far
+    if spread.any():
+        # Whether friction steps or changes smoothly at low speed is itself uncertain: its effect on each
+        # Coulomb amplitude joins that amplitude's variance (independent of the other parameters).
+        covariance = fit.covariance.copy()
+        k = len(config.passive.terms)
+        for j in range(n):
+            index = n + j * k + config.passive.terms.index("coulomb")
+            covariance[index, index] += spread[j] ** 2
+        fit = dataclasses.replace(fit, covariance=covariance)
     noise, misfit = _misfit(fit)
     for j, joint in enumerate(joints):
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
@@ -517,5 +569,6 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "removed_samples": {k: v for k, v in removed.items() if v},
             "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
             "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
+            "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
         },
     )
