@@ -60,7 +60,7 @@ def test_a_bit_flip_in_a_marker_coordinate_is_removed_and_reported(
 
 @pytest.mark.parametrize(
     ("name", "kind"),
-    [("spikes", "wrench_spikes"), ("absurd", "wrench_absurd"), ("jump", "marker_hand")],
+    [("spikes", "wrench_spikes"), ("absurd", "wrench_absurd"), ("jump", "marker_hand"), ("swap", "marker_elbow")],
 )
 def test_glitches_in_a_bag_without_crcs_are_removed_and_counted(
     name: str, kind: str, simulated: SimulatedSession, clean: dict[str, Any], tmp_path: Path
@@ -69,6 +69,7 @@ def test_glitches_in_a_bag_without_crcs_are_removed_and_counted(
         "spikes": lambda s: glitches.wrench_spikes(s, 10, 1000.0, seed=4),
         "absurd": lambda s: glitches.set_wrench_sample(s, 500, 1e30, 1),
         "jump": lambda s: glitches.displace_marker(s, "hand", 600, (0.0, 0.06, 0.0)),
+        "swap": lambda s: glitches.swap_markers(s, "elbow", "hand", 1200),
     }[name](simulated.session)
     document = identify_bag(rewrite_without_crcs(write_session_bag(tmp_path / name, session)))
     within_3_std(clean, document)
