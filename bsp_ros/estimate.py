@@ -95,7 +95,7 @@ def estimate_document(
     for i, (key, owner) in enumerate(result.names):
         if owner in joints:
             joints[owner][key] = quantity(result.values[i], result.std[i], "data")
-    quality = {
+    quality: dict[str, Any] = {
         "valid": bool(result.valid),
         "n_samples": int(result.n_samples),
         "condition_number": float(result.condition_number) if math.isfinite(result.condition_number) else None,
@@ -103,7 +103,18 @@ def estimate_document(
         "warnings": list(result.warnings) + (list(posterior.notes) if posterior else []),
         "message": result.message,
         "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
+        "removed_samples": removed_samples(result, data),
     }
+    sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
+    if sensitivity:
+        # What the data cannot test at one operating point, and what it would cost if false.
+        quality["assumptions"] = [
+            {
+                "assumption": "no elastic passive offset at any joint (a constant passive moment is confounded "
+                "with gravity over a small range of motion)",
+                "static_moment_shift_kgm_per_0_05_nm": sensitivity,
+            }
+        ]
     correlation = _correlation(result.covariance)
     document: dict[str, Any] = {
         "schema": SCHEMA,
@@ -123,6 +134,15 @@ def estimate_document(
     if session:
         document["session"] = session
     return document
+
+
+def removed_samples(result: IdentificationResult, data: IdentificationData) -> dict[str, int]:
+    """Implausible samples removed before or during the fit, by kind (``wrench_spikes``, ``marker_elbow``...)."""
+    found = result.diagnostics.get("removed_samples", {})
+    merged = dict(data.removed_samples)
+    if isinstance(found, dict):
+        merged.update({str(k): int(v) for k, v in found.items()})
+    return merged
 
 
 def _finite(number: float) -> float | None:

@@ -166,3 +166,38 @@ def fuse_static_moments(
     grad = np.hstack((np.diag(coms), np.diag(masses)))
     first_std = np.sqrt(np.diag(grad @ covariance @ grad.T))
     return Posterior(solution.x, covariance, prior_share, first, first_std, list(prior.notes))
+
+
+# Static moments outside this factor of the anthropometric prior's are not a human arm (nor an arm with
+# a handle): a lost transform, a wrong sensor frame or damaged data.
+PLAUSIBLE_FACTOR = 4.0
+
+
+def implausible_static_moments(
+    subject: SubjectInfo, lengths_m: np.ndarray, beta_kgm: np.ndarray, factor: float = PLAUSIBLE_FACTOR
+) -> list[str]:
+    """What is physically implausible in identified static moments, judged against the anthropometric prior.
+
+    Parameters
+    ----------
+    subject : the subject facts of the prior.
+    lengths_m : (n,) segment lengths (m).
+    beta_kgm : (n,) identified static moments (kg m).
+    factor : a static moment below ``1/factor`` or above ``factor`` times the prior's is implausible.
+
+    Returns
+    -------
+    One message per implausible segment (empty when all are plausible).
+    """
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    prior = anthropometric_prior(subject, lengths)
+    n = lengths.size
+    expected = static_moments_kgm(lengths, prior.mean[:n], prior.mean[n:])
+    problems = []
+    for segment, value, typical in zip(segments_for(n), np.asarray(beta_kgm, dtype=np.float64), expected, strict=True):
+        if not (np.isfinite(value) and typical / factor <= value <= typical * factor):
+            problems.append(
+                f"implausible {segment} static moment {value:.3g} kgm: the anthropometric prior expects about "
+                f"{typical:.3g} kgm (plausible {typical / factor:.2g} to {typical * factor:.2g})"
+            )
+    return problems

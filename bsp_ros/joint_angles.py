@@ -11,6 +11,7 @@ import numpy.typing as npt
 from scipy import signal
 
 from bsp_ros.errors import DataError, InputError
+from bsp_ros.identification.robust import hampel_outliers, robust_sd
 from bsp_ros.streams import MarkerSeries, markers_for
 from bsp_ros.validation import check_finite_scalar, check_positive
 
@@ -26,18 +27,27 @@ class KinematicsConfig:
         at 0.03 rad/s a 5 Hz-filtered derivative is as noisy as the signal (NOTES.md 1).
     max_gap_s : marker gaps up to this long are bridged by interpolation; longer ones remove samples.
     min_run_s : stretches of valid frames shorter than this are dropped (the filters need a run-in).
+    max_length_error_m : a marker frame whose segment length is further than this (and than
+        ``outlier_sd`` robust standard deviations) from the session's median length is removed.
+    outlier_sd : a marker position further than this many robust standard deviations from the rolling
+        median of its neighbours (a jump no arm makes) is removed, as is a joint angle in
+        :func:`kinematics_from_angles`.
     """
 
     cutoff_hz: float = 5.0
     direction_cutoff_hz: float = 0.5
     max_gap_s: float = 0.1
     min_run_s: float = 2.0
+    max_length_error_m: float = 0.005
+    outlier_sd: float = 8.0
 
     def __post_init__(self) -> None:
         check_positive("cutoff_hz", self.cutoff_hz, 1000.0)
         check_positive("direction_cutoff_hz", self.direction_cutoff_hz, self.cutoff_hz)
         check_finite_scalar("max_gap_s", self.max_gap_s, 0.0, 10.0)
         check_finite_scalar("min_run_s", self.min_run_s, 0.0, 600.0)
+        check_positive("max_length_error_m", self.max_length_error_m, 1.0)
+        check_positive("outlier_sd", self.outlier_sd, 1000.0)
 
 
 @dataclass(frozen=True)
@@ -53,6 +63,7 @@ class MarkerKinematics:
     lengths_std_m : (n,) standard errors of those lengths (m).
     n_frames_bridged : frames filled across short gaps, per marker.
     n_frames_invalid : grid frames without valid angles (long gaps, short runs, edges).
+    n_frames_rejected : marker (or ``angles``) -> frames removed as inconsistent with the rigid chain.
     direction_velocity_noise_rad_s : (n,) standard deviation of the marker noise in the direction
         velocities (rad/s), propagated from the angle noise through the filter.
     warnings : plain-language notes on data quality.
@@ -67,6 +78,7 @@ class MarkerKinematics:
     n_frames_invalid: int
     direction_velocity_noise_rad_s: np.ndarray
     warnings: list[str] = field(default_factory=list)
+    n_frames_rejected: dict[str, int] = field(default_factory=dict)
 
     @property
     def rate_hz(self) -> float:
@@ -174,6 +186,73 @@ def _zero_phase_lowpass(values: np.ndarray, cutoff_hz: float, rate_hz: float, or
     return signal.sosfiltfilt(sos, values, axis=0, padtype="odd", padlen=padlen)
 
 
+# Frames in the rolling median of a marker's positions: up to 4 consecutive bad frames are found.
+_MARKER_WINDOW = 9
+
+
+def _rigid_chain_outliers(
+    cleaned: dict[str, tuple[np.ndarray, np.ndarray]], names: tuple[str, ...], config: KinematicsConfig
+) -> dict[str, np.ndarray]:
+    """Per marker, (M,) bool flags of frames inconsistent with a rigid chain moving slowly.
+
+    A frame is flagged when the marker jumps away from the rolling median of its neighbouring frames (a
+    jump no arm makes at rehabilitation speeds), or when a segment length in it is off the session's
+    median length. A length error is blamed on the marker that all of its flagged segments share (the
+    elbow when both upper arm and forearm are off), on both ends of a segment otherwise.
+    """
+    flags = {}
+    for name in names:
+        _, position = cleaned[name]
+        flags[name] = hampel_outliers(position, _MARKER_WINDOW, config.outlier_sd, floor=1e-3)
+    off: list[np.ndarray] = []  # per segment: stamps with a length off the median
+    for proximal, distal in itertools.pairwise(names):
+        t_a, p_a = cleaned[proximal]
+        t_b, p_b = cleaned[distal]
+        common, i_a, i_b = np.intersect1d(t_a, t_b, assume_unique=True, return_indices=True)
+        distance = np.linalg.norm(sagittal_from_world(p_b[i_b]) - sagittal_from_world(p_a[i_a]), axis=1)
+        error = np.abs(distance - np.median(distance)) if distance.size else distance
+        limit = max(config.max_length_error_m, config.outlier_sd * float(robust_sd(distance)) if distance.size else 0.0)
+        # A length error at a frame where an end already jumped is explained by that jump.
+        jumped = np.concatenate((t_a[flags[proximal]], t_b[flags[distal]]))
+        off.append(np.setdiff1d(common[error > limit], jumped))
+    # A frame's set of off segments is explained by one marker when it is exactly that marker's segments
+    # (both for an inner marker, the one for an end marker); otherwise both ends of each are dropped.
+    off_sets: dict[int, set[int]] = {}
+    for s, stamps in enumerate(off):
+        for stamp in stamps.tolist():
+            off_sets.setdefault(stamp, set()).add(s)
+    adjacency = [{s for s in (k - 1, k) if 0 <= s < len(off)} for k in range(len(names))]
+    blamed: dict[str, list[int]] = {name: [] for name in names}
+    for stamp, segments in off_sets.items():
+        culprits = [names[k] for k in range(len(names)) if adjacency[k] == segments]
+        if not culprits:
+            culprits = sorted({names[e] for s in segments for e in (s, s + 1)})
+        for name in culprits:
+            blamed[name].append(stamp)
+    for name in names:
+        flags[name] |= np.isin(cleaned[name][0], np.array(blamed[name], dtype=np.int64))
+    return flags
+
+
+def _remove_chain_outliers(
+    cleaned: dict[str, tuple[np.ndarray, np.ndarray]], names: tuple[str, ...], config: KinematicsConfig
+) -> tuple[dict[str, int], list[str]]:
+    """Remove (as if occluded) marker frames inconsistent with the rigid chain; counts and a warning."""
+    flags = _rigid_chain_outliers(cleaned, names, config)
+    counts = {name: int(flag.sum()) for name, flag in flags.items() if flag.any()}
+    for name, flag in flags.items():
+        t_ns, position = cleaned[name]
+        cleaned[name] = (t_ns[~flag], position[~flag])
+    if not counts:
+        return {}, []
+    total = sum(counts.values())
+    where = ", ".join(f"{name} {count}" for name, count in counts.items()) if len(counts) > 1 else next(iter(counts))
+    return counts, [
+        f"removed {total} marker frame{'s' if total > 1 else ''} inconsistent with the rigid chain ({where}): "
+        "a jump or segment-length change no arm makes; treated as occluded"
+    ]
+
+
 def _segment_lengths(
     cleaned: dict[str, tuple[np.ndarray, np.ndarray]], names: tuple[str, ...]
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -208,7 +287,8 @@ def _direction_velocity_noise(
     if high.shape[0] < 10:
         return np.full(raw_q.shape[1], np.nan)
     band_share = max(1.0 - 2.0 * config.cutoff_hz / rate_hz, 0.05)
-    angle_sd = high.std(axis=0) / np.sqrt(band_share)
+    # The median absolute deviation: one glitched frame must not inflate the noise, hence the dead band.
+    angle_sd = robust_sd(high, axis=0) / np.sqrt(band_share)
     return np.asarray(angle_sd * _direction_noise_gain(config.direction_cutoff_hz, rate_hz))
 
 
@@ -223,9 +303,12 @@ def _direction_noise_gain(direction_cutoff_hz: float, rate_hz: float) -> float:
 
 
 def _filtered_runs(
-    raw_q: np.ndarray, rate_hz: float, config: KinematicsConfig, angle_filter: bool = True
+    raw_q: np.ndarray, rate_hz: float, config: KinematicsConfig, angle_filter: bool = True, trim_edges: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """Zero-phase filtered angles and direction velocities over each long-enough run of valid frames.
+
+    With ``trim_edges`` the direction velocity is left out (NaN) within a quarter period of its cutoff of
+    each run's ends: there the padding makes it noise, and its sign, the direction of motion, a guess.
 
     Returns angles, velocities (NaN outside usable runs), the direction-velocity noise (n,), and notes.
 
@@ -250,6 +333,10 @@ def _filtered_runs(
         q_rad[begin:end] = smooth[begin:end] if angle_filter else run
         slow = _zero_phase_lowpass(run, config.direction_cutoff_hz, rate_hz, order=2)
         velocity[begin:end] = np.gradient(slow, 1.0 / rate_hz, axis=0)
+        if trim_edges:
+            edge = min(int(0.25 * rate_hz / config.direction_cutoff_hz), (end - begin) // 4)
+            velocity[begin : begin + edge] = np.nan
+            velocity[end - edge : end] = np.nan
     if not np.isfinite(q_rad).any():
         raise DataError("no stretch of marker data is long enough to give joint angles")
     # The noise is judged against the smoothed angles even when those are not returned.
@@ -325,6 +412,8 @@ def kinematics_from_markers(
         if t_ns.size < 10:
             raise DataError(f"marker {name!r} has {t_ns.size} usable frames; at least 10 are needed")
         cleaned[name] = (t_ns, position)
+    rejected, notes = _remove_chain_outliers(cleaned, names, config)
+    warnings += notes
     lengths_m, lengths_std_m = _segment_lengths(cleaned, names)
 
     step_ns = round(float(np.median(np.concatenate([np.diff(t) for t, _ in cleaned.values()]))))
@@ -340,14 +429,16 @@ def kinematics_from_markers(
         gridded, bridged[name] = _grid_values(grid_ns, t_ns, sagittal_from_world(position), max_gap_ns)
         points[:, k] = gridded
     raw_q = joint_angles_from_positions(points)
-    q_rad, velocity, noise, notes = _filtered_runs(raw_q, 1e9 / step_ns, config)
+    q_rad, velocity, noise, notes = _filtered_runs(raw_q, 1e9 / step_ns, config, trim_edges=True)
     warnings += notes
     n_invalid = int((~np.isfinite(q_rad).all(axis=1)).sum())
     if n_invalid:
         warnings.append(
             f"{n_invalid} of {grid_ns.size} marker frames give no angle (gaps over {config.max_gap_s} s or short runs)"
         )
-    return MarkerKinematics(grid_ns, q_rad, velocity, lengths_m, lengths_std_m, bridged, n_invalid, noise, warnings)
+    return MarkerKinematics(
+        grid_ns, q_rad, velocity, lengths_m, lengths_std_m, bridged, n_invalid, noise, warnings, rejected
+    )
 
 
 def resample_kinematics(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -38,6 +38,23 @@ def identify_bag(
             "identified from the intact part",
         )
     warnings[1:1] = [w for w in report.warnings if w not in warnings]
+    quality = document["quality"]
+    if report.rotation_source == "assumed" and not quality["valid"]:
+        frame = read.session.wrench.frame_id
+        quality["message"] = (
+            f"missing transform world -> {frame} (/tf_static lost or never recorded): the wrench was taken as "
+            f"given in world; {quality['message']}"
+        )
+    # Samples implausible in themselves (not merely off the model's fit): the signature of bit damage.
+    implausible = {k: v for k, v in quality.get("removed_samples", {}).items() if k.startswith(("wrench", "marker"))}
+    if report.chunks_without_crc and implausible:
+        # Without chunk CRCs, bit damage shows only as implausible values: say how many were removed.
+        total = sum(implausible.values())
+        warnings.insert(
+            0,
+            f"possible undetected bag damage: chunks carry no CRC and {total} implausible samples were removed "
+            f"({', '.join(f'{k} {v}' for k, v in implausible.items())})",
+        )
     document["bag"] = {
         "files": [Path(f).name for f in report.files],
         "messages": {topic: t.read for topic, t in report.topics.items()},
@@ -47,5 +64,6 @@ def identify_bag(
         "chunks_without_crc": report.chunks_without_crc,
         "rotation_source": report.rotation_source,
         "damage": list(report.damage),
+        "implausible_samples_removed": implausible,
     }
     return document

@@ -9,7 +9,13 @@ import numpy as np
 
 from bsp_ros.errors import BspError
 from bsp_ros.estimate import estimate_document
-from bsp_ros.fusion import Posterior, SubjectInfo, anthropometric_prior, fuse_static_moments
+from bsp_ros.fusion import (
+    Posterior,
+    SubjectInfo,
+    anthropometric_prior,
+    fuse_static_moments,
+    implausible_static_moments,
+)
 from bsp_ros.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.identification.joint import JointConfig, identify_joint
 from bsp_ros.identification.paper import PaperConfig, identify_paper
@@ -53,11 +59,20 @@ def identify_data(
     """Run the chosen identification method on prepared samples.
 
     ``check_elastic`` runs the test for an unmodelled elastic passive term (a second fit): a live window
-    may run it on only some updates.
+    may run it on only some updates. A valid result whose static moments are implausible for a human arm
+    (:func:`bsp_ros.fusion.implausible_static_moments`) is made invalid.
     """
     if options.method == "paper":
-        return identify_paper(data, PaperConfig())
-    return identify_joint(data, JointConfig(passive=options.passive, check_elastic=check_elastic))
+        result = identify_paper(data, PaperConfig())
+    else:
+        result = identify_joint(data, JointConfig(passive=options.passive, check_elastic=check_elastic))
+    if result.valid:
+        _, beta, _ = result.block("static_moment_kgm")
+        implausible = implausible_static_moments(options.subject, data.lengths_m, beta)
+        if implausible:
+            result.valid = False
+            result.message = "; ".join(implausible)
+    return result
 
 
 def fuse(result: IdentificationResult, data: IdentificationData, subject: SubjectInfo) -> Posterior | None:

@@ -26,6 +26,8 @@ class IdentificationData:
     velocity_noise_rad_s : (n,) noise of the direction velocities (rad/s), NaN if unknown.
     n_wrench_samples : wrench samples received, before any was removed.
     warnings : what was removed and why.
+    removed_samples : implausible samples removed before identification: ``wrench_absurd``,
+        ``wrench_non_finite`` and ``marker_<name>`` (frames inconsistent with the rigid chain) -> count.
     """
 
     t_ns: np.ndarray
@@ -37,6 +39,7 @@ class IdentificationData:
     velocity_noise_rad_s: np.ndarray
     n_wrench_samples: int = 0
     warnings: list[str] = field(default_factory=list)
+    removed_samples: dict[str, int] = field(default_factory=dict)
 
     @property
     def n_joints(self) -> int:
@@ -55,11 +58,16 @@ class IdentificationData:
             self.velocity_noise_rad_s,
             stop - start,
             list(self.warnings),
+            dict(self.removed_samples),
         )
 
 
 # A step back in stamps larger than this is a clock jump, not jitter or reordering in transport.
 CLOCK_JUMP_NS = 1_000_000_000
+
+# No arm on a rehab cell's force sensor exerts this: such a sample is damage or a sensor fault.
+MAX_FORCE_N = 5000.0
+MAX_TORQUE_NM = 500.0
 
 
 def wrench_world_yzx(wrench: WrenchSeries, rotation_world_from_sensor: np.ndarray) -> np.ndarray:
@@ -87,7 +95,7 @@ def wrench_world_yzx(wrench: WrenchSeries, rotation_world_from_sensor: np.ndarra
     return np.column_stack((force[:, 1], force[:, 2], torque[:, 0]))
 
 
-def _clean_wrench(wrench: WrenchSeries) -> tuple[np.ndarray, list[str]]:
+def _clean_wrench(wrench: WrenchSeries) -> tuple[np.ndarray, list[str], dict[str, int]]:
     """Indices of usable wrench samples in time order: finite, unique stamps; say what was removed."""
     t_ns = np.asarray(wrench.t_ns, dtype=np.int64)
     values = np.column_stack((wrench.force_n, wrench.torque_nm))
@@ -95,6 +103,17 @@ def _clean_wrench(wrench: WrenchSeries) -> tuple[np.ndarray, list[str]]:
     finite = np.isfinite(values).all(axis=1)
     if not finite.all():
         notes.append(f"wrench: {int((~finite).sum())} samples with NaN/Inf removed")
+    with np.errstate(invalid="ignore", over="ignore"):
+        absurd = finite & (
+            (np.linalg.norm(values[:, :3], axis=1) > MAX_FORCE_N)
+            | (np.linalg.norm(values[:, 3:], axis=1) > MAX_TORQUE_NM)
+        )
+    if absurd.any():
+        notes.append(
+            f"wrench: removed {int(absurd.sum())} samples with an absurd magnitude (|F| > {MAX_FORCE_N:g} N or "
+            f"|M| > {MAX_TORQUE_NM:g} Nm)"
+        )
+        finite &= ~absurd
     positive = t_ns > 0
     if not positive.all():
         notes.append(f"wrench: {int((~positive).sum())} samples with stamp <= 0 removed")
@@ -112,7 +131,8 @@ def _clean_wrench(wrench: WrenchSeries) -> tuple[np.ndarray, list[str]]:
     if duplicate.any():
         notes.append(f"wrench: {int(duplicate.sum())} duplicate stamps removed (first kept)")
     keep = (finite & positive)[order] & ~duplicate
-    return order[keep], notes
+    removed = {"wrench_absurd": int(absurd.sum()), "wrench_non_finite": int((~np.isfinite(values).all(axis=1)).sum())}
+    return order[keep], notes, {k: v for k, v in removed.items() if v}
 
 
 def identification_data_from_session(
@@ -130,7 +150,8 @@ def identification_data_from_session(
         raise DataError("the session holds no wrench samples")
     kinematics = kinematics_from_markers(session.markers, session.n_segments, kinematics_config)
     rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
-    keep, notes = _clean_wrench(session.wrench)
+    keep, notes, removed = _clean_wrench(session.wrench)
+    removed.update({f"marker_{name}": count for name, count in kinematics.n_frames_rejected.items()})
     if rotation.ndim == 3:
         rotation = rotation[keep]
     wrench = WrenchSeries(
@@ -143,9 +164,12 @@ def identification_data_from_session(
     q_rad, velocity, valid = resample_kinematics(kinematics, wrench.t_ns)
     if not valid.any():
         raise DataError("no wrench sample falls where the markers give joint angles (streams do not overlap)")
-    dropped = int((~valid).sum())
+    # Samples before the first and after the last angle are the session's edges (filter run-in): expected,
+    # not worth a warning. Those lost inside the session are.
+    inside = np.flatnonzero(valid)
+    dropped = int((~valid[inside[0] : inside[-1] + 1]).sum())
     if dropped:
-        notes.append(f"{dropped} of {keep.size} wrench samples have no joint angles (marker gaps or edges)")
+        notes.append(f"{dropped} of {keep.size} wrench samples inside the session have no joint angles (marker gaps)")
     tau = contact_torques_nm(q_rad[valid], kinematics.lengths_m, wrench_yzx[valid])
     return IdentificationData(
         wrench.t_ns[valid],
@@ -157,4 +181,5 @@ def identification_data_from_session(
         kinematics.direction_velocity_noise_rad_s,
         n_wrench,
         kinematics.warnings + notes,
+        removed,
     )

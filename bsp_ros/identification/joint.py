@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,6 +13,7 @@ from bsp_ros.identification.covariance import correlation_from_covariance, hac_c
 from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.passive import TERMS, PassiveModel
 from bsp_ros.identification.result import IdentificationResult, ParameterName
+from bsp_ros.identification.robust import hampel_outliers, high_frequency_sd, robust_sd
 from bsp_ros.model import gravity_regressor
 from bsp_ros.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_scalar, check_positive
@@ -32,6 +34,15 @@ class JointConfig:
     min_direction_share : each direction of motion must hold this share of a joint's rows (Coulomb).
     max_condition : a larger column-scaled condition number makes the estimate invalid.
     check_elastic : test whether an elastic term the model lacks would change the static moments.
+    outlier_sd : torque samples further than this many robust standard deviations from the rolling median
+        of their neighbours (wrench spikes), or from the fit, are removed.
+    spike_window : samples in that rolling median.
+    max_misfit : the residual RMS of a joint above this multiple of the sensor noise the data shows
+        (robust, from first differences) means the model does not fit: invalid.
+    max_outlier_shift : if removing the samples far off the fit moves a parameter by more than this many
+        standard deviations, the estimate hangs on a few samples: invalid.
+    min_row_share : with a Coulomb term, a joint whose direction of motion is trustworthy in fewer than
+        this share of the samples makes the estimate invalid.
     """
 
     passive: PassiveModel = field(default_factory=PassiveModel)
@@ -42,6 +53,11 @@ class JointConfig:
     min_direction_share: float = 0.05
     max_condition: float = 1e4
     check_elastic: bool = True
+    outlier_sd: float = 8.0
+    spike_window: int = 11
+    max_misfit: float = 4.0
+    min_row_share: float = 0.5
+    max_outlier_shift: float = 2.0
 
     def __post_init__(self) -> None:
         check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)
@@ -50,6 +66,11 @@ class JointConfig:
         check_finite_scalar("min_range_deg", self.min_range_deg, 0.0, 90.0)
         check_finite_scalar("min_direction_share", self.min_direction_share, 0.0, 0.5)
         check_positive("max_condition", self.max_condition)
+        check_positive("outlier_sd", self.outlier_sd, 1000.0)
+        check_positive("spike_window", self.spike_window, 10_001)
+        check_positive("max_misfit", self.max_misfit)
+        check_finite_scalar("min_row_share", self.min_row_share, 0.0, 1.0)
+        check_finite_scalar("max_outlier_shift", self.max_outlier_shift, 0.0, 1e6)
 
 
 @dataclass(frozen=True)
@@ -70,9 +91,14 @@ class _Fit:
     sigma: np.ndarray  # (n,)
     condition: float
     lags: int
+    design: np.ndarray  # (p, p) X^T W X over the used rows
+    weights: np.ndarray  # (n,) per-joint weights 1 / sigma^2
 
 
-def _build_problem(data: IdentificationData, passive: PassiveModel, rows: np.ndarray) -> _Problem:
+def _build_problem(
+    data: IdentificationData, passive: PassiveModel, rows: np.ndarray, widths: np.ndarray | None = None
+) -> _Problem:
+    """The stacked problem; ``widths`` (n,) rad/s > 0 replace a joint's Coulomb ``sign(v)`` by ``tanh(v / w)``."""
     n = data.n_joints
     joints, segments = joints_for(n), segments_for(n)
     k = len(passive.terms)
@@ -86,6 +112,9 @@ def _build_problem(data: IdentificationData, passive: PassiveModel, rows: np.nda
             key, _, bound = TERMS[term]
             names.append((key, joint))
             lower.append(bound)
+        if widths is not None and widths[j] > 0 and "coulomb" in passive.terms:
+            column = n + j * k + passive.terms.index("coulomb")
+            regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
     return _Problem(names, regressor, data.tau_nm, rows, np.array(lower), np.full(len(names), np.inf))
 
 
@@ -141,7 +170,8 @@ def _fit(problem: _Problem) -> _Fit:
     # Singular values of the column-scaled matrix are those of its triangular factor.
     singular = np.linalg.svd(_triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0], compute_uv=False)
     condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
-    return _Fit(values, covariance, np.where(problem.rows, residual, np.nan), sigma, condition, lags)
+    residual_used = np.where(problem.rows, residual, np.nan)
+    return _Fit(values, covariance, residual_used, sigma, condition, lags, design, weights)
 
 
 def _motion_rows(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
@@ -180,14 +210,14 @@ def _excitation_problems(data: IdentificationData, rows: np.ndarray, config: Joi
 
 
 def _elastic_check(
-    data: IdentificationData, config: JointConfig, rows: np.ndarray, base: _Fit, names: list[ParameterName]
+    data: IdentificationData, config: JointConfig, rows: np.ndarray, base: _Fit, widths: np.ndarray
 ) -> list[str]:
     """Warn when an elastic term the model lacks is supported by the data and moves the static moments."""
     missing = [t for t in ("offset", "stiffness") if t not in config.passive.terms]
     if not missing:
         return []
     wider = PassiveModel(config.passive.terms + tuple(missing))
-    problem = _build_problem(data, wider, rows)
+    problem = _build_problem(data, wider, rows, widths)
     fit = _fit(problem)
     n = data.n_joints
     notes = []
@@ -218,8 +248,182 @@ def _elastic_check(
     return notes
 
 
+# Torque deviations and misfits below this never count (Nm): no rehab cell's sensor resolves them, and a
+# noise-free simulation would otherwise be judged against its rounding errors.
+MIN_OUTLIER_NM = 1e-3
+
+
+# Candidate widths of a smooth friction transition, tanh(v / w) (rad/s): 0.25 to 16 mrad/s.
+TRANSITION_WIDTHS_RAD_S = 0.00025 * 2.0 ** (np.arange(25) / 4.0)
+# A smooth transition is detected when it lowers the weighted residual sum of squares by this much (a
+# chi-square-like figure, inflated by autocorrelation): clean sessions give at most ~1, sessions with 5%
+# marker dropouts (noisy directions at each run's ends) up to ~200 rarely, a 1 mrad/s transition over
+# 60 s 110 at the wrist and 1200 at the elbow.
+TRANSITION_MIN_GAIN = 100.0
+
+
+def _transition_widths(
+    problem: _Problem, fit: _Fit, data: IdentificationData, config: JointConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """Width of a smooth Coulomb transition at each joint, and how uncertain that leaves the amplitude.
+
+    A profile over :data:`TRANSITION_WIDTHS_RAD_S` (and the sign step, width 0), one joint at a time, on
+    the weighted normal equations: swapping one column costs O(N), not a new fit.
+
+    Returns
+    -------
+    widths : (n,) rad/s; 0 where a sign step fits as well (gain below :data:`TRANSITION_MIN_GAIN`).
+    spread : (n,) half the range (Nm) of the Coulomb amplitudes over the widths the data cannot tell from
+        the chosen one (residual within :data:`TRANSITION_MIN_GAIN` of it): a model uncertainty the
+        covariance of one fit does not hold.
+    """
+    n = data.n_joints
+    widths, spread = np.zeros(n), np.zeros(n)
+    if "coulomb" not in config.passive.terms:
+        return widths, spread
+    k = len(config.passive.terms)
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    total = float((w * problem.torque**2).sum())
+
+    def solve(a: np.ndarray, b: np.ndarray) -> tuple[float, np.ndarray]:
+        try:
+            x = np.linalg.solve(a, b)
+        except np.linalg.LinAlgError:
+            return np.inf, np.full(b.size, np.nan)
+        return total - float(b @ x), x
+
+    base, base_x = solve(design, moment)
+    for j in range(n):
+        column = n + j * k + config.passive.terms.index("coulomb")
+        x_j, w_j, y_j = problem.regressor[:, j, :], w[:, j], problem.torque[:, j]
+        profile = [(base, 0.0, float(base_x[column]))]
+        for width in TRANSITION_WIDTHS_RAD_S:
+            c = np.tanh(data.velocity_rad_s[:, j] / width)
+            a, b = design.copy(), moment.copy()
+            cross = (x_j * (w_j * c)[:, None]).sum(axis=0)
+            cross[column] = (w_j * c * c).sum()
+            a[column, :], a[:, column] = cross, cross
+            b[column] = (w_j * c * y_j).sum()
+            value, x = solve(a, b)
+            profile.append((value, float(width), float(x[column])))
+        best = min(profile)
+        chosen = best if base - best[0] > TRANSITION_MIN_GAIN else profile[0]
+        widths[j] = chosen[1]
+        near = [c for value, _, c in profile if value <= chosen[0] + TRANSITION_MIN_GAIN and np.isfinite(c)]
+        spread[j] = 0.5 * (max(near) - min(near)) if near else 0.0
+    return widths, spread
+    k = len(config.passive.terms)
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    total = float((w * problem.torque**2).sum())
+
+    def ssr(a: np.ndarray, b: np.ndarray) -> float:
+        try:
+            return total - float(b @ np.linalg.solve(a, b))
+        except np.linalg.LinAlgError:
+            return np.inf
+
+    base = ssr(design, moment)
+    for j in range(n):
+        column = n + j * k + config.passive.terms.index("coulomb")
+        x_j, w_j, y_j = problem.regressor[:, j, :], w[:, j], problem.torque[:, j]
+        best, best_width = base, 0.0
+        for width in TRANSITION_WIDTHS_RAD_S:
+            c = np.tanh(data.velocity_rad_s[:, j] / width)
+            a, b = design.copy(), moment.copy()
+            cross = (x_j * (w_j * c)[:, None]).sum(axis=0)
+            cross[column] = (w_j * c * c).sum()
+            a[column, :], a[:, column] = cross, cross
+            b[column] = (w_j * c * y_j).sum()
+            value = ssr(a, b)
+            if value < best:
+                best, best_width = value, float(width)
+        if base - best > TRANSITION_MIN_GAIN:
+            widths[j] = best_width
+    return widths
+
+
+def _spikes(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
+    """Samples whose torques jump off the rolling median of their neighbours (wrench spikes), or not finite."""
+    finite = np.isfinite(data.tau_nm).all(axis=1)
+    flags = ~finite
+    if finite.sum() >= 3:
+        flags[finite] = hampel_outliers(
+            data.tau_nm[finite], config.spike_window, config.outlier_sd, floor=MIN_OUTLIER_NM
+        )
+    count = int(flags.sum())
+    if not count:
+        return flags, []
+    return flags, [
+        f"removed {count} wrench sample{'s' if count > 1 else ''} off the local robust spread (joint torques more "
+        f"than {config.outlier_sd:g} robust sd from the rolling median of {config.spike_window} samples)"
+    ]
+
+
+def _fit_outliers(fit: _Fit, config: JointConfig) -> np.ndarray:
+    """(N,) samples with a residual beyond ``outlier_sd`` robust standard deviations at any joint."""
+    scale = robust_sd(fit.residual, axis=0)
+    with np.errstate(invalid="ignore"):
+        far = np.abs(fit.residual) > np.maximum(config.outlier_sd * scale, MIN_OUTLIER_NM)[None, :]
+    return np.asarray(far.any(axis=1))
+
+
+def _misfit(fit: _Fit) -> tuple[np.ndarray, np.ndarray]:
+    """Per joint: the sensor noise the data shows (Nm) and the residual RMS as a multiple of it."""
+    noise = high_frequency_sd(fit.residual)
+    rms = np.sqrt(np.nanmean(fit.residual**2, axis=0))
+    return noise, rms / np.maximum(noise, 1e-12)
+
+
+# The elastic offset whose effect on the static moments the estimate states (Nm).
+SENSITIVITY_OFFSET_NM = 0.05
+
+
+def _offset_sensitivity(problem: _Problem, fit: _Fit, n: int) -> dict[str, dict[str, float]]:
+    """Joint -> segment -> how far an unmodelled constant passive offset of 0.05 Nm at that joint moves the
+    static moment (kg m), to first order: ``A^-1 X^T W u`` with ``u`` the offset's torque column."""
+    joints, segments = joints_for(n), segments_for(n)
+    out: dict[str, dict[str, float]] = {}
+    if any(key == "offset_nm" for key, _ in problem.names):
+        return out  # the offset is modelled: nothing assumed
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    try:
+        for j, joint in enumerate(joints):
+            rhs = SENSITIVITY_OFFSET_NM * problem.regressor[:, j, :].T @ w[:, j]
+            shift = np.linalg.solve(fit.design, rhs)[:n]
+            out[joint] = {segment: float(v) for segment, v in zip(segments, shift, strict=True)}
+    except np.linalg.LinAlgError:
+        return {}
+    return out
+
+
+def _failed(
+    data: IdentificationData, names: list[ParameterName], problems: list[str], warnings: list[str]
+) -> IdentificationResult:
+    p = len(names)
+    return IdentificationResult(
+        "joint",
+        names,
+        np.full(p, np.nan),
+        np.full((p, p), np.nan),
+        False,
+        "; ".join(problems),
+        warnings,
+        n_samples=int(data.t_ns.size),
+    )
+
+
 def identify_joint(data: IdentificationData, config: JointConfig | None = None) -> IdentificationResult:
     """Identify static moments and passive moments of all joints in one stacked problem.
+
+    Wrench spikes are removed before the fit and samples far off the fit after it (counted in the
+    warnings); if removing the latter moves a parameter by more than its standard deviation, the
+    estimate is not valid: it would hang on a few samples. Nor is it valid when the residuals are far
+    above the sensor noise the data shows (the model does not fit), when a static moment sits at its
+    bound 0, or when most samples of a joint lie in the direction dead band.
 
     Parameters
     ----------
@@ -232,24 +436,86 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     """
     config = config or JointConfig()
     n = data.n_joints
+    joints = joints_for(n)
     rows, notes = _motion_rows(data, config)
+    spikes, spike_notes = _spikes(data, config)
+    rows &= ~spikes[:, None]
     problems = _excitation_problems(data, rows, config)
     problem = _build_problem(data, config.passive, rows)
+    warnings = list(data.warnings) + spike_notes + notes
     if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
         problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
-        p = len(problem.names)
-        return IdentificationResult(
-            "joint",
-            problem.names,
-            np.full(p, np.nan),
-            np.full((p, p), np.nan),
-            False,
-            "; ".join(problems),
-            notes + list(data.warnings),
-            n_samples=int(data.t_ns.size),
-        )
+        return _failed(data, problem.names, problems, warnings)
+    usable = int((~spikes).sum())
+    if "coulomb" in config.passive.terms:
+        for j, joint in enumerate(joints):
+            share = rows[:, j].sum() / max(usable, 1)
+            if share < config.min_row_share:
+                problems.append(
+                    f"most samples of the {joint} were dropped: only {100 * share:.0f}% move clearly enough to "
+                    "tell the direction of motion"
+                )
     fit = _fit(problem)
-    warnings = list(data.warnings) + notes
+    widths, spread = _transition_widths(problem, fit, data, config)
+    if widths.any():
+        problem = _build_problem(data, config.passive, rows, widths)
+        fit = _fit(problem)
+        for j, joint in enumerate(joints):
+            if widths[j] == 0:
+                continue
+            beyond = float((np.abs(data.velocity_rad_s[rows[:, j], j]) > 3 * widths[j]).sum()) / max(usable, 1)
+            warnings.append(
+                f"friction at the {joint} changes direction smoothly (tanh width about {1e3 * widths[j]:.2g} mrad/s, "
+                f"modelled); {100 * beyond:.0f}% of samples move faster than 3 widths"
+            )
+            if beyond < config.min_row_share:
+                problems.append(
+                    f"the {joint} hardly leaves its friction transition (width about {1e3 * widths[j]:.2g} mrad/s, "
+                    f"{100 * beyond:.0f}% of samples beyond 3 widths): its Coulomb amplitude is not identified"
+                )
+    far = _fit_outliers(fit, config)
+    n_far = int(far.sum())
+    n_removed = 0
+    if n_far > 0.05 * usable:
+        problems.append(
+            f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
+        )
+    elif n_far:
+        kept = _build_problem(data, config.passive, rows & ~far[:, None], widths)
+        refit = _fit(kept)
+        # Against the larger std of the two fits: samples far off the fit (a filter's edge, a glitch) also
+        # inflate the std of the fit that keeps them.
+        std = np.sqrt(np.clip(np.maximum(np.diag(refit.covariance), np.diag(fit.covariance)), 0.0, None))
+        shift = np.abs(refit.values - fit.values) / np.maximum(std, 1e-300)
+        warnings.append(
+            f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over "
+            f"{config.outlier_sd:g} robust sd)"
+        )
+        if shift.max() > config.max_outlier_shift:
+            worst = int(np.argmax(shift))
+            key, owner = problem.names[worst]
+            problems.append(
+                f"the fit hangs on a few samples: removing {n_far} far off it moves {key} at the {owner} by "
+                f"{shift[worst]:.1f} std"
+            )
+        problem, fit, n_removed = kept, refit, n_far
+    if spread.any():
+        # Whether friction steps or changes smoothly at low speed is itself uncertain: its effect on each
+        # Coulomb amplitude joins that amplitude's variance (independent of the other parameters).
+        covariance = fit.covariance.copy()
+        k = len(config.passive.terms)
+        for j in range(n):
+            index = n + j * k + config.passive.terms.index("coulomb")
+            covariance[index, index] += spread[j] ** 2
+        fit = dataclasses.replace(fit, covariance=covariance)
+    noise, misfit = _misfit(fit)
+    for j, joint in enumerate(joints):
+        if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
+            problems.append(
+                f"the model does not fit at the {joint}: residual RMS {misfit[j] * noise[j]:.3g} Nm is "
+                f"{misfit[j]:.1f} times the sensor noise ({noise[j]:.2g} Nm) the data shows (a missing or "
+                "wrong sensor transform, an unmodelled load or passive moment?)"
+            )
     if fit.condition > config.max_condition:
         problems.append(f"poor excitation: condition number {fit.condition:.3g} > {config.max_condition:g}")
     correlation = correlation_from_covariance(fit.covariance)
@@ -261,15 +527,27 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             if corr > 0.95:
                 warnings.append(f"confounded: {key} at the {owner} is correlated with gravity (|corr| {corr:.3f})")
         std = np.sqrt(max(fit.covariance[i, i], 0.0))
-        if np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12 and std > 0:
+        at_bound = np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12
+        if at_bound and i < n:
+            problems.append(f"the {owner} static moment sits at its bound 0: the data do not support it")
+        elif at_bound and std > 0:
             warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
     if config.check_elastic and not problems:
-        warnings += _elastic_check(data, config, rows, fit, problem.names)
+        elastic = _elastic_check(data, config, problem.rows, fit, widths)
+        warnings += elastic
+        if elastic:
+            problems.append(
+                "an elastic passive moment the model lacks is supported by the data and biases the static moments "
+                "(see warnings)"
+            )
+    sensitivity = _offset_sensitivity(problem, fit, n)
     valid = not problems and bool(np.isfinite(fit.values).all())
     message = "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples"
-    residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints_for(n))}
+    residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)}
+    used = problem.rows.sum(axis=0)
+    removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_removed}
     return IdentificationResult(
         "joint",
         problem.names,
@@ -285,6 +563,12 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "hac_lags": fit.lags,
             "max_corr_with_gravity": max_corr_with_gravity,
             "passive_model": config.passive.label,
-            "rows_used": {j: int(c) for j, c in zip(joints_for(n), rows.sum(axis=0), strict=True)},
+            "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
+            "sensor_noise_nm": {j: float(v) for j, v in zip(joints, noise, strict=True)},
+            "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},
+            "removed_samples": {k: v for k, v in removed.items() if v},
+            "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
+            "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
+            "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
         },
     )

@@ -25,6 +25,11 @@ class CausalAnglesConfig:
     max_gap_s : a frame gap longer than this restarts the filters (no angle until they settle).
     settle_s : time after a (re)start before angles are published.
     length_frames : frames kept for the running-median segment lengths.
+    max_length_error_m : a frame whose segment length is further than this from the running median is
+        rejected as inconsistent with the rigid chain (a swapped or mislabelled marker).
+    max_speed_rad_s : a frame whose angles jump further from the previous accepted frame than this speed
+        allows (plus ``jump_margin_rad``) is rejected: no arm moves so in a rehab cell.
+    jump_margin_rad : allowance for marker noise in that jump test.
     """
 
     rate_hz: float = 50.0
@@ -33,6 +38,9 @@ class CausalAnglesConfig:
     max_gap_s: float = 0.1
     settle_s: float = 2.0
     length_frames: int = 3000
+    max_length_error_m: float = 0.005
+    max_speed_rad_s: float = 3.0
+    jump_margin_rad: float = 0.03
 
     def __post_init__(self) -> None:
         check_positive("rate_hz", self.rate_hz, 10_000.0)
@@ -41,6 +49,9 @@ class CausalAnglesConfig:
         check_finite_scalar("max_gap_s", self.max_gap_s, 0.0, 10.0)
         check_finite_scalar("settle_s", self.settle_s, 0.0, 60.0)
         check_positive("length_frames", self.length_frames)
+        check_positive("max_length_error_m", self.max_length_error_m, 1.0)
+        check_positive("max_speed_rad_s", self.max_speed_rad_s, 1000.0)
+        check_positive("jump_margin_rad", self.jump_margin_rad, 10.0)
 
 
 @dataclass(frozen=True)
@@ -57,8 +68,14 @@ class CausalJointAngles:
     """Joint angles frame by frame with causal filters and occlusion handling.
 
     A frame needs every marker of the chain; a frame with a marker missing is skipped, and a gap longer
-    than ``max_gap_s`` restarts the filters so that no angle is interpolated across it.
+    than ``max_gap_s`` restarts the filters so that no angle is interpolated across it. A frame
+    inconsistent with the rigid chain (segment length off the running median, or an angle jump) is
+    skipped too and counted in :attr:`n_rejected`: a run of them longer than ``max_gap_s`` ends in a
+    restart, after which the jump test starts afresh.
     """
+
+    # Frames of length history needed before the length test is trusted.
+    _MIN_LENGTH_FRAMES = 50
 
     def __init__(self, n_segments: int, config: CausalAnglesConfig | None = None) -> None:
         self.config = config or CausalAnglesConfig()
@@ -76,6 +93,7 @@ class CausalJointAngles:
         self._median_at = 0
         self._reset()
         self.n_restarts = 0
+        self.n_rejected = 0
         self.last_raw_q_rad: np.ndarray | None = None  # unfiltered angles of the last accepted frame
 
     def _reset(self) -> None:
@@ -127,10 +145,23 @@ class CausalJointAngles:
         if self._last_t_ns is not None and (t_ns - self._last_t_ns) > self.config.max_gap_s * 1e9:
             self._reset()
             self.n_restarts += 1
-        self._add_lengths(np.hypot(*np.diff(points, axis=0).T))
+        lengths = np.hypot(*np.diff(points, axis=0).T)
+        off_chain = (
+            self._median_m is not None
+            and self._length_count >= self._MIN_LENGTH_FRAMES
+            and bool((np.abs(lengths - self._median_m) > self.config.max_length_error_m).any())
+        )
+        # Lengths of every frame feed the median, so that a re-placed marker is accepted once it is the norm.
+        self._add_lengths(lengths)
         raw = joint_angles_from_positions(points[None])[0]
         if self._previous_raw is not None:  # keep angles continuous across +-pi
             raw = self._previous_raw + np.angle(np.exp(1j * (raw - self._previous_raw)))
+            assert self._last_t_ns is not None
+            allowed = self.config.max_speed_rad_s * (t_ns - self._last_t_ns) / 1e9 + self.config.jump_margin_rad
+            off_chain = off_chain or bool((np.abs(raw - self._previous_raw) > allowed).any())
+        if off_chain:
+            self.n_rejected += 1
+            return None
         self._previous_raw = raw
         self.last_raw_q_rad = raw
         if self._start_t_ns is None:

@@ -83,3 +83,17 @@ def test_a_missing_marker_is_a_clear_error(human_session_noise_free) -> None:
     markers = {k: v for k, v in human_session_noise_free.session.markers.items() if k != "elbow"}
     with pytest.raises(DataError, match="elbow"):
         kinematics_from_markers(markers, 3)
+
+
+def test_one_spike_in_a_live_angle_stream_does_not_inflate_the_velocity_noise() -> None:
+    """The live window's path (kinematics_from_angles): a MAD noise level one sample cannot blow up."""
+    from bsp_ros.joint_angles import kinematics_from_angles
+
+    rng = np.random.default_rng(5)
+    t_ns = 1_000_000_000 + 20_000_000 * np.arange(1500, dtype=np.int64)
+    seconds = (t_ns - t_ns[0]) / 1e9
+    q = np.column_stack([0.1 * np.sin(2 * np.pi * seconds / p) for p in (22.0, 19.0)]) + rng.normal(0, 1e-3, (1500, 2))
+    before = kinematics_from_angles(t_ns, q, [0.3, 0.3], angle_filter=True).direction_velocity_noise_rad_s
+    q[700, 1] += 0.5
+    after = kinematics_from_angles(t_ns, q, [0.3, 0.3], angle_filter=True).direction_velocity_noise_rad_s
+    np.testing.assert_allclose(after, before, rtol=0.05)

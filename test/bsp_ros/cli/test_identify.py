@@ -120,3 +120,37 @@ def test_a_bag_whose_clock_jumps_back_is_refused_with_a_clear_message(tmp_path, 
     bag = _write_modified(tmp_path, "jump_bag", jumped)
     assert main(["identify", str(bag), "--format", "none"]) == 3
     assert "jump back by" in capsys.readouterr().err
+
+
+def test_a_rotated_sensor_bag_without_tf_static_is_invalid_naming_the_transform(human_bag, tmp_path) -> None:
+    from bag_surgery import rewrite_without_crcs
+
+    lost = tmp_path / "lost_tf"
+    shutil.copytree(human_bag, lost)
+    rewrite_without_crcs(lost, drop_topics=("/tf_static",))
+    code, estimate = _identify(lost, tmp_path / "l.json")
+    assert code == 1
+    assert not estimate["quality"]["valid"]
+    assert "missing transform world -> ft_sensor" in estimate["quality"]["message"]
+
+
+def test_a_bit_flip_in_a_bag_without_crcs_is_counted_and_harmless(human_bag, tmp_path) -> None:
+    from bag_surgery import flip_bit_of_value, rewrite_without_crcs
+
+    plain = tmp_path / "plain"
+    shutil.copytree(human_bag, plain)
+    rewrite_without_crcs(plain)
+    _, clean = _identify(plain, tmp_path / "c.json")
+    from bsp_ros.bag import read_session
+
+    y = float(read_session(plain).session.markers["hand"].position_m[2000, 1])
+    flip_bit_of_value(plain, "/mocap/hand", 2000, y, 52)
+    code, estimate = _identify(plain, tmp_path / "f.json")
+    assert code == 0
+    assert estimate["bag"]["implausible_samples_removed"] == {"marker_hand": 1}
+    for segment, quantities in clean["segments"].items():
+        q = quantities["static_moment_kgm"]
+        assert abs(estimate["segments"][segment]["static_moment_kgm"]["value"] - q["value"]) < 3 * q["std"]
+    for joint, quantities in clean["joints"].items():
+        q = quantities["coulomb_nm"]
+        assert abs(estimate["joints"][joint]["coulomb_nm"]["value"] - q["value"]) < 3 * q["std"]

@@ -1,0 +1,147 @@
+"""Coverage and warning false-alarm rates of `bsp identify` over seeded simulated sessions.
+
+For each seed and scenario a human arm cell is simulated and identified (joint method, defaults). Reported:
+the share of valid estimates, for valid ones the share of data-sourced parameters whose truth lies within
+3 std, and how often each kind of warning fires. Run:
+
+    python bench/coverage.py --sessions 200 --duration 120 --scenario clean
+    python bench/coverage.py --sessions 50 --scenario elastic
+
+Scenarios: clean; elastic (0.2 Nm passive offset per joint) and elastic_small (0.05 Nm); random_subject
+(body mass 55-100 kg drawn from the prior); dropouts (5% marker dropouts, 20 frames mean); glitches (one
+elbow frame off by ~0.3 m and ten 1 kN wrench spikes); transition_1mrad / transition_2mrad (Coulomb
+friction as c tanh(v / w), added to the torques of a friction-free session).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import dataclasses
+import json
+import re
+import time
+from typing import Any
+
+import numpy as np
+
+from bsp_ros import glitches
+from bsp_ros import simulation as sim
+from bsp_ros.estimate import estimate_document
+from bsp_ros.identification.data import identification_data_from_session
+from bsp_ros.pipeline import IdentifyOptions, fuse, identify_data, identify_session
+
+SCENARIOS = (
+    "clean",
+    "elastic",
+    "elastic_small",
+    "random_subject",
+    "dropouts",
+    "glitches",
+    "transition_1mrad",
+    "transition_2mrad",
+)
+COULOMB_NM = np.array([0.5, 0.28, 0.06])
+
+
+def _spec(scenario: str, seed: int, duration_s: float) -> sim.CellSpec:
+    rng = np.random.default_rng(10_000 + seed)
+    spec = sim.human_arm_cell(seed=seed, duration_s=duration_s)
+    if scenario == "random_subject":
+        subject = sim.SubjectTruth.from_anthropometry("male", float(rng.uniform(55, 100)), 1.78, 3, rng=rng)
+        spec = dataclasses.replace(spec, subject=subject)
+    if scenario == "dropouts":
+        spec = dataclasses.replace(
+            spec, markers=dataclasses.replace(spec.markers, dropout_fraction=0.05, dropout_mean_frames=20.0)
+        )
+    if scenario.startswith("transition"):
+        spec = dataclasses.replace(spec, passive=sim.PassiveTruth(coulomb_nm=(0.0, 0.0, 0.0)))
+    if scenario.startswith("elastic"):
+        offset = 0.2 if scenario == "elastic" else 0.05
+        passive = dataclasses.replace(spec.passive, offset_nm=(offset, offset, offset))
+        spec = dataclasses.replace(spec, passive=passive)
+    return spec
+
+
+def _transition_document(spec: sim.CellSpec, simulated: sim.SimulatedSession, width_rad_s: float) -> dict[str, Any]:
+    """Friction ``c tanh(v / width)`` added to the torques of a friction-free session (the true velocities)."""
+    data = identification_data_from_session(simulated.session)
+    simulator = sim.CellSimulator(spec)
+    velocity = simulator.joint_velocities_rad_s(simulator.seconds_since_start(data.t_ns))
+    data = dataclasses.replace(data, tau_nm=data.tau_nm + COULOMB_NM * np.tanh(velocity / width_rad_s))
+    options = IdentifyOptions()
+    result = identify_data(data, options)
+    posterior = fuse(result, data, options.subject) if result.valid else None
+    return estimate_document(result, data, posterior, options.subject)
+
+
+def _kind(warning: str) -> str:
+    """A warning's kind: its text up to the first number or colon (counts, names of joints vary)."""
+    return re.sub(r"[0-9][0-9.e+-]*", "#", warning)[:60]
+
+
+def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dict[str, Any]:
+    valid = 0
+    z_all: list[float] = []
+    worst: list[tuple[float, int, str]] = []
+    kinds: collections.Counter[str] = collections.Counter()
+    messages: collections.Counter[str] = collections.Counter()
+    started = time.perf_counter()
+    for seed in range(first_seed, first_seed + sessions):
+        spec = _spec(scenario, seed, duration_s)
+        simulated = sim.simulate_cell(spec)
+        truth = simulated.truth.to_dict()
+        if scenario == "glitches":
+            rng = np.random.default_rng(seed)
+            session = glitches.displace_marker(
+                simulated.session, "elbow", int(rng.integers(100, 2900)), rng.normal(0.0, 0.3, 3)
+            )
+            session = glitches.wrench_spikes(session, 10, 1000.0, seed=seed)
+            document = identify_session(session)
+        elif scenario.startswith("transition"):
+            document = _transition_document(spec, simulated, 0.001 if scenario.endswith("1mrad") else 0.002)
+            for j, joint in enumerate(("shoulder", "elbow", "wrist")):
+                truth["joints"][joint]["coulomb_nm"] = float(COULOMB_NM[j])
+        else:
+            document = identify_session(simulated.session)
+        for kind in {_kind(w) for w in document["quality"]["warnings"]}:
+            kinds[kind] += 1
+        if not document["quality"]["valid"]:
+            messages[_kind(document["quality"]["message"])] += 1
+            continue
+        valid += 1
+        for group in ("segments", "joints"):
+            for owner, quantities in document[group].items():
+                for key, q in quantities.items():
+                    if q["source"] != "data" or key not in truth[group][owner] or not q["std"]:
+                        continue
+                    z = abs(q["value"] - truth[group][owner][key]) / q["std"]
+                    z_all.append(z)
+                    worst.append((z, seed, f"{key}/{owner}"))
+    z = np.array(z_all)
+    return {
+        "scenario": scenario,
+        "sessions": sessions,
+        "duration_s": duration_s,
+        "valid": valid,
+        "parameters": int(z.size),
+        "within_3_std": float((z < 3).mean()) if z.size else None,
+        "worst": sorted(worst, reverse=True)[:5],
+        "warning_rate": {k: v / sessions for k, v in kinds.most_common()},
+        "invalid_reasons": dict(messages),
+        "seconds": round(time.perf_counter() - started, 1),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sessions", type=int, default=200)
+    parser.add_argument("--duration", type=float, default=120.0)
+    parser.add_argument("--scenario", choices=SCENARIOS, default="clean")
+    parser.add_argument("--first-seed", type=int, default=0)
+    args = parser.parse_args()
+    print(json.dumps(run(args.scenario, args.sessions, args.duration, args.first_seed), indent=1))
+
+
+if __name__ == "__main__":
+    main()
