@@ -25,6 +25,7 @@ __all__ = [
     "corrected_session",
     "estimate_tare",
     "read_tare_file",
+    "tare_warnings",
     "tare_wrench",
     "write_tare_file",
 ]
@@ -97,6 +98,7 @@ class Tare:
     rotation_world_from_sensor : (3, 3) the mean orientation during the recording, None if unknown.
     residual_rms : (6,) rms residual per force (N) and moment (Nm) axis.
     source : where it came from (a bag's name; never a person's).
+    file : the file it was read from (not part of the file itself).
     """
 
     frame_id: str
@@ -110,6 +112,7 @@ class Tare:
     rotation_world_from_sensor: np.ndarray | None = None
     residual_rms: tuple[float, ...] = (0.0,) * 6
     source: str = ""
+    file: str = dataclasses.field(default="", compare=False)
 
     def __post_init__(self) -> None:
         if self.load not in LOADS:
@@ -464,7 +467,8 @@ def tare_wrench(
     ----------
     wrench : the session's wrench (sensor frame).
     tare : the tare of the same sensor.
-    rotation_world_from_sensor : (3, 3) the sensor's orientation during the session.
+    rotation_world_from_sensor : (3, 3) the sensor's orientation during the session, or (N, 3, 3) one
+        per sample.
 
     Returns
     -------
@@ -485,33 +489,44 @@ def tare_wrench(
             "a tare only applies to the sensor it was recorded with"
         )
     rotation = np.asarray(rotation_world_from_sensor, dtype=np.float64)
-    warnings: list[str] = []
-    if tare.load == "constant":
-        if tare.rotation_world_from_sensor is None:
-            warnings.append(
-                "tare: constant load of a recording without orientation applied; it is right only if the "
-                "sensor was held as in the session"
-            )
-        else:
-            tilt = math.degrees(
-                math.acos(
-                    float(
-                        np.clip(
-                            _gravity_in_sensor(rotation) @ _gravity_in_sensor(tare.rotation_world_from_sensor), -1, 1
-                        )
-                    )
-                )
-            )
-            if tilt > MAX_CONSTANT_LOAD_TILT_DEG:
-                warnings.append(
-                    f"tare: constant load recorded with the sensor tilted {tilt:.3g} deg from its session "
-                    "orientation: the handle's weight is not removed correctly (record a swinging tare)"
-                )
+    if rotation.ndim == 3:
+        if rotation.shape != (np.asarray(wrench.t_ns).size, 3, 3):
+            raise InputError(f"per-sample rotations must be (N, 3, 3) with N wrench samples, got {rotation.shape}")
+        h_all = np.stack([tare.wrench_jacobian(r) for r in rotation]) if tare.load == "separated" else None
+        load_all = h_all @ tare.values if h_all is not None else np.broadcast_to(tare.values, (rotation.shape[0], 6))
+        h_mean = h_all.mean(axis=0) if h_all is not None else np.eye(6)
+        return (
+            np.asarray(wrench.force_n, dtype=np.float64) - load_all[:, :3],
+            np.asarray(wrench.torque_nm, dtype=np.float64) - load_all[:, 3:],
+            h_mean @ tare.covariance @ h_mean.T,
+            tare_warnings(tare, rotation),
+        )
+    warnings = tare_warnings(tare, rotation)
     h = tare.wrench_jacobian(rotation)
     load = h @ tare.values
     force = np.asarray(wrench.force_n, dtype=np.float64) - load[:3]
     torque = np.asarray(wrench.torque_nm, dtype=np.float64) - load[3:]
     return force, torque, h @ tare.covariance @ h.T, warnings
+
+
+def tare_warnings(tare: Tare, rotation_world_from_sensor: npt.ArrayLike) -> list[str]:
+    """What applying ``tare`` at this session orientation ((3, 3), or (N, 3, 3)) needs to say, if anything."""
+    if tare.load != "constant":
+        return []
+    if tare.rotation_world_from_sensor is None:
+        return [
+            "tare: a constant load recorded without the sensor's orientation was applied; it is right only if "
+            "the sensor was held as in the session"
+        ]
+    rotation = np.asarray(rotation_world_from_sensor, dtype=np.float64).reshape(-1, 3, 3)
+    cosines = _gravity_in_sensor(rotation) @ _gravity_in_sensor(tare.rotation_world_from_sensor)
+    tilt = math.degrees(math.acos(float(np.clip(cosines.min(), -1.0, 1.0))))
+    if tilt <= MAX_CONSTANT_LOAD_TILT_DEG:
+        return []
+    return [
+        f"tare: constant load recorded with the sensor tilted up to {tilt:.3g} deg from its session orientation: "
+        "the handle's weight is not removed correctly (record a tare that swings the sensor)"
+    ]
 
 
 def corrected_session(session: Session, tare: Tare | None) -> Session:
@@ -563,4 +578,4 @@ def read_tare_file(path: str | Path) -> Tare:
         data = yaml.safe_load(file.read_text("utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as error:
         raise InputError(f"tare file {file} is not YAML: {error}") from None
-    return Tare.from_dict(data)
+    return dataclasses.replace(Tare.from_dict(data), file=file.name)

@@ -51,6 +51,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--tf-topic", default="/tf")
     parser.add_argument("--tf-static-topic", default="/tf_static")
     parser.add_argument(
+        "--tare",
+        type=Path,
+        metavar="FILE",
+        help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
+    )
+    parser.add_argument(
         "--format",
         choices=("auto", "table", "tsv", "none"),
         default="auto",
@@ -70,6 +76,14 @@ def _topics(args: argparse.Namespace) -> Any:
             raise InputError(f"--marker-topic takes NAME=TOPIC with NAME in {sorted(markers)}, got {item!r}")
         markers[name] = topic
     return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
+
+
+def _read_tare(path: Path | None) -> Any:
+    if path is None:
+        return None
+    from bsp_ros.tare import read_tare_file
+
+    return read_tare_file(path)
 
 
 def _progress_bar() -> Any:
@@ -125,6 +139,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         passive=PassiveModel.parse(args.passive),
         subject=SubjectInfo(args.body_mass, args.height, args.sex),
+        tare=_read_tare(args.tare),
     )
     try:
         document = identify_bag(args.bag, options, _topics(args), _progress_bar())
