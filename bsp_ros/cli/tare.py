@@ -14,6 +14,7 @@ from bsp_ros.errors import DataError, InputError, RuntimeBackendError
 
 # Exit codes (README "Commands"): 0 tare written, 2 bad option value, 3 unusable recording (too short,
 # NaN samples), 6 no middleware for --live, 10-16 the bag codes of `bsp identify`.
+FIRST_MESSAGE_TIMEOUT_S = 10.0
 BAG_EXIT_CODES = {
     "not-found": 10,
     "not-a-bag": 11,
@@ -79,7 +80,7 @@ def format_tare(tare: Any) -> str:
 
 
 def collect_live_wrench(topic: str, duration_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
-    """Subscribe to a running WrenchStamped topic with rclpy for ``duration_s`` s.
+    """Subscribe to a running WrenchStamped topic with rclpy for ``duration_s`` s from its first message.
 
     Returns
     -------
@@ -105,14 +106,18 @@ def collect_live_wrench(topic: str, duration_s: float) -> tuple[np.ndarray, np.n
         node = rclpy.create_node("bsp_tare")
         # Sensor-data QoS (best effort) matches reliable and best-effort publishers alike.
         node.create_subscription(WrenchStamped, topic, on_wrench, qos_profile_sensor_data)
-        end = time.monotonic() + duration_s
+        # The recording lasts duration_s from the first message (discovery can take a second or more).
+        end = time.monotonic() + FIRST_MESSAGE_TIMEOUT_S
+        first = False
         while time.monotonic() < end and rclpy.ok():
             rclpy.spin_once(node, timeout_sec=min(0.1, max(end - time.monotonic(), 0.0)))
+            if rows and not first:
+                first, end = True, time.monotonic() + duration_s
         node.destroy_node()
     finally:
         rclpy.try_shutdown()
     if not rows:
-        raise DataError(f"no message on {topic} in {duration_s:g} s: is the sensor driver running?")
+        raise DataError(f"no message on {topic} in {FIRST_MESSAGE_TIMEOUT_S:g} s: is the sensor driver running?")
     if len(frames) > 1:
         raise DataError(f"{topic} carried several frame ids {sorted(frames)}: one is expected")
     data = np.asarray(rows, dtype=np.float64)

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -119,3 +121,46 @@ def test_offline_tare_does_not_import_rclpy(bags, tmp_path) -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip().splitlines()[-1] == "False"
+
+
+_PUBLISHER = """
+import sys, time
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+rclpy.init()
+node = rclpy.create_node("tare_test_sensor")
+pub = node.create_publisher(WrenchStamped, "/ft_sensor/wrench", 10)
+end = time.monotonic() + float(sys.argv[1])
+k = 0
+while time.monotonic() < end:
+    msg = WrenchStamped()
+    msg.header.stamp = node.get_clock().now().to_msg()
+    msg.header.frame_id = "ft_sensor"
+    msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = 1.0 + 0.01 * (k % 3 - 1), 2.0, 3.0
+    msg.wrench.torque.z = 0.1
+    pub.publish(msg)
+    k += 1
+    time.sleep(0.01)
+node.destroy_node()
+rclpy.try_shutdown()
+"""
+
+
+def test_live_tare_collects_the_running_wrench_topic(tmp_path, monkeypatch) -> None:
+    pytest.importorskip("rclpy")
+    domain = str(1 + os.getpid() % 10)  # below the node tests' domains (11 and up)
+    monkeypatch.setenv("ROS_DOMAIN_ID", domain)
+    publisher = subprocess.Popen([sys.executable, "-c", _PUBLISHER, "11"], env={**os.environ, "ROS_DOMAIN_ID": domain})
+    try:
+        time.sleep(1.5)
+        assert main(["tare", "--live", "--duration", "6", "--out", str(tmp_path / "live.yaml")]) == 0
+        assert publisher.wait(timeout=20) == 0
+    finally:
+        if publisher.poll() is None:
+            publisher.kill()
+            publisher.wait()
+    doc = yaml.safe_load((tmp_path / "live.yaml").read_text())
+    assert doc["load"] == "constant" and doc["frame_id"] == "ft_sensor"
+    assert doc["recording"]["source"] == "live /ft_sensor/wrench" and doc["recording"]["n_samples"] > 300
+    np.testing.assert_allclose(doc["force_offset_n"]["value"], [1.0, 2.0, 3.0], atol=0.005)
+    np.testing.assert_allclose(doc["torque_offset_nm"]["value"], [0.0, 0.0, 0.1], atol=1e-9)
