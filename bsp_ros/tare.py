@@ -456,6 +456,8 @@ def estimate_tare(
 
 # A constant load is only right at the orientation it was recorded at.
 MAX_CONSTANT_LOAD_TILT_DEG = 1.0
+# Sensor orientations of a session and its tare further apart than this point at a lost transform.
+MAX_TARE_SESSION_TILT_DEG = 45.0
 
 
 def tare_wrench(
@@ -510,23 +512,33 @@ def tare_wrench(
 
 
 def tare_warnings(tare: Tare, rotation_world_from_sensor: npt.ArrayLike) -> list[str]:
-    """What applying ``tare`` at this session orientation ((3, 3), or (N, 3, 3)) needs to say, if anything."""
-    if tare.load != "constant":
-        return []
+    """What applying ``tare`` at this session orientation ((3, 3), or (N, 3, 3)) needs to say, if anything.
+
+    A constant load applied more than ``MAX_CONSTANT_LOAD_TILT_DEG`` away from its recorded orientation is
+    wrong by the handle's weight; any tare applied more than ``MAX_TARE_SESSION_TILT_DEG`` away from where
+    it was recorded points at a lost or wrong transform (the sensor is mounted once for both).
+    """
     if tare.rotation_world_from_sensor is None:
-        return [
-            "tare: a constant load recorded without the sensor's orientation was applied; it is right only if "
-            "the sensor was held as in the session"
-        ]
+        if tare.load == "constant":
+            return [
+                "tare: a constant load recorded without the sensor's orientation was applied; it is right only "
+                "if the sensor was held as in the session"
+            ]
+        return []
     rotation = np.asarray(rotation_world_from_sensor, dtype=np.float64).reshape(-1, 3, 3)
     cosines = _gravity_in_sensor(rotation) @ _gravity_in_sensor(tare.rotation_world_from_sensor)
     tilt = math.degrees(math.acos(float(np.clip(cosines.min(), -1.0, 1.0))))
-    if tilt <= MAX_CONSTANT_LOAD_TILT_DEG:
-        return []
-    return [
-        f"tare: constant load recorded with the sensor tilted up to {tilt:.3g} deg from its session orientation: "
-        "the handle's weight is not removed correctly (record a tare that swings the sensor)"
-    ]
+    if tilt > MAX_TARE_SESSION_TILT_DEG:
+        return [
+            f"tare: the session's sensor orientation is {tilt:.3g} deg from the tare's: a lost or wrong "
+            "world -> sensor transform (/tf_static)? The handle's weight is removed in the wrong direction"
+        ]
+    if tare.load == "constant" and tilt > MAX_CONSTANT_LOAD_TILT_DEG:
+        return [
+            f"tare: constant load recorded with the sensor tilted up to {tilt:.3g} deg from its session "
+            "orientation: the handle's weight is not removed correctly (record a tare that swings the sensor)"
+        ]
+    return []
 
 
 def corrected_session(session: Session, tare: Tare | None) -> Session:

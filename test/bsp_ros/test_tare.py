@@ -182,3 +182,10 @@ def test_foreign_or_broken_tare_files_are_refused(tmp_path: Path) -> None:
         Tare.from_dict(data)
     with pytest.raises(InputError, match="does not exist"):
         read_tare_file(tmp_path / "none.yaml")
+
+
+def test_a_tare_far_from_the_session_orientation_points_at_a_lost_transform() -> None:
+    tare, _ = _tare()
+    assert tare_warnings(tare, SENSOR.rotation_world_from_sensor) == []
+    (warning,) = tare_warnings(tare, np.eye(3))  # what a session bag without /tf_static gives
+    assert "lost or wrong world -> sensor transform" in warning and "180 deg" in warning
