@@ -1186,6 +1186,25 @@ class CellSimulator:
         torque = torque_w @ self._rotation + offset_m + load_m + s.torque_noise_nm * noise[:, 3:]
         return WrenchSeries(t_ns=stamps, force_n=force, torque_nm=torque, frame_id=s.frame_id)
 
+    def sample_tare_wrench(self, t_ns: npt.ArrayLike, tare: TareSpec) -> tuple[WrenchSeries, np.ndarray]:
+        """Noisy wrench of the cell in tare mode (handle free, no arm) at the given stamps, for a live publisher.
+
+        Parameters
+        ----------
+        t_ns : (N,) int64, strictly increasing stamps, ns.
+        tare : the tare recording; it starts ``tare.start_offset_s`` after ``spec.start_ns`` (use 0 for a
+            publisher that starts in tare mode).
+
+        Returns
+        -------
+        wrench : offset (with drift) + handle load + noise in the sensor frame (see :func:`simulate_tare`).
+        rotations : (N, 3, 3) the sensor's orientation at each stamp (publish it on ``/tf`` if it swings).
+        """
+        if not isinstance(tare, TareSpec):
+            raise InputError(f"tare must be a TareSpec, got {tare!r}")
+        stamps = check_stamps_ns("t_ns", t_ns)
+        return _tare_wrench(self._spec, tare, stamps, self._rng_wrench_noise.standard_normal((stamps.size, 6)))
+
     def _dropout_mask(self, name: str, count: int) -> np.ndarray:
         """(count,) bool, True where the frame is lost: a two-state Markov chain carried across calls."""
         m = self._spec.markers
@@ -1330,6 +1349,26 @@ def tare_rotations(spec: CellSpec, tare: TareSpec, t_s: npt.ArrayLike) -> np.nda
     return np.stack([mount @ rotation_from_rpy_deg(*row) for row in angles]) if t.size else np.zeros((0, 3, 3))
 
 
+def _tare_wrench(
+    spec: CellSpec, tare: TareSpec, stamps: np.ndarray, noise: np.ndarray
+) -> tuple[WrenchSeries, np.ndarray]:
+    """Handle-free wrench at ``stamps`` given (N, 6) standard normal draws; and the (N, 3, 3) orientations."""
+    s = spec.sensor
+    start_ns = spec.start_ns + round(tare.start_offset_s * 1e9)
+    t_tare = (stamps - np.int64(start_ns)).astype(np.float64) * 1e-9
+    rotations = tare_rotations(spec, tare, t_tare)
+    offset_f, offset_m = s.offset_at(t_tare + tare.start_offset_s)
+    load_f = np.einsum("k,nkj->nj", np.array([0.0, 0.0, -GRAVITY_M_S2 * s.handle_mass_kg]), rotations)
+    load_m = np.cross(np.asarray(s.handle_com_m), load_f)
+    wrench = WrenchSeries(
+        t_ns=stamps,
+        force_n=offset_f + load_f + s.force_noise_n * noise[:, :3],
+        torque_nm=offset_m + load_m + s.torque_noise_nm * noise[:, 3:],
+        frame_id=s.frame_id,
+    )
+    return wrench, rotations
+
+
 def simulate_tare(spec: CellSpec, tare: TareSpec | None = None) -> SimulatedTare:
     """Simulate the tare recording of a cell (the handle free: no arm, markers not recorded).
 
@@ -1362,18 +1401,7 @@ def simulate_tare(spec: CellSpec, tare: TareSpec | None = None) -> SimulatedTare
         clip = _JITTER_CLIP_PERIODS * 1e9 / s.wrench_hz
         offsets_ns += np.round(np.clip(rng_stamps.normal(0.0, s.stamp_jitter_s * 1e9, count), -clip, clip))
     stamps = check_stamps_ns("tare stamps", np.int64(start_ns) + offsets_ns.astype(np.int64))
-    t_tare = (stamps - np.int64(start_ns)).astype(np.float64) * 1e-9
-    rotations = tare_rotations(spec, tare, t_tare)
-    offset_f, offset_m = s.offset_at(t_tare + tare.start_offset_s)
-    load_f = np.einsum("k,nkj->nj", np.array([0.0, 0.0, -GRAVITY_M_S2 * s.handle_mass_kg]), rotations)
-    load_m = np.cross(np.asarray(s.handle_com_m), load_f)
-    noise = rng_noise.standard_normal((count, 6))
-    wrench = WrenchSeries(
-        t_ns=stamps,
-        force_n=offset_f + load_f + s.force_noise_n * noise[:, :3],
-        torque_nm=offset_m + load_m + s.torque_noise_nm * noise[:, 3:],
-        frame_id=s.frame_id,
-    )
+    wrench, _ = _tare_wrench(spec, tare, stamps, rng_noise.standard_normal((count, 6)))
     if tare.swinging:
         n_tf = max(math.ceil(tare.duration_s * tare.tf_hz), 2)
         tf_s = np.arange(n_tf, dtype=np.float64) / tare.tf_hz

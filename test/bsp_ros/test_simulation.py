@@ -619,3 +619,17 @@ def test_swinging_tare_publishes_the_orientation_the_wrench_follows() -> None:
     rotation = tare.rotations_world_from_sensor[100]
     force_world = rotation @ tare.wrench.force_n[k]
     np.testing.assert_allclose(force_world, [0.0, 0.0, -0.3 * G], atol=0.02)  # 1.3 ms of swing apart
+
+
+def test_streamed_tare_wrench_matches_the_whole_recording_physics() -> None:
+    from bsp_ros.simulation import TareSpec, simulate_tare
+
+    sensor = SensorSpec(handle_mass_kg=0.3, handle_com_m=(0.0, 0.0, 0.05), force_noise_n=0.0, torque_noise_nm=0.0)
+    spec = human_arm_cell(sensor=sensor)
+    tare = TareSpec(duration_s=10.0, swing_rpy_deg=(10.0, 15.0, 0.0))
+    whole = simulate_tare(spec, tare)
+    streamed, rotations = CellSimulator(spec).sample_tare_wrench(whole.wrench.t_ns[:300], tare)
+    np.testing.assert_allclose(streamed.force_n, whole.wrench.force_n[:300], atol=1e-12)
+    np.testing.assert_allclose(streamed.torque_nm, whole.wrench.torque_nm[:300], atol=1e-12)
+    weight = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -0.3 * G])  # R^T (0, 0, -m g)
+    np.testing.assert_allclose(streamed.force_n, weight, atol=1e-12)
