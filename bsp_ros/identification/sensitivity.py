@@ -41,6 +41,25 @@ def _mean_rotation(rotation: np.ndarray) -> np.ndarray:
     return np.asarray(u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt)
 
 
+def _world_unit_torques(data: IdentificationData) -> np.ndarray:
+    """(3, N, n) joint torques of a unit ``F_y`` (N), ``F_z`` (N) and ``M_x`` (Nm) in ``world``: ``-J^T e``."""
+    out = np.empty((3, *data.tau_nm.shape))
+    for k in range(3):
+        unit = np.zeros((data.t_ns.size, 3))
+        unit[:, k] = 1.0
+        out[k] = contact_torques_nm(data.q_rad, data.lengths_m, unit)
+    return out
+
+
+def _world_from_sensor_offsets(rotation_world_from_sensor: npt.ArrayLike) -> np.ndarray:
+    """(3, 6) map from a sensor-frame offset ``[F (3) N, M (3) Nm]`` to the planar ``[F_y, F_z, M_x]`` in world."""
+    rotation = _mean_rotation(np.asarray(rotation_world_from_sensor, dtype=np.float64))
+    out = np.zeros((3, 6))
+    out[:2, :3] = rotation[1:3, :]
+    out[2, 3:] = rotation[0, :]
+    return out
+
+
 def offset_torques_nm(data: IdentificationData, rotation_world_from_sensor: npt.ArrayLike) -> np.ndarray:
     """Joint torques a unit sensor-frame offset adds to the measured torques.
 
@@ -54,13 +73,8 @@ def offset_torques_nm(data: IdentificationData, rotation_world_from_sensor: npt.
     (6, N, n) ``-J^T [ (R e)_y, (R e)_z, (R e')_x ]`` for unit force offsets along the sensor's x, y, z (N)
     and unit moment offsets about them (Nm), in that order.
     """
-    rotation = _mean_rotation(np.asarray(rotation_world_from_sensor, dtype=np.float64))
-    out = np.empty((6, *data.tau_nm.shape))
-    for k in range(6):
-        axis = rotation[:, k % 3]  # R e_k: the sensor axis in world
-        yzx = np.array([axis[1], axis[2], 0.0]) if k < 3 else np.array([0.0, 0.0, axis[0]])
-        out[k] = contact_torques_nm(data.q_rad, data.lengths_m, np.broadcast_to(yzx, (data.t_ns.size, 3)))
-    return out
+    mapping = _world_from_sensor_offsets(rotation_world_from_sensor)
+    return np.einsum("wk,wni->kni", mapping, _world_unit_torques(data))
 
 
 def offset_sensitivity(
@@ -70,8 +84,10 @@ def offset_sensitivity(
 
     A sensor-frame offset ``o`` adds ``-J^T (R o)`` to every measured torque (``offset_torques_nm``). For a
     weighted least-squares fit that is ``G = (A^T W A)^-1 A^T W D`` with ``D`` those torques; rather than
-    rebuild the estimator's rows, weights and bounds here, the estimator is re-run with each offset added
-    (steps of 0.01 N and 0.001 Nm, in its linear range), so ``G`` is right whatever the estimator does.
+    rebuild the estimator's rows, weights and bounds here, the estimator is re-run with an offset added
+    (0.01 N or 0.001 Nm, in its linear range), so ``G`` is right whatever the estimator does. Only the
+    planar ``F_y``, ``F_z``, ``M_x`` in ``world`` reach the model, so three re-runs (plus the reference)
+    give all six sensor-frame columns.
 
     Parameters
     ----------
@@ -85,13 +101,13 @@ def offset_sensitivity(
     base : the estimator's result on the unperturbed data (the reference of the differences).
     """
     base = refit(data)
-    unit = offset_torques_nm(data, rotation_world_from_sensor)
-    g = np.empty((base.values.size, 6))
-    for k in range(6):
-        step = FORCE_STEP_N if k < 3 else TORQUE_STEP_NM
+    unit = _world_unit_torques(data)
+    g_world = np.empty((base.values.size, 3))
+    for k in range(3):
+        step = FORCE_STEP_N if k < 2 else TORQUE_STEP_NM
         shifted = dataclasses.replace(data, tau_nm=data.tau_nm + step * unit[k], warnings=list(data.warnings))
-        g[:, k] = (refit(shifted).values - base.values) / step
-    return g, base
+        g_world[:, k] = (refit(shifted).values - base.values) / step
+    return g_world @ _world_from_sensor_offsets(rotation_world_from_sensor), base
 
 
 def add_tare_covariance(result: IdentificationResult, g: np.ndarray, wrench_covariance: np.ndarray) -> np.ndarray:
