@@ -111,6 +111,16 @@ def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
     return out
 
 
+def tare_line(quality: dict[str, Any]) -> str:
+    """One line on the tare: applied (which file), or not, with how much 0.1 N of offset would matter."""
+    tare = quality.get("tare") or {}
+    if tare.get("applied"):
+        return f"tare: {tare.get('file')} applied (its uncertainty is in the std)"
+    percent = [p for p in (quality.get("offset_sensitivity") or {}).get("static_moment_percent", {}).values() if p]
+    worst = f": 0.1 N of sensor offset moves a static moment by up to {max(percent):.2g}%" if percent else ""
+    return f"tare: none applied{worst} (bsp tare, then --tare FILE)"
+
+
 def format_table(document: dict[str, Any]) -> str:
     """A human-readable table of an estimate document."""
     quality = document["quality"]
@@ -124,6 +134,7 @@ def format_table(document: dict[str, Any]) -> str:
         value_text = "n/a" if value is None else f"{value:.5g}"
         std_text = "n/a" if std is None else f"{std:.2g}"
         lines.append(f"{owner:10s} {key:22s} {value_text:>12s} {std_text:>11s}  {source}")
+    lines.append(tare_line(quality))
     state = "VALID" if quality["valid"] else "INVALID"
     lines.append(f"{state}: {quality.get('message', '')}")
     lines += [f"warning: {w}" for w in quality["warnings"]]

@@ -164,3 +164,19 @@ def test_live_tare_collects_the_running_wrench_topic(tmp_path, monkeypatch) -> N
     assert doc["recording"]["source"] == "live /ft_sensor/wrench" and doc["recording"]["n_samples"] > 300
     np.testing.assert_allclose(doc["force_offset_n"]["value"], [1.0, 2.0, 3.0], atol=0.005)
     np.testing.assert_allclose(doc["torque_offset_nm"]["value"], [0.0, 0.0, 0.1], atol=1e-9)
+
+
+def test_identify_table_names_the_tare_or_the_sensitivity(bags, tmp_path) -> None:
+    from bsp_ros.cli.identify import tare_line
+
+    assert (
+        tare_line({"tare": {"applied": True, "file": "t.yaml"}})
+        == "tare: t.yaml applied (its uncertainty is in the std)"
+    )
+    quality = {
+        "tare": {"applied": False, "file": None},
+        "offset_sensitivity": {"static_moment_percent": {"upper_arm": 0.33, "forearm": None, "hand": 1.17}},
+    }
+    assert tare_line(quality) == (
+        "tare: none applied: 0.1 N of sensor offset moves a static moment by up to 1.2% (bsp tare, then --tare FILE)"
+    )
