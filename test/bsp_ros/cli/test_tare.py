@@ -166,7 +166,7 @@ def test_live_tare_collects_the_running_wrench_topic(tmp_path, monkeypatch) -> N
     np.testing.assert_allclose(doc["torque_offset_nm"]["value"], [0.0, 0.0, 0.1], atol=1e-9)
 
 
-def test_identify_table_names_the_tare_or_the_sensitivity(bags, tmp_path) -> None:
+def test_identify_table_names_the_tare_or_the_sensitivity() -> None:
     from bsp_ros.cli.identify import tare_line
 
     assert (
