@@ -180,3 +180,12 @@ def test_identify_table_names_the_tare_or_the_sensitivity() -> None:
     assert tare_line(quality) == (
         "tare: none applied: 0.1 N of sensor offset moves a static moment by up to 1.2% (bsp tare, then --tare FILE)"
     )
+
+
+def test_tare_bag_without_any_transform_gives_a_constant_load_and_says_why(tmp_path, capsys) -> None:
+    bag = tmp_path / "tare_no_tf"
+    assert main(["simulate", "--out", str(bag), "--tare", "--duration", "6", "--no-tf-static", *NUISANCE]) == 0
+    assert main(["tare", str(bag), "--out", str(tmp_path / "t.yaml")]) == 0
+    doc = yaml.safe_load((tmp_path / "t.yaml").read_text())
+    assert doc["load"] == "constant" and doc["recording"]["rotation_world_from_sensor"] is None
+    assert "no transform connects the wrench frame ft_sensor to world" in capsys.readouterr().err
