@@ -37,6 +37,10 @@ MIN_TARE_SAMPLES = 50
 # The gravity direction in the sensor frame must swing by this much (rms, in two independent directions)
 # before the handle's mass and centre of mass are told apart from the sensor's offset.
 MIN_SWING_DEG = 3.0
+# Samples whose residual is beyond this many robust standard deviations (MAD) on any axis are outliers,
+# and a recording with more than this fraction of them is not a steady tare.
+OUTLIER_MAD = 6.0
+MAX_REJECTED_FRACTION = 0.1
 LOADS = ("separated", "constant")
 _SEPARATED_NAMES = (
     "force_offset_x_n",
@@ -92,6 +96,7 @@ class Tare:
     values : (p,) parameters (10 separated, 6 constant).
     covariance : (p, p) their covariance (Newey-West HAC from the residuals).
     n_samples : wrench samples used.
+    n_rejected : samples left out as outliers (beyond ``OUTLIER_MAD`` robust std of the residuals).
     start_time_ns, duration_s : when the recording started and how long it lasted.
     swing_deg : (2,) rms swing of the gravity direction in the sensor frame along its two principal
         directions, deg (zeros without orientation).
@@ -112,6 +117,7 @@ class Tare:
     rotation_world_from_sensor: np.ndarray | None = None
     residual_rms: tuple[float, ...] = (0.0,) * 6
     source: str = ""
+    n_rejected: int = 0
     file: str = dataclasses.field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -248,6 +254,7 @@ class Tare:
                 "start_time_ns": int(self.start_time_ns),
                 "duration_s": float(self.duration_s),
                 "n_samples": int(self.n_samples),
+                "rejected_samples": int(self.n_rejected),
                 "swing_deg": [float(s) for s in self.swing_deg],
                 "rotation_world_from_sensor": None if rotation is None else [[float(x) for x in r] for r in rotation],
                 "residual_rms": [float(r) for r in self.residual_rms],
@@ -293,6 +300,7 @@ class Tare:
                 rotation_world_from_sensor=None if rotation is None else np.asarray(rotation, dtype=np.float64),
                 residual_rms=tuple(float(r) for r in recording.get("residual_rms", (0.0,) * 6)),
                 source=str(recording.get("source", "")),
+                n_rejected=int(recording.get("rejected_samples", 0)),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, InputError):
@@ -383,8 +391,10 @@ def estimate_tare(
     ``MIN_SWING_DEG`` (rms) in two independent directions, the force offset and handle mass come from
     ``F = oF + m g R^T e`` and the moment offset and handle first moment ``s = m c`` from
     ``M = oM + s x g R^T e`` (``e = (0, 0, -1)``), each by linear least squares; otherwise the constant
-    load (the mean wrench) is estimated. Standard deviations are Newey-West HAC from the residuals, so a
-    slowly drifting or coloured sensor signal is not counted as independent samples.
+    load (the mean wrench) is estimated. Samples beyond 6 robust standard deviations (MAD) of the residuals
+    on any axis are left out as outliers and counted (``n_rejected``). Standard deviations are Newey-West
+    HAC from the residuals, so a slowly drifting or coloured sensor signal is not counted as independent
+    samples.
 
     Parameters
     ----------
@@ -401,7 +411,7 @@ def estimate_tare(
     Raises
     ------
     DataError
-        Fewer than 50 samples, shorter than 5 s, or NaN/Inf samples.
+        Fewer than 50 samples, shorter than 5 s, NaN/Inf samples, or more than 10 % outliers.
     InputError
         Mismatched shapes or non-integer stamps.
     """
@@ -423,29 +433,53 @@ def estimate_tare(
         "rotation_world_from_sensor": mean_rotation,
         "source": source,
     }
-    if rotations is not None and min(swing) >= MIN_SWING_DEG:
+    separated = rotations is not None and min(swing) >= MIN_SWING_DEG
+    if rotations is not None and separated:
         d = GRAVITY_M_S2 * _gravity_in_sensor(rotations)  # (N, 3)
         eye = np.broadcast_to(np.eye(3), (n, 3, 3))
-        f_values, f_cov, f_res = _ols_hac(np.concatenate([eye, d[:, :, None]], axis=2), force)
-        m_values, m_cov, m_res = _ols_hac(np.concatenate([eye, -_skew(d)], axis=2), torque)
-        covariance = np.zeros((10, 10))
-        covariance[:4, :4], covariance[4:, 4:] = f_cov, m_cov
-        residual = np.hstack([f_res, m_res])
-        return Tare(
-            load="separated",
-            values=np.concatenate([f_values, m_values]),
-            covariance=covariance,
-            residual_rms=tuple(np.sqrt((residual**2).mean(axis=0)).tolist()),
-            **common,
+        designs = (np.concatenate([eye, d[:, :, None]], axis=2), np.concatenate([eye, -_skew(d)], axis=2))
+    else:
+        designs = (np.broadcast_to(np.eye(3), (n, 3, 3)),) * 2  # the constant load: a mean per axis
+
+    def solve(keep: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        f_values, f_cov, _ = _ols_hac(designs[0][keep], force[keep])
+        m_values, m_cov, _ = _ols_hac(designs[1][keep], torque[keep])
+        p_f = f_values.size
+        covariance = np.zeros((p_f + m_values.size,) * 2)
+        covariance[:p_f, :p_f], covariance[p_f:, p_f:] = f_cov, m_cov
+        residual = np.hstack(
+            [
+                force - np.einsum("nkp,p->nk", designs[0], f_values),
+                torque - np.einsum("nkp,p->nk", designs[1], m_values),
+            ]
         )
-    wrench = np.hstack([force, torque])
-    design = np.broadcast_to(np.eye(6)[None, :, :], (n, 6, 6))
-    values, covariance, residual = _ols_hac(np.ascontiguousarray(design), wrench)
+        return np.concatenate([f_values, m_values]), covariance, residual
+
+    # Spikes (a knock on the handle, a glitch) must not move the tare: samples off the robust spread of
+    # the residuals (median absolute deviation) are left out and counted.
+    keep = np.ones(n, dtype=bool)
+    for _ in range(4):
+        values, covariance, residual = solve(keep)
+        centred = residual[keep] - np.median(residual[keep], axis=0)
+        scale = np.maximum(1.4826 * np.median(np.abs(centred), axis=0), 1e-12)
+        inliers = (np.abs(residual - np.median(residual[keep], axis=0)) <= OUTLIER_MAD * scale).all(axis=1)
+        if np.array_equal(inliers, keep):
+            break
+        keep = inliers
+        if keep.sum() < (1.0 - MAX_REJECTED_FRACTION) * n:
+            raise DataError(
+                f"the tare recording is not steady: {n - int(keep.sum())} of {n} samples lie off the model's "
+                f"robust spread (was the handle touched?): record it again"
+            )
+    if not keep.all():
+        values, covariance, residual = solve(keep)
+    common["n_samples"] = int(keep.sum())
+    common["n_rejected"] = int(n - keep.sum())
     return Tare(
-        load="constant",
+        load="separated" if separated else "constant",
         values=values,
         covariance=covariance,
-        residual_rms=tuple(np.sqrt((residual**2).mean(axis=0)).tolist()),
+        residual_rms=tuple(np.sqrt((residual[keep] ** 2).mean(axis=0)).tolist()),
         **common,
     )
 

@@ -189,3 +189,26 @@ def test_a_tare_far_from_the_session_orientation_points_at_a_lost_transform() ->
     assert tare_warnings(tare, SENSOR.rotation_world_from_sensor) == []
     (warning,) = tare_warnings(tare, np.eye(3))  # what a session bag without /tf_static gives
     assert "lost or wrong world -> sensor transform" in warning and "180 deg" in warning
+
+
+def test_spikes_are_left_out_and_counted() -> None:
+    cell = human_arm_cell(sensor=SENSOR, seed=2)
+    recording = simulate_tare(cell, SWING)
+    rotations = tare_rotations(cell, SWING, (recording.wrench.t_ns - cell.start_ns) * 1e-9 - SWING.start_offset_s)
+    w = recording.wrench
+    clean = estimate_tare(w.t_ns, w.force_n, w.torque_nm, "ft_sensor", rotations)
+    force, torque = w.force_n.copy(), w.torque_nm.copy()
+    spikes = np.random.default_rng(5).choice(w.t_ns.size, 10, replace=False)
+    force[spikes, 2] += 1000.0  # ten 1 kN knocks
+    torque[spikes[:3], 0] -= 50.0
+    spiked = estimate_tare(w.t_ns, force, torque, "ft_sensor", rotations)
+    assert spiked.n_rejected == 10 and clean.n_rejected == 0
+    assert np.all(np.abs(spiked.values - clean.values) < 0.2 * clean.std)
+
+
+def test_a_handle_touched_during_the_tare_is_refused() -> None:
+    w = simulate_tare(human_arm_cell(sensor=SENSOR), TareSpec(duration_s=20.0)).wrench
+    force = w.force_n.copy()
+    force[500:900, 1] += 5.0  # 4 s of a hand resting on the handle
+    with pytest.raises(DataError, match="not steady: 400 of 2000"):
+        estimate_tare(w.t_ns, force, w.torque_nm, "ft_sensor")
