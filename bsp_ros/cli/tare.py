@@ -62,7 +62,8 @@ def format_tare(tare: Any) -> str:
     what = "offset" if tare.load == "separated" else "constant load (offset and handle together)"
     lines = [
         f"tare of {tare.frame_id}: {tare.n_samples} samples over {tare.duration_s:.1f} s, "
-        f"orientation swing {tare.swing_deg[0]:.1f}/{tare.swing_deg[1]:.1f} deg",
+        f"orientation swing {tare.swing_deg[0]:.1f}/{tare.swing_deg[1]:.1f} deg"
+        + (f"; {tare.n_rejected} outlier samples left out" if tare.n_rejected else ""),
         f"force {what}: {vec(force, force_std, 'N')}",
         f"moment {what}: {vec(torque, torque_std, 'Nm')}",
     ]
