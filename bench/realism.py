@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.errors import BspError
 from bsp_ros.fusion import SubjectInfo
 from bsp_ros.pipeline import IdentifyOptions, identify_session
 from bsp_ros.simulation import (
@@ -84,6 +85,8 @@ NUISANCES: dict[str, Callable[[CellSpec, int], CellSpec]] = {
         s, markers=MarkerSpec(skin_offset_m=tuple(tuple(0.01 * _direction(seed + k)[:2]) for k in range(4)))
     ),
     "lost /tf_static": lambda s, seed: _sensor(s, tf_static=False),
+    "spikes 1 kN in 0.1 %": lambda s, seed: _sensor(s, spike_fraction=0.001, spike_n=1000.0),
+    "absurd 1e30 N in 0.02 %": lambda s, seed: _sensor(s, spike_fraction=0.0002, spike_n=1e30),
     "30 s session": lambda s, seed: dataclasses.replace(s, duration_s=30.0),
 }
 
@@ -161,7 +164,17 @@ def main(argv: list[str] | None = None) -> int:
             results = []
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 spec = NUISANCES[name](human_arm_cell(duration_s=args.duration, seed=seed), seed)
-                result = _run(spec, tare)
+                try:
+                    result = _run(spec, tare)
+                except BspError as error:  # an error is a result here: it names the bad input
+                    result = {
+                        "valid": False,
+                        "moment_err_pct": math.nan,
+                        "coulomb_err_pct": math.nan,
+                        "max_z": math.nan,
+                        "warnings": [f"error: {type(error).__name__}"],
+                        "message": str(error),
+                    }
                 results.append(result)
                 runs.append({"nuisance": name, "tare": tare, "seed": seed, **result})
             valid = [r for r in results if r["valid"]]

@@ -429,6 +429,9 @@ class SensorSpec:
         reference point (the contact point), m: its weight adds the moment ``c x R^T m g``.
     tf_static : whether the bag records ``/tf_static`` (False: the world -> sensor transform is lost, as
         in a bag recorded without it; a reader then takes the wrench as given in ``world``).
+    spike_fraction : probability that a wrench sample is a spike (a knock, a glitch), in [0, 0.5]: its
+        force gains ``+-spike_n`` along one sensor axis (axis and sign drawn per spike).
+    spike_n : spike amplitude, N (0-1e30: absurd values included on purpose).
     """
 
     wrench_hz: float = 100.0
@@ -445,6 +448,8 @@ class SensorSpec:
     handle_mass_kg: float = 0.0
     handle_com_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
     tf_static: bool = True
+    spike_fraction: float = 0.0
+    spike_n: float = 1000.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "wrench_hz", check_finite_scalar("wrench_hz", self.wrench_hz, 1.0, 5000.0))
@@ -480,6 +485,8 @@ class SensorSpec:
         object.__setattr__(self, "handle_com_m", _float_tuple("handle_com_m", self.handle_com_m, 3, -1.0, 1.0))
         if not isinstance(self.tf_static, bool):
             raise InputError(f"tf_static must be True or False, got {self.tf_static!r}")
+        object.__setattr__(self, "spike_fraction", check_finite_scalar("spike_fraction", self.spike_fraction, 0.0, 0.5))
+        object.__setattr__(self, "spike_n", check_finite_scalar("spike_n", self.spike_n, 0.0, 1e30))
 
     def offset_at(self, t_s: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Force (N) and moment (Nm) offsets in the sensor frame at ``t_s`` s: (N,) -> (N, 3), (N, 3)."""
@@ -928,6 +935,8 @@ def _simulation_settings(spec: CellSpec) -> dict[str, Any]:
         "handle_mass_kg": s.handle_mass_kg,
         "handle_com_m": list(s.handle_com_m),
         "tf_static": s.tf_static,
+        "spike_fraction": s.spike_fraction,
+        "spike_n": s.spike_n,
         "marker_hz": m.marker_hz,
         "marker_phase_s": m.phase_s,
         "marker_stamp_jitter_s": m.stamp_jitter_s,
@@ -997,6 +1006,8 @@ class CellSimulator:
         self._rng_marker_noise = dict(zip(self._marker_names, rngs[3 : 3 + k], strict=True))
         self._rng_dropout = dict(zip(self._marker_names, rngs[3 + k :], strict=True))
         self._lost: dict[str, bool | None] = dict.fromkeys(self._marker_names)
+        # Its own stream (not one of the spawned children above), so spikes leave every other draw unchanged.
+        self._rng_spikes = np.random.default_rng(np.random.SeedSequence([spec.seed, 13]))
         self._truth = SessionTruth(spec.subject, spec.passive, spec.trajectory, _simulation_settings(spec))
 
     # ---- properties -------------------------------------------------------------------------------
@@ -1169,7 +1180,7 @@ class CellSimulator:
         WrenchSeries
             Force (N, 3) N and moment (N, 3) Nm in ``sensor.frame_id`` axes, referenced at the contact
             point: ``R^T F_world + offset(t) + payload + noise`` (offset with its drift, the handle's
-            gravity load ``R^T m g`` and its moment ``c x R^T m g``).
+            gravity load ``R^T m g`` and its moment ``c x R^T m g``; spikes if ``spike_fraction`` > 0).
         """
         stamps = check_stamps_ns("t_ns", t_ns)
         world = self.wrench_world(self.seconds_since_start(stamps))
@@ -1183,6 +1194,11 @@ class CellSimulator:
         offset_f, offset_m = s.offset_at(self.seconds_since_start(stamps))
         load_f, load_m = s.payload_wrench(self._rotation)
         force = force_w @ self._rotation + offset_f + load_f + s.force_noise_n * noise[:, :3]
+        if s.spike_fraction > 0.0:
+            draws = self._rng_spikes.random((stamps.size, 3))
+            hit = draws[:, 0] < s.spike_fraction
+            axis = (draws[hit, 1] * 3).astype(int)
+            force[np.flatnonzero(hit), axis] += np.where(draws[hit, 2] < 0.5, -s.spike_n, s.spike_n)
         torque = torque_w @ self._rotation + offset_m + load_m + s.torque_noise_nm * noise[:, 3:]
         return WrenchSeries(t_ns=stamps, force_n=force, torque_nm=torque, frame_id=s.frame_id)
 

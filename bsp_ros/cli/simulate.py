@@ -80,6 +80,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     cell.add_argument(
         "--no-tf-static", action="store_true", help="leave /tf_static out of the bag (the sensor rotation is lost)"
     )
+    cell.add_argument(
+        "--spikes", type=float, metavar="FRACTION", help="fraction of wrench samples that are force spikes (0-0.5)"
+    )
+    cell.add_argument("--spike-size", type=float, metavar="N", help="spike amplitude, N (default 1000)")
     tare = parser.add_argument_group("tare recording (--tare: the handle free, no arm; --duration is its length)")
     tare.add_argument("--tare", action="store_true", help="write the cell's tare recording instead of a session")
     tare.add_argument(
@@ -138,6 +142,10 @@ def _spec(args: argparse.Namespace) -> Any:
         sensor["handle_mass_kg"] = args.handle_mass
     if args.no_tf_static:
         sensor["tf_static"] = False
+    if args.spikes is not None:
+        sensor["spike_fraction"] = args.spikes
+    if args.spike_size is not None:
+        sensor["spike_n"] = args.spike_size
     markers: dict[str, Any] = {}
     if args.marker_hz is not None:
         markers["marker_hz"] = args.marker_hz

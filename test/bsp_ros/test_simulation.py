@@ -633,3 +633,16 @@ def test_streamed_tare_wrench_matches_the_whole_recording_physics() -> None:
     np.testing.assert_allclose(streamed.torque_nm, whole.wrench.torque_nm[:300], atol=1e-12)
     weight = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -0.3 * G])  # R^T (0, 0, -m g)
     np.testing.assert_allclose(streamed.force_n, weight, atol=1e-12)
+
+
+def test_spikes_hit_the_configured_fraction_with_the_configured_size_and_nothing_else() -> None:
+    base = human_arm_cell(duration_s=60.0)
+    spiked = dataclasses.replace(base, sensor=SensorSpec(spike_fraction=0.01, spike_n=1000.0))
+    a, b = simulate_cell(base).session, simulate_cell(spiked).session
+    difference = b.wrench.force_n - a.wrench.force_n
+    hit = np.abs(difference).max(axis=1) > 0
+    assert 30 <= hit.sum() <= 90  # 6000 samples at 1 %: 60 +- 7.7
+    np.testing.assert_allclose(np.abs(difference[hit]).sum(axis=1), 1000.0)  # one axis, +-1000 N
+    assert (np.count_nonzero(difference[hit], axis=1) == 1).all()
+    np.testing.assert_array_equal(b.wrench.torque_nm, a.wrench.torque_nm)
+    np.testing.assert_array_equal(b.markers["hand"].position_m, a.markers["hand"].position_m)
