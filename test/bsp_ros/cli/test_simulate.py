@@ -23,6 +23,7 @@ def test_elastic_friction_and_sensor_options_are_recorded_in_the_truth(tmp_path:
         *("--passive-offset", "0.05", "-0.2", "0", "--stiffness", "0", "1.2", "0", "--neutral", "0", "1.87", "0"),
         *("--friction-transition", "0.002", "--force-offset", "3", "0", "0", "--handle-mass", "0.3"),
         *("--handle-com", "0", "0", "0.05", "--skin-offset", "0", "0.01", "0", "0.01", "0", "0.01", "0", "0.01"),
+        *("--spikes", "0.001", "--spike-size", "500"),
     )
     elbow = truth["joints"]["elbow"]
     assert (elbow["offset_nm"], elbow["stiffness_nm_per_rad"], elbow["neutral_rad"]) == (-0.2, 1.2, 1.87)
@@ -30,6 +31,7 @@ def test_elastic_friction_and_sensor_options_are_recorded_in_the_truth(tmp_path:
     sim = truth["simulation"]
     assert (sim["force_bias_n"], sim["handle_mass_kg"], sim["handle_com_m"]) == ([3, 0, 0], 0.3, [0, 0, 0.05])
     assert sim["skin_offset_m"] == [[0.0, 0.01]] * 4
+    assert (sim["spike_fraction"], sim["spike_n"]) == (0.001, 500.0)
 
 
 def test_per_joint_option_with_the_wrong_count_names_the_option(tmp_path: Path, capsys) -> None:
