@@ -25,6 +25,7 @@ __all__ = [
     "corrected_session",
     "estimate_tare",
     "read_tare_file",
+    "recording_warnings",
     "tare_warnings",
     "tare_wrench",
     "write_tare_file",
@@ -41,6 +42,8 @@ MIN_SWING_DEG = 3.0
 # and a recording with more than this fraction of them is not a steady tare.
 OUTLIER_MAD = 6.0
 MAX_REJECTED_FRACTION = 0.1
+# A tare whose residual spread exceeds its sample-to-sample noise this many times did not see a steady load.
+MAX_UNSTEADINESS = 5.0
 LOADS = ("separated", "constant")
 _SEPARATED_NAMES = (
     "force_offset_x_n",
@@ -97,6 +100,8 @@ class Tare:
     covariance : (p, p) their covariance (Newey-West HAC from the residuals).
     n_samples : wrench samples used.
     n_rejected : samples left out as outliers (beyond ``OUTLIER_MAD`` robust std of the residuals).
+    unsteadiness : largest ratio over the axes of the residual rms to the sample-to-sample noise (about 1
+        for a steady tare; above ``MAX_UNSTEADINESS`` the load changed during the recording).
     start_time_ns, duration_s : when the recording started and how long it lasted.
     swing_deg : (2,) rms swing of the gravity direction in the sensor frame along its two principal
         directions, deg (zeros without orientation).
@@ -118,6 +123,7 @@ class Tare:
     residual_rms: tuple[float, ...] = (0.0,) * 6
     source: str = ""
     n_rejected: int = 0
+    unsteadiness: float = 1.0
     file: str = dataclasses.field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -255,6 +261,7 @@ class Tare:
                 "duration_s": float(self.duration_s),
                 "n_samples": int(self.n_samples),
                 "rejected_samples": int(self.n_rejected),
+                "unsteadiness": float(self.unsteadiness),
                 "swing_deg": [float(s) for s in self.swing_deg],
                 "rotation_world_from_sensor": None if rotation is None else [[float(x) for x in r] for r in rotation],
                 "residual_rms": [float(r) for r in self.residual_rms],
@@ -301,6 +308,7 @@ class Tare:
                 residual_rms=tuple(float(r) for r in recording.get("residual_rms", (0.0,) * 6)),
                 source=str(recording.get("source", "")),
                 n_rejected=int(recording.get("rejected_samples", 0)),
+                unsteadiness=float(recording.get("unsteadiness", 1.0)),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, InputError):
@@ -475,6 +483,13 @@ def estimate_tare(
         values, covariance, residual = solve(keep)
     common["n_samples"] = int(keep.sum())
     common["n_rejected"] = int(n - keep.sum())
+    # Residual spread over sample-to-sample noise: about 1 for a steady load and a white sensor, far more
+    # when the load changed during the recording (an arm attached, the handle held).
+    used = residual[keep]
+    step_noise = 1.4826 * np.median(np.abs(np.diff(used, axis=0)), axis=0) / math.sqrt(2.0)
+    spread = np.sqrt((used**2).mean(axis=0))
+    ratios = spread[step_noise > 0] / step_noise[step_noise > 0]
+    common["unsteadiness"] = float(ratios.max()) if ratios.size else 1.0
     return Tare(
         load="separated" if separated else "constant",
         values=values,
@@ -543,6 +558,19 @@ def tare_wrench(
     force = np.asarray(wrench.force_n, dtype=np.float64) - load[:3]
     torque = np.asarray(wrench.torque_nm, dtype=np.float64) - load[3:]
     return force, torque, h @ tare.covariance @ h.T, warnings
+
+
+def recording_warnings(tare: Tare) -> list[str]:
+    """What is doubtful about the tare recording itself (an unsteady load, outliers left out)."""
+    out = []
+    if tare.unsteadiness > MAX_UNSTEADINESS:
+        out.append(
+            f"tare: the load changed during the recording (residual {tare.unsteadiness:.3g} x the sample-to-sample "
+            "noise): was an arm attached or the handle held? The tare's std is large accordingly; record it again"
+        )
+    if tare.n_rejected:
+        out.append(f"tare: {tare.n_rejected} outlier samples left out of {tare.n_samples + tare.n_rejected}")
+    return out
 
 
 def tare_warnings(tare: Tare, rotation_world_from_sensor: npt.ArrayLike) -> list[str]:

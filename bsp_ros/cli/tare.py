@@ -128,7 +128,7 @@ def collect_live_wrench(topic: str, duration_s: float) -> tuple[np.ndarray, np.n
 def run(args: argparse.Namespace) -> int:
     """Estimate and write the tare; return the exit code."""
     from bsp_ros.bag.errors import BagError
-    from bsp_ros.tare import MIN_TARE_DURATION_S, estimate_tare, write_tare_file
+    from bsp_ros.tare import MIN_TARE_DURATION_S, estimate_tare, recording_warnings, write_tare_file
 
     out: Path = args.out
     if out.exists():
@@ -160,6 +160,7 @@ def run(args: argparse.Namespace) -> int:
         rotations, source = read.rotations_world_from_sensor, Path(args.bag).name
         warnings += read.warnings
     tare = estimate_tare(t_ns, force, torque, frame, rotations, source=source)
+    warnings += recording_warnings(tare)
     write_tare_file(out, tare)
     print(format_tare(tare))
     for warning in warnings:

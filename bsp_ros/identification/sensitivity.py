@@ -188,7 +188,7 @@ def account_for_tare(
     -------
     ``{"tare": {...}, "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
     """
-    from bsp_ros.tare import tare_warnings
+    from bsp_ros.tare import recording_warnings, tare_warnings
 
     rotation = _mean_rotation(np.asarray(rotation_world_from_sensor, dtype=np.float64))
     g = None
@@ -196,7 +196,7 @@ def account_for_tare(
         g, _ = offset_sensitivity(data, rotation, refit)
     added = None
     if tare is not None:
-        result.warnings.extend(tare_warnings(tare, rotation))
+        result.warnings.extend(recording_warnings(tare) + tare_warnings(tare, rotation))
         if g is not None:
             h = tare.wrench_jacobian(rotation)
             added = add_tare_covariance(result, g, h @ tare.covariance @ h.T)

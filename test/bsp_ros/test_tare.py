@@ -24,6 +24,7 @@ from bsp_ros.tare import (
     corrected_session,
     estimate_tare,
     read_tare_file,
+    recording_warnings,
     tare_warnings,
     tare_wrench,
     write_tare_file,
@@ -212,3 +213,15 @@ def test_a_handle_touched_during_the_tare_is_refused() -> None:
     force[500:900, 1] += 5.0  # 4 s of a hand resting on the handle
     with pytest.raises(DataError, match="not steady: 400 of 2000"):
         estimate_tare(w.t_ns, force, w.torque_nm, "ft_sensor")
+
+
+def test_a_load_that_changes_during_the_tare_is_called_unsteady() -> None:
+    steady, _ = _tare()
+    assert steady.unsteadiness < 1.3 and recording_warnings(steady) == []
+    w = simulate_tare(human_arm_cell(sensor=SENSOR), TareSpec(duration_s=20.0)).wrench
+    t_s = (w.t_ns - w.t_ns[0]) * 1e-9
+    force = w.force_n + np.stack([0 * t_s, 2.0 * np.sin(2 * np.pi * t_s / 19.0), 0 * t_s], 1)  # an arm moving
+    unsteady = estimate_tare(w.t_ns, force, w.torque_nm, "ft_sensor")
+    (warning,) = recording_warnings(unsteady)
+    assert unsteady.unsteadiness > 20 and "the load changed during the recording" in warning
+    assert unsteady.force_offset_n[1][1] > 0.1  # and its std says how little it is worth
