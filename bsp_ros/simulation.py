@@ -975,10 +975,13 @@ class CellSimulator:
     ``tau_G(q) + tau_p = -J(q)^T F_end``. ``tau_G`` is computed from each segment's mass and COM
     position (not from the grouped static moments); ``F_end = [Fy, Fz, Mx]`` is the wrench the hand
     exerts on the sensor at the contact point, in ``world``. A 2-segment chain holds a bearing: Mx = 0.
-    Fx = My = Mz = 0 in ``world``.
+    Fx = My = Mz = 0 in ``world``. The sensor reads that wrench in its own axes plus the cell's nuisances
+    (``SensorSpec``: offset and drift, the handle's weight, spikes; ``MarkerSpec.skin_offset_m``;
+    ``PassiveTruth`` friction shape and elastic terms); :meth:`sample_tare_wrench` gives the handle-free
+    readings of a tare.
 
     Random draws: one seeded ``np.random.Generator`` per stream (wrench stamps, wrench noise, marker
-    stamps, and noise and dropouts per marker), all spawned from ``spec.seed``, so a stream's values do
+    stamps, and noise and dropouts per marker, wrench spikes), all seeded by ``spec.seed``, so a stream's values do
     not depend on how calls to the other streams interleave, and sampling in chunks gives the same
     values as sampling all at once.
 
