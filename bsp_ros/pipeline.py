@@ -21,8 +21,10 @@ from bsp_ros.identification.joint import JointConfig, identify_joint
 from bsp_ros.identification.paper import PaperConfig, identify_paper
 from bsp_ros.identification.passive import PassiveModel
 from bsp_ros.identification.result import IdentificationResult
+from bsp_ros.identification.sensitivity import account_for_tare
 from bsp_ros.joint_angles import KinematicsConfig
 from bsp_ros.streams import Session
+from bsp_ros.tare import Tare, corrected_session
 
 METHODS = ("joint", "paper")
 
@@ -35,6 +37,7 @@ class IdentifyOptions:
     passive: PassiveModel = field(default_factory=PassiveModel)
     subject: SubjectInfo = field(default_factory=SubjectInfo)
     kinematics: KinematicsConfig = field(default_factory=KinematicsConfig)
+    tare: Tare | None = None
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -99,8 +102,17 @@ def identify_session(
         error but ``quality.valid`` False.
     """
     options = options or IdentifyOptions()
+    session = corrected_session(session, options.tare)
     data = identification_data_from_session(session, options.kinematics)
     result = identify_data(data, options)
+    offsets = account_for_tare(
+        result,
+        data,
+        session.rotation_world_from_sensor,
+        session.wrench.frame_id,
+        options.tare,
+        lambda d: identify_data(d, options, check_elastic=False),
+    )
     posterior = fuse(result, data, options.subject) if result.valid else None
     info = {
         "start_time_ns": int(data.t_ns[0]),
@@ -111,7 +123,9 @@ def identify_session(
         "config": options.config(),
         **(session_info or {}),
     }
-    return estimate_document(result, data, posterior, options.subject, info)
+    document = estimate_document(result, data, posterior, options.subject, info)
+    document["quality"].update(offsets)
+    return document
 
 
 __all__ = ["METHODS", "BspError", "IdentifyOptions", "fuse", "identify_data", "identify_session"]

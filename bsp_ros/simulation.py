@@ -41,12 +41,16 @@ __all__ = [
     "SensorSpec",
     "SessionTruth",
     "SimulatedSession",
+    "SimulatedTare",
     "SubjectTruth",
+    "TareSpec",
     "TrajectorySpec",
     "human_arm_cell",
     "paper_mechanical_arm_cell",
     "rotation_from_rpy_deg",
     "simulate_cell",
+    "simulate_tare",
+    "tare_rotations",
 ]
 
 GRAVITY_M_S2 = 9.81
@@ -274,7 +278,11 @@ class SubjectTruth:
 class PassiveTruth:
     """True passive joint moment, per joint (shoulder, elbow, wrist), the torque the driver must supply.
 
-    ``tau_p,j = c_j sign(qdot_j) + b_j qdot_j + k_j (q_j - q0_j) + offset_j`` (Nm), with ``sign(0) = 0``.
+    ``tau_p,j = c_j s(qdot_j) h(qdot_j) + b_j qdot_j + k_j (q_j - q0_j) + offset_j`` (Nm), where the
+    direction shape ``s(v) = sign(v)`` (``sign(0) = 0``) if ``friction_transition_rad_s`` is 0, else
+    ``tanh(v / friction_transition_rad_s)`` (a smooth transition), and the Stribeck-like level
+    ``h(v) = 1 + (stribeck_ratio - 1) exp(-(v / stribeck_speed_rad_s)^2)`` (1 for the default ratio 1:
+    plain Coulomb; > 1 sticks more at low speed). ``c_j`` is the level at speeds far above both widths.
     An empty tuple (the default for all but ``coulomb_nm``) means zeros for every joint.
 
     Attributes
@@ -284,6 +292,9 @@ class PassiveTruth:
     stiffness_nm_per_rad : (n,) stiffnesses k_j >= 0, Nm/rad.
     neutral_rad : (n,) neutral angles q0_j of the elastic term, rad (relative joint angles).
     offset_nm : (n,) constant offsets, Nm.
+    friction_transition_rad_s : width of the tanh direction transition, rad/s (0: a sign step).
+    stribeck_ratio : friction level at zero speed over ``c_j`` (>= 0; 1: no Stribeck effect).
+    stribeck_speed_rad_s : speed scale of the Stribeck decay, rad/s (> 0).
     """
 
     coulomb_nm: tuple[float, ...]
@@ -291,6 +302,9 @@ class PassiveTruth:
     stiffness_nm_per_rad: tuple[float, ...] = ()
     neutral_rad: tuple[float, ...] = ()
     offset_nm: tuple[float, ...] = ()
+    friction_transition_rad_s: float = 0.0
+    stribeck_ratio: float = 1.0
+    stribeck_speed_rad_s: float = 0.01
 
     def __post_init__(self) -> None:
         coulomb = _float_tuple("coulomb_nm", self.coulomb_nm, None, 0.0, _MAX_COULOMB_NM)
@@ -307,11 +321,30 @@ class PassiveTruth:
             if isinstance(value, Sequence | np.ndarray) and len(value) == 0:
                 value = (0.0,) * n
             object.__setattr__(self, name, _float_tuple(name, value, n, lo, hi))
+        object.__setattr__(
+            self,
+            "friction_transition_rad_s",
+            check_finite_scalar("friction_transition_rad_s", self.friction_transition_rad_s, 0.0, 10.0),
+        )
+        object.__setattr__(
+            self, "stribeck_ratio", check_finite_scalar("stribeck_ratio", self.stribeck_ratio, 0.0, 10.0)
+        )
+        object.__setattr__(
+            self, "stribeck_speed_rad_s", check_positive("stribeck_speed_rad_s", self.stribeck_speed_rad_s, 10.0)
+        )
 
     @property
     def n_joints(self) -> int:
         """Number of joints (2 or 3)."""
         return len(self.coulomb_nm)
+
+    def friction_nm(self, qdot_rad_s: npt.ArrayLike) -> np.ndarray:
+        """Friction part ``c_j s(qdot_j) h(qdot_j)`` of the passive moment: (N, n) rad/s -> (N, n) Nm."""
+        v = np.asarray(qdot_rad_s, dtype=np.float64)
+        width = self.friction_transition_rad_s
+        shape = np.sign(v) if width == 0.0 else np.tanh(v / width)
+        level = 1.0 + (self.stribeck_ratio - 1.0) * np.exp(-((v / self.stribeck_speed_rad_s) ** 2))
+        return np.asarray(self.coulomb_nm) * shape * level
 
 
 @dataclass(frozen=True)
@@ -401,8 +434,20 @@ class SensorSpec:
     frame_id : ``header.frame_id`` of the wrench.
     force_noise_n : white Gaussian noise per force axis (sensor frame), N (1 sd).
     torque_noise_nm : white Gaussian noise per moment axis (sensor frame), Nm (1 sd).
-    force_bias_n : (3,) constant force bias in the sensor frame, N.
-    torque_bias_nm : (3,) constant moment bias in the sensor frame, Nm.
+    force_bias_n : (3,) force offset in the sensor frame at the session start, N.
+    torque_bias_nm : (3,) moment offset in the sensor frame at the session start, Nm.
+    force_drift_n_per_s : (3,) linear drift of the force offset, sensor frame, N/s (the offset at
+        time t s after the session start is ``force_bias_n + t * force_drift_n_per_s``).
+    torque_drift_nm_per_s : (3,) linear drift of the moment offset, sensor frame, Nm/s.
+    handle_mass_kg : mass of the handle between the sensor and the hand, kg (0-20). Its weight loads
+        the sensor: ``R^T m g`` (g = (0, 0, -9.81) m/s^2 in ``world``), rotating with the sensor.
+    handle_com_m : (3,) the handle's centre of mass in the sensor frame, relative to the wrench's
+        reference point (the contact point), m: its weight adds the moment ``c x R^T m g``.
+    tf_static : whether the bag records ``/tf_static`` (False: the world -> sensor transform is lost, as
+        in a bag recorded without it; a reader then takes the wrench as given in ``world``).
+    spike_fraction : probability that a wrench sample is a spike (a knock, a glitch), in [0, 0.5]: its
+        force gains ``+-spike_n`` along one sensor axis (axis and sign drawn per spike).
+    spike_n : spike amplitude, N (0-1e30: absurd values included on purpose).
     """
 
     wrench_hz: float = 100.0
@@ -414,6 +459,13 @@ class SensorSpec:
     torque_noise_nm: float = 0.005
     force_bias_n: tuple[float, float, float] = (0.0, 0.0, 0.0)
     torque_bias_nm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    force_drift_n_per_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    torque_drift_nm_per_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    handle_mass_kg: float = 0.0
+    handle_com_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    tf_static: bool = True
+    spike_fraction: float = 0.0
+    spike_n: float = 1000.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "wrench_hz", check_finite_scalar("wrench_hz", self.wrench_hz, 1.0, 5000.0))
@@ -435,6 +487,46 @@ class SensorSpec:
         )
         object.__setattr__(self, "force_bias_n", _float_tuple("force_bias_n", self.force_bias_n, 3, -1e3, 1e3))
         object.__setattr__(self, "torque_bias_nm", _float_tuple("torque_bias_nm", self.torque_bias_nm, 3, -1e2, 1e2))
+        object.__setattr__(
+            self, "force_drift_n_per_s", _float_tuple("force_drift_n_per_s", self.force_drift_n_per_s, 3, -1.0, 1.0)
+        )
+        object.__setattr__(
+            self,
+            "torque_drift_nm_per_s",
+            _float_tuple("torque_drift_nm_per_s", self.torque_drift_nm_per_s, 3, -0.1, 0.1),
+        )
+        object.__setattr__(
+            self, "handle_mass_kg", check_finite_scalar("handle_mass_kg", self.handle_mass_kg, 0.0, 20.0)
+        )
+        object.__setattr__(self, "handle_com_m", _float_tuple("handle_com_m", self.handle_com_m, 3, -1.0, 1.0))
+        if not isinstance(self.tf_static, bool):
+            raise InputError(f"tf_static must be True or False, got {self.tf_static!r}")
+        object.__setattr__(self, "spike_fraction", check_finite_scalar("spike_fraction", self.spike_fraction, 0.0, 0.5))
+        object.__setattr__(self, "spike_n", check_finite_scalar("spike_n", self.spike_n, 0.0, 1e30))
+
+    def offset_at(self, t_s: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """Force (N) and moment (Nm) offsets in the sensor frame at ``t_s`` s: (N,) -> (N, 3), (N, 3)."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))[:, None]
+        force = np.asarray(self.force_bias_n) + t * np.asarray(self.force_drift_n_per_s)
+        torque = np.asarray(self.torque_bias_nm) + t * np.asarray(self.torque_drift_nm_per_s)
+        return force, torque
+
+    def payload_wrench(self, rotation_world_from_sensor: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """The handle's gravity load in the sensor frame.
+
+        Parameters
+        ----------
+        rotation_world_from_sensor : (3, 3) or (N, 3, 3) rotation(s) of the sensor in ``world``.
+
+        Returns
+        -------
+        force (..., 3) N and moment (..., 3) Nm at the reference point: ``R^T m g`` and ``c x R^T m g``.
+        """
+        rotation = np.asarray(rotation_world_from_sensor, dtype=np.float64)
+        weight_world = np.array([0.0, 0.0, -GRAVITY_M_S2 * self.handle_mass_kg])
+        force = weight_world @ rotation  # row form of R^T w
+        torque = np.cross(np.asarray(self.handle_com_m), force)
+        return force, torque
 
     @property
     def rotation_world_from_sensor(self) -> np.ndarray:
@@ -455,6 +547,10 @@ class MarkerSpec:
     noise_m : white Gaussian position noise per axis (x included), m (1 sd).
     dropout_fraction : long-run fraction of frames lost, per marker independently, in [0, 0.9].
     dropout_mean_frames : mean length of a gap of lost frames (>= 1), frames.
+    skin_offset_m : per marker (proximal to distal: shoulder, elbow, (wrist,) hand), the skin marker's
+        offset from the joint centre ``(along, normal)`` in m, fixed in the segment that starts at that
+        joint (the hand marker: in the hand, the last segment); ``along`` points distally along the
+        segment axis, ``normal`` 90 deg counter-clockwise from it in the y-z plane. Empty: on the centres.
     """
 
     marker_hz: float = 50.0
@@ -464,6 +560,7 @@ class MarkerSpec:
     noise_m: float = 1e-4
     dropout_fraction: float = 0.0
     dropout_mean_frames: float = 10.0
+    skin_offset_m: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "marker_hz", check_positive("marker_hz", self.marker_hz, 5000.0))
@@ -485,6 +582,13 @@ class MarkerSpec:
             "dropout_mean_frames",
             check_finite_scalar("dropout_mean_frames", self.dropout_mean_frames, 1.0, 1e6),
         )
+        offsets = self.skin_offset_m
+        if isinstance(offsets, str | bytes) or not isinstance(offsets, Sequence | np.ndarray):
+            raise InputError(f"skin_offset_m must be a sequence of (along, normal) pairs, got {offsets!r}")
+        pairs = tuple(_float_tuple(f"skin_offset_m[{k}]", pair, 2, -0.1, 0.1) for k, pair in enumerate(offsets))
+        if pairs and len(pairs) not in (3, 4):
+            raise InputError(f"skin_offset_m needs one (along, normal) pair per marker (3 or 4), got {len(pairs)}")
+        object.__setattr__(self, "skin_offset_m", pairs)
 
 
 @dataclass(frozen=True)
@@ -534,6 +638,10 @@ class CellSpec:
             raise InputError(f"passive has {self.passive.n_joints} joints, the subject has {n} segments")
         if self.trajectory.n_joints != n:
             raise InputError(f"trajectory has {self.trajectory.n_joints} joints, the subject has {n} segments")
+        if self.markers.skin_offset_m and len(self.markers.skin_offset_m) != n + 1:
+            raise InputError(
+                f"markers.skin_offset_m has {len(self.markers.skin_offset_m)} pairs, the chain has {n + 1} markers"
+            )
         object.__setattr__(self, "duration_s", check_positive("duration_s", self.duration_s, _MAX_DURATION_S))
         object.__setattr__(self, "start_ns", _check_int("start_ns", self.start_ns, 1, 2**62))
         object.__setattr__(self, "seed", _check_int("seed", self.seed, 0))
@@ -712,8 +820,10 @@ class SessionTruth:
         dict
             ``{"schema", "segments": {name: {length_m, static_moment_kgm, mass_kg, com_m,
             first_moment_kgm}}, "joints": {name: {coulomb_nm, viscous_nms, stiffness_nm_per_rad,
-            neutral_rad, offset_nm}}, "trajectory": {joint: {center_deg, amplitude_deg, period_s,
-            phase_rad}}, "simulation": {...}}``.
+            neutral_rad, offset_nm}}, "friction": {transition_rad_s, stribeck_ratio,
+            stribeck_speed_rad_s}, "trajectory": {joint: {center_deg, amplitude_deg, period_s,
+            phase_rad}}, "simulation": {...}}``; ``simulation`` holds every sensor and marker nuisance
+            (offsets and drift, handle payload, ``tf_static``, skin marker offsets).
         """
         s, p, t = self.subject, self.passive, self.trajectory
         segments = {
@@ -748,10 +858,16 @@ class SessionTruth:
                 }
                 for j, name in enumerate(self.joint_names)
             }
+        friction = {
+            "transition_rad_s": p.friction_transition_rad_s,
+            "stribeck_ratio": p.stribeck_ratio,
+            "stribeck_speed_rad_s": p.stribeck_speed_rad_s,
+        }
         return {
             "schema": TRUTH_SCHEMA,
             "segments": segments,
             "joints": joints,
+            "friction": friction,
             "trajectory": trajectory,
             "simulation": dict(self.simulation),
         }
@@ -794,6 +910,7 @@ class SessionTruth:
             stiffness_nm_per_rad=tuple(x.get("stiffness_nm_per_rad", 0.0) for x in jnt),
             neutral_rad=tuple(x.get("neutral_rad", 0.0) for x in jnt),
             offset_nm=tuple(x.get("offset_nm", 0.0) for x in jnt),
+            **_friction_fields(data.get("friction", {})),
         )
         traj = _require(data, "trajectory", "")
         if isinstance(traj, Mapping) and "planned" in traj:
@@ -814,6 +931,18 @@ class SessionTruth:
         return cls(subject, passive, trajectory, dict(simulation))
 
 
+def _friction_fields(friction: Any) -> dict[str, Any]:
+    """PassiveTruth friction-shape keywords from a truth dict's ``friction`` block (absent: plain Coulomb)."""
+    if not isinstance(friction, Mapping):
+        raise InputError(f"truth dict: friction must be a mapping, got {friction!r}")
+    keys = {
+        "transition_rad_s": "friction_transition_rad_s",
+        "stribeck_ratio": "stribeck_ratio",
+        "stribeck_speed_rad_s": "stribeck_speed_rad_s",
+    }
+    return {name: friction[key] for key, name in keys.items() if key in friction}
+
+
 def _simulation_settings(spec: CellSpec) -> dict[str, Any]:
     s, m = spec.sensor, spec.markers
     return {
@@ -830,6 +959,13 @@ def _simulation_settings(spec: CellSpec) -> dict[str, Any]:
         "torque_noise_nm": s.torque_noise_nm,
         "force_bias_n": list(s.force_bias_n),
         "torque_bias_nm": list(s.torque_bias_nm),
+        "force_drift_n_per_s": list(s.force_drift_n_per_s),
+        "torque_drift_nm_per_s": list(s.torque_drift_nm_per_s),
+        "handle_mass_kg": s.handle_mass_kg,
+        "handle_com_m": list(s.handle_com_m),
+        "tf_static": s.tf_static,
+        "spike_fraction": s.spike_fraction,
+        "spike_n": s.spike_n,
         "marker_hz": m.marker_hz,
         "marker_phase_s": m.phase_s,
         "marker_stamp_jitter_s": m.stamp_jitter_s,
@@ -837,6 +973,7 @@ def _simulation_settings(spec: CellSpec) -> dict[str, Any]:
         "shoulder_m": list(m.shoulder_m),
         "dropout_fraction": m.dropout_fraction,
         "dropout_mean_frames": m.dropout_mean_frames,
+        "skin_offset_m": [list(pair) for pair in m.skin_offset_m],
     }
 
 
@@ -867,10 +1004,13 @@ class CellSimulator:
     ``tau_G(q) + tau_p = -J(q)^T F_end``. ``tau_G`` is computed from each segment's mass and COM
     position (not from the grouped static moments); ``F_end = [Fy, Fz, Mx]`` is the wrench the hand
     exerts on the sensor at the contact point, in ``world``. A 2-segment chain holds a bearing: Mx = 0.
-    Fx = My = Mz = 0 in ``world``.
+    Fx = My = Mz = 0 in ``world``. The sensor reads that wrench in its own axes plus the cell's nuisances
+    (``SensorSpec``: offset and drift, the handle's weight, spikes; ``MarkerSpec.skin_offset_m``;
+    ``PassiveTruth`` friction shape and elastic terms); :meth:`sample_tare_wrench` gives the handle-free
+    readings of a tare.
 
     Random draws: one seeded ``np.random.Generator`` per stream (wrench stamps, wrench noise, marker
-    stamps, and noise and dropouts per marker), all spawned from ``spec.seed``, so a stream's values do
+    stamps, and noise and dropouts per marker, wrench spikes), all seeded by ``spec.seed``, so a stream's values do
     not depend on how calls to the other streams interleave, and sampling in chunks gives the same
     values as sampling all at once.
 
@@ -898,6 +1038,8 @@ class CellSimulator:
         self._rng_marker_noise = dict(zip(self._marker_names, rngs[3 : 3 + k], strict=True))
         self._rng_dropout = dict(zip(self._marker_names, rngs[3 + k :], strict=True))
         self._lost: dict[str, bool | None] = dict.fromkeys(self._marker_names)
+        # Its own stream (not one of the spawned children above), so spikes leave every other draw unchanged.
+        self._rng_spikes = np.random.default_rng(np.random.SeedSequence([spec.seed, 13]))
         self._truth = SessionTruth(spec.subject, spec.passive, spec.trajectory, _simulation_settings(spec))
 
     # ---- properties -------------------------------------------------------------------------------
@@ -950,14 +1092,22 @@ class CellSimulator:
         return np.concatenate([origin, origin + np.cumsum(steps, axis=1)], axis=1)
 
     def marker_positions_m(self, t_s: npt.ArrayLike) -> dict[str, np.ndarray]:
-        """Noise-free marker positions in ``world``: (N,) s -> name -> (N, 3) m."""
+        """Noise-free marker positions in ``world`` (skin offsets included): (N,) s -> name -> (N, 3) m."""
         q = self.joint_angles_rad(t_s)
         points = self._joint_points_yz(q)
+        phi = np.cumsum(q, axis=1)
+        offsets = self._spec.markers.skin_offset_m
         out = {}
         for i, name in enumerate(self._marker_names):
             xyz = np.empty((q.shape[0], 3))
             xyz[:, 0] = self._shoulder[0]
             xyz[:, 1:] = points[:, i, :]
+            if offsets:
+                # Fixed in the segment starting at this joint (the hand marker: in the last segment).
+                angle = phi[:, min(i, q.shape[1] - 1)]
+                along, normal = offsets[i]
+                xyz[:, 1] += along * np.cos(angle) - normal * np.sin(angle)
+                xyz[:, 2] += along * np.sin(angle) + normal * np.cos(angle)
             out[name] = xyz
         return out
 
@@ -984,7 +1134,7 @@ class CellSimulator:
         qdot = self.joint_velocities_rad_s(t_s)
         p = self._spec.passive
         return (
-            np.asarray(p.coulomb_nm) * np.sign(qdot)
+            p.friction_nm(qdot)
             + np.asarray(p.viscous_nms) * qdot
             + np.asarray(p.stiffness_nm_per_rad) * (q - np.asarray(p.neutral_rad))
             + np.asarray(p.offset_nm)
@@ -1061,7 +1211,8 @@ class CellSimulator:
         -------
         WrenchSeries
             Force (N, 3) N and moment (N, 3) Nm in ``sensor.frame_id`` axes, referenced at the contact
-            point: ``R^T F_world + bias + noise``.
+            point: ``R^T F_world + offset(t) + payload + noise`` (offset with its drift, the handle's
+            gravity load ``R^T m g`` and its moment ``c x R^T m g``; spikes if ``spike_fraction`` > 0).
         """
         stamps = check_stamps_ns("t_ns", t_ns)
         world = self.wrench_world(self.seconds_since_start(stamps))
@@ -1072,9 +1223,35 @@ class CellSimulator:
         s = self._spec.sensor
         noise = self._rng_wrench_noise.standard_normal((stamps.size, 6))
         # Row vectors: v_sensor = R^T v_world  <=>  v_sensor_row = v_world_row @ R.
-        force = force_w @ self._rotation + np.asarray(s.force_bias_n) + s.force_noise_n * noise[:, :3]
-        torque = torque_w @ self._rotation + np.asarray(s.torque_bias_nm) + s.torque_noise_nm * noise[:, 3:]
+        offset_f, offset_m = s.offset_at(self.seconds_since_start(stamps))
+        load_f, load_m = s.payload_wrench(self._rotation)
+        force = force_w @ self._rotation + offset_f + load_f + s.force_noise_n * noise[:, :3]
+        if s.spike_fraction > 0.0:
+            draws = self._rng_spikes.random((stamps.size, 3))
+            hit = draws[:, 0] < s.spike_fraction
+            axis = (draws[hit, 1] * 3).astype(int)
+            force[np.flatnonzero(hit), axis] += np.where(draws[hit, 2] < 0.5, -s.spike_n, s.spike_n)
+        torque = torque_w @ self._rotation + offset_m + load_m + s.torque_noise_nm * noise[:, 3:]
         return WrenchSeries(t_ns=stamps, force_n=force, torque_nm=torque, frame_id=s.frame_id)
+
+    def sample_tare_wrench(self, t_ns: npt.ArrayLike, tare: TareSpec) -> tuple[WrenchSeries, np.ndarray]:
+        """Noisy wrench of the cell in tare mode (handle free, no arm) at the given stamps, for a live publisher.
+
+        Parameters
+        ----------
+        t_ns : (N,) int64, strictly increasing stamps, ns.
+        tare : the tare recording; it starts ``tare.start_offset_s`` after ``spec.start_ns`` (use 0 for a
+            publisher that starts in tare mode).
+
+        Returns
+        -------
+        wrench : offset (with drift) + handle load + noise in the sensor frame (see :func:`simulate_tare`).
+        rotations : (N, 3, 3) the sensor's orientation at each stamp (publish it on ``/tf`` if it swings).
+        """
+        if not isinstance(tare, TareSpec):
+            raise InputError(f"tare must be a TareSpec, got {tare!r}")
+        stamps = check_stamps_ns("t_ns", t_ns)
+        return _tare_wrench(self._spec, tare, stamps, self._rng_wrench_noise.standard_normal((stamps.size, 6)))
 
     def _dropout_mask(self, name: str, count: int) -> np.ndarray:
         """(count,) bool, True where the frame is lost: a two-state Markov chain carried across calls."""
@@ -1133,12 +1310,178 @@ def simulate_cell(spec: CellSpec) -> SimulatedSession:
     -------
     SimulatedSession
         ``.session`` (wrench in the sensor frame, markers in ``world``, ``rotation_world_from_sensor``
-        set) and ``.truth``.
+        set; the identity if ``spec.sensor.tf_static`` is False, as a reader of a bag without
+        ``/tf_static`` takes it) and ``.truth``.
     """
     sim = CellSimulator(spec)
     wrench = sim.sample_wrench(sim.wrench_stamps_ns())
     markers = sim.sample_markers(sim.marker_stamps_ns())
-    session = Session(
-        wrench=wrench, markers=markers, rotation_world_from_sensor=np.array(sim.rotation_world_from_sensor)
-    )
+    rotation = np.array(sim.rotation_world_from_sensor) if spec.sensor.tf_static else np.eye(3)
+    session = Session(wrench=wrench, markers=markers, rotation_world_from_sensor=rotation)
     return SimulatedSession(session=session, truth=sim.truth)
+
+
+# --------------------------------------------------------------------------------------------------------
+# tare recording (handle free)
+# --------------------------------------------------------------------------------------------------------
+
+_SWING_PHASES_RAD = (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)
+
+
+@dataclass(frozen=True)
+class TareSpec:
+    """A tare recording of a cell: the handle free (no arm), the robot at rest or swinging the sensor.
+
+    The sensor's orientation is ``R_mount @ Rpy(swing_rpy_deg * sin(2 pi t / swing_period_s + phase))``
+    with phases (0, 2 pi / 3, 4 pi / 3) rad for roll, pitch, yaw, ``R_mount`` from the cell's
+    ``SensorSpec.roll_pitch_yaw_deg``; zero swing holds it at rest.
+
+    Attributes
+    ----------
+    duration_s : length of the recording, s (0 < d <= 3600).
+    start_offset_s : its start relative to the session start, s (negative: before the session); the
+        offset drift of ``SensorSpec`` continues through it.
+    swing_rpy_deg : (3,) swing amplitudes about the fixed x, y, z axes, deg (0-90).
+    swing_period_s : period of the swing, s (> 0).
+    tf_hz : rate of the ``/tf`` orientation samples of a swinging sensor, Hz.
+    """
+
+    duration_s: float = 20.0
+    start_offset_s: float = -60.0
+    swing_rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    swing_period_s: float = 10.0
+    tf_hz: float = 50.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "duration_s", check_positive("tare duration_s", self.duration_s, 3600.0))
+        object.__setattr__(
+            self, "start_offset_s", check_finite_scalar("tare start_offset_s", self.start_offset_s, -1e5, 1e5)
+        )
+        object.__setattr__(self, "swing_rpy_deg", _float_tuple("swing_rpy_deg", self.swing_rpy_deg, 3, 0.0, 90.0))
+        object.__setattr__(self, "swing_period_s", check_positive("swing_period_s", self.swing_period_s, 1e4))
+        object.__setattr__(self, "tf_hz", check_positive("tf_hz", self.tf_hz, 1000.0))
+
+    @property
+    def swinging(self) -> bool:
+        """True if the sensor's orientation varies during the recording."""
+        return any(a > 0.0 for a in self.swing_rpy_deg)
+
+
+@dataclass(frozen=True)
+class SimulatedTare:
+    """A simulated tare recording and its truth.
+
+    Attributes
+    ----------
+    wrench : the wrench stream (sensor frame): offset (with drift) + handle load + noise.
+    tf_t_ns : (K,) int64 stamps of the orientation samples (empty if the sensor was at rest).
+    rotations_world_from_sensor : (K, 3, 3) sensor orientations at ``tf_t_ns``.
+    rotation_world_from_sensor : (3, 3) the mounting orientation (the sensor at rest).
+    truth : JSON-ready truth: the offsets at the recording's middle and the handle's mass and COM.
+    """
+
+    wrench: WrenchSeries
+    tf_t_ns: np.ndarray
+    rotations_world_from_sensor: np.ndarray
+    rotation_world_from_sensor: np.ndarray
+    truth: dict[str, Any]
+
+
+def tare_rotations(spec: CellSpec, tare: TareSpec, t_s: npt.ArrayLike) -> np.ndarray:
+    """Sensor orientations of a tare recording: (N,) s since the tare's start -> (N, 3, 3)."""
+    t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
+    mount = spec.sensor.rotation_world_from_sensor
+    angles = np.asarray(tare.swing_rpy_deg) * np.sin(
+        2.0 * np.pi * t[:, None] / tare.swing_period_s + np.asarray(_SWING_PHASES_RAD)
+    )
+    return np.stack([mount @ rotation_from_rpy_deg(*row) for row in angles]) if t.size else np.zeros((0, 3, 3))
+
+
+def _tare_wrench(
+    spec: CellSpec, tare: TareSpec, stamps: np.ndarray, noise: np.ndarray
+) -> tuple[WrenchSeries, np.ndarray]:
+    """Handle-free wrench at ``stamps`` given (N, 6) standard normal draws; and the (N, 3, 3) orientations."""
+    s = spec.sensor
+    start_ns = spec.start_ns + round(tare.start_offset_s * 1e9)
+    t_tare = (stamps - np.int64(start_ns)).astype(np.float64) * 1e-9
+    rotations = tare_rotations(spec, tare, t_tare)
+    offset_f, offset_m = s.offset_at(t_tare + tare.start_offset_s)
+    load_f = np.einsum("k,nkj->nj", np.array([0.0, 0.0, -GRAVITY_M_S2 * s.handle_mass_kg]), rotations)
+    load_m = np.cross(np.asarray(s.handle_com_m), load_f)
+    wrench = WrenchSeries(
+        t_ns=stamps,
+        force_n=offset_f + load_f + s.force_noise_n * noise[:, :3],
+        torque_nm=offset_m + load_m + s.torque_noise_nm * noise[:, 3:],
+        frame_id=s.frame_id,
+    )
+    return wrench, rotations
+
+
+def simulate_tare(spec: CellSpec, tare: TareSpec | None = None) -> SimulatedTare:
+    """Simulate the tare recording of a cell (the handle free: no arm, markers not recorded).
+
+    The wrench is ``offset(t) + R(t)^T m g`` (force) and ``offset_M(t) + c x R(t)^T m g`` (moment) plus
+    the sensor's white noise, with the offsets, drift, handle mass ``m`` and COM ``c`` of
+    ``spec.sensor``; draws come from a generator seeded by ``spec.seed`` but independent of the
+    session's streams.
+
+    Parameters
+    ----------
+    spec : the cell (sensor, seed, session start).
+    tare : the recording (default ``TareSpec()``: 20 s at rest, a minute before the session).
+
+    Returns
+    -------
+    SimulatedTare
+    """
+    tare = tare if tare is not None else TareSpec()
+    if not isinstance(tare, TareSpec):
+        raise InputError(f"tare must be a TareSpec, got {tare!r}")
+    s = spec.sensor
+    start_ns = spec.start_ns + round(tare.start_offset_s * 1e9)
+    if start_ns <= 0:
+        raise InputError(f"the tare would start at ROS time {start_ns} ns (<= 0): start_offset_s is too early")
+    rng_stamps, rng_noise = (np.random.default_rng(c) for c in np.random.SeedSequence([spec.seed, 7]).spawn(2))
+    count = max(math.ceil((tare.duration_s - s.phase_s) * s.wrench_hz), 1)
+    nominal = s.phase_s + np.arange(count, dtype=np.float64) / s.wrench_hz
+    offsets_ns = np.round(nominal * 1e9)
+    if s.stamp_jitter_s > 0.0:
+        clip = _JITTER_CLIP_PERIODS * 1e9 / s.wrench_hz
+        offsets_ns += np.round(np.clip(rng_stamps.normal(0.0, s.stamp_jitter_s * 1e9, count), -clip, clip))
+    stamps = check_stamps_ns("tare stamps", np.int64(start_ns) + offsets_ns.astype(np.int64))
+    wrench, _ = _tare_wrench(spec, tare, stamps, rng_noise.standard_normal((count, 6)))
+    if tare.swinging:
+        n_tf = max(math.ceil(tare.duration_s * tare.tf_hz), 2)
+        tf_s = np.arange(n_tf, dtype=np.float64) / tare.tf_hz
+        tf_t_ns = np.int64(start_ns) + np.round(tf_s * 1e9).astype(np.int64)
+        tf_rotations = tare_rotations(spec, tare, tf_s)
+    else:
+        tf_t_ns, tf_rotations = np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3))
+    middle_f, middle_m = s.offset_at([tare.start_offset_s + 0.5 * tare.duration_s])
+    truth = {
+        "schema": "bsp_ros/tare_truth/1",
+        "frame_id": s.frame_id,
+        "force_offset_n": middle_f[0].tolist(),
+        "torque_offset_nm": middle_m[0].tolist(),
+        "force_drift_n_per_s": list(s.force_drift_n_per_s),
+        "torque_drift_nm_per_s": list(s.torque_drift_nm_per_s),
+        "handle_mass_kg": s.handle_mass_kg,
+        "handle_com_m": list(s.handle_com_m),
+        "duration_s": tare.duration_s,
+        "start_offset_s": tare.start_offset_s,
+        "swing_rpy_deg": list(tare.swing_rpy_deg),
+        "swing_period_s": tare.swing_period_s,
+        "sensor_roll_pitch_yaw_deg": list(s.roll_pitch_yaw_deg),
+        "force_noise_n": s.force_noise_n,
+        "torque_noise_nm": s.torque_noise_nm,
+        "wrench_hz": s.wrench_hz,
+        "seed": spec.seed,
+        "start_ns": int(start_ns),
+    }
+    return SimulatedTare(
+        wrench=wrench,
+        tf_t_ns=tf_t_ns,
+        rotations_world_from_sensor=tf_rotations,
+        rotation_world_from_sensor=np.array(s.rotation_world_from_sensor),
+        truth=truth,
+    )

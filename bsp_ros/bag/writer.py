@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -62,6 +62,8 @@ def write_session_bag(
     delay_jitter_ns: int = 200_000,
     seed: int = 0,
     chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+    tf_static: bool = True,
+    tf_samples: Sequence[TransformSample] = (),
 ) -> Path:
     """Write ``session`` as a rosbag2 (Jazzy, metadata version 9) bag directory with one MCAP file.
 
@@ -84,6 +86,10 @@ def write_session_bag(
     transport_delay_ns, delay_jitter_ns : receive delay after the header stamp, ns (>= 0).
     seed : seed of the jitter draw.
     chunk_bytes : target MCAP chunk size, bytes (a killed recorder loses at most one chunk).
+    tf_static : False leaves ``/tf_static`` out (a bag that lost it, or a cell that publishes the sensor
+        orientation on ``/tf`` only).
+    tf_samples : transforms written on ``/tf``, one TFMessage each, stamped and received at their stamp
+        (e.g. a sensor whose orientation changes during a tare recording).
 
     Returns
     -------
@@ -138,7 +144,14 @@ def write_session_bag(
         )
     starts = [int(p[3].min()) for p in payloads if p[3].size]
     t0 = min(starts) if starts else 1
-    if w.frame_id != world_frame:
+    if tf_samples:
+        tf_stamps = np.array([s.t_ns for s in tf_samples], dtype=np.int64)
+        tf_rows = [
+            bytes(typestore.serialize_cdr(build_tf_message(lambda n: typestore.types[n], [s]), TF_TYPE))
+            for s in tf_samples
+        ]
+        payloads.append((topic_map.tf, TF_TYPE, tf_rows, tf_stamps, np.maximum.accumulate(tf_stamps), False))
+    if tf_static and w.frame_id != world_frame:
         try:
             rotation_xyzw = quaternion_from_matrix(session.rotation_world_from_sensor)
         except ValueError as error:

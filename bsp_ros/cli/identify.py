@@ -51,6 +51,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--tf-topic", default="/tf")
     parser.add_argument("--tf-static-topic", default="/tf_static")
     parser.add_argument(
+        "--tare",
+        type=Path,
+        metavar="FILE",
+        help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
+    )
+    parser.add_argument(
         "--format",
         choices=("auto", "table", "tsv", "none"),
         default="auto",
@@ -73,6 +79,14 @@ def _topics(args: argparse.Namespace) -> Any:
     # A --wrench-topic that names a marker topic stays the wrench topic (TopicMap.expected_types), so a
     # PoseStamped topic given there fails the bag's type check (exit 14) before anything is decoded.
     return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
+
+
+def _read_tare(path: Path | None) -> Any:
+    if path is None:
+        return None
+    from bsp_ros.tare import read_tare_file
+
+    return read_tare_file(path)
 
 
 def _progress_bar() -> Any:
@@ -100,6 +114,16 @@ def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
     return out
 
 
+def tare_line(quality: dict[str, Any]) -> str:
+    """One line on the tare: applied (which file), or not, with how much 0.1 N of offset would matter."""
+    tare = quality.get("tare") or {}
+    if tare.get("applied"):
+        return f"tare: {tare.get('file')} applied (its uncertainty is in the std)"
+    percent = [p for p in (quality.get("offset_sensitivity") or {}).get("static_moment_percent", {}).values() if p]
+    worst = f": 0.1 N of sensor offset moves a static moment by up to {max(percent):.2g}%" if percent else ""
+    return f"tare: none applied{worst} (bsp tare, then --tare FILE)"
+
+
 def format_table(document: dict[str, Any]) -> str:
     """A human-readable table of an estimate document."""
     quality = document["quality"]
@@ -113,6 +137,7 @@ def format_table(document: dict[str, Any]) -> str:
         value_text = "n/a" if value is None else f"{value:.5g}"
         std_text = "n/a" if std is None else f"{std:.2g}"
         lines.append(f"{owner:10s} {key:22s} {value_text:>12s} {std_text:>11s}  {source}")
+    lines.append(tare_line(quality))
     state = "VALID" if quality["valid"] else "INVALID"
     lines.append(f"{state}: {quality.get('message', '')}")
     lines += [f"warning: {w}" for w in quality["warnings"]]
@@ -134,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         passive=PassiveModel.parse(args.passive),
         subject=SubjectInfo(args.body_mass, args.height, args.sex),
+        tare=_read_tare(args.tare),
     )
     try:
         document = identify_bag(args.bag, options, _topics(args), _progress_bar())

@@ -17,8 +17,24 @@ CORE = [
     "bsp_ros.pipeline",
     "bsp_ros.online.windowed",
     "bsp_ros.online.causal_angles",
+    "bsp_ros.identification.robust",
+    "bsp_ros.identification.sensitivity",
+    "bsp_ros.tare",
+    "bsp_ros.glitches",
+    "bsp_ros.weight_support",
+    "bsp_ros.mdc",
+    "bsp_ros.planning",
 ]
-FORBIDDEN = ("rclpy", "geometry_msgs", "sensor_msgs", "cyclonedds", "rosbags", "mcap")
+FORBIDDEN = (
+    "rclpy",
+    "geometry_msgs",
+    "sensor_msgs",
+    "nav_msgs",
+    "trajectory_msgs",
+    "cyclonedds",
+    "rosbags",
+    "mcap",
+)
 
 
 def test_core_modules_import_no_middleware() -> None:

@@ -446,3 +446,203 @@ def test_truth_from_dict_rejects_a_foreign_schema_and_missing_keys() -> None:
     del d["segments"]["forearm"]["mass_kg"]
     with pytest.raises(InputError, match="mass_kg"):
         SessionTruth.from_dict(d)
+
+
+# ---- nuisances (issue 10) -------------------------------------------------------------------------------
+
+
+def _wrench_difference(nuisance: dict[str, Any], rpy: tuple[float, float, float] = (180.0, 0.0, 0.0)) -> tuple:
+    """Sensor-frame wrench with the sensor nuisance minus the ideal cell's, at the same stamps (no noise)."""
+    base = _noise_free(human_arm_cell())
+    ideal = dataclasses.replace(base, sensor=dataclasses.replace(base.sensor, roll_pitch_yaw_deg=rpy))
+    spoiled = dataclasses.replace(ideal, sensor=dataclasses.replace(ideal.sensor, **nuisance))
+    a, b = CellSimulator(ideal), CellSimulator(spoiled)
+    stamps = a.wrench_stamps_ns()
+    wa, wb = a.sample_wrench(stamps), b.sample_wrench(stamps)
+    return (stamps - base.start_ns) * 1e-9, wb.force_n - wa.force_n, wb.torque_nm - wa.torque_nm
+
+
+def test_offset_drifts_linearly_from_its_value_at_the_session_start() -> None:
+    t_s, d_force, d_torque = _wrench_difference(
+        {
+            "force_bias_n": (1.0, -2.0, 3.0),
+            "force_drift_n_per_s": (0.01, 0.0, -0.02),
+            "torque_bias_nm": (0.1, 0.0, -0.1),
+            "torque_drift_nm_per_s": (0.0, 0.001, 0.0),
+        }
+    )
+    np.testing.assert_allclose(d_force[:, 0], 1.0 + 0.01 * t_s, atol=1e-9)
+    np.testing.assert_allclose(d_force[:, 1], -2.0, atol=1e-9)
+    np.testing.assert_allclose(d_force[:, 2], 3.0 - 0.02 * t_s, atol=1e-9)
+    np.testing.assert_allclose(d_torque, np.stack([0.1 + 0 * t_s, 0.001 * t_s, -0.1 + 0 * t_s], 1), atol=1e-9)
+
+
+def test_handle_weight_loads_the_sensor_in_its_own_axes() -> None:
+    # Sensor upside down (roll 180 deg): world -z is sensor +z, so the 0.3 kg handle pulls +2.943 N along
+    # sensor z; its COM 0.1 m along sensor x gives c x F = (0, -0.1 * 2.943, 0) Nm.
+    _, d_force, d_torque = _wrench_difference({"handle_mass_kg": 0.3, "handle_com_m": (0.1, 0.0, 0.0)})
+    np.testing.assert_allclose(d_force, np.tile([0.0, 0.0, 0.3 * G], (d_force.shape[0], 1)), atol=1e-9)
+    np.testing.assert_allclose(d_torque, np.tile([0.0, -0.1 * 0.3 * G, 0.0], (d_force.shape[0], 1)), atol=1e-9)
+
+
+def test_handle_weight_rotates_with_the_sensor() -> None:
+    # Pitch 90 deg: sensor x points to world -z, so the weight is +m g along sensor x; COM on sensor z.
+    _, d_force, d_torque = _wrench_difference(
+        {"handle_mass_kg": 0.5, "handle_com_m": (0.0, 0.0, 0.02)}, rpy=(0.0, 90.0, 0.0)
+    )
+    np.testing.assert_allclose(d_force[0], [0.5 * G, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(d_torque[0], [0.0, 0.02 * 0.5 * G, 0.0], atol=1e-9)
+
+
+def test_smooth_friction_follows_tanh_of_the_transition_width() -> None:
+    passive = PassiveTruth(coulomb_nm=(0.5, 0.28, 0.06), friction_transition_rad_s=0.002)
+    v = np.array([[0.0, 0.002, -0.01], [0.001, -0.0005, 1.0]])
+    expected = np.array(
+        [[0.0, 0.28 * math.tanh(1.0), -0.06 * math.tanh(5.0)], [0.5 * math.tanh(0.5), -0.28 * math.tanh(0.25), 0.06]]
+    )
+    np.testing.assert_allclose(passive.friction_nm(v), expected, rtol=1e-12, atol=1e-15)
+
+
+def test_stribeck_shape_sticks_more_at_low_speed_and_decays_to_coulomb() -> None:
+    passive = PassiveTruth(coulomb_nm=(0.5, 0.2), stribeck_ratio=1.5, stribeck_speed_rad_s=0.01)
+    v = np.array([[1e-9, -0.01], [0.1, -1.0]])
+    expected = np.array(
+        [[0.5 * 1.5, -0.2 * (1.0 + 0.5 * math.exp(-1.0))], [0.5 * (1.0 + 0.5 * math.exp(-100.0)), -0.2]]
+    )
+    np.testing.assert_allclose(passive.friction_nm(v), expected, rtol=1e-9)
+
+
+def test_simulated_passive_moment_uses_the_friction_shape() -> None:
+    spec = human_arm_cell(passive=PassiveTruth(coulomb_nm=(0.5, 0.28, 0.06), friction_transition_rad_s=0.005))
+    sim = CellSimulator(spec)
+    t_s = np.linspace(0.0, 30.0, 301)
+    qdot = spec.trajectory.velocities_rad_s(t_s)
+    np.testing.assert_allclose(sim.passive_torque_nm(t_s), np.array([0.5, 0.28, 0.06]) * np.tanh(qdot / 0.005))
+
+
+def test_skin_markers_sit_at_their_offset_in_the_segment_frame() -> None:
+    offsets = ((0.0, 0.01), (0.02, 0.0), (0.0, -0.01), (0.01, 0.01))
+    base = _noise_free(human_arm_cell())
+    spoiled = dataclasses.replace(base, markers=dataclasses.replace(base.markers, skin_offset_m=offsets))
+    t_s = np.array([0.0, 7.3])
+    clean, skin = CellSimulator(base).marker_positions_m(t_s), CellSimulator(spoiled).marker_positions_m(t_s)
+    phi = np.cumsum(base.trajectory.angles_rad(t_s), axis=1)
+    for i, name in enumerate(("shoulder", "elbow", "wrist", "hand")):
+        angle = phi[:, min(i, 2)]
+        along, normal = offsets[i]
+        dy = along * np.cos(angle) - normal * np.sin(angle)
+        dz = along * np.sin(angle) + normal * np.cos(angle)
+        np.testing.assert_allclose(skin[name] - clean[name], np.stack([0 * dy, dy, dz], 1), atol=1e-12)
+
+
+def test_skin_offsets_need_one_pair_per_marker() -> None:
+    with pytest.raises(InputError, match="skin_offset_m"):
+        paper_mechanical_arm_cell(markers=MarkerSpec(skin_offset_m=((0.0, 0.01),) * 4))
+
+
+def test_lost_tf_static_leaves_the_session_without_its_rotation() -> None:
+    spec = human_arm_cell(duration_s=5.0, sensor=SensorSpec(tf_static=False))
+    simulated = simulate_cell(spec)
+    np.testing.assert_array_equal(simulated.session.rotation_world_from_sensor, np.eye(3))
+    assert simulated.truth.simulation["tf_static"] is False
+    assert simulated.truth.simulation["sensor_roll_pitch_yaw_deg"] == [180.0, 0.0, 30.0]
+
+
+def test_truth_records_every_nuisance_and_reads_back() -> None:
+    spec = human_arm_cell(
+        passive=PassiveTruth(
+            coulomb_nm=(0.5, 0.28, 0.06),
+            offset_nm=(0.05, -0.2, 0.0),
+            friction_transition_rad_s=0.002,
+            stribeck_ratio=1.3,
+            stribeck_speed_rad_s=0.02,
+        ),
+        sensor=SensorSpec(force_drift_n_per_s=(0.0, 0.001, 0.0), handle_mass_kg=0.3, handle_com_m=(0.0, 0.0, 0.04)),
+        markers=MarkerSpec(skin_offset_m=((0.0, 0.01),) * 4),
+        duration_s=5.0,
+    )
+    data = json.loads(json.dumps(simulate_cell(spec).truth.to_dict()))
+    assert data["friction"] == {"transition_rad_s": 0.002, "stribeck_ratio": 1.3, "stribeck_speed_rad_s": 0.02}
+    assert data["joints"]["elbow"]["offset_nm"] == -0.2
+    sim = data["simulation"]
+    assert (sim["handle_mass_kg"], sim["handle_com_m"]) == (0.3, [0.0, 0.0, 0.04])
+    assert sim["force_drift_n_per_s"] == [0.0, 0.001, 0.0]
+    assert sim["skin_offset_m"] == [[0.0, 0.01]] * 4
+    back = SessionTruth.from_dict(data)
+    assert back.passive == spec.passive
+
+
+def test_truth_without_a_friction_block_reads_as_plain_coulomb() -> None:
+    data = simulate_cell(human_arm_cell(duration_s=2.0)).truth.to_dict()
+    del data["friction"]
+    passive = SessionTruth.from_dict(data).passive
+    assert (passive.friction_transition_rad_s, passive.stribeck_ratio) == (0.0, 1.0)
+
+
+def test_tare_at_rest_measures_offset_plus_the_handle_load() -> None:
+    from bsp_ros.simulation import TareSpec, simulate_tare
+
+    sensor = SensorSpec(
+        roll_pitch_yaw_deg=(180.0, 0.0, 0.0),
+        force_bias_n=(1.0, 2.0, 3.0),
+        torque_bias_nm=(0.1, 0.0, 0.0),
+        force_drift_n_per_s=(0.001, 0.0, 0.0),
+        handle_mass_kg=0.3,
+        handle_com_m=(0.1, 0.0, 0.0),
+        force_noise_n=0.0,
+        torque_noise_nm=0.0,
+    )
+    tare = simulate_tare(human_arm_cell(sensor=sensor), TareSpec(duration_s=10.0, start_offset_s=-100.0))
+    t_s = (tare.wrench.t_ns - DEFAULT_START_NS) * 1e-9  # about -100 .. -90 s
+    assert tare.tf_t_ns.size == 0
+    np.testing.assert_allclose(tare.wrench.force_n[:, 0], 1.0 + 0.001 * t_s, atol=1e-9)
+    np.testing.assert_allclose(tare.wrench.force_n[:, 1:], np.tile([2.0, 3.0 + 0.3 * G], (t_s.size, 1)), atol=1e-9)
+    np.testing.assert_allclose(tare.wrench.torque_nm, np.tile([0.1, -0.1 * 0.3 * G, 0.0], (t_s.size, 1)), atol=1e-9)
+    assert tare.truth["force_offset_n"] == pytest.approx([1.0 - 0.001 * 95.0, 2.0, 3.0])
+
+
+def test_swinging_tare_publishes_the_orientation_the_wrench_follows() -> None:
+    from bsp_ros.simulation import TareSpec, simulate_tare
+
+    sensor = SensorSpec(handle_mass_kg=0.3, force_noise_n=0.0, torque_noise_nm=0.0, stamp_jitter_s=0.0)
+    spec = human_arm_cell(sensor=sensor)
+    tare = simulate_tare(spec, TareSpec(duration_s=10.0, swing_rpy_deg=(20.0, 30.0, 0.0), swing_period_s=5.0))
+    assert tare.tf_t_ns.size == 500
+    # At t = 0 of the tare the swing is (0, 30 sin(2 pi / 3), 0) deg about the mounting orientation.
+    expected = spec.sensor.rotation_world_from_sensor @ rotation_from_rpy_deg(
+        0.0, 30.0 * math.sin(2 * math.pi / 3), 0.0
+    )
+    np.testing.assert_allclose(tare.rotations_world_from_sensor[0], expected, atol=1e-12)
+    # A tf sample that coincides with a wrench stamp: the force is R^T (0, 0, -m g).
+    k = int(np.searchsorted(tare.wrench.t_ns, tare.tf_t_ns[100]))
+    assert tare.wrench.t_ns[k] - tare.tf_t_ns[100] == pytest.approx(1_300_000, abs=1)  # the 1.3 ms wrench phase
+    rotation = tare.rotations_world_from_sensor[100]
+    force_world = rotation @ tare.wrench.force_n[k]
+    np.testing.assert_allclose(force_world, [0.0, 0.0, -0.3 * G], atol=0.02)  # 1.3 ms of swing apart
+
+
+def test_streamed_tare_wrench_matches_the_whole_recording_physics() -> None:
+    from bsp_ros.simulation import TareSpec, simulate_tare
+
+    sensor = SensorSpec(handle_mass_kg=0.3, handle_com_m=(0.0, 0.0, 0.05), force_noise_n=0.0, torque_noise_nm=0.0)
+    spec = human_arm_cell(sensor=sensor)
+    tare = TareSpec(duration_s=10.0, swing_rpy_deg=(10.0, 15.0, 0.0))
+    whole = simulate_tare(spec, tare)
+    streamed, rotations = CellSimulator(spec).sample_tare_wrench(whole.wrench.t_ns[:300], tare)
+    np.testing.assert_allclose(streamed.force_n, whole.wrench.force_n[:300], atol=1e-12)
+    np.testing.assert_allclose(streamed.torque_nm, whole.wrench.torque_nm[:300], atol=1e-12)
+    weight = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -0.3 * G])  # R^T (0, 0, -m g)
+    np.testing.assert_allclose(streamed.force_n, weight, atol=1e-12)
+
+
+def test_spikes_hit_the_configured_fraction_with_the_configured_size_and_nothing_else() -> None:
+    base = human_arm_cell(duration_s=60.0)
+    spiked = dataclasses.replace(base, sensor=SensorSpec(spike_fraction=0.01, spike_n=1000.0))
+    a, b = simulate_cell(base).session, simulate_cell(spiked).session
+    difference = b.wrench.force_n - a.wrench.force_n
+    hit = np.abs(difference).max(axis=1) > 0
+    assert 30 <= hit.sum() <= 90  # 6000 samples at 1 %: 60 +- 7.7
+    np.testing.assert_allclose(np.abs(difference[hit]).sum(axis=1), 1000.0)  # one axis, +-1000 N
+    assert (np.count_nonzero(difference[hit], axis=1) == 1).all()
+    np.testing.assert_array_equal(b.wrench.torque_nm, a.wrench.torque_nm)
+    np.testing.assert_array_equal(b.markers["hand"].position_m, a.markers["hand"].position_m)

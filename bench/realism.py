@@ -1,0 +1,202 @@
+"""Realism benchmark: the estimator on simulated cells with one everyday nuisance at a time, with and without tare.
+
+Usage: ``python bench/realism.py [--seeds 3] [--duration 120] [--only NAME ...] [--no-tare] [--json OUT]``
+
+For every nuisance and seed, a 3-segment human-arm session is simulated (``bsp_ros.simulation``) and identified
+with the default options (``bsp_ros.pipeline.identify_session``, body mass and height given); "with tare" first
+simulates the cell's tare recording (20 s, a minute before the session, the sensor swung 20 deg in roll and
+pitch, orientation known as from ``/tf``), estimates it (``bsp_ros.tare``) and applies it. Per nuisance and
+mode the table shows, over the seeds: the worst static-moment error (% of the truth, worst segment, worst
+seed), the worst Coulomb error (%), the largest |z| = |estimate - truth| / std of those data-sourced parameters,
+how many estimates were valid, how many were valid yet beyond 3 std ("bad"), and the most frequent warning
+kinds. Sensor nuisances (offset, drift, handle) pick a seeded random direction per seed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import dataclasses
+import json
+import math
+import re
+import sys
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.errors import BspError
+from bsp_ros.fusion import SubjectInfo
+from bsp_ros.pipeline import IdentifyOptions, identify_session
+from bsp_ros.simulation import (
+    CellSpec,
+    MarkerSpec,
+    TareSpec,
+    human_arm_cell,
+    simulate_cell,
+    simulate_tare,
+    tare_rotations,
+)
+from bsp_ros.tare import estimate_tare
+
+COULOMB = (0.5, 0.28, 0.06)
+TARE = TareSpec(duration_s=20.0, start_offset_s=-60.0, swing_rpy_deg=(20.0, 20.0, 0.0))
+
+
+def _direction(seed: int) -> np.ndarray:
+    v = np.random.default_rng([seed, 11]).standard_normal(3)
+    return v / np.linalg.norm(v)
+
+
+def _sensor(spec: CellSpec, **changes: Any) -> CellSpec:
+    return dataclasses.replace(spec, sensor=dataclasses.replace(spec.sensor, **changes))
+
+
+def _passive(spec: CellSpec, **changes: Any) -> CellSpec:
+    return dataclasses.replace(spec, passive=dataclasses.replace(spec.passive, **changes))
+
+
+def _offset(newtons: float) -> Callable[[CellSpec, int], CellSpec]:
+    return lambda s, seed: _sensor(s, force_bias_n=tuple(newtons * _direction(seed)))
+
+
+NUISANCES: dict[str, Callable[[CellSpec, int], CellSpec]] = {
+    "none": lambda s, seed: s,
+    "friction tanh 2 mrad/s": lambda s, seed: _passive(s, friction_transition_rad_s=0.002),
+    "friction tanh 5 mrad/s": lambda s, seed: _passive(s, friction_transition_rad_s=0.005),
+    "Stribeck x1.5 at 10 mrad/s": lambda s, seed: _passive(s, stribeck_ratio=1.5, stribeck_speed_rad_s=0.01),
+    "F/T offset 0.2 N": _offset(0.2),
+    "F/T offset 1 N": _offset(1.0),
+    "F/T offset 3 N": _offset(3.0),
+    "F/T moment offset 0.05 Nm": lambda s, seed: _sensor(s, torque_bias_nm=tuple(0.05 * _direction(seed + 100))),
+    "F/T drift 5 mN/s": lambda s, seed: _sensor(s, force_drift_n_per_s=tuple(0.005 * _direction(seed))),
+    "handle 0.3 kg": lambda s, seed: _sensor(s, handle_mass_kg=0.3, handle_com_m=(0.0, 0.02, 0.05)),
+    "3 N offset + 0.3 kg handle": lambda s, seed: _sensor(
+        s, force_bias_n=tuple(3.0 * _direction(seed)), handle_mass_kg=0.3, handle_com_m=(0.0, 0.02, 0.05)
+    ),
+    "elastic offset 0.05 Nm": lambda s, seed: _passive(s, offset_nm=(0.05, 0.05, 0.05)),
+    "elastic offset 0.2 Nm": lambda s, seed: _passive(s, offset_nm=(0.2, 0.2, 0.2)),
+    "elbow stiffness 1.2 Nm/rad": lambda s, seed: _passive(
+        s, stiffness_nm_per_rad=(0.0, 1.2, 0.0), neutral_rad=(0.0, math.radians(107.0), 0.0)
+    ),
+    "skin markers 1 cm": lambda s, seed: dataclasses.replace(
+        s, markers=MarkerSpec(skin_offset_m=tuple(tuple(0.01 * _direction(seed + k)[:2]) for k in range(4)))
+    ),
+    "lost /tf_static": lambda s, seed: _sensor(s, tf_static=False),
+    "spikes 1 kN in 0.1 %": lambda s, seed: _sensor(s, spike_fraction=0.001, spike_n=1000.0),
+    "absurd 1e30 N in 0.02 %": lambda s, seed: _sensor(s, spike_fraction=0.0002, spike_n=1e30),
+    "30 s session": lambda s, seed: dataclasses.replace(s, duration_s=30.0),
+}
+
+_NUMBER = re.compile(r"[-+]?\d[\d.e+-]*%?")
+# Notes every session carries (edge samples without angles, the prior used): not counted as warnings.
+_ROUTINE = ("# of # wrench samples have no joint angles", "masses and COMs")
+
+
+def _kind(warning: str) -> str:
+    """A warning without its numbers, cut to its first clause (so that alike warnings count together)."""
+    head = warning.split(":")[0] if not warning.startswith(("confounded", "uncertain")) else warning
+    return _NUMBER.sub("#", head)[:60]
+
+
+def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
+    options = IdentifyOptions(subject=SubjectInfo(75.0, 1.78, "male"))
+    if tare:
+        recording = simulate_tare(spec, TARE)
+        t_s = (recording.wrench.t_ns - spec.start_ns) * 1e-9 - TARE.start_offset_s
+        rotations = tare_rotations(spec, TARE, t_s) if spec.sensor.tf_static else None
+        w = recording.wrench
+        options = dataclasses.replace(
+            options, tare=estimate_tare(w.t_ns, w.force_n, w.torque_nm, w.frame_id, rotations)
+        )
+    simulated = simulate_cell(spec)
+    truth = simulated.truth.to_dict()
+    document = identify_session(simulated.session, options)
+    moment_err, coulomb_err, z = [], [], []
+    for segment, q in document["segments"].items():
+        value, std, true = q["static_moment_kgm"]["value"], q["static_moment_kgm"]["std"], truth["segments"][segment]
+        value = math.nan if value is None else value
+        moment_err.append(100.0 * abs(value - true["static_moment_kgm"]) / true["static_moment_kgm"])
+        z.append(abs(value - true["static_moment_kgm"]) / std if std else math.inf)
+    for joint, q in document["joints"].items():
+        if "coulomb_nm" not in q:
+            continue
+        value, std = q["coulomb_nm"]["value"], q["coulomb_nm"]["std"]
+        value = math.nan if value is None else value
+        true_c = truth["joints"][joint]["coulomb_nm"]
+        coulomb_err.append(100.0 * abs(value - true_c) / true_c)
+        z.append(abs(value - true_c) / std if std else math.inf)
+    return {
+        "valid": bool(document["quality"]["valid"]),
+        "moment_err_pct": float(np.nanmax(moment_err)) if not np.isnan(moment_err).all() else math.nan,
+        "coulomb_err_pct": float(np.nanmax(coulomb_err))
+        if coulomb_err and not np.isnan(coulomb_err).all()
+        else math.nan,
+        "max_z": float(np.nanmax(z)) if not np.isnan(z).all() else math.nan,
+        "warnings": [_kind(w) for w in document["quality"]["warnings"]],
+        "message": document["quality"].get("message", ""),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seeds", type=int, default=3, help="seeds per nuisance (default 3)")
+    parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--duration", type=float, default=120.0, help="session length, s (default 120)")
+    parser.add_argument("--only", nargs="+", metavar="NAME", help="nuisances whose name contains one of these")
+    parser.add_argument("--no-tare", action="store_true", help="skip the runs with a tare")
+    parser.add_argument("--json", metavar="OUT", help="write every run's figures here")
+    args = parser.parse_args(argv)
+    names = [n for n in NUISANCES if not args.only or any(o.lower() in n.lower() for o in args.only)]
+    modes = (False,) if args.no_tare else (False, True)
+    rows, runs = [], []
+    header = (
+        f"{'nuisance':28s} {'tare':4s} {'moment %':>9s} {'Coulomb %':>9s} {'max|z|':>7s} {'valid':>6s} {'bad':>4s}"
+        "  warnings (runs)"
+    )
+    print(header)
+    print("-" * len(header))
+    started = time.perf_counter()
+    for name in names:
+        for tare in modes:
+            results = []
+            for seed in range(args.first_seed, args.first_seed + args.seeds):
+                spec = NUISANCES[name](human_arm_cell(duration_s=args.duration, seed=seed), seed)
+                try:
+                    result = _run(spec, tare)
+                except BspError as error:  # an error is a result here: it names the bad input
+                    result = {
+                        "valid": False,
+                        "moment_err_pct": math.nan,
+                        "coulomb_err_pct": math.nan,
+                        "max_z": math.nan,
+                        "warnings": [f"error: {type(error).__name__}"],
+                        "message": str(error),
+                    }
+                results.append(result)
+                runs.append({"nuisance": name, "tare": tare, "seed": seed, **result})
+            valid = [r for r in results if r["valid"]]
+            bad = sum(1 for r in valid if r["max_z"] > 3.0)
+            kinds = collections.Counter(k for r in results for k in set(r["warnings"]) if not k.startswith(_ROUTINE))
+            common = "; ".join(f"{k} ({c})" for k, c in kinds.most_common(2)) or "-"
+            row = (
+                f"{name:28s} {'yes' if tare else 'no':4s} "
+                f"{max(r['moment_err_pct'] for r in results):9.3g} {max(r['coulomb_err_pct'] for r in results):9.3g} "
+                f"{max(r['max_z'] for r in results):7.3g} {len(valid):>3d}/{len(results):<2d} {bad:>4d}  {common}"
+            )
+            rows.append(row)
+            print(row, flush=True)
+    print(
+        f"({len(runs)} runs in {time.perf_counter() - started:.0f} s; seeds {args.first_seed}..."
+        f"{args.first_seed + args.seeds - 1}, {args.duration:g} s sessions)"
+    )
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as stream:
+            json.dump(runs, stream, indent=1, allow_nan=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

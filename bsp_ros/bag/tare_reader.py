@@ -1,0 +1,141 @@
+"""Read a tare recording (wrench, and the sensor's orientation over time from /tf_static and /tf) from a bag."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from bsp_ros.bag.errors import EmptyBagError, MessageTypeError, MissingTopicError, UnsupportedBagError
+from bsp_ros.bag.mcap_scan import scan_mcap
+from bsp_ros.bag.reader import _collect, _resolve_files, _SessionSink, _usable_transform
+from bsp_ros.bag.report import ReadReport
+from bsp_ros.bag.topics import WORLD_FRAME, TopicMap
+from msg_adapters import TransformSample, rotation_between
+
+
+@dataclass
+class TareRead:
+    """A tare recording as arrays.
+
+    Attributes
+    ----------
+    t_ns : (N,) int64 wrench stamps, ns (receive order).
+    force_n, torque_nm : (N, 3) wrench in the sensor frame.
+    frame_id : the wrench's frame.
+    rotations_world_from_sensor : (N, 3, 3) orientation at each wrench stamp, or None when no transform
+        connects the sensor to ``world``.
+    orientation_source : ``"tf"`` (varying, from /tf), ``"tf_static"`` (fixed), ``"world"`` (the wrench is
+        in ``world``) or ``"unknown"``.
+    warnings : what the read noticed (damage, lost messages, missing transforms).
+    """
+
+    t_ns: np.ndarray
+    force_n: np.ndarray
+    torque_nm: np.ndarray
+    frame_id: str
+    rotations_world_from_sensor: np.ndarray | None
+    orientation_source: str
+    warnings: list[str] = field(default_factory=list)
+
+
+def _orientation_track(
+    static: list[TransformSample], dynamic: list[TransformSample], frame: str, world: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """Stamps (K,) and rotations (K, 3, 3) of ``frame`` in ``world`` at every /tf sample that connects them."""
+    latest: dict[str, TransformSample] = {}
+    stamps, rotations = [], []
+    for sample in sorted(dynamic, key=lambda s: s.t_ns):
+        latest[sample.child_frame] = sample
+        rotation = rotation_between([*static, *latest.values()], world, frame)
+        if rotation is not None:
+            stamps.append(sample.t_ns)
+            rotations.append(rotation)
+    return np.asarray(stamps, dtype=np.int64), np.asarray(rotations).reshape(-1, 3, 3)
+
+
+def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame: str = WORLD_FRAME) -> TareRead:
+    """Read the wrench and the sensor's orientation of a tare recording (markers are not needed).
+
+    The orientation at each wrench stamp is the /tf_static + /tf chain ``world -> wrench frame``,
+    interpolated (slerp) between /tf stamps and held beyond them; fixed if only /tf_static connects it.
+
+    Raises
+    ------
+    BagError subclasses
+        Missing path, not a bag, empty, no wrench messages, wrong types, several wrench frames.
+    """
+    topic_map = topics or TopicMap()
+    wanted = TopicMap(topic_map.wrench, {}, topic_map.tf_static, topic_map.tf)
+    root = Path(path)
+    report = ReadReport(path=str(root))
+    files, _ = _resolve_files(root, report)
+    sink = _SessionSink(wanted)
+    present: dict[str, str] = {}
+    warnings = list(report.warnings) + [f"damage: {d}" for d in report.damage]
+    for file in files:
+        scan = scan_mcap(file, sink)
+        present.update({c.topic: c.msgtype for c in scan.channels.values()})
+        if scan.crc_errors or scan.truncated:
+            warnings.append(f"{file.name}: {scan.crc_errors} CRC errors, truncated={scan.truncated}")
+    if sink.wrong:
+        topic, found = sorted(sink.wrong.items())[0]
+        raise MessageTypeError(topic, wanted.expected_types()[topic], found)
+    if sink.unsupported:
+        raise UnsupportedBagError("; ".join(sorted(set(sink.unsupported))))
+    if not present:
+        raise EmptyBagError(f"{root} holds no messages")
+    t_ns, values, _, frames, _ = _collect(sink.streams.get(wanted.wrench), 6)
+    if wanted.wrench not in present:
+        raise MissingTopicError(wanted.wrench, present)
+    if t_ns.size == 0:
+        raise MissingTopicError(wanted.wrench, present, detail="has no messages")
+    if len(frames) > 1:
+        raise UnsupportedBagError(f"{wanted.wrench} carries several frame ids {frames}: one is expected")
+    frame = frames[0]
+
+    def samples(topic: str) -> list[TransformSample]:
+        stream = sink.streams.get(topic)
+        if stream is None:
+            return []
+        return [s for _, batch in sorted(stream.transforms, key=lambda x: x[0]) for s in batch if _usable_transform(s)]
+
+    static, dynamic = samples(wanted.tf_static), samples(wanted.tf)
+    n = t_ns.size
+    if frame == world_frame:
+        rotations: np.ndarray | None = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        source = "world"
+    else:
+        track_t, track_r = _orientation_track(static, dynamic, frame, world_frame)
+        if track_t.size >= 2:
+            order = np.unique(track_t, return_index=True)[1]
+            track_t, track_r = track_t[order], track_r[order]
+        if track_t.size >= 2:
+            clamped = np.clip(t_ns, track_t[0], track_t[-1])
+            slerp = Slerp((track_t - track_t[0]).astype(np.float64), Rotation.from_matrix(track_r))
+            rotations = slerp((clamped - track_t[0]).astype(np.float64)).as_matrix()
+            source = "tf"
+            outside = int(((t_ns < track_t[0]) | (t_ns > track_t[-1])).sum())
+            if outside > 0.05 * n:
+                warnings.append(f"/tf covers the sensor orientation for only {n - outside} of {n} wrench samples")
+        else:
+            fixed = rotation_between([*static, *dynamic], world_frame, frame)
+            if fixed is None:
+                rotations, source = None, "unknown"
+                warnings.append(
+                    f"no transform connects the wrench frame {frame} to {world_frame}: the sensor's orientation "
+                    "is unknown, so only the constant load can be estimated"
+                )
+            else:
+                rotations, source = np.broadcast_to(fixed, (n, 3, 3)).copy(), "tf_static"
+    return TareRead(
+        t_ns=t_ns,
+        force_n=np.ascontiguousarray(values[:, :3]),
+        torque_nm=np.ascontiguousarray(values[:, 3:]),
+        frame_id=frame,
+        rotations_world_from_sensor=rotations,
+        orientation_source=source,
+        warnings=warnings,
+    )

@@ -1,0 +1,175 @@
+"""`bsp tare TARE --out FILE`: the F/T sensor's offset and the handle's load from a recording with the handle free."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bsp_ros.errors import DataError, InputError, RuntimeBackendError
+
+if TYPE_CHECKING:  # numpy is imported when a command runs, not on every `bsp` start
+    import numpy as np
+
+# Exit codes (README "Commands"): 0 tare written, 2 bad option value, 3 unusable recording (too short,
+# NaN samples), 6 no middleware for --live, 10-16 the bag codes of `bsp identify`.
+FIRST_MESSAGE_TIMEOUT_S = 10.0
+BAG_EXIT_CODES = {
+    "not-found": 10,
+    "not-a-bag": 11,
+    "empty": 12,
+    "missing-topic": 13,
+    "wrong-type": 14,
+    "corrupt": 15,
+    "unsupported": 16,
+}
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register `bsp tare`."""
+    parser = subparsers.add_parser(
+        "tare",
+        help="estimate the F/T sensor offset and handle payload from a handle-free recording",
+        description=(
+            "Estimate the force/torque sensor's offset and the handle's load from a recording taken with the "
+            "handle free (no arm attached; at least 5 s). If the sensor's orientation (from /tf_static and /tf) "
+            "varied enough, the handle's mass and centre of mass are separated from the offset; otherwise the "
+            "constant load at the recorded orientation is estimated. Writes a YAML file (schema bsp_ros/tare/1) "
+            "for `bsp identify BAG --tare FILE`. Exit codes: 0 written, 2 bad option, 3 unusable recording, "
+            "6 no middleware (--live), 10-16 bag errors as for `bsp identify`."
+        ),
+    )
+    parser.add_argument("bag", nargs="?", type=Path, metavar="TARE", help="tare recording (rosbag2 dir or .mcap)")
+    parser.add_argument("--out", required=True, type=Path, metavar="FILE", help="tare file to write (YAML)")
+    parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
+    parser.add_argument("--tf-topic", default="/tf")
+    parser.add_argument("--tf-static-topic", default="/tf_static")
+    parser.add_argument("--world-frame", default="world")
+    parser.add_argument("--live", action="store_true", help="record from the running wrench topic instead of a bag")
+    parser.add_argument("--duration", type=float, metavar="S", help="--live: how long to record, s (>= 5)")
+    return parser
+
+
+def format_tare(tare: Any) -> str:
+    """A few human-readable lines about a tare."""
+
+    force, force_std = tare.force_offset_n
+    torque, torque_std = tare.torque_offset_nm
+
+    def vec(v: np.ndarray, s: np.ndarray, unit: str) -> str:
+        return ", ".join(f"{a:.4g} +- {b:.2g}" for a, b in zip(v, s, strict=True)) + f" {unit}"
+
+    what = "offset" if tare.load == "separated" else "constant load (offset and handle together)"
+    lines = [
+        f"tare of {tare.frame_id}: {tare.n_samples} samples over {tare.duration_s:.1f} s, "
+        f"orientation swing {tare.swing_deg[0]:.1f}/{tare.swing_deg[1]:.1f} deg"
+        + (f"; {tare.n_rejected} outlier samples left out" if tare.n_rejected else ""),
+        f"force {what}: {vec(force, force_std, 'N')}",
+        f"moment {what}: {vec(torque, torque_std, 'Nm')}",
+    ]
+    mass, com = tare.handle_mass_kg, tare.handle_com_m
+    if mass is not None:
+        lines.append(f"handle mass: {mass[0]:.4g} +- {mass[1]:.2g} kg")
+        if com is not None:
+            lines.append(f"handle COM: {vec(com[0], com[1], 'm')} (sensor frame, from the contact point)")
+    else:
+        lines.append(
+            "the orientation did not vary enough (or is unknown): the constant load applies only at this "
+            "orientation; swing the sensor to separate the handle"
+        )
+    return "\n".join(lines)
+
+
+def collect_live_wrench(topic: str, duration_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
+    """Subscribe to a running WrenchStamped topic with rclpy for ``duration_s`` s from its first message.
+
+    Returns
+    -------
+    t_ns (N,), force (N, 3) N, torque (N, 3) Nm, and the frame id.
+    """
+    import numpy as np
+
+    try:
+        import rclpy
+        from geometry_msgs.msg import WrenchStamped
+        from rclpy.qos import qos_profile_sensor_data
+    except ImportError as error:
+        raise RuntimeBackendError(f"bsp tare --live needs rclpy and geometry_msgs: {error}") from None
+    rows: list[tuple[int, float, float, float, float, float, float]] = []
+    frames: set[str] = set()
+
+    def on_wrench(msg: Any) -> None:
+        f, m = msg.wrench.force, msg.wrench.torque
+        stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
+        rows.append((stamp, f.x, f.y, f.z, m.x, m.y, m.z))
+        frames.add(msg.header.frame_id)
+
+    rclpy.init()
+    try:
+        node = rclpy.create_node("bsp_tare")
+        # Sensor-data QoS (best effort) matches reliable and best-effort publishers alike.
+        node.create_subscription(WrenchStamped, topic, on_wrench, qos_profile_sensor_data)
+        # The recording lasts duration_s from the first message (discovery can take a second or more).
+        end = time.monotonic() + FIRST_MESSAGE_TIMEOUT_S
+        first = False
+        while time.monotonic() < end and rclpy.ok():
+            rclpy.spin_once(node, timeout_sec=min(0.1, max(end - time.monotonic(), 0.0)))
+            if rows and not first:
+                first, end = True, time.monotonic() + duration_s
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown()
+    if not rows:
+        raise DataError(f"no message on {topic} in {FIRST_MESSAGE_TIMEOUT_S:g} s: is the sensor driver running?")
+    if len(frames) > 1:
+        raise DataError(f"{topic} carried several frame ids {sorted(frames)}: one is expected")
+    data = np.asarray(rows, dtype=np.float64)
+    return np.asarray([r[0] for r in rows], dtype=np.int64), data[:, 1:4], data[:, 4:7], frames.pop()
+
+
+def run(args: argparse.Namespace) -> int:
+    """Estimate and write the tare; return the exit code."""
+    import numpy as np
+
+    from bsp_ros.bag.errors import BagError
+    from bsp_ros.tare import MIN_TARE_DURATION_S, estimate_tare, recording_warnings, write_tare_file
+
+    out: Path = args.out
+    if out.exists():
+        raise InputError(f"{out} exists already: refusing to overwrite a tare (choose another --out)")
+    warnings: list[str] = []
+    if args.live:
+        if args.bag is not None:
+            raise InputError("give either a TARE recording or --live, not both")
+        if args.duration is None or not np.isfinite(args.duration) or args.duration < MIN_TARE_DURATION_S:
+            raise InputError(f"--live needs --duration S with S >= {MIN_TARE_DURATION_S:g} s, got {args.duration}")
+        t_ns, force, torque, frame = collect_live_wrench(args.wrench_topic, args.duration)
+        rotations, source = None, f"live {args.wrench_topic}"
+        warnings.append("live tare: the sensor's orientation is not recorded, so the constant load is estimated")
+    else:
+        if args.bag is None:
+            raise InputError("give a TARE recording (bag) or --live --duration S")
+        if args.duration is not None:
+            raise InputError("--duration applies to --live only")
+        from bsp_ros.bag import TopicMap
+        from bsp_ros.bag.tare_reader import read_tare_bag
+
+        topics = TopicMap(args.wrench_topic, {}, args.tf_static_topic, args.tf_topic)
+        try:
+            read = read_tare_bag(args.bag, topics, args.world_frame)
+        except BagError as error:
+            print(f"bsp tare: error: {error}", file=sys.stderr)
+            return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)
+        t_ns, force, torque, frame = read.t_ns, read.force_n, read.torque_nm, read.frame_id
+        rotations, source = read.rotations_world_from_sensor, Path(args.bag).name
+        warnings += read.warnings
+    tare = estimate_tare(t_ns, force, torque, frame, rotations, source=source)
+    warnings += recording_warnings(tare)
+    write_tare_file(out, tare)
+    print(format_tare(tare))
+    for warning in warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    print(f"wrote {out}")
+    return 0
