@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bsp_ros.cli.identify import BAG_EXIT_CODES
 from bsp_ros.errors import DataError, InputError, RuntimeBackendError
 
 if TYPE_CHECKING:  # numpy is imported when a command runs, not on every `bsp` start
@@ -16,15 +17,6 @@ if TYPE_CHECKING:  # numpy is imported when a command runs, not on every `bsp` s
 # Exit codes (README "Commands"): 0 tare written, 2 bad option value, 3 unusable recording (too short,
 # NaN samples), 6 no middleware for --live, 10-16 the bag codes of `bsp identify`.
 FIRST_MESSAGE_TIMEOUT_S = 10.0
-BAG_EXIT_CODES = {
-    "not-found": 10,
-    "not-a-bag": 11,
-    "empty": 12,
-    "missing-topic": 13,
-    "wrong-type": 14,
-    "corrupt": 15,
-    "unsupported": 16,
-}
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
