@@ -1,22 +1,11 @@
-"""A ROS domain id of its own for every live test (rclpy + Fast DDS in separate processes)."""
+"""Fixtures of the live tests: a fresh ROS domain id per test (conftest.py puts this directory on sys.path)."""
 
 from __future__ import annotations
 
-import itertools
-import os
+from collections.abc import Callable
 
 import pytest
-
-#: Domain ids a machine commonly uses already (the default 0, tutorials' 1 and 42); the rest of 1..101
-#: (Fast DDS's safe range on Linux: higher ids reach the ephemeral ports) is shared out.
-_AVOID = frozenset({0, 1, 42})
-_FREE = [d for d in range(1, 102) if d not in _AVOID]
-_counter = itertools.count()
-
-
-def next_domain_id() -> int:
-    """A domain id unique within this test process (a counter), spread between processes by the pid."""
-    return _FREE[(os.getpid() * 7 + next(_counter)) % len(_FREE)]
+from ros_domains import next_domain_id
 
 
 @pytest.fixture
@@ -26,6 +15,6 @@ def ros_domain() -> int:
 
 
 @pytest.fixture
-def ros_domains() -> object:
+def ros_domains() -> Callable[[], int]:
     """A function giving a fresh ROS domain id at each call (tests running several cells)."""
     return next_domain_id

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from conftest import next_domain_id
+from ros_domains import next_domain_id
 
 from bsp_ros.bag import read_session, write_session_bag
 from bsp_ros.bag.mcap_scan import ChannelInfo, scan_mcap

@@ -12,7 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from conftest import next_domain_id
+from ros_domains import next_domain_id
 
 from bsp_ros.runtime.ros import Client
 
