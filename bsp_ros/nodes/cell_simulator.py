@@ -126,7 +126,7 @@ class CellSimulatorNode(RosNode):
             + ("on /tf_static" if has_message(TF_TYPE) else f"(not on /tf_static: {TF_TYPE} is not installed)")
         )
         truth_pub = self.create_publisher(message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static"))
-        truth = self.simulator.truth.to_dict()
+        truth = {**self.simulator.truth.to_dict(), "start_time_ns": self.start_wall_ns}
         truth_pub.publish(message_class("std_msgs/msg/String")(data=json.dumps(truth)))
         self.create_timer(p["tick_s"], self.tick)
         self.get_logger().info(
