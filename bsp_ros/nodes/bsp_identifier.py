@@ -157,7 +157,7 @@ class BspIdentifierNode(RosNode):
             message_class("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", rclpy_qos("default")
         )
         wrench = message_class("geometry_msgs/msg/WrenchStamped")
-        self.create_subscription(wrench, p["wrench_topic"], self.on_wrench, rclpy_qos("sensor_data"))
+        self.create_subscription(wrench, p["wrench_topic"], self.on_wrench, rclpy_qos("sensor_input"))
         self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, estimates)
         self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, estimates)
         self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import sys
 from typing import Any
 
@@ -79,8 +80,8 @@ class JointAngleEstimatorNode(RosNode):
             self.create_subscription(
                 pose,
                 p["marker_topic_prefix"] + name,
-                lambda msg, n=name: self.on_pose(n, msg),
-                rclpy_qos("sensor_data"),
+                functools.partial(self.on_pose, name),
+                rclpy_qos("sensor_input"),
             )
         self.last_lengths: np.ndarray | None = None
         self.create_timer(1.0, self.on_watchdog)

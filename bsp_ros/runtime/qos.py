@@ -29,11 +29,14 @@ class QosSpec:
     transient_local: bool = False
 
 
-#: Profiles by name. ``sensor_data`` is rclpy's ``qos_profile_sensor_data``; ``default`` is an int depth 10
+#: Profiles by name. ``sensor_data`` is rclpy's ``qos_profile_sensor_data`` (publishers); ``default`` is an int depth 10
 #: in rclpy; ``tf_static``/``tf`` are tf2_ros' static and dynamic broadcaster profiles, and
 #: ``tf_static_listener`` the static listener's deeper history (several static broadcasters).
 PROFILES: dict[str, QosSpec] = {
     "sensor_data": QosSpec(reliable=False, depth=5),
+    # A node's subscription to a sensor stream: best effort (matches any publisher) with a deep history,
+    # so that a Python executor busy for a few ms behind a 1 kHz stream is not overtaken (depth 5 would be).
+    "sensor_input": QosSpec(reliable=False, depth=1000),
     "default": QosSpec(reliable=True, depth=10),
     "estimates": QosSpec(reliable=True, depth=10),
     "tf": QosSpec(reliable=True, depth=100),
