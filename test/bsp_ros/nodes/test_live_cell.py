@@ -56,6 +56,7 @@ def test_windowed_estimate_converges_to_the_truth(cell) -> None:
     assert len(valid) > 40
     document = valid[-1]
     errors = _errors(document, c.truth)
+    print("relative errors", errors, "z", _z_scores(document, c.truth))
     for name, error in errors.items():
         assert error < (0.005 if "static_moment" in name else 0.10), (name, error)
 
