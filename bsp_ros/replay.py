@@ -402,7 +402,8 @@ def play_bag(
     for byte as recorded; a topic whose message package is not installed (e.g. ``tf2_msgs`` outside a
     cell) is skipped with a warning naming its type. The wrench and marker streams go out best effort
     (``sensor_data``), latched (transient-local) topics such as ``/tf_static`` reliable transient-local
-    and ahead of the timeline, everything else reliable. A damaged bag plays its intact part; the report says what was lost.
+    and ahead of the timeline, everything else reliable. A damaged bag plays its intact part; the report
+    says what was lost.
 
     Parameters
     ----------
