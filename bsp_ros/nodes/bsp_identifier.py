@@ -15,12 +15,9 @@ from bsp_ros.errors import BspError, InputError
 from bsp_ros.estimate import invalid_document
 from bsp_ros.fusion import SubjectInfo
 from bsp_ros.identification.passive import PassiveModel
-from bsp_ros.identification.recursive import RecursiveConfig, RecursiveIdentifier
-from bsp_ros.model import contact_torques_one_nm
 from bsp_ros.nodes import estimate_jobs as jobs
-from bsp_ros.online.angle_track import AngleTrack
 from bsp_ros.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
-from bsp_ros.online.guard import StreamGuard
+from bsp_ros.online.recursive_feed import RecursiveFeed
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate, WindowSamples
 from bsp_ros.pipeline import IdentifyOptions
 from bsp_ros.runtime.offload import ProcessOffload
@@ -123,11 +120,8 @@ class BspIdentifierNode(RosNode):
             raise InputError(f"{NAME}: parameter passive: {exc}") from exc
         self.options = IdentifyOptions(method=p["method"], passive=passive, subject=subject)
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
-        self.recursive = RecursiveIdentifier(self.n, RecursiveConfig(passive=self.options.passive))
-        self.recursive_guard = StreamGuard("wrench")
-        self.angles = AngleTrack(self.n)
+        self.recursive = RecursiveFeed(self.n, self.options.passive)
         self.lengths: np.ndarray | None = None
-        self.passive_joints: tuple[str, ...] | None = None
         self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
@@ -209,7 +203,7 @@ class BspIdentifierNode(RosNode):
             return
         sample = read_joint_state(msg)
         self.last_receive["joint_states"] = self.now_ns()
-        accepted = self.angles.add(sample.t_ns, sample.position, sample.velocity)
+        accepted = self.recursive.add_joint_state(sample.t_ns, sample.position, sample.velocity)
         self.counts["joint_states" if accepted else "refused"] += 1
 
     def on_wrench(self, msg: Any) -> None:
@@ -225,28 +219,12 @@ class BspIdentifierNode(RosNode):
         if self.mode == "windowed":
             accepted = self.windowed.add_wrench(sample.t_ns, wrench_yzx)
         else:
-            accepted = self.update_recursive(sample.t_ns, wrench_yzx)
+            accepted, coulomb_nm = self.recursive.add_wrench(sample.t_ns, wrench_yzx, self.lengths)
+            joints = self.recursive.passive_joints
+            if coulomb_nm is not None and len(joints) == coulomb_nm.size:
+                passive = JointStateSample(sample.t_ns, "", joints, np.zeros(0), np.zeros(0), coulomb_nm)
+                self.passive_pub.publish(build_joint_state(self.types, passive))
         self.counts["wrench" if accepted else "refused"] += 1
-
-    def update_recursive(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
-        verdict = self.recursive_guard.check(t_ns, wrench_yzx)
-        if verdict in ("jump", "gap"):
-            self.recursive.reset()
-        if verdict == "refused" or self.lengths is None:
-            return verdict != "refused"
-        angles = self.angles.at(t_ns)
-        if angles is None:  # no angle near this wrench
-            return True
-        q, v = angles
-        tau = contact_torques_one_nm(q, self.lengths, wrench_yzx)
-        if self.recursive.update(t_ns, q, v, tau):
-            passive = self.recursive.theta[self.n :: len(self.options.passive.terms)]
-            if self.passive_joints is None:
-                self.passive_joints = tuple(name for key, name in self.recursive.names if key == "coulomb_nm")
-            if len(self.passive_joints) == len(passive):
-                sample = JointStateSample(t_ns, "", self.passive_joints, np.zeros(0), np.zeros(0), passive)
-                self.passive_pub.publish(build_joint_state(self.types, sample))
-        return True
 
     # -- outputs --------------------------------------------------------------------------------------
     def stale_reason(self) -> str | None:
@@ -307,7 +285,8 @@ class BspIdentifierNode(RosNode):
             job = lambda: jobs.outputs_from_document(document, now, with_passive=False)  # noqa: E731 - in order
         else:
             assert self.lengths is not None  # stale_reason() waits for them
-            result, lengths, stamp = self.recursive.result(), self.lengths.copy(), self.recursive_guard.last_t_ns or 0
+            result, lengths = self.recursive.identifier.result(), self.lengths.copy()
+            stamp = self.recursive.guard.last_t_ns or 0
             job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp)  # noqa: E731
         self.worker.submit(lambda: self.publish(self._timed(job), counts))
 
