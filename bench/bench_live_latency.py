@@ -1,8 +1,9 @@
-"""Benchmark: latency, update rate, CPU, memory and loss of the live node suite on DDS loopback at 1 kHz."""
+"""Benchmark: latency, update rate, CPU, memory and loss of the live node suite on rclpy + Fast DDS at 1 kHz."""
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import signal
@@ -17,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.runtime import make_context
+from bsp_ros.runtime.ros import Client, has_message
 from msg_adapters.diagnostics import read_diagnostic_array
 from msg_adapters.stamps import stamp_to_ns
 
@@ -81,17 +82,16 @@ class Snapshot:
 
 @dataclass
 class Stream:
-    """Stamps, publication times (DDS source timestamps) and listener receive times of one topic."""
+    """Stamps, publication times (the middleware's source timestamps) and listener receive times of one topic."""
 
     stamp: array = field(default_factory=lambda: array("q"))
     pub: array = field(default_factory=lambda: array("q"))
     recv: array = field(default_factory=lambda: array("q"))
 
-    def add(self, stamp_ns: int, msg: Any) -> None:
+    def add(self, stamp_ns: int, info: dict[str, int] | None) -> None:
         self.recv.append(time.time_ns())
         self.stamp.append(stamp_ns)
-        info = getattr(msg, "sample_info", None)
-        self.pub.append(int(info.source_timestamp) if info is not None else -1)
+        self.pub.append(int(info["source_timestamp"]) if info else -1)
 
     def arrays(self, lo_ns: int, hi_ns: int, by: str = "recv") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(stamp, pub, recv) of the messages whose ``by`` time ("recv" or "stamp") is in [lo_ns, hi_ns)."""
@@ -102,58 +102,54 @@ class Stream:
 
 
 class RawStamps(threading.Thread):
-    """Receive times, header stamps and source timestamps of 1 kHz topics, read raw on a thread of its own.
+    """Receive times, header stamps and source timestamps of 1 kHz topics, taken raw on a thread of its own.
 
-    Decoding only the header stamp (CDR offset 4: int32 sec, uint32 nanosec) keeps the listener from
-    loading the 2 cores the nodes share, and stamps the receive time as the sample is taken.
+    A private rclpy context with raw subscriptions: decoding only the header stamp (CDR offset 4: int32 sec,
+    uint32 nanosec) keeps the listener from loading the 2 cores the nodes share.
     """
 
-    def __init__(self, context: Any, topics: dict[str, tuple[str, str, Stream]]) -> None:
+    def __init__(self, domain: int, topics: dict[str, tuple[str, str, Stream]]) -> None:
         super().__init__(name="bench-raw-stamps", daemon=True)
-        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
-        from cyclonedds.sub import DataReader
+        from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-        from bsp_ros.runtime.qos import dds_qos
+        from bsp_ros.runtime.qos import qos_spec
 
-        self.mask = SampleState.Any | ViewState.Any | InstanceState.Any
-        self.waitset = WaitSet(context.participant)
-        self.readers: list[tuple[Any, Stream]] = []
+        self.client = Client("bench_raw_listener", domain)
         for topic, (type_name, profile, stream) in topics.items():
-            reader = DataReader(
-                context._subscriber, context._topic("rt" + topic, type_name), qos=dds_qos(profile, reader_depth=5000)
+            reliable = qos_spec(profile).reliable
+            qos = QoSProfile(
+                history=HistoryPolicy.KEEP_LAST,
+                depth=5000,
+                reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
             )
-            self.waitset.attach(ReadCondition(reader, self.mask))
-            self.readers.append((reader, stream))
+
+            def on_raw(data: bytes, info: dict[str, int], stream: Stream = stream) -> None:
+                sec, nanosec = struct.unpack_from("<iI", data, 4)
+                stream.add(sec * 1_000_000_000 + nanosec, info)
+
+            self.client.node.create_subscription(self.client_message(type_name), topic, on_raw, qos, raw=True)
         self.stop = threading.Event()
 
-    def run(self) -> None:
-        from cyclonedds._clayer import ddspy_take
-        from cyclonedds.util import duration
+    @staticmethod
+    def client_message(type_name: str) -> Any:
+        from bsp_ros.runtime.ros import message_class
 
+        return message_class(type_name)
+
+    def run(self) -> None:
         while not self.stop.is_set():
-            self.waitset.wait(duration(milliseconds=100))
-            for reader, stream in self.readers:
-                batch = ddspy_take(reader._ref, self.mask, 1000)
-                if isinstance(batch, int):
-                    continue
-                now = time.time_ns()
-                for data, info in batch:
-                    if info.valid_data:
-                        sec, nanosec = struct.unpack_from("<iI", data, 4)
-                        stream.recv.append(now)
-                        stream.stamp.append(sec * 1_000_000_000 + nanosec)
-                        stream.pub.append(int(info.source_timestamp))
+            self.client.spin(0.1)
+        self.client.close()
 
 
 class Listener:
-    """In-process DDS listener: wrench, estimates, passive moments, diagnostics and the simulator's start."""
+    """In-process rclpy listener: wrench, estimates, passive moments, diagnostics and the simulator's start."""
 
     def __init__(self, domain: int) -> None:
-        self.context = make_context("dds", domain_id=domain, args=[])
-        node = self.context.create_node("bench_listener")
+        self.client = Client("bench_listener", domain)
         self.wrench, self.estimate, self.passive = Stream(), Stream(), Stream()
         self.raw = RawStamps(
-            self.context,
+            domain,
             {
                 "/ft_sensor/wrench": ("geometry_msgs/msg/WrenchStamped", "sensor_data", self.wrench),
                 "/bsp/passive_moments": ("sensor_msgs/msg/JointState", "estimates", self.passive),
@@ -164,12 +160,12 @@ class Listener:
         self.invalid_reasons: dict[str, int] = {}
         self.diagnostics: dict[str, list[tuple[int, int, dict[str, str]]]] = {}
         self.start_ns: int | None = None
-        node.create_subscription("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", self._on_estimate, "estimates")
-        node.create_subscription("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", self._on_diag, "default")
-        node.create_subscription("tf2_msgs/msg/TFMessage", "/tf_static", self._on_tf_static, "tf_static_listener")
+        self.client.subscribe("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", self._on_estimate, "estimates")
+        self.client.subscribe("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", self._on_diag, "default")
+        self.client.subscribe("std_msgs/msg/String", "sim/truth", self._on_truth, "tf_static_listener")
 
-    def _on_estimate(self, msg: Any) -> None:
-        self.estimate.add(stamp_to_ns(msg.header.stamp), msg)
+    def _on_estimate(self, msg: Any, info: dict[str, int]) -> None:
+        self.estimate.add(stamp_to_ns(msg.header.stamp), info)
         quality = [s for s in msg.status if s.name.endswith("/quality")]
         valid = any(kv.key == "valid" and kv.value == "True" for s in quality for kv in s.values)
         self.estimate_valid.append(int(valid))
@@ -182,26 +178,36 @@ class Listener:
         for status in sample.status:
             self.diagnostics.setdefault(status.name, []).append((time.time_ns(), sample.t_ns, dict(status.values)))
 
-    def _on_tf_static(self, msg: Any) -> None:
-        for transform in msg.transforms:
-            if transform.header.frame_id == "world" and self.start_ns is None:
-                self.start_ns = stamp_to_ns(transform.header.stamp)  # the simulator's start wall time
+    def _on_truth(self, msg: Any) -> None:
+        if self.start_ns is None:
+            self.start_ns = int(json.loads(msg.data)["start_time_ns"])  # the simulator's start wall time
 
     def spin_until(self, wall_ns: int) -> None:
         while time.time_ns() < wall_ns:
-            self.context.spin(min(0.2, max(0.001, (wall_ns - time.time_ns()) / 1e9)))
+            self.client.spin(min(0.2, max(0.001, (wall_ns - time.time_ns()) / 1e9)))
+
+
+def _wrench_frame_parameter() -> list[str]:
+    """The simulated sensor's rotation for the identifier where /tf_static cannot carry it (no tf2_msgs)."""
+    if has_message("tf2_msgs/msg/TFMessage"):
+        return []
+    from bsp_ros.simulation import human_arm_cell
+    from msg_adapters.rotation import quaternion_from_matrix
+
+    xyzw = quaternion_from_matrix(human_arm_cell().sensor.rotation_world_from_sensor)
+    return ["wrench_frame_rotation_xyzw:=[" + ", ".join(repr(float(v)) for v in xyzw) + "]"]
 
 
 class Cell:
     """The three nodes as processes on one private domain."""
 
     def __init__(self, domain: int, log_dir: str | None) -> None:
-        self.env = {**os.environ, "BSP_ROS_BACKEND": "dds", "ROS_DOMAIN_ID": str(domain)}
+        self.env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen[bytes]] = {}
 
     def start(self, name: str, params: list[str]) -> None:
-        args = [a for p in params for a in ("--param", p)]
+        args = ["--ros-args", *[a for p in params for a in ("-p", p)]] if params else []
         out = open(os.path.join(self.log_dir, f"{name}.log"), "wb") if self.log_dir else subprocess.DEVNULL
         self.processes[name] = subprocess.Popen(
             [sys.executable, "-m", f"bsp_ros.nodes.{name}", *args], env=self.env, stdout=out, stderr=out
@@ -213,10 +219,10 @@ class Cell:
     def close(self) -> None:
         for process in self.processes.values():
             if process.poll() is None:
-                process.terminate()
+                process.send_signal(signal.SIGINT)
         for process in self.processes.values():
             try:
-                process.wait(5)
+                process.wait(10)
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait(5)
@@ -253,12 +259,12 @@ def run_mode(mode: str, domain: int, duration_s: float, warmup_s: float, log_dir
     result: dict[str, Any] = {"mode": mode, "domain": domain}
     try:
         cell.start("joint_angle_estimator", [f"marker_hz:={MARKER_HZ}"])
-        cell.start("bsp_identifier", [f"mode:={mode}", f"update_hz:={UPDATE_HZ}"])
+        cell.start("bsp_identifier", [f"mode:={mode}", f"update_hz:={UPDATE_HZ}", *_wrench_frame_parameter()])
         deadline = time.time_ns() + int(60e9)
         while not {"bsp_identifier", "joint_angle_estimator"} <= listener.diagnostics.keys():
             if time.time_ns() > deadline or not all(cell.alive().values()):
                 raise RuntimeError(f"nodes did not come up: {cell.alive()} (see --log-dir)")
-            listener.context.spin(0.2)
+            listener.client.spin(0.2)
         total_s = warmup_s + duration_s
         cell.start(
             "cell_simulator",
@@ -273,8 +279,8 @@ def run_mode(mode: str, domain: int, duration_s: float, warmup_s: float, log_dir
         deadline = time.time_ns() + int(30e9)
         while listener.start_ns is None:
             if time.time_ns() > deadline:
-                raise RuntimeError("no /tf_static from the simulator")
-            listener.context.spin(0.1)
+                raise RuntimeError("no sim/truth from the simulator")
+            listener.client.spin(0.1)
         start = listener.start_ns
         t0, t1 = start + int(warmup_s * 1e9), start + int(total_s * 1e9)
         listener.spin_until(t0)
@@ -290,7 +296,7 @@ def run_mode(mode: str, domain: int, duration_s: float, warmup_s: float, log_dir
         cell.close()
         listener.raw.stop.set()
         listener.raw.join(2.0)
-        listener.context.shutdown()
+        listener.client.close()
     result.update(
         listener=listener, start=start, t0=t0, t1=t1, first=first, last=last, rss_series=rss_series, total_s=total_s
     )
@@ -390,7 +396,7 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
     busy = (last.machine[0] - first.machine[0]) / ticks * cores
     stolen = (last.machine[2] - first.machine[2]) / ticks * cores
     ours = 0.0
-    print(f"  CPU (share of one core over {wall:.0f} s; other threads = DDS reader thread and Cyclone's) and RSS")
+    print(f"  CPU (share of one core over {wall:.0f} s; other threads = Fast DDS's and the worker threads) and RSS")
     flat = True
     growth_text = []
     for name in [*NODES, "listener"]:
@@ -451,7 +457,7 @@ def main() -> int:
     parser.add_argument("--duration", type=float, default=600.0, help="measured seconds per mode (after warm-up)")
     parser.add_argument("--warmup", type=float, default=20.0, help="seconds before measuring")
     parser.add_argument("--modes", default="windowed,recursive", help="comma-separated identifier modes")
-    parser.add_argument("--domain", type=int, default=60 + (os.getpid() % 40) * 2, help="first private domain id")
+    parser.add_argument("--domain", type=int, default=60 + (os.getpid() % 20) * 2, help="first private domain id")
     parser.add_argument("--log-dir", default=None, help="keep the nodes' output here")
     parser.add_argument("--dump", default=None, help="save per-wrench latencies to <DUMP>_<mode>.npz")
     args = parser.parse_args()

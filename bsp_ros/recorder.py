@@ -1,4 +1,4 @@
-"""Record ROS 2 topics from DDS into a rosbag2 MCAP bag: small CRC-checked chunks, flushed often, kill-tolerant."""
+"""Record ROS 2 topics (rclpy, serialized) into a rosbag2 MCAP bag: small CRC-checked chunks, flushed often."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ DEFAULT_CHUNK_BYTES = 48 * 1024
 DEFAULT_FLUSH_S = 0.25
 _TAKE_N = 256
 _POLL_S = 0.1
-_TYPE_RE = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)::msg::dds_::([A-Za-z_][A-Za-z0-9_]*)_$")
+_TOPIC_RE = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
 
 
 @dataclass(frozen=True)
@@ -47,15 +47,12 @@ def parse_topic_specs(specs: Sequence[str]) -> list[TopicSpec]:
     InputError
         On an invalid topic or type name, or a topic given twice.
     """
-    from bsp_ros.runtime.dds_backend import resolve_topic
-
     out: list[TopicSpec] = []
     for spec in specs:
         topic, _, msgtype = spec.partition(":")
-        try:
-            topic = resolve_topic(topic if topic.startswith("/") else "/" + topic)
-        except Exception as error:
-            raise InputError(f"invalid topic {spec!r}: {error}") from None
+        topic = topic if topic.startswith("/") else "/" + topic
+        if not _TOPIC_RE.match(topic):
+            raise InputError(f"invalid topic {spec!r}: ROS names are /-separated tokens of letters, digits and _")
         if msgtype and (msgtype.count("/") != 2 or not all(msgtype.split("/"))):
             raise InputError(f"invalid message type in {spec!r}: write pkg/msg/Type")
         if any(t.topic == topic for t in out):
@@ -64,11 +61,6 @@ def parse_topic_specs(specs: Sequence[str]) -> list[TopicSpec]:
     if not out:
         raise InputError("give at least one topic to record")
     return out
-
-
-def _ros_type(dds_type: str) -> str | None:
-    match = _TYPE_RE.match(dds_type)
-    return f"{match.group(1)}/msg/{match.group(2)}" if match else None
 
 
 def _is_sensor(topic: str) -> bool:
@@ -133,31 +125,26 @@ class RecordReport:
 class _Sub:
     topic: str
     msgtype: str
-    reader: Any
-    condition: Any
+    subscription: Any
     channel_id: int
     qos: dict[str, Any]
+    inbox: list[tuple[int, bytes]] = field(default_factory=list)
     count: int = 0
 
 
 class _Recorder:
-    """The DDS readers and the MCAP writer of one recording (all used from one thread)."""
+    """The raw rclpy subscriptions and the MCAP writer of one recording (all used from one thread)."""
 
     def __init__(self, out: Path, domain_id: int | None, chunk_bytes: int) -> None:
-        from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
-        from cyclonedds.core import WaitSet
         from mcap.writer import CompressionType, Writer
+        from rosbags.typesys import Stores, get_typestore
 
-        from bsp_ros.runtime.dds_backend import DdsContext
-        from bsp_ros.runtime.dds_types import typestore
+        from bsp_ros.runtime.ros import Client
 
         self.out = out
         self.mcap_name = f"{out.name}_0.mcap"
-        self.typestore = typestore()
-        self.ctx = DdsContext(domain_id, args=[])
-        self.node = self.ctx.create_node("rosbag2_recorder")
-        self.publications = BuiltinDataReader(self.ctx.participant, BuiltinTopicDcpsPublication)
-        self.waitset = WaitSet(self.ctx.participant)
+        self.typestore = get_typestore(Stores.ROS2_JAZZY)
+        self.client = Client("rosbag2_recorder", domain_id)
         self.subs: dict[str, _Sub] = {}
         self.schemas: dict[str, int] = {}
         # Buffered (the mcap writer would wrap a raw file anyway); :meth:`flush` pushes everything to the OS.
@@ -174,60 +161,36 @@ class _Recorder:
         self.end_ns = 0
         self.unflushed = 0
 
-    def discovered(self) -> dict[str, tuple[set[str], list[tuple[bool, bool]]]]:
-        """ROS topic -> (ROS types, [(reliable, transient_local)]) of the alive publications seen."""
-        from cyclonedds.core import InstanceState
-        from cyclonedds.qos import Policy
+    def discovered(self, topics: Sequence[str]) -> dict[str, tuple[set[str], list[tuple[bool, bool]]]]:
+        """ROS topic -> (ROS types, [(reliable, transient_local)]) of the publishers of ``topics`` in the graph."""
+        from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
         found: dict[str, tuple[set[str], list[tuple[bool, bool]]]] = {}
-        for sample in self.publications.read(N=4096):
-            info = getattr(sample, "sample_info", None)
-            if info is not None and info.instance_state != InstanceState.Alive:
-                continue
-            name = getattr(sample, "topic_name", "") or ""
-            if not name.startswith("rt/"):
-                continue
-            ros_type = _ros_type(getattr(sample, "type_name", "") or "")
-            if ros_type is None:
-                continue
-            qos = sample.qos
-            try:
-                reliable = isinstance(qos[Policy.Reliability], Policy.Reliability.Reliable)
-            except (KeyError, TypeError):
-                reliable = False  # the DDS default for writers is reliable, but be safe: best effort matches all
-            try:
-                durable = qos[Policy.Durability] in (Policy.Durability.TransientLocal, Policy.Durability.Transient)
-            except (KeyError, TypeError):
-                durable = False
-            types, offered = found.setdefault(name[2:], (set(), []))
-            types.add(ros_type)
-            offered.append((reliable, durable))
+        for topic in topics:
+            for info in self.client.node.get_publishers_info_by_topic(topic):
+                types, offered = found.setdefault(topic, (set(), []))
+                types.add(info.topic_type)
+                qos = info.qos_profile
+                offered.append(
+                    (
+                        qos.reliability == ReliabilityPolicy.RELIABLE,
+                        qos.durability == DurabilityPolicy.TRANSIENT_LOCAL,
+                    )
+                )
         return found
 
     def subscribe(self, topic: str, msgtype: str, reliable: bool, durable: bool) -> _Sub:
-        """Create the reader and register the MCAP channel of a topic."""
-        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
-        from cyclonedds.qos import Policy, Qos
-        from cyclonedds.sub import DataReader
-        from cyclonedds.util import duration
+        """Create the raw subscription and register the MCAP channel of a topic."""
+        from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-        from bsp_ros.runtime.dds_types import type_hash
+        from bsp_ros.runtime.ros import message_class
 
-        dds_topic = self.ctx._topic("rt" + topic, msgtype)
-        type_hash_text = type_hash(msgtype)
-        policies: list[Any] = [
-            Policy.History.KeepAll,
-            Policy.Reliability.Reliable(max_blocking_time=duration(infinite=True))
-            if reliable
-            else Policy.Reliability.BestEffort,
-            Policy.Durability.TransientLocal if durable else Policy.Durability.Volatile,
-            Policy.Userdata(f"typehash={type_hash_text};".encode()),
-        ]
-        reader = DataReader(self.ctx._subscriber, dds_topic, qos=Qos(*policies))
-        condition = ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any)
-        self.waitset.attach(condition)
+        cls = message_class(msgtype)  # raises, naming the type and its package, when it is not installed
         if msgtype not in self.schemas:
-            msgdef, _ = self.typestore.generate_msgdef(msgtype, ros_version=2)
+            try:
+                msgdef, _ = self.typestore.generate_msgdef(msgtype, ros_version=2)
+            except Exception as exc:  # rosbags: a type outside its Jazzy store
+                raise InputError(f"{topic}: no message definition of {msgtype} to store in the bag: {exc}") from exc
             self.schemas[msgtype] = self.writer.register_schema(msgtype, "ros2msg", msgdef.encode("utf-8"))
         profile = qos_profile(transient_local=durable, depth=1 if durable else 10)
         if not reliable:
@@ -236,42 +199,39 @@ class _Recorder:
             topic,
             "cdr",
             self.schemas[msgtype],
-            {"offered_qos_profiles": dump_qos([profile]), "topic_type_hash": type_hash_text},
+            {"offered_qos_profiles": dump_qos([profile]), "topic_type_hash": self.typestore.hash_rihs01(msgtype)},
         )
-        sub = _Sub(topic, msgtype, reader, condition, channel_id, profile)
+        sub = _Sub(topic, msgtype, None, channel_id, profile)
+        qos = QoSProfile(
+            history=HistoryPolicy.KEEP_ALL,
+            reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL if durable else DurabilityPolicy.VOLATILE,
+        )
+
+        def on_message(data: bytes) -> None:
+            sub.inbox.append((time.time_ns(), data))
+
+        sub.subscription = self.client.node.create_subscription(cls, topic, on_message, qos, raw=True)
         self.subs[topic] = sub
         return sub
 
-    def take_all(self) -> int:
-        """Write every sample waiting in the readers; returns how many."""
-        from cyclonedds._clayer import ddspy_take
-        from cyclonedds.core import InstanceState, SampleState, ViewState
+    def spin(self, seconds: float) -> None:
+        """Receive for ``seconds`` (raw CDR goes to each topic's inbox)."""
+        self.client.spin(seconds)
 
-        mask = SampleState.Any | ViewState.Any | InstanceState.Any
+    def take_all(self) -> int:
+        """Write every message received so far; returns how many."""
         total = 0
         for sub in self.subs.values():
-            while True:
-                batch = ddspy_take(sub.reader._ref, mask, _TAKE_N)  # raw CDR: written as received
-                if isinstance(batch, int):
-                    break
-                now = time.time_ns()
-                for data, info in batch:
-                    if not info.valid_data:
-                        continue
-                    self.writer.add_message(
-                        sub.channel_id,
-                        log_time=now,
-                        data=bytes(data),
-                        publish_time=int(info.source_timestamp),
-                        sequence=sub.count,
-                    )
-                    sub.count += 1
-                    total += 1
-                if batch:
-                    self.start_ns = self.start_ns or now
-                    self.end_ns = now
-                if len(batch) < _TAKE_N:
-                    break
+            inbox, sub.inbox = sub.inbox, []
+            for now, data in inbox:
+                # rclpy hands raw messages without their source timestamp: publish time = receive time.
+                self.writer.add_message(sub.channel_id, log_time=now, data=data, publish_time=now, sequence=sub.count)
+                sub.count += 1
+            if inbox:
+                self.start_ns = self.start_ns or inbox[0][0]
+                self.end_ns = inbox[-1][0]
+            total += len(inbox)
         self.unflushed += total
         return total
 
@@ -302,10 +262,10 @@ class _Recorder:
         return {"writer": f"bsp_ros {__version__} recorder"}
 
     def close(self) -> None:
-        """Release DDS (the file is closed by :meth:`finish`, or left as is after a failure)."""
+        """Leave the ROS graph (the file is closed by :meth:`finish`, or left as is after a failure)."""
         if not self.stream.closed:
             self.stream.close()
-        self.ctx.shutdown()
+        self.client.close()
 
 
 def record(
@@ -319,14 +279,16 @@ def record(
     stop: threading.Event | None = None,
     on_subscribe: Callable[[str, str], None] | None = None,
 ) -> RecordReport:
-    """Record DDS topics into a new rosbag2 bag (metadata version 9, one ``.mcap``).
+    """Record ROS 2 topics into a new rosbag2 bag (metadata version 9, one ``.mcap``).
 
-    Types come from ``TOPIC:TYPE`` or from the publishers discovered (DDS built-in DCPSPublication);
-    a topic is subscribed as soon as its type is known. QoS follows the publishers (rosbag2's
-    adaptation); sensor streams are subscribed best effort. Payloads are stored exactly as received
-    (serialized CDR), log time = receive time (ns, wall clock), publish time = the writer's source
-    timestamp. Chunks are small, CRC-checked and flushed at least every ``flush_interval_s``: a killed
-    recorder leaves an ``.mcap`` that :func:`bsp_ros.bag.read_session` reads up to the cut.
+    Types come from ``TOPIC:TYPE`` or from the publishers in the ROS graph; a topic is subscribed (raw:
+    serialized CDR) as soon as its type is known, and refused with a warning naming the type if its message
+    package is not installed (a type given on the command line that is not installed is an error at once).
+    QoS follows the publishers (rosbag2's adaptation); sensor streams are subscribed best effort. Payloads
+    are stored exactly as received (serialized CDR), log time = publish time = receive time (ns, wall
+    clock; rclpy's raw subscriptions give no source timestamp). Chunks are small, CRC-checked and flushed
+    at least every ``flush_interval_s``: a killed recorder leaves an ``.mcap`` that
+    :func:`bsp_ros.bag.read_session` reads up to the cut.
     ``metadata.yaml`` is written at the end.
 
     Parameters
@@ -354,11 +316,11 @@ def record(
     out = Path(out_dir)
     if out.exists():
         raise BagWriteError(f"{out} exists already: refusing to overwrite a bag")
-    from bsp_ros.runtime.dds_types import dds_class
+    from bsp_ros.runtime.ros import message_class
 
     for spec in specs:
         if spec.msgtype is not None:
-            dds_class(spec.msgtype)  # an unknown type fails now, naming it
+            message_class(spec.msgtype)  # a type not installed fails now, naming it and its package
     stop = stop or threading.Event()
     out.mkdir(parents=True)
     report = RecordReport(path=str(out))
@@ -377,13 +339,14 @@ def record(
                 last_discovery = now
                 _subscribe_pending(rec, pending, report, on_subscribe)
             if rec.subs:
-                rec.waitset.wait(_duration_ns(min(_POLL_S, flush_interval_s)))
+                rec.spin(min(_POLL_S, flush_interval_s))
             else:
                 stop.wait(_POLL_S / 2)
             rec.take_all()
             if time.monotonic() - last_flush >= flush_interval_s:
                 rec.flush()
                 last_flush = time.monotonic()
+        rec.spin(0.05)  # what arrived meanwhile
         rec.take_all()
         records = rec.finish()
         report.counts = {r.name: r.message_count for r in records}
@@ -402,17 +365,13 @@ def record(
     return report
 
 
-def _duration_ns(seconds: float) -> int:
-    return int(seconds * 1e9)
-
-
 def _subscribe_pending(
     rec: _Recorder,
     pending: dict[str, TopicSpec],
     report: RecordReport,
     on_subscribe: Callable[[str, str], None] | None,
 ) -> None:
-    found = rec.discovered()
+    found = rec.discovered(list(pending))
     for topic, spec in list(pending.items()):
         types, offered = found.get(topic, (set(), []))
         msgtype = spec.msgtype

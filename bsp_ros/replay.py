@@ -1,4 +1,4 @@
-"""Play a rosbag2 MCAP bag onto ROS 2 topics over Cyclone DDS, with recorded timing, reporting any damage."""
+"""Play a rosbag2 MCAP bag onto ROS 2 topics (rclpy, serialized), with recorded timing, reporting any damage."""
 
 from __future__ import annotations
 
@@ -306,27 +306,28 @@ class _StoppedError(Exception):
 
 
 def _raw_writer(publisher: Any) -> Callable[[bytes], None]:
-    """A function writing serialized CDR (with its encapsulation header) as a sample of ``publisher``."""
-    from cyclonedds._clayer import ddspy_write
-    from cyclonedds.core import DDSException
-
-    ref = publisher._writer._ref  # the runtime's DataWriter; raw bytes skip a deserialize/serialize round trip
+    """A function publishing serialized CDR (with its encapsulation header) as it is on ``publisher``."""
     topic = publisher.topic_name
 
     def write(data: bytes) -> None:
-        if len(data) % 4:
-            data = data.ljust((len(data) + 3) & ~3, b"\0")  # as cyclonedds' DataWriter.write pads
-        ret = ddspy_write(ref, data)
-        if ret < 0:
-            raise BspError(f"publishing on {topic} failed: {DDSException(ret)}")
+        try:
+            publisher.publish(data)  # rclpy: bytes are published raw, no deserialize/serialize round trip
+        except Exception as exc:  # rclpy raises RCLError
+            raise BspError(f"publishing on {topic} failed: {exc}") from exc
 
     return write
 
 
-def _clock_bytes(t_ns: int) -> bytes:
-    from bsp_ros.runtime.dds_types import typestore
+_clock_store: Any = None
 
-    store = typestore()
+
+def _clock_bytes(t_ns: int) -> bytes:
+    global _clock_store
+    if _clock_store is None:
+        from rosbags.typesys import Stores, get_typestore
+
+        _clock_store = get_typestore(Stores.ROS2_JAZZY)
+    store = _clock_store
     time_cls = store.types["builtin_interfaces/msg/Time"]
     msg = store.types[_CLOCK_TYPE](clock=time_cls(sec=t_ns // 1_000_000_000, nanosec=t_ns % 1_000_000_000))
     return bytes(store.serialize_cdr(msg, _CLOCK_TYPE))
@@ -395,12 +396,14 @@ def play_bag(
     stop: threading.Event | None = None,
     on_start: Callable[[PlayReport], None] | None = None,
 ) -> PlayReport:
-    """Publish a bag's messages on ROS 2 topics (DDS), timed by their receive (log) times.
+    """Publish a bag's messages on ROS 2 topics (rclpy), timed by their receive (log) times.
 
-    Messages are read raw from the MCAP file(s) with CRC checking and written as serialized CDR, byte
-    for byte as recorded. The wrench and marker streams go out best effort (``sensor_data``), latched
-    (transient-local) topics such as ``/tf_static`` reliable transient-local and ahead of the timeline,
-    everything else reliable. A damaged bag plays its intact part; the report says what was lost.
+    Messages are read raw from the MCAP file(s) with CRC checking and published as serialized CDR, byte
+    for byte as recorded; a topic whose message package is not installed (e.g. ``tf2_msgs`` outside a
+    cell) is skipped with a warning naming its type. The wrench and marker streams go out best effort
+    (``sensor_data``), latched (transient-local) topics such as ``/tf_static`` reliable transient-local
+    and ahead of the timeline, everything else reliable. A damaged bag plays its intact part; the report
+    says what was lost.
 
     Parameters
     ----------
@@ -436,30 +439,28 @@ def play_bag(
     report = PlayReport(path=str(path))
     plans = _plan(files, meta, topics, report)
 
-    from bsp_ros.runtime.dds_backend import DdsContext
-    from bsp_ros.runtime.dds_types import dds_class
+    from bsp_ros.runtime.ros import Client, message_class
 
-    ctx = DdsContext(domain_id, args=[])
+    client = Client("rosbag2_player", domain_id)
     started = time.monotonic()
     try:
-        node = ctx.create_node("rosbag2_player")
         writers: dict[str, Callable[[bytes], None]] = {}
         publishers: dict[str, Any] = {}
         plan_of: dict[str, TopicPlan] = {}
         for plan in plans:
             try:
-                dds_class(plan.msgtype)
+                message_class(plan.msgtype)
             except BspError as error:
-                report.skipped[plan.topic] = f"type {plan.msgtype or '<none>'} unknown: {error}"
+                report.skipped[plan.topic] = f"type {plan.msgtype or '<none>'} not installed: {error}"
                 _LOG.warning("skipping %s: %s", plan.topic, report.skipped[plan.topic])
                 continue
-            pub = node.create_publisher(plan.msgtype, plan.topic, plan.qos)
+            pub = client.publisher(plan.msgtype, plan.topic, plan.qos)
             publishers[plan.topic] = pub
             writers[plan.topic] = _raw_writer(pub)
             plan_of[plan.topic] = plan
             report.published[plan.topic] = 0
             report.expected[plan.topic] = plan.expected
-        clock_write = _raw_writer(node.create_publisher(_CLOCK_TYPE, "/clock", _CLOCK_QOS)) if clock else None
+        clock_write = _raw_writer(client.publisher(_CLOCK_TYPE, "/clock", _CLOCK_QOS)) if clock else None
 
         _wait_for_subscribers(publishers, wait_subscribers_s, settle_s, stop)
         report.matched = {t: p.get_subscription_count() for t, p in publishers.items()}
@@ -471,12 +472,18 @@ def play_bag(
         if reliable:
             # Interrupted: do not hang on a subscriber that may be dead (DDS notices only after its lease).
             deadline = time.monotonic() + (min(ack_timeout_s, 0.5) if report.interrupted else ack_timeout_s)
-            report.acked = all(p.wait_for_acks(max(0.0, deadline - time.monotonic())) for p in reliable)
+            report.acked = all(_wait_for_acks(p, deadline - time.monotonic()) for p in reliable)
         time.sleep(0.05)  # best-effort samples just written leave the socket
     finally:
         report.wall_s = time.monotonic() - started
-        ctx.shutdown()
+        client.close()
     return report
+
+
+def _wait_for_acks(publisher: Any, timeout_s: float) -> bool:
+    from rclpy.duration import Duration
+
+    return bool(publisher.wait_for_all_acked(Duration(nanoseconds=max(0, int(timeout_s * 1e9)))))
 
 
 def _wait_for_subscribers(publishers: dict[str, Any], timeout_s: float, settle_s: float, stop: threading.Event) -> None:

@@ -9,15 +9,15 @@ import numpy as np
 import numpy.typing as npt
 
 #: Maps a ROS type name such as ``geometry_msgs/msg/WrenchStamped`` to its message class
-#: (rosbags: ``lambda n: typestore.types[n]``; rclpy: ``rosidl_runtime_py.utilities.get_message``).
+#: (rosbags: ``lambda n: typestore.types[n]``; rclpy: ``bsp_ros.runtime.ros.message_class``).
 TypeLookup = Callable[[str], type]
 
 
 def float_sequence(cls: type, values: npt.ArrayLike) -> Any:
     """Return ``values`` in the form ``cls`` accepts for a ``float64[]`` field.
 
-    rosbags message classes (they carry ``__msgtype__``) serialise numpy arrays; rclpy and Cyclone DDS
-    classes take a list of Python floats.
+    rosbags message classes (they carry ``__msgtype__``) serialise numpy arrays; rclpy classes take a
+    list of Python floats.
     """
     array = np.asarray(values, dtype=np.float64).reshape(-1)
     if hasattr(cls, "__msgtype__"):

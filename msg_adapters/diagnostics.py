@@ -40,7 +40,7 @@ class DiagnosticArraySample:
 
 
 def _level_to_int(level: Any) -> int:
-    # rclpy holds the ``byte`` field as a length-1 ``bytes``; rosbags and Cyclone DDS as an int.
+    # rclpy holds the ``byte`` field as a length-1 ``bytes``; rosbags as an int.
     if isinstance(level, bytes | bytearray):
         return int(level[0])
     return int(level)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -28,7 +29,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--subject", choices=("human", "paper-arm"), default="human")
     parser.add_argument("--mode", choices=("windowed", "recursive"), default="windowed")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--domain", type=int, default=None, help="DDS domain id (default: derived from the pid)")
+    parser.add_argument(
+        "--domain", type=int, default=None, help="ROS domain id (default: derived from the pid, 2..101)"
+    )
     return parser
 
 
@@ -65,36 +68,38 @@ def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: fl
 
 def run(args: argparse.Namespace) -> int:
     """Start the nodes, watch the estimates converge, print the final errors."""
-    from bsp_ros.runtime import make_context
+    from bsp_ros.runtime.ros import Client, has_message
 
-    domain = args.domain if args.domain is not None else 100 + os.getpid() % 100
-    env = {**os.environ, "BSP_ROS_BACKEND": "dds", "ROS_DOMAIN_ID": str(domain)}
+    # 1..101: the ROS 2 domain ids safe on Linux; 0 (everyone's default) is left alone.
+    domain = args.domain if args.domain is not None else 2 + os.getpid() % 100
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
     n_segments = "3" if args.subject == "human" else "2"
+    identifier = ["-p", f"n_segments:={n_segments}", "-p", f"mode:={args.mode}"]
+    if not has_message("tf2_msgs/msg/TFMessage"):
+        # No /tf_static without tf2_msgs: the identifier gets the simulated sensor's rotation as a parameter.
+        from bsp_ros.simulation import human_arm_cell, paper_mechanical_arm_cell
+        from msg_adapters.rotation import quaternion_from_matrix
+
+        spec = human_arm_cell() if args.subject == "human" else paper_mechanical_arm_cell()
+        xyzw = quaternion_from_matrix(spec.sensor.rotation_world_from_sensor)
+        identifier += ["-p", "wrench_frame_rotation_xyzw:=[" + ", ".join(repr(float(v)) for v in xyzw) + "]"]
     node_args = {
-        "cell_simulator": [
-            "--param",
-            f"speed:={args.speed}",
-            "--param",
-            f"subject:={args.subject}",
-            "--param",
-            f"seed:={args.seed}",
-        ],
-        "joint_angle_estimator": ["--param", f"n_segments:={n_segments}"],
-        "bsp_identifier": ["--param", f"n_segments:={n_segments}", "--param", f"mode:={args.mode}"],
+        "cell_simulator": ["-p", f"speed:={args.speed}", "-p", f"subject:={args.subject}", "-p", f"seed:={args.seed}"],
+        "joint_angle_estimator": ["-p", f"n_segments:={n_segments}"],
+        "bsp_identifier": identifier,
     }
-    context = make_context("dds", domain_id=domain, args=[])
-    node = context.create_node("bsp_demo_console")
+    client = Client("bsp_demo_console", domain)
     latest: dict[str, Any] = {}
     truth: dict[str, Any] = {}
-    node.create_subscription(
+    client.subscribe(
         "std_msgs/msg/String", "bsp/estimate_json", lambda m: latest.__setitem__("doc", json.loads(m.data)), "estimates"
     )
-    node.create_subscription(
+    client.subscribe(
         "std_msgs/msg/String", "sim/truth", lambda m: truth.update(json.loads(m.data)), "tf_static_listener"
     )
     processes = [
         subprocess.Popen(
-            [sys.executable, "-m", f"bsp_ros.nodes.{name}", *node_args[name]],
+            [sys.executable, "-m", f"bsp_ros.nodes.{name}", "--ros-args", *node_args[name]],
             env=env,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
@@ -106,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.monotonic()
     try:
         while time.monotonic() - start < args.duration:
-            context.spin(1.0 if interactive else 5.0)
+            client.spin(1.0 if interactive else 5.0)
             if any(p.poll() is not None for p in processes):
                 failed = [n for n, p in zip(NODES, processes, strict=True) if p.poll() is not None]
                 print(f"bsp demo: node(s) {failed} stopped", file=sys.stderr)
@@ -115,13 +120,14 @@ def run(args: argparse.Namespace) -> int:
             print(("\033[2J\033[H" if interactive else "") + table + ("" if interactive else "\n"), flush=True)
     finally:
         for process in processes:
-            process.terminate()
+            process.send_signal(signal.SIGINT)  # the nodes' clean exit (rclpy's handler); SIGKILL if it hangs
         for process in processes:
             try:
-                process.wait(5)
+                process.wait(10)
             except subprocess.TimeoutExpired:
                 process.kill()
-        context.shutdown()
+                process.wait(5)
+        client.close()
     document = latest.get("doc")
     print("\nfinal estimate (truth beside it):")
     print(render(document, truth, time.monotonic() - start))

@@ -20,10 +20,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "play",
         help="publish a bag's topics on ROS 2 (DDS) with the recorded timing",
         description=(
-            "Publish the messages of a rosbag2 MCAP bag on their topics over Cyclone DDS (ROS 2 wire protocol), "
+            "Publish the messages of a rosbag2 MCAP bag on their topics (rclpy, serialized messages as recorded), "
             "timed by their receive times. Wrench and marker streams go out best effort (sensor_data), /tf_static "
             "transient-local and first, other topics reliable. A damaged bag plays its intact part and says what "
-            "was lost."
+            "was lost. A topic whose message package is not installed (e.g. tf2_msgs) is skipped, by name."
         ),
     )
     parser.add_argument("bag", type=Path, metavar="BAG", help="bag directory, its metadata.yaml, or an .mcap file")

@@ -16,9 +16,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "record",
         help="record ROS 2 topics (DDS) into a rosbag2 MCAP bag",
         description=(
-            "Subscribe to ROS 2 topics over Cyclone DDS and write a rosbag2 bag (metadata.yaml version 9 and one "
-            ".mcap with small CRC-checked chunks, flushed every 0.25 s, so a killed recorder loses well under a "
-            "second). Types come from the publishers or from TOPIC:TYPE. Stop with Ctrl-C/SIGTERM or --duration. "
+            "Subscribe to ROS 2 topics (rclpy, serialized messages) and write a rosbag2 bag (metadata.yaml "
+            "version 9 and one .mcap with small CRC-checked chunks, flushed every 0.25 s, so a killed recorder "
+            "loses well under a second). Types come from the publishers or from TOPIC:TYPE (a type whose message "
+            "package is not installed is refused). Stop with Ctrl-C/SIGTERM or --duration. "
             "Never name the bag after a person."
         ),
     )

@@ -1,26 +1,29 @@
-"""`bsp_identifier`: wrench + joint states + tf -> live estimates of segment parameters and passive moments."""
+"""`bsp_identifier`: wrench, joint states, wrench frame -> live estimates of segment parameters and passive moments."""
 
 from __future__ import annotations
 
 import sys
 import time
+import traceback
 from collections import deque
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from bsp_ros.errors import BspError, InputError
 from bsp_ros.estimate import invalid_document
 from bsp_ros.fusion import SubjectInfo
 from bsp_ros.identification.passive import PassiveModel
-from bsp_ros.identification.recursive import RecursiveConfig, RecursiveIdentifier
-from bsp_ros.model import contact_torques_one_nm
 from bsp_ros.nodes import estimate_jobs as jobs
-from bsp_ros.online.guard import StreamGuard
+from bsp_ros.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
+from bsp_ros.online.recursive_feed import RecursiveFeed
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate, WindowSamples
 from bsp_ros.pipeline import IdentifyOptions
-from bsp_ros.runtime import run_node
 from bsp_ros.runtime.offload import ProcessOffload
+from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.runtime.qos import rclpy_qos
+from bsp_ros.runtime.ros import RosNode, has_message, log_error, message_class, require_rclpy
 from bsp_ros.runtime.worker import LatestJobWorker
 from bsp_ros.streams import segments_for
 from msg_adapters.diagnostics import (
@@ -32,60 +35,94 @@ from msg_adapters.diagnostics import (
     build_diagnostic_array,
 )
 from msg_adapters.joint_state import JointStateSample, build_joint_state, read_joint_state
-from msg_adapters.tf import read_tf_message, rotation_between
+from msg_adapters.tf import read_tf_message
 from msg_adapters.wrench import read_wrench_stamped
 
 NAME = "bsp_identifier"
 MODES = ("windowed", "recursive")
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+
+PARAMETERS = (
+    Param("mode", "windowed", "windowed (sliding window) or recursive (per sample)", choices=MODES),
+    Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
+    Param("window_s", 30.0, "sliding window length", "s", lo=1.0, hi=3600.0),
+    Param("update_hz", 5.0, "estimate rate", "Hz", lo=0.1, hi=100.0),
+    Param("stale_s", 0.4, "an input silent this long makes the estimate invalid", "s", lo=0.01, hi=60.0),
+    Param(
+        "method", "joint", "joint (ours) or paper (the method paper's sequential procedure)", choices=("joint", "paper")
+    ),
+    Param("passive", "coulomb", "passive model, e.g. coulomb+viscous"),
+    Param("body_mass_kg", 0.0, "subject body mass for the prior (0: unknown)", "kg", lo=0.0, hi=300.0),
+    Param("height_m", 0.0, "subject height (0: unknown)", "m", lo=0.0, hi=2.5),
+    Param("sex", "male", "anthropometric table", choices=("male", "female")),
+    Param("world_frame", "world", "frame of the markers and of gravity (z up)"),
+    Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
+    Param(
+        "wrench_frame_source",
+        "auto",
+        "where the wrench frame's rotation comes from: tf (/tf_static and /tf), parameter "
+        "(wrench_frame_rotation_xyzw), or auto (tf if tf2_msgs is installed, else the parameter)",
+        choices=("auto", "tf", "parameter"),
+    ),
+    Param(
+        "wrench_frame_rotation_xyzw",
+        [0.0, 0.0, 0.0, 1.0],
+        "rotation world <- wrench frame as a unit quaternion [x, y, z, w], used without tf",
+    ),
+    Param(
+        "tf_wait_s",
+        2.0,
+        "wait this long for the wrench frame's transform before taking it as world",
+        "s",
+        lo=0.0,
+        hi=60.0,
+    ),
+)
 
 
-class BspIdentifierNode:
+class BspIdentifierNode(RosNode):
     """Identifies online, in a sliding window (default) or recursively, and publishes the estimates.
 
     An estimate is published invalid (level ERROR) when an input is stale (nothing received for
     ``stale_s`` of wall time), and samples that are non-finite, out of order or duplicated never enter it.
+    The callbacks adapt messages and hand them to the online blocks (``bsp_ros.online``).
     """
 
-    def __init__(self, node: Any) -> None:
-        self.node = node
-        p = node.declare_parameter
-        self.mode = p("mode", "windowed", "windowed (sliding window) or recursive (per sample)")
-        if self.mode not in MODES:
-            from bsp_ros.errors import InputError
-
-            raise InputError(f"{NAME}: parameter mode must be one of {MODES}, got {self.mode!r}")
-        self.n = p("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3)
-        window_s = p("window_s", 30.0, "sliding window length", "s", lo=1.0, hi=3600.0)
-        update_hz = p("update_hz", 5.0, "estimate rate", "Hz", lo=0.1, hi=100.0)
-        self.stale_s = p("stale_s", 0.4, "an input silent this long makes the estimate invalid", "s", lo=0.01, hi=60.0)
-        method = p("method", "joint", "joint (ours) or paper (the method paper's sequential procedure)")
-        passive = p("passive", "coulomb", "passive model, e.g. coulomb+viscous")
-        body_mass = p("body_mass_kg", 0.0, "subject body mass for the prior (0: unknown)", "kg", lo=0.0, hi=300.0)
-        height = p("height_m", 0.0, "subject height (0: unknown)", "m", lo=0.0, hi=2.5)
-        sex = p("sex", "male", "anthropometric table: male or female")
-        self.world_frame = p("world_frame", "world", "frame of the markers and of gravity (z up)")
-        self.wrench_topic = p("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic")
-        self.tf_wait_s = p(
-            "tf_wait_s",
-            2.0,
-            "wait this long for the wrench frame's transform before taking it as world",
-            "s",
-            lo=0.0,
-            hi=60.0,
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        p = declare_parameters(self, PARAMETERS)
+        self.mode = p["mode"]
+        self.n = p["n_segments"]
+        self.stale_s = p["stale_s"]
+        self.world_frame = p["world_frame"]
+        try:
+            parameter_rotation = rotation_from_quaternion_xyzw(p["wrench_frame_rotation_xyzw"])
+        except ValueError as exc:
+            raise InputError(f"{NAME}: parameter wrench_frame_rotation_xyzw: {exc}") from exc
+        tf_installed = has_message(TF_TYPE)
+        source = p["wrench_frame_source"]
+        if source == "tf" and not tf_installed:
+            raise InputError(
+                f"{NAME}: wrench_frame_source is tf but {TF_TYPE} is not installed; "
+                "give wrench_frame_rotation_xyzw with wrench_frame_source:=parameter"
+            )
+        use_tf = source == "tf" or (source == "auto" and tf_installed)
+        self.frames = WrenchFrames(self.world_frame, use_tf, parameter_rotation, p["tf_wait_s"])
+        self.frame_source = "tf (/tf_static, /tf)" if use_tf else "parameter wrench_frame_rotation_xyzw"
+        self.get_logger().info(
+            f"wrench frame rotation from {self.frame_source}"
+            + ("" if use_tf else f" = {p['wrench_frame_rotation_xyzw']} ({TF_TYPE} not used)")
         )
-        self.first_wrench_wall_ns: int | None = None
-        subject = SubjectInfo(body_mass or None, height or None, sex)
-        self.options = IdentifyOptions(method=method, passive=PassiveModel.parse(passive), subject=subject)
-        self.windowed = WindowedIdentifier(self.n, WindowConfig(window_s, 60.0, self.options))
-        self.recursive = RecursiveIdentifier(self.n, RecursiveConfig(passive=self.options.passive))
-        self.recursive_guard = StreamGuard("wrench")
-        self.transforms: dict[str, Any] = {}
-        self.rotations: dict[str, np.ndarray] = {}
-        self.assumed_world: set[str] = set()
+        subject = SubjectInfo(p["body_mass_kg"] or None, p["height_m"] or None, p["sex"])
+        try:
+            passive = PassiveModel.parse(p["passive"])
+        except (BspError, ValueError) as exc:
+            raise InputError(f"{NAME}: parameter passive: {exc}") from exc
+        self.options = IdentifyOptions(method=p["method"], passive=passive, subject=subject)
+        self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
+        self.recursive = RecursiveFeed(self.n, self.options.passive)
         self.lengths: np.ndarray | None = None
-        self.passive_joints: tuple[str, ...] | None = None
-        self.joint_states: list[tuple[int, np.ndarray, np.ndarray]] = []
-        self.last_receive = {"wrench": None, "joint_states": None}
+        self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
         self.worker = LatestJobWorker(f"{NAME}-estimate")
@@ -97,60 +134,51 @@ class BspIdentifierNode:
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
         self.offload.run(jobs.ping)
-        self.update_s: deque[float] = deque(maxlen=int(10 * update_hz) + 1)  # compute time of the last ~10 s
-        self.types = node.message_class
-        self.estimate_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", "estimates")
-        self.json_pub = node.create_publisher("std_msgs/msg/String", "bsp/estimate_json", "estimates")
-        self.passive_pub = node.create_publisher("sensor_msgs/msg/JointState", "bsp/passive_moments", "estimates")
+        self.update_s: deque[float] = deque(maxlen=int(10 * p["update_hz"]) + 1)  # compute time of the last ~10 s
+        self.types = message_class
+        estimates = rclpy_qos("estimates")
+        self.estimate_pub = self.create_publisher(
+            message_class("diagnostic_msgs/msg/DiagnosticArray"), "bsp/estimate", estimates
+        )
+        self.json_pub = self.create_publisher(message_class("std_msgs/msg/String"), "bsp/estimate_json", estimates)
+        joint_state = message_class("sensor_msgs/msg/JointState")
+        self.passive_pub = self.create_publisher(joint_state, "bsp/passive_moments", estimates)
         self.inertia_pubs = {
-            s: node.create_publisher("geometry_msgs/msg/InertiaStamped", f"bsp/{s}/inertia", "estimates")
+            s: self.create_publisher(message_class("geometry_msgs/msg/InertiaStamped"), f"bsp/{s}/inertia", estimates)
             for s in segments_for(self.n)
         }
-        self.diag_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", "default")
-        node.create_subscription("geometry_msgs/msg/WrenchStamped", self.wrench_topic, self.on_wrench, "sensor_data")
-        node.create_subscription("sensor_msgs/msg/JointState", "arm/joint_states", self.on_joint_state, "estimates")
-        node.create_subscription("sensor_msgs/msg/JointState", "arm/joint_angles_raw", self.on_raw_angles, "estimates")
-        node.create_subscription("sensor_msgs/msg/JointState", "arm/segment_lengths", self.on_lengths, "estimates")
-        node.create_subscription("tf2_msgs/msg/TFMessage", "/tf_static", self.on_tf, "tf_static_listener")
-        node.create_subscription("tf2_msgs/msg/TFMessage", "/tf", self.on_tf, "tf")
-        node.create_timer(1.0 / update_hz, self.on_update)
+        self.diag_pub = self.create_publisher(
+            message_class("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", rclpy_qos("default")
+        )
+        wrench = message_class("geometry_msgs/msg/WrenchStamped")
+        self.create_subscription(wrench, p["wrench_topic"], self.on_wrench, rclpy_qos("sensor_input"))
+        self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, estimates)
+        self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, estimates)
+        self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
+        if use_tf:
+            tf = message_class(TF_TYPE)
+            self.create_subscription(tf, "/tf_static", self.on_tf, rclpy_qos("tf_static_listener"))
+            self.create_subscription(tf, "/tf", self.on_tf, rclpy_qos("tf"))
+        self.create_timer(1.0 / p["update_hz"], self.on_update)
+
+    def now_ns(self) -> int:
+        """The node clock (system time unless ``use_sim_time``), ns."""
+        return int(self.get_clock().now().nanoseconds)
+
+    def destroy_node(self) -> None:
+        """Stop the worker thread and the worker process, then the node."""
+        self.worker.close()
+        self.offload.close()
+        super().destroy_node()
 
     # -- inputs ---------------------------------------------------------------------------------------
     def on_tf(self, msg: Any) -> None:
-        """Keep the newest transform of every child frame; a changed wrench rotation restarts the estimate."""
-        for transform in read_tf_message(msg):
-            self.transforms[transform.child_frame] = transform
-        for frame_id, old in list(self.rotations.items()):
-            new = rotation_between(self.transforms.values(), self.world_frame, frame_id)
-            if new is not None and not np.allclose(new, old, atol=1e-9):
-                # Samples already buffered were rotated the old way: they must not mix with new ones.
-                self.node.get_logger().warning("transform of %s changed: estimate restarted", frame_id)
-                self.windowed.reset()
-                self.recursive.reset()
-                self.rotations[frame_id] = new
-
-    def rotation_for(self, frame_id: str) -> np.ndarray | None:
-        """Rotation from ``frame_id`` to the world frame.
-
-        None while waiting up to ``tf_wait_s`` for a transform; after that, identity with a warning
-        (CONTRACT.md: no transform means the wrench frame is ``world``).
-        """
-        if frame_id in self.rotations:
-            return self.rotations[frame_id]
-        rotation = (
-            np.eye(3)
-            if frame_id == self.world_frame
-            else rotation_between(self.transforms.values(), self.world_frame, frame_id)
-        )
-        if rotation is None:
-            now = self.node.now_ns()
-            self.first_wrench_wall_ns = self.first_wrench_wall_ns or now
-            if now - self.first_wrench_wall_ns < self.tf_wait_s * 1e9:
-                return None
-            rotation = np.eye(3)
-            self.node.get_logger().warning("no transform %s -> %s: taken as world", frame_id, self.world_frame)
-        self.rotations[frame_id] = rotation
-        return rotation
+        """New transforms; a changed wrench rotation restarts the estimate."""
+        for frame_id in self.frames.on_transforms(read_tf_message(msg)):
+            # Samples already buffered were rotated the old way: they must not mix with new ones.
+            self.get_logger().warning(f"transform of {frame_id} changed: estimate restarted")
+            self.windowed.reset()
+            self.recursive.reset()
 
     def on_lengths(self, msg: Any) -> None:
         """Segment lengths from the joint angle estimator."""
@@ -163,7 +191,7 @@ class BspIdentifierNode:
         sample = read_joint_state(msg)
         if self.mode != "windowed":
             return
-        self.last_receive["joint_states"] = self.node.now_ns()
+        self.last_receive["joint_states"] = self.now_ns()
         if self.lengths is None or sample.position.size != self.n:
             return
         accepted = self.windowed.add_joint_state(sample.t_ns, sample.position, self.lengths)
@@ -171,27 +199,18 @@ class BspIdentifierNode:
 
     def on_joint_state(self, msg: Any) -> None:
         """Causally filtered joint angles and direction velocities (the recursive mode)."""
-        sample = read_joint_state(msg)
         if self.mode != "recursive":
             return
-        self.last_receive["joint_states"] = self.node.now_ns()
-        if sample.position.size != self.n or not np.isfinite(sample.position).all():
-            self.counts["refused"] += 1
-            return
-        velocity = sample.velocity if sample.velocity.size == self.n else np.zeros(self.n)
-        if self.joint_states and sample.t_ns <= self.joint_states[-1][0]:
-            if self.joint_states[-1][0] - sample.t_ns <= 1e9:  # out of order or duplicate; a jump restarts
-                self.counts["refused"] += 1
-                return
-            self.joint_states = []
-        self.counts["joint_states"] += 1
-        self.joint_states = [*self.joint_states[-1:], (sample.t_ns, sample.position, velocity)]
+        sample = read_joint_state(msg)
+        self.last_receive["joint_states"] = self.now_ns()
+        accepted = self.recursive.add_joint_state(sample.t_ns, sample.position, sample.velocity)
+        self.counts["joint_states" if accepted else "refused"] += 1
 
     def on_wrench(self, msg: Any) -> None:
         """One wrench: into world axes, then into the window or the recursive filter."""
         sample = read_wrench_stamped(msg)
-        self.last_receive["wrench"] = self.node.now_ns()
-        rotation = self.rotation_for(sample.frame_id)
+        self.last_receive["wrench"] = self.now_ns()
+        rotation = self.frames.rotation_for(sample.frame_id, self.now_ns())
         if rotation is None:
             self.counts["waiting_for_tf"] = self.counts.get("waiting_for_tf", 0) + 1
             return
@@ -200,33 +219,16 @@ class BspIdentifierNode:
         if self.mode == "windowed":
             accepted = self.windowed.add_wrench(sample.t_ns, wrench_yzx)
         else:
-            accepted = self.update_recursive(sample.t_ns, wrench_yzx)
+            accepted, coulomb_nm = self.recursive.add_wrench(sample.t_ns, wrench_yzx, self.lengths)
+            joints = self.recursive.passive_joints
+            if coulomb_nm is not None and len(joints) == coulomb_nm.size:
+                passive = JointStateSample(sample.t_ns, "", joints, np.zeros(0), np.zeros(0), coulomb_nm)
+                self.passive_pub.publish(build_joint_state(self.types, passive))
         self.counts["wrench" if accepted else "refused"] += 1
-
-    def update_recursive(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
-        verdict = self.recursive_guard.check(t_ns, wrench_yzx)
-        if verdict in ("jump", "gap"):
-            self.recursive.reset()
-        if verdict == "refused" or self.lengths is None or not self.joint_states:
-            return verdict != "refused"
-        (t0, q0, v0), (t1, q1, v1) = self.joint_states[0], self.joint_states[-1]
-        if t_ns - t1 > 0.1e9 or t_ns < t0 - 0.1e9:  # no angle near this wrench
-            return True
-        w = 0.0 if t1 == t0 else min(max((t_ns - t0) / (t1 - t0), 0.0), 1.0)
-        q, v = (1 - w) * q0 + w * q1, (1 - w) * v0 + w * v1
-        tau = contact_torques_one_nm(q, self.lengths, wrench_yzx)
-        if self.recursive.update(t_ns, q, v, tau):
-            passive = self.recursive.theta[self.n :: len(self.options.passive.terms)]
-            if self.passive_joints is None:
-                self.passive_joints = tuple(name for key, name in self.recursive.names if key == "coulomb_nm")
-            if len(self.passive_joints) == len(passive):
-                sample = JointStateSample(t_ns, "", self.passive_joints, np.zeros(0), np.zeros(0), passive)
-                self.passive_pub.publish(build_joint_state(self.types, sample))
-        return True
 
     # -- outputs --------------------------------------------------------------------------------------
     def stale_reason(self) -> str | None:
-        now = self.node.now_ns()
+        now = self.now_ns()
         for name, last in self.last_receive.items():
             if last is None:
                 return f"waiting for {name}"
@@ -258,9 +260,9 @@ class BspIdentifierNode:
         if window is None or isinstance(window, WindowEstimate):
             self.generation += 1
             if window is None:
-                document, stamp = invalid_document(self.options.method, str(reason)), self.node.now_ns()
+                document, stamp = invalid_document(self.options.method, str(reason)), self.now_ns()
             else:
-                document, stamp = window.document, window.last_wrench_t_ns or self.node.now_ns()
+                document, stamp = window.document, window.last_wrench_t_ns or self.now_ns()
             document["mode"] = self.mode
             self.publish(jobs.outputs_from_document(document, stamp, with_passive=True), counts)
             return
@@ -278,12 +280,13 @@ class BspIdentifierNode:
         """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
         job: Callable[[], jobs.EstimateOutputs]
         if reason is not None:
-            document, now = invalid_document(self.options.method, reason), self.node.now_ns()
+            document, now = invalid_document(self.options.method, reason), self.now_ns()
             document["mode"] = self.mode
             job = lambda: jobs.outputs_from_document(document, now, with_passive=False)  # noqa: E731 - in order
         else:
             assert self.lengths is not None  # stale_reason() waits for them
-            result, lengths, stamp = self.recursive.result(), self.lengths.copy(), self.recursive_guard.last_t_ns or 0
+            result, lengths = self.recursive.identifier.result(), self.lengths.copy()
+            stamp = self.recursive.guard.last_t_ns or 0
             job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp)  # noqa: E731
         self.worker.submit(lambda: self.publish(self._timed(job), counts))
 
@@ -294,10 +297,10 @@ class BspIdentifierNode:
         try:
             outputs = job()
         except Exception as exc:
-            self.node.get_logger().exception("estimate failed")
+            self.get_logger().error(f"estimate failed: {traceback.format_exc()}")
             document = invalid_document(self.options.method, f"internal error: {exc!r}")
             document["mode"] = self.mode
-            outputs = jobs.outputs_from_document(document, self.node.now_ns(), with_passive=False)
+            outputs = jobs.outputs_from_document(document, self.now_ns(), with_passive=False)
         self.update_s.append(time.perf_counter() - started)
         return outputs
 
@@ -318,15 +321,55 @@ class BspIdentifierNode:
                 "update_ms_mean": f"{1e3 * np.mean(self.update_s):.1f}",
                 "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
             }
-        values = {**counts, "published": self.published, "updates_dropped": self.worker.dropped, **timing}
+        frames = {f"wrench_frame.{f}": source for f, source in self.frames.sources.items()}
+        values = {
+            **counts,
+            "published": self.published,
+            "updates_dropped": self.worker.dropped,
+            **timing,
+            "wrench_frame_source": self.frame_source,
+            **frames,
+        }
         status = DiagnosticStatusData.with_values(level, NAME, outputs.message, "", values)
-        diagnostics = DiagnosticArraySample(self.node.now_ns(), "", (status,))
+        diagnostics = DiagnosticArraySample(self.now_ns(), "", (status,))
         self.diag_pub.publish(build_diagnostic_array(self.types, diagnostics))
 
 
 def main(args: list[str] | None = None) -> int:
-    """Console entry point."""
-    return run_node(BspIdentifierNode, NAME, args=args)
+    """Console entry point (``ros2 run bsp_ros bsp_identifier``); ``args``: a command line like ``sys.argv``."""
+    if wants_help(args):
+        print(help_text(NAME, BspIdentifierNode.__doc__ or "", PARAMETERS))
+        return 0
+    try:
+        require_rclpy()
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    # A callback thread waiting for the GIL waits up to the switch interval (5 ms by default) while
+    # another thread (the middleware, an estimate's worker) runs; 0.2 ms keeps a 1 kHz stream's latency low.
+    sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = BspIdentifierNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    except Exception:
+        if rclpy.ok():
+            raise
+        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""`cell_simulator`: the simulated cell publishing wrench, marker poses, /tf_static and the truth in real time."""
+"""`cell_simulator`: the simulated cell publishing wrench, marker poses, /tf_static (if tf2_msgs) and the truth."""
 
 from __future__ import annotations
 
@@ -13,13 +13,49 @@ from typing import Any
 import numpy as np
 
 from bsp_ros import simulation as sim
-from bsp_ros.runtime import run_node
+from bsp_ros.errors import BspError, InputError
+from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.runtime.qos import rclpy_qos
+from bsp_ros.runtime.ros import RosNode, has_message, log_error, message_class, require_rclpy
 from msg_adapters.pose import PoseSample, build_pose_stamped
 from msg_adapters.rotation import quaternion_from_matrix
 from msg_adapters.tf import TransformSample, build_tf_message
 from msg_adapters.wrench import WrenchSample, build_wrench_stamped
 
 NAME = "cell_simulator"
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+
+PARAMETERS = (
+    Param(
+        "subject",
+        "human",
+        "simulated arm: human (3 segments) or paper-arm (2 segments)",
+        choices=("human", "paper-arm"),
+    ),
+    Param("seed", 0, "random seed", lo=0, hi=2**31 - 1),
+    Param("speed", 1.0, "simulated seconds per wall second", "", lo=0.01, hi=100.0),
+    Param("wrench_hz", 100.0, "wrench rate", "Hz", lo=1.0, hi=5000.0),
+    Param("marker_hz", 50.0, "marker rate", "Hz", lo=1.0, hi=1000.0),
+    Param("duration_s", 0.0, "simulated session length (0: endless)", "s", lo=0.0, hi=1e6),
+    Param("dropout_fraction", 0.0, "share of marker frames lost", "", lo=0.0, hi=0.9),
+    Param("nan_burst_period_s", 0.0, "a NaN burst every this many s (0: none)", "s", lo=0.0),
+    Param("nan_burst_s", 0.2, "length of a NaN burst", "s", lo=0.0, hi=10.0),
+    Param("stall_at_s", 0.0, "the sensor stops publishing at this time (0: never)", "s", lo=0.0),
+    Param("die_at_s", 0.0, "the process exits at this time (0: never)", "s", lo=0.0),
+    Param("clock_jump_at_s", 0.0, "stamps jump backwards at this time (0: never)", "s", lo=0.0),
+    Param("clock_jump_s", 10.0, "size of the backwards jump", "s", lo=0.0, hi=1e6),
+    Param(
+        "sensor_roll_pitch_yaw_deg",
+        [180.0, 0.0, 30.0],
+        "fixed-axis roll, pitch, yaw of the sensor frame in world",
+        "deg",
+    ),
+    Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
+    Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
+    # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
+    # 1 kHz (a coarser tick publishes bursts, which delay the last sample of each burst downstream).
+    Param("tick_s", 0.001, "publish the samples that fell due every this long", "s", lo=0.0005, hi=0.1),
+)
 
 
 @dataclasses.dataclass
@@ -30,43 +66,39 @@ class _Queue:
     items: collections.deque[tuple[int, Any]] = dataclasses.field(default_factory=collections.deque)
 
 
-class CellSimulatorNode:
+class CellSimulatorNode(RosNode):
     """Paces :class:`bsp_ros.simulation.CellSimulator` against the clock and publishes its streams.
 
-    Faults on request (parameters): marker dropouts, NaN bursts in the wrench, a stalled sensor (stops
-    publishing the wrench), a dying process, and a backwards clock jump of the stamps.
+    The sensor frame's transform goes out on /tf_static when tf2_msgs is installed; the node logs the
+    quaternion either way (the identifier's ``wrench_frame_rotation_xyzw`` without tf). Faults on request
+    (parameters): marker dropouts, NaN bursts in the wrench, a stalled sensor (stops publishing the wrench),
+    a dying process, and a backwards clock jump of the stamps.
     """
 
-    def __init__(self, node: Any) -> None:
-        self.node = node
-        p = node.declare_parameter
-        subject = p("subject", "human", "simulated arm: human (3 segments) or paper-arm (2 segments)")
-        seed = p("seed", 0, "random seed", lo=0, hi=2**31 - 1)
-        self.speed = p("speed", 1.0, "simulated seconds per wall second", "", lo=0.01, hi=100.0)
-        wrench_hz = p("wrench_hz", 100.0, "wrench rate", "Hz", lo=1.0, hi=5000.0)
-        marker_hz = p("marker_hz", 50.0, "marker rate", "Hz", lo=1.0, hi=1000.0)
-        self.duration_s = p("duration_s", 0.0, "simulated session length (0: endless)", "s", lo=0.0, hi=1e6)
-        dropout = p("dropout_fraction", 0.0, "share of marker frames lost", "", lo=0.0, hi=0.9)
-        self.nan_burst_period_s = p("nan_burst_period_s", 0.0, "a NaN burst every this many s (0: none)", "s", lo=0.0)
-        self.nan_burst_s = p("nan_burst_s", 0.2, "length of a NaN burst", "s", lo=0.0, hi=10.0)
-        self.stall_at_s = p("stall_at_s", 0.0, "the sensor stops publishing at this time (0: never)", "s", lo=0.0)
-        self.die_at_s = p("die_at_s", 0.0, "the process exits at this time (0: never)", "s", lo=0.0)
-        self.jump_at_s = p("clock_jump_at_s", 0.0, "stamps jump backwards at this time (0: never)", "s", lo=0.0)
-        self.jump_s = p("clock_jump_s", 10.0, "size of the backwards jump", "s", lo=0.0, hi=1e6)
-        self.wrench_topic = p("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic")
-        self.marker_prefix = p("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name")
-        # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
-        # 1 kHz (a coarser tick publishes bursts, which delay the last sample of each burst downstream).
-        tick_s = p("tick_s", 0.001, "publish the samples that fell due every this long", "s", lo=0.0005, hi=0.1)
-        self.start_wall_ns = node.now_ns()
-        base = sim.human_arm_cell() if subject == "human" else sim.paper_mechanical_arm_cell()
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        p = declare_parameters(self, PARAMETERS)
+        self.speed = p["speed"]
+        self.duration_s = p["duration_s"]
+        self.nan_burst_period_s = p["nan_burst_period_s"]
+        self.nan_burst_s = p["nan_burst_s"]
+        self.stall_at_s = p["stall_at_s"]
+        self.die_at_s = p["die_at_s"]
+        self.jump_at_s = p["clock_jump_at_s"]
+        self.jump_s = p["clock_jump_s"]
+        wrench_hz, marker_hz = p["wrench_hz"], p["marker_hz"]
+        rpy = p["sensor_roll_pitch_yaw_deg"]
+        if len(rpy) != 3:
+            raise InputError(f"{NAME}: sensor_roll_pitch_yaw_deg needs 3 angles, got {rpy}")
+        self.start_wall_ns = self.now_ns()
+        base = sim.human_arm_cell() if p["subject"] == "human" else sim.paper_mechanical_arm_cell()
         spec = dataclasses.replace(
             base,
-            seed=seed,
+            seed=p["seed"],
             start_ns=self.start_wall_ns,
             duration_s=max(self.duration_s, 1.0),
-            sensor=dataclasses.replace(base.sensor, wrench_hz=wrench_hz),
-            markers=dataclasses.replace(base.markers, marker_hz=marker_hz, dropout_fraction=dropout),
+            sensor=dataclasses.replace(base.sensor, wrench_hz=wrench_hz, roll_pitch_yaw_deg=tuple(rpy)),
+            markers=dataclasses.replace(base.markers, marker_hz=marker_hz, dropout_fraction=p["dropout_fraction"]),
         )
         self.simulator = sim.CellSimulator(spec)
         self.frame_id = spec.sensor.frame_id
@@ -74,34 +106,40 @@ class CellSimulatorNode:
         self.marker_period_ns = int(1e9 / marker_hz)
         self.wrench_queue = _Queue(self.start_wall_ns)
         self.marker_queue = _Queue(self.start_wall_ns)
-        types = node.message_class
-        self.types = types
-        self.wrench_pub = node.create_publisher("geometry_msgs/msg/WrenchStamped", self.wrench_topic, "sensor_data")
+        self.types = message_class
+        sensor_data = rclpy_qos("sensor_data")
+        self.wrench_pub = self.create_publisher(
+            message_class("geometry_msgs/msg/WrenchStamped"), p["wrench_topic"], sensor_data
+        )
+        pose = message_class("geometry_msgs/msg/PoseStamped")
         self.marker_pubs = {
-            name: node.create_publisher("geometry_msgs/msg/PoseStamped", self.marker_prefix + name, "sensor_data")
+            name: self.create_publisher(pose, p["marker_topic_prefix"] + name, sensor_data)
             for name in self.simulator.marker_names
         }
-        tf_pub = node.create_publisher("tf2_msgs/msg/TFMessage", "/tf_static", "tf_static")
-        rotation = self.simulator.rotation_world_from_sensor
-        transform = TransformSample(
-            self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion_from_matrix(rotation)
+        quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
+        if has_message(TF_TYPE):
+            tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
+            transform = TransformSample(self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion)
+            tf_pub.publish(build_tf_message(message_class, [transform]))
+        self.get_logger().info(
+            f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {[round(float(v), 9) for v in quaternion]} "
+            + ("on /tf_static" if has_message(TF_TYPE) else f"(not on /tf_static: {TF_TYPE} is not installed)")
         )
-        tf_pub.publish(build_tf_message(types, [transform]))
-        truth_pub = node.create_publisher("std_msgs/msg/String", "sim/truth", "tf_static")
-        truth = self.simulator.truth.to_dict()
-        truth_pub.publish(types("std_msgs/msg/String")(data=json.dumps(truth)))
-        self._keep = (tf_pub, truth_pub)
-        node.create_timer(tick_s, self.tick)
-        node.get_logger().info(
-            "simulating a %d-segment arm at %.1fx real time, wrench %.0f Hz, markers %.0f Hz",
-            self.simulator.n_segments,
-            self.speed,
-            wrench_hz,
-            marker_hz,
+        truth_pub = self.create_publisher(message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static"))
+        truth = {**self.simulator.truth.to_dict(), "start_time_ns": self.start_wall_ns}
+        truth_pub.publish(message_class("std_msgs/msg/String")(data=json.dumps(truth)))
+        self.create_timer(p["tick_s"], self.tick)
+        self.get_logger().info(
+            f"simulating a {self.simulator.n_segments}-segment arm at {self.speed:.1f}x real time, "
+            f"wrench {wrench_hz:.0f} Hz, markers {marker_hz:.0f} Hz"
         )
 
+    def now_ns(self) -> int:
+        """The node clock, ns."""
+        return int(self.get_clock().now().nanoseconds)
+
     def _sim_now_ns(self) -> int:
-        return self.start_wall_ns + int((self.node.now_ns() - self.start_wall_ns) * self.speed)
+        return self.start_wall_ns + int((self.now_ns() - self.start_wall_ns) * self.speed)
 
     def _stamp(self, t_ns: np.ndarray) -> np.ndarray:
         """Apply the clock-jump fault to stamps (the physics keeps going)."""
@@ -115,7 +153,7 @@ class CellSimulatorNode:
         now = self._sim_now_ns()
         elapsed_s = (now - self.start_wall_ns) / 1e9
         if self.die_at_s and elapsed_s >= self.die_at_s:
-            self.node.get_logger().warning("fault: the simulated sensor dies now")
+            self.get_logger().warning("fault: the simulated sensor dies now")
             os._exit(3)
         if self.duration_s and elapsed_s >= self.duration_s:
             now = min(now, self.start_wall_ns + int(self.duration_s * 1e9))
@@ -164,8 +202,37 @@ class CellSimulatorNode:
 
 
 def main(args: list[str] | None = None) -> int:
-    """Console entry point (`ros2 run bsp_ros cell_simulator` or `cell_simulator` on DDS)."""
-    return run_node(CellSimulatorNode, NAME, args=args)
+    """Console entry point (``ros2 run bsp_ros cell_simulator``); ``args``: a command line like ``sys.argv``."""
+    if wants_help(args):
+        print(help_text(NAME, CellSimulatorNode.__doc__ or "", PARAMETERS))
+        return 0
+    try:
+        require_rclpy()
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = CellSimulatorNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    except Exception:
+        if rclpy.ok():
+            raise
+        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == "__main__":

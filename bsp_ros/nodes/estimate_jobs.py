@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from rosbags.typesys import Stores, get_typestore
 
 from bsp_ros.estimate import estimate_document
 from bsp_ros.estimate_messages import diagnostics_from_estimate, inertias_from_estimate, passive_moments_from_estimate
@@ -15,12 +16,20 @@ from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.result import IdentificationResult
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowSamples
 from bsp_ros.pipeline import IdentifyOptions, fuse
-from bsp_ros.runtime.dds_types import typestore
 from msg_adapters.diagnostics import build_diagnostic_array
 from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import build_joint_state
 
 _windowed: WindowedIdentifier | None = None  # the child's own: it keeps the elastic-check schedule
+_store: Any = None
+
+
+def _typestore() -> Any:
+    """The rosbags Jazzy type store: it serialises CDR in the worker process without rclpy."""
+    global _store
+    if _store is None:
+        _store = get_typestore(Stores.ROS2_JAZZY)
+    return _store
 
 
 def init_worker(n_segments: int, config: WindowConfig, background: bool = False) -> None:
@@ -49,7 +58,7 @@ class EstimateOutputs:
 
     Building and serialising the messages here, in the worker process, keeps the node's interpreter lock
     free for the 1 kHz wrench path. ``cdr`` maps an output (``estimate``, ``json``, ``inertia/<segment>``,
-    ``passive``) to serialised CDR, which rclpy's ``Publisher.publish`` and the DDS runtime both accept.
+    ``passive``) to serialised CDR, which rclpy's ``Publisher.publish`` takes as it is.
     """
 
     valid: bool
@@ -60,7 +69,7 @@ class EstimateOutputs:
 def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive: bool) -> EstimateOutputs:
     """Serialise an estimate document (CONTRACT.md schema) for ``bsp/estimate``, ``bsp/estimate_json``,
     ``bsp/<segment>/inertia`` and, when ``with_passive``, ``bsp/passive_moments``."""
-    store = typestore()
+    store = _typestore()
 
     def types(name: str) -> Any:
         return store.types[name]

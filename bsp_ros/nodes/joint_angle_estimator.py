@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import functools
 import sys
 from typing import Any
 
 import numpy as np
 
+from bsp_ros.errors import BspError
 from bsp_ros.online.causal_angles import CausalAnglesConfig, CausalJointAngles
-from bsp_ros.runtime import run_node
+from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.runtime.qos import rclpy_qos
+from bsp_ros.runtime.ros import RosNode, log_error, message_class, require_rclpy
 from bsp_ros.streams import joints_for, markers_for, segments_for
 from msg_adapters.diagnostics import (
     ERROR,
@@ -24,7 +28,18 @@ from msg_adapters.pose import read_pose_stamped
 NAME = "joint_angle_estimator"
 
 
-class JointAngleEstimatorNode:
+PARAMETERS = (
+    Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
+    Param("marker_hz", 50.0, "nominal mocap frame rate", "Hz", lo=1.0, hi=1000.0),
+    Param("cutoff_hz", 5.0, "causal low-pass of the angles", "Hz", lo=0.1, hi=100.0),
+    Param("direction_cutoff_hz", 0.5, "low-pass of the direction velocity", "Hz", lo=0.01, hi=10.0),
+    Param("max_gap_s", 0.1, "longer marker gaps restart the filters", "s", lo=0.0, hi=10.0),
+    Param("stale_s", 0.5, "no frame for this long: stale", "s", lo=0.01, hi=60.0),
+    Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
+)
+
+
+class JointAngleEstimatorNode(RosNode):
     """Collects each mocap frame's markers, estimates the angles causally and publishes them.
 
     A frame is processed once all of its markers arrived; a newer complete frame drops older incomplete
@@ -35,43 +50,50 @@ class JointAngleEstimatorNode:
     running-median segment lengths (JointState with segment names, position = length in m).
     """
 
-    def __init__(self, node: Any) -> None:
-        self.node = node
-        p = node.declare_parameter
-        n_segments = p("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3)
-        rate_hz = p("marker_hz", 50.0, "nominal mocap frame rate", "Hz", lo=1.0, hi=1000.0)
-        cutoff_hz = p("cutoff_hz", 5.0, "causal low-pass of the angles", "Hz", lo=0.1, hi=100.0)
-        direction_hz = p("direction_cutoff_hz", 0.5, "low-pass of the direction velocity", "Hz", lo=0.01, hi=10.0)
-        max_gap_s = p("max_gap_s", 0.1, "longer marker gaps restart the filters", "s", lo=0.0, hi=10.0)
-        self.stale_s = p("stale_s", 0.5, "no frame for this long: stale", "s", lo=0.01, hi=60.0)
-        prefix = p("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name")
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        p = declare_parameters(self, PARAMETERS)
+        n_segments = p["n_segments"]
+        self.stale_s = p["stale_s"]
         self.n = n_segments
         self.names = markers_for(n_segments)
-        self.estimator = CausalJointAngles(
-            n_segments, CausalAnglesConfig(rate_hz, cutoff_hz, min(direction_hz, cutoff_hz), max_gap_s)
+        config = CausalAnglesConfig(
+            p["marker_hz"], p["cutoff_hz"], min(p["direction_cutoff_hz"], p["cutoff_hz"]), p["max_gap_s"]
         )
+        self.estimator = CausalJointAngles(n_segments, config)
         self.delay_ns = int(self.estimator.group_delay_s() * 1e9)
         self.frames: dict[int, dict[str, np.ndarray]] = {}
         self.last_frame_ns: int | None = None
         self.last_receive_wall_ns: int | None = None
         self.counts = {"frames": 0, "incomplete_frames": 0, "refused": 0}
-        types = node.message_class
-        self.types = types
-        self.state_pub = node.create_publisher("sensor_msgs/msg/JointState", "arm/joint_states", "estimates")
-        self.length_pub = node.create_publisher("sensor_msgs/msg/JointState", "arm/segment_lengths", "estimates")
-        self.raw_pub = node.create_publisher("sensor_msgs/msg/JointState", "arm/joint_angles_raw", "estimates")
-        self.diag_pub = node.create_publisher("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", "default")
+        self.types = message_class
+        estimates = rclpy_qos("estimates")
+        joint_state = message_class("sensor_msgs/msg/JointState")
+        self.state_pub = self.create_publisher(joint_state, "arm/joint_states", estimates)
+        self.length_pub = self.create_publisher(joint_state, "arm/segment_lengths", estimates)
+        self.raw_pub = self.create_publisher(joint_state, "arm/joint_angles_raw", estimates)
+        self.diag_pub = self.create_publisher(
+            message_class("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", rclpy_qos("default")
+        )
+        pose = message_class("geometry_msgs/msg/PoseStamped")
         for name in self.names:
-            node.create_subscription(
-                "geometry_msgs/msg/PoseStamped", prefix + name, lambda msg, n=name: self.on_pose(n, msg), "sensor_data"
+            self.create_subscription(
+                pose,
+                p["marker_topic_prefix"] + name,
+                functools.partial(self.on_pose, name),
+                rclpy_qos("sensor_input"),
             )
         self.last_lengths: np.ndarray | None = None
-        node.create_timer(1.0, self.on_watchdog)
+        self.create_timer(1.0, self.on_watchdog)
+
+    def now_ns(self) -> int:
+        """The node clock, ns."""
+        return int(self.get_clock().now().nanoseconds)
 
     def on_pose(self, marker: str, msg: Any) -> None:
         """Store one marker; process the frame once complete."""
         pose = read_pose_stamped(msg)
-        self.last_receive_wall_ns = self.node.now_ns()
+        self.last_receive_wall_ns = self.now_ns()
         if not np.isfinite(pose.position_m).all() or pose.t_ns <= 0:
             self.counts["refused"] += 1
             return
@@ -116,7 +138,7 @@ class JointAngleEstimatorNode:
 
     def on_watchdog(self) -> None:
         """Publish the node's health on /diagnostics; stale when frames stopped."""
-        now = self.node.now_ns()
+        now = self.now_ns()
         if self.last_receive_wall_ns is None:
             level, message = WARN, "waiting for markers"
         elif now - self.last_receive_wall_ns > self.stale_s * 1e9:
@@ -128,8 +150,37 @@ class JointAngleEstimatorNode:
 
 
 def main(args: list[str] | None = None) -> int:
-    """Console entry point."""
-    return run_node(JointAngleEstimatorNode, NAME, args=args)
+    """Console entry point (``ros2 run bsp_ros joint_angle_estimator``); ``args``: a command line like ``sys.argv``."""
+    if wants_help(args):
+        print(help_text(NAME, JointAngleEstimatorNode.__doc__ or "", PARAMETERS))
+        return 0
+    try:
+        require_rclpy()
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = JointAngleEstimatorNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    except Exception:
+        if rclpy.ok():
+            raise
+        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == "__main__":

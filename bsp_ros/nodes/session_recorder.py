@@ -7,41 +7,54 @@ import sys
 from typing import Any
 
 from bsp_ros.errors import BspError
-from bsp_ros.runtime import run_node
+from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.runtime.qos import rclpy_qos
+from bsp_ros.runtime.ros import RosNode, log_error, message_class, require_rclpy
 from bsp_ros.session_end import SessionEndDetector
 from bsp_ros.store import check_subject_id, open_store
 
 NAME = "session_recorder"
 
 
-class SessionRecorderNode:
+PARAMETERS = (
+    Param("subject", "", "pseudonymous subject id (required)"),
+    Param("store", "", "store file or postgresql:// URL (empty: the per-user default)"),
+    Param("end_timeout_s", 5.0, "estimates silent this long end the session", "s", lo=0.5, hi=3600.0),
+)
+
+
+class SessionRecorderNode(RosNode):
     """Listens to `bsp/estimate_json`; on the end of a session stores its last valid estimate.
 
     The end is silence on the estimate topic for ``end_timeout_s`` or any message on `bsp/session_end`.
     The subject is a pseudonymous id (a parameter): never a name.
     """
 
-    def __init__(self, node: Any) -> None:
-        self.node = node
-        p = node.declare_parameter
-        self.subject = check_subject_id(p("subject", "", "pseudonymous subject id (required)"))
-        self.store_location = p("store", "", "store file or postgresql:// URL (empty: the per-user default)") or None
-        timeout = p("end_timeout_s", 5.0, "estimates silent this long end the session", "s", lo=0.5, hi=3600.0)
-        self.detector = SessionEndDetector(timeout)
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        p = declare_parameters(self, PARAMETERS)
+        self.subject = check_subject_id(p["subject"])
+        self.store_location = p["store"] or None
+        self.detector = SessionEndDetector(p["end_timeout_s"])
         self.end_requested = False
         self.stored_ids: list[int] = []
-        node.create_subscription("std_msgs/msg/String", "bsp/estimate_json", self.on_estimate, "estimates")
-        node.create_subscription("std_msgs/msg/String", "bsp/session_end", self.on_end, "estimates")
-        node.create_timer(0.5, self.on_timer)
+        string = message_class("std_msgs/msg/String")
+        self.create_subscription(string, "bsp/estimate_json", self.on_estimate, rclpy_qos("estimates"))
+        self.create_subscription(string, "bsp/session_end", self.on_end, rclpy_qos("estimates"))
+        self.create_timer(0.5, self.on_timer)
+
+    def now_ns(self) -> int:
+        """The node clock, ns."""
+        return int(self.get_clock().now().nanoseconds)
 
     def on_estimate(self, msg: Any) -> None:
         """Track an estimate."""
         try:
             document = json.loads(msg.data)
         except ValueError:
-            self.node.get_logger().warning("bsp/estimate_json: not JSON, ignored")
+            self.get_logger().warning("bsp/estimate_json: not JSON, ignored")
             return
-        self.detector.on_estimate(document, self.node.now_ns())
+        self.detector.on_estimate(document, self.now_ns())
 
     def on_end(self, msg: Any) -> None:
         """An explicit end of session."""
@@ -50,7 +63,7 @@ class SessionRecorderNode:
 
     def on_timer(self) -> None:
         """Store the session's final valid estimate when it ends."""
-        document = self.detector.due(self.node.now_ns(), self.end_requested)
+        document = self.detector.due(self.now_ns(), self.end_requested)
         self.end_requested = False
         if document is None:
             return
@@ -60,20 +73,49 @@ class SessionRecorderNode:
                 record = store.add_estimate(
                     document,
                     self.subject,
-                    session_time_ns=session.get("start_time_ns") or self.node.now_ns(),
+                    session_time_ns=session.get("start_time_ns") or self.now_ns(),
                     source=session.get("source", "live"),
                 )
         except BspError as error:  # a refused estimate must not stop the recorder of later sessions
-            self.node.get_logger().error("session not stored: %s", error)
+            self.get_logger().error(f"session not stored: {error}")
             return
         if record.id is not None:
             self.stored_ids.append(record.id)
-        self.node.get_logger().info("stored session %s of subject %s", record.id, self.subject)
+        self.get_logger().info(f"stored session {record.id} of subject {self.subject}")
 
 
 def main(args: list[str] | None = None) -> int:
-    """Console entry point."""
-    return run_node(SessionRecorderNode, NAME, args=args)
+    """Console entry point (``ros2 run bsp_ros session_recorder``); ``args``: a command line like ``sys.argv``."""
+    if wants_help(args):
+        print(help_text(NAME, SessionRecorderNode.__doc__ or "", PARAMETERS))
+        return 0
+    try:
+        require_rclpy()
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = SessionRecorderNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except BspError as exc:
+        log_error(NAME, exc)
+        return exc.exit_code
+    except Exception:
+        if rclpy.ok():
+            raise
+        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == "__main__":

@@ -1,18 +1,13 @@
-"""The ROS 2 QoS profiles bsp_ros uses, as Cyclone DDS ``Qos`` and as rclpy ``QoSProfile``."""
+"""The ROS 2 QoS profiles bsp_ros uses, by name, and their rclpy ``QoSProfile``."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
 
-from cyclonedds.qos import Policy, Qos
-from cyclonedds.util import duration
-
 from bsp_ros.errors import RuntimeBackendError
 
-__all__ = ["PROFILES", "QosSpec", "dds_qos", "qos_spec", "rclpy_qos"]
-
-_DDS_LENGTH_UNLIMITED = -1
+__all__ = ["PROFILES", "QosSpec", "qos_spec", "rclpy_qos"]
 
 
 @dataclass(frozen=True)
@@ -34,17 +29,19 @@ class QosSpec:
     transient_local: bool = False
 
 
-#: Profiles by name. ``sensor_data`` is rclpy's ``qos_profile_sensor_data``; ``default`` is an int depth 10
+#: Profiles by name. ``sensor_data`` is rclpy's ``qos_profile_sensor_data`` (publishers); ``default`` is an int depth 10
 #: in rclpy; ``tf_static``/``tf`` are tf2_ros' static and dynamic broadcaster profiles, and
 #: ``tf_static_listener`` the static listener's deeper history (several static broadcasters).
 PROFILES: dict[str, QosSpec] = {
     "sensor_data": QosSpec(reliable=False, depth=5),
+    # A node's subscription to a sensor stream: best effort (matches any publisher) with a deep history,
+    # so that a Python executor busy for a few ms behind a 1 kHz stream is not overtaken (depth 5 would be).
+    "sensor_input": QosSpec(reliable=False, depth=1000),
     "default": QosSpec(reliable=True, depth=10),
     "estimates": QosSpec(reliable=True, depth=10),
     "tf": QosSpec(reliable=True, depth=100),
     "tf_static": QosSpec(reliable=True, depth=1, transient_local=True),
     "tf_static_listener": QosSpec(reliable=True, depth=100, transient_local=True),
-    "discovery_info": QosSpec(reliable=True, depth=1, transient_local=True),
 }
 
 
@@ -76,54 +73,6 @@ def qos_spec(qos: str | int | QosSpec) -> QosSpec:
     return spec
 
 
-def dds_qos(qos: str | int | QosSpec, *, reader_depth: int | None = None, user_data: bytes = b"") -> Qos:
-    """Return the Cyclone DDS ``Qos`` rmw_cyclonedds would build for a ROS 2 profile.
-
-    Parameters
-    ----------
-    qos : str or int or QosSpec
-        The profile (see :func:`qos_spec`).
-    reader_depth : int, optional
-        A deeper history for a reader (the buffer between arrival and take; does not affect matching).
-    user_data : bytes
-        Endpoint user data, e.g. ``b"typehash=RIHS01_...;"``.
-
-    Returns
-    -------
-    Qos
-        Keep-last history, reliability (reliable blocks without limit, as in rmw_cyclonedds), durability
-        with a matching durability service, no auto-dispose, and the user data.
-    """
-    spec = qos_spec(qos)
-    depth = max(spec.depth, reader_depth or 0)
-    history = Policy.History.KeepLast(depth)
-    policies: list[Any] = [
-        history,
-        Policy.WriterDataLifecycle(autodispose=False),
-        (
-            Policy.Reliability.Reliable(max_blocking_time=duration(infinite=True))
-            if spec.reliable
-            else Policy.Reliability.BestEffort
-        ),
-    ]
-    if spec.transient_local:
-        policies += [
-            Policy.Durability.TransientLocal,
-            Policy.DurabilityService(
-                cleanup_delay=0,
-                history=history,
-                max_samples=_DDS_LENGTH_UNLIMITED,
-                max_instances=_DDS_LENGTH_UNLIMITED,
-                max_samples_per_instance=_DDS_LENGTH_UNLIMITED,
-            ),
-        ]
-    else:
-        policies.append(Policy.Durability.Volatile)
-    if user_data:
-        policies.append(Policy.Userdata(user_data))
-    return Qos(*policies)
-
-
 def rclpy_qos(qos: str | int | QosSpec) -> Any:
     """Return the ``rclpy.qos.QoSProfile`` of a profile (needs rclpy).
 
@@ -137,16 +86,11 @@ def rclpy_qos(qos: str | int | QosSpec) -> Any:
     rclpy.qos.QoSProfile
         The profile for ``create_publisher``/``create_subscription``.
     """
-    try:
-        from rclpy.qos import (
-            DurabilityPolicy,
-            HistoryPolicy,
-            QoSProfile,
-            ReliabilityPolicy,
-            qos_profile_sensor_data,
-        )
-    except ImportError as exc:
-        raise RuntimeBackendError(f"rclpy is not available: {exc}") from exc
+    from bsp_ros.runtime.ros import require_rclpy
+
+    require_rclpy()
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+
     if qos == "sensor_data":
         return qos_profile_sensor_data
     spec = qos_spec(qos)

@@ -15,22 +15,27 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from ros_domains import next_domain_id
 
 from bsp_ros.bag import read_session, write_session_bag
 from bsp_ros.bag.mcap_scan import ChannelInfo, scan_mcap
 from bsp_ros.errors import InputError
 from bsp_ros.recorder import parse_topic_specs, subscription_qos
 from bsp_ros.replay import playback_qos
+from bsp_ros.runtime.ros import has_message
 
 ROOT = Path(__file__).resolve().parents[2]
 PEER = Path(__file__).with_name("play_record_peer.py")
 TOPICS = ["/ft_sensor/wrench", "/mocap/shoulder", "/mocap/elbow", "/mocap/wrist", "/mocap/hand", "/tf_static"]
+#: /tf_static needs tf2_msgs, which the PyPI wheels lack: there it is skipped (play) and never subscribed (record).
+TF_INSTALLED = has_message("tf2_msgs/msg/TFMessage")
+PLAYABLE = TOPICS if TF_INSTALLED else TOPICS[:-1]
 pytestmark = pytest.mark.dds
 
 
 def _domain(k: int) -> int:
-    """A domain id unique to this test process and test (Cyclone allows 0..232)."""
-    return 120 + (os.getpid() % 25) * 4 + k
+    """A fresh ROS domain id (see conftest.py); ``k`` only tells the tests' calls apart."""
+    return next_domain_id()
 
 
 def _bsp(*args: object) -> subprocess.Popen[str]:
@@ -120,7 +125,7 @@ def test_qos_choices_and_topic_specs() -> None:
         parse_topic_specs(["/a:std_msgs/String"])
 
 
-def test_fast_play_into_recorder_loses_nothing_and_is_bit_identical(
+def test_play_into_recorder_loses_nothing_and_is_bit_identical(
     source_bag: Path, tmp_path: Path, procs: list[subprocess.Popen[str]]
 ) -> None:
     domain = _domain(0)
@@ -128,17 +133,22 @@ def test_fast_play_into_recorder_loses_nothing_and_is_bit_identical(
     recorder = _bsp("record", *TOPICS, "--out", out, "--domain", domain)
     procs.append(recorder)
     _wait_line(recorder, "recording")
-    player = _bsp("play", source_bag, "--rate", 0, "--domain", domain, "--wait-subscribers", 15)
+    # Twice real time (600 messages/s). Best-effort streams as fast as possible (--rate 0, ~5000/s) overrun
+    # the Python recorder's rclpy executor: Fast DDS then drops samples, as best effort allows.
+    player = _bsp("play", source_bag, "--rate", 2, "--domain", domain, "--wait-subscribers", 15)
     procs.append(player)
     played, err = player.communicate(timeout=40)
     assert player.returncode == 0, err
-    assert "playing 6 topics" in played and "without subscribers" not in played
+    assert f"playing {len(PLAYABLE)} topics" in played and "without subscribers" not in played
+    if not TF_INSTALLED:
+        assert "/tf_static" in played and "tf2_msgs/msg/TFMessage" in played  # skipped, by name
     time.sleep(0.5)
     recorder.send_signal(signal.SIGINT)
     _, err = recorder.communicate(timeout=20)
     assert recorder.returncode == 0, err
 
     source, copy = _raw(source_bag), _raw(out)
+    source = {t: v for t, v in source.items() if t in PLAYABLE}
     assert {t: len(v) for t, v in copy.items()} == {t: len(v) for t, v in source.items()}
     for topic in source:
         assert copy[topic] == source[topic], topic  # every payload, byte for byte, in order
@@ -147,21 +157,26 @@ def test_fast_play_into_recorder_loses_nothing_and_is_bit_identical(
     assert meta["message_count"] == sum(len(v) for v in source.values())
 
     original, again = read_session(source_bag), read_session(out)
-    assert again.report.clean, again.report.warnings
+    assert again.report.clean or not TF_INSTALLED, again.report.warnings
     assert again.report.chunks_read > 1 and again.report.chunks_without_crc == 0
     np.testing.assert_array_equal(again.session.wrench.t_ns, original.session.wrench.t_ns)
     assert again.session.wrench.force_n.tobytes() == original.session.wrench.force_n.tobytes()
     assert again.session.wrench.torque_nm.tobytes() == original.session.wrench.torque_nm.tobytes()
     for name, series in original.session.markers.items():
         assert again.session.markers[name].position_m.tobytes() == series.position_m.tobytes()
-    np.testing.assert_array_equal(again.session.rotation_world_from_sensor, original.session.rotation_world_from_sensor)
+    if TF_INSTALLED:
+        np.testing.assert_array_equal(
+            again.session.rotation_world_from_sensor, original.session.rotation_world_from_sensor
+        )
 
 
+@pytest.mark.skipif(not TF_INSTALLED, reason="tf2_msgs is not installed")
 def test_tf_static_reaches_a_late_subscriber_and_clock_runs(
     source_bag: Path, procs: list[subprocess.Popen[str]]
 ) -> None:
-    from bsp_ros.runtime.dds_backend import DdsContext
-    from bsp_ros.runtime.dds_types import typestore
+    from rclpy.serialization import serialize_message
+
+    from bsp_ros.runtime.ros import Client
 
     domain = _domain(1)
     player = _bsp(
@@ -173,21 +188,18 @@ def test_tf_static_reaches_a_late_subscriber_and_clock_runs(
     time.sleep(0.5)  # /tf_static went out before anyone listened
     got: list[object] = []
     clock: list[int] = []
-    with DdsContext(domain, args=[]) as ctx:
-        node = ctx.create_node("late_listener")
-        node.create_subscription("tf2_msgs/msg/TFMessage", "/tf_static", got.append, "tf_static_listener")
-        node.create_subscription(
+    with Client("late_listener", domain) as client:
+        client.subscribe("tf2_msgs/msg/TFMessage", "/tf_static", got.append, "tf_static_listener")
+        client.subscribe(
             "rosgraph_msgs/msg/Clock",
             "/clock",
             lambda m: clock.append(m.clock.sec * 1_000_000_000 + m.clock.nanosec),
             "sensor_data",
         )
-        ctx.spin(until=lambda: (bool(got) and len(clock) > 5) or player.poll() is not None)
-        ctx.spin(0.3)
+        client.spin_until(lambda: (bool(got) and len(clock) > 5) or player.poll() is not None, 30)
+        client.spin(0.3)
     assert len(got) == 1
-    store = typestore()
-    payload = bytes(store.serialize_cdr(got[0], "tf2_msgs/msg/TFMessage"))  # subscriptions deliver rosbags messages
-    assert payload == _raw(source_bag)["/tf_static"][0]
+    assert serialize_message(got[0]) == _raw(source_bag)["/tf_static"][0]
     assert len(clock) > 5 and all(b >= a for a, b in itertools.pairwise(clock))
     player.send_signal(signal.SIGINT)
     stdout, _ = player.communicate(timeout=20)
@@ -238,7 +250,7 @@ def test_damaged_bag_plays_its_intact_part_and_says_so(
     recorder = _bsp("record", *TOPICS, "--out", out, "--domain", domain)
     procs.append(recorder)
     _wait_line(recorder, "recording")
-    player = _bsp("play", damaged, "--rate", 0, "--domain", domain, "--wait-subscribers", 15)
+    player = _bsp("play", damaged, "--rate", 2, "--domain", domain, "--wait-subscribers", 15)
     procs.append(player)
     played, err = player.communicate(timeout=40)
     assert player.returncode == 1
@@ -253,3 +265,38 @@ def test_damaged_bag_plays_its_intact_part_and_says_so(
     assert f"/ft_sensor/wrench: {len(wrench)} published (bag lists {len(source['/ft_sensor/wrench'])})" in played
     for topic, payloads in copy.items():
         assert payloads == source[topic][: len(payloads)], topic
+
+
+def test_tf_static_without_tf2_msgs_is_skipped_by_name_and_clock_runs(
+    source_bag: Path, procs: list[subprocess.Popen[str]]
+) -> None:
+    from bsp_ros.runtime.ros import Client
+
+    domain = _domain(4)
+    player = _bsp(
+        "play", source_bag, "--rate", 5, "--clock", "--domain", domain, "--wait-subscribers", 0,
+        "--topics", "/tf_static", "/ft_sensor/wrench",
+    )  # fmt: skip
+    procs.append(player)
+    clock: list[int] = []
+    with Client("clock_listener", domain) as client:
+        client.subscribe(
+            "rosgraph_msgs/msg/Clock",
+            "/clock",
+            lambda m: clock.append(m.clock.sec * 1_000_000_000 + m.clock.nanosec),
+            "sensor_data",
+        )
+        client.spin_until(lambda: len(clock) > 5 or player.poll() is not None, 30)
+    assert len(clock) > 5 and all(b >= a for a, b in itertools.pairwise(clock))
+    player.send_signal(signal.SIGINT)
+    stdout, stderr = player.communicate(timeout=20)
+    if not TF_INSTALLED:
+        assert "/tf_static" in stdout + stderr and "tf2_msgs/msg/TFMessage" in stdout + stderr
+
+
+def test_record_refuses_a_type_that_is_not_installed(tmp_path: Path) -> None:
+    recorder = _bsp("record", "/x:no_such_msgs/msg/Nothing", "--out", tmp_path / "bag", "--domain", _domain(5))
+    _, err = recorder.communicate(timeout=30)
+    assert recorder.returncode != 0
+    assert "no_such_msgs/msg/Nothing" in err and "no_such_msgs" in err and "Traceback" not in err
+    assert not (tmp_path / "bag").exists()

@@ -163,7 +163,7 @@ def test_diagnostics_roundtrip() -> None:
     assert cdr(ma.build_diagnostic_array(types, back)) == cdr(msg)
 
 
-# Duck-typed plain objects: what rclpy or Cyclone DDS classes look like to the adapters.
+# Duck-typed plain objects: what rclpy classes look like to the adapters.
 
 
 class _Plain:

@@ -1,4 +1,4 @@
-"""Nodes as separate processes on a private DDS domain, and an in-process listener/publisher on that domain."""
+"""Nodes as separate processes on a private ROS domain, and an in-process rclpy listener/publisher on it."""
 
 from __future__ import annotations
 
@@ -12,21 +12,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.runtime import make_context
+from ros_domains import next_domain_id
+
+from bsp_ros.runtime.ros import Client
 
 ROOT = Path(__file__).resolve().parents[3]
 PLAY_PEER = ROOT / "test" / "bsp_ros" / "play_record_peer.py"
 
 
-#: Offsets of :func:`domain_id` in use, one per test (a killed node lingers in DDS discovery until its lease ends):
-#: test_replay_identify 0, test_session_recorder 1-4.
-DOMAIN_OFFSETS = 5
-
-
-def domain_id(offset: int, base: int = 11, slots: int = 44) -> int:
-    """A DDS domain id unique to this test process and ``offset``; Cyclone allows 0..232."""
-    assert 0 <= offset < DOMAIN_OFFSETS
-    return base + (os.getpid() % slots) * DOMAIN_OFFSETS + offset
+def domain_id(offset: int = 0) -> int:
+    """A fresh ROS domain id for this test process (``offset`` is kept for the callers' readability only)."""
+    return next_domain_id()
 
 
 class NodeProcesses:
@@ -37,15 +33,14 @@ class NodeProcesses:
         self.log_dir = log_dir
         self.env = {
             **os.environ,
-            "BSP_ROS_BACKEND": "dds",
             "ROS_DOMAIN_ID": str(domain),
             "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
         }
         self.processes: dict[str, subprocess.Popen[bytes]] = {}
 
     def start(self, name: str, params: list[str]) -> subprocess.Popen[bytes]:
-        """Start node ``name`` with ``--param`` overrides (``name:=value``)."""
-        args = [a for p in params for a in ("--param", p)]
+        """Start node ``name`` with ROS parameter overrides (``name:=value``)."""
+        args = ["--ros-args", *[a for p in params for a in ("-p", p)]] if params else []
         with open(self.log_dir / f"{name}.log", "ab") as log:
             process = subprocess.Popen(
                 [sys.executable, "-m", f"bsp_ros.nodes.{name}", *args],
@@ -72,24 +67,23 @@ class NodeProcesses:
         return path.read_text("utf-8", errors="replace") if path.exists() else ""
 
     def close(self) -> None:
-        """Stop every node started here: SIGINT (a clean exit leaves DDS discovery at once), then SIGKILL."""
+        """Stop every node started here: SIGINT (a clean exit leaves the ROS graph at once), then SIGKILL."""
         for process in self.processes.values():
             if process.poll() is None:
                 process.send_signal(signal.SIGINT)
         for process in self.processes.values():
             try:
-                process.wait(3)
+                process.wait(10)
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait(5)
 
 
 class Peer:
-    """An in-process DDS node on the domain: JSON topics it listens to, publishers it owns."""
+    """An in-process rclpy node on the domain: JSON topics it listens to, publishers it owns."""
 
     def __init__(self, domain: int, name: str = "test_peer") -> None:
-        self.context = make_context("dds", domain_id=domain, args=[])
-        self.node = self.context.create_node(name)
+        self.client = Client(name, domain)
         self.received: dict[str, list[tuple[float, dict[str, Any]]]] = {}
 
     def listen_json(self, topic: str, qos: str = "estimates") -> list[tuple[float, dict[str, Any]]]:
@@ -99,31 +93,25 @@ class Peer:
         def on_message(msg: Any) -> None:
             out.append((time.monotonic(), json.loads(msg.data)))
 
-        self.node.create_subscription("std_msgs/msg/String", topic, on_message, qos)
+        self.client.subscribe("std_msgs/msg/String", topic, on_message, qos)
         return out
 
     def string_publisher(self, topic: str, qos: str = "estimates") -> Callable[[str], None]:
         """A function publishing its argument as a std_msgs/String on ``topic``; ``.publisher`` is the writer."""
-        publisher = self.node.create_publisher("std_msgs/msg/String", topic, qos)
-        cls = self.node.message_class("std_msgs/msg/String")
+        from std_msgs.msg import String
+
+        publisher = self.client.publisher("std_msgs/msg/String", topic, qos)
 
         def publish(text: str) -> None:
-            publisher.publish(cls(data=text))
+            publisher.publish(String(data=text))
 
         publish.publisher = publisher  # type: ignore[attr-defined]
         return publish
 
     def spin_until(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
         """Run callbacks until ``predicate()`` or the timeout; return whether it held."""
-        deadline = time.monotonic() + timeout_s
-        while True:
-            if predicate():
-                return True
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                return False
-            self.context.spin(min(0.1, remaining))
+        return self.client.spin_until(predicate, timeout_s)
 
     def close(self) -> None:
-        """Shut the context down."""
-        self.context.shutdown()
+        """Leave the ROS graph."""
+        self.client.close()

@@ -9,8 +9,8 @@ import numpy as np
 from bsp_ros.identification.recursive import RecursiveIdentifier
 from bsp_ros.model import gravity_regressor
 from bsp_ros.nodes import estimate_jobs as jobs
+from bsp_ros.nodes.estimate_jobs import _typestore as typestore
 from bsp_ros.pipeline import IdentifyOptions
-from bsp_ros.runtime.dds_types import typestore
 from msg_adapters.diagnostics import read_diagnostic_array
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from live_cell import wrench_frame_parameter
 from node_processes import NodeProcesses, Peer, domain_id
 
 from bsp_ros.bag import write_session_bag
@@ -70,7 +71,9 @@ def test_real_time_replay_into_the_nodes_matches_the_offline_identification(tmp_
         estimates = peer.listen_json("bsp/estimate_json")
         nodes.start("joint_angle_estimator", [])
         # The window holds the whole bag; after the replay the estimate of all of it stays valid for stale_s.
-        nodes.start("bsp_identifier", [f"window_s:={DURATION_S + 20}", "stale_s:=1.0"])
+        # Without tf2_msgs /tf_static is not played: the sensor's rotation is given as a parameter.
+        frame = wrench_frame_parameter(tuple(human_arm_cell().sensor.roll_pitch_yaw_deg))
+        nodes.start("bsp_identifier", [f"window_s:={DURATION_S + 20}", "stale_s:=1.0", frame])
         # `bsp play` waits until every topic of the bag has a subscriber (the nodes are up) before playing.
         player = nodes.play(bag, "--rate", 1, "--wait-subscribers", 30)
         assert peer.spin_until(lambda: player.poll() is not None, DURATION_S + 40), nodes.log("bsp_identifier")
