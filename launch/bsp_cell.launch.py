@@ -1,13 +1,14 @@
-"""Launch the bsp_ros cell on a Jazzy cell: joint angles, identification, session recording (and optionally the simulator)."""
+"""Launch the bsp_ros cell on Jazzy: joint angles, identification, session recording (optionally the simulator)."""
 
 import os
 
 from ament_index_python.packages import get_package_share_directory
-from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
+
+from launch import LaunchDescription
 
 
 def generate_launch_description() -> LaunchDescription:

@@ -32,7 +32,6 @@ DECLARED: dict[str, tuple[str | None, str | None]] = {
     "mcap_ros2": ("mcap-ros2-support", "mcap-ros2-support"),
     "lz4": ("lz4", "mcap-ros2-support"),
     "zstandard": ("zstandard", "mcap-ros2-support"),
-    "cyclonedds": ("cyclonedds", None),
     # The optional PostgreSQL store (extra `postgres`); rosdep has no key for psycopg 3.
     "psycopg": ("psycopg", None),
     "rclpy": ("ros-jazzy-rclpy", "rclpy"),

@@ -240,19 +240,15 @@ def _publish(plan: Any, args: argparse.Namespace) -> None:
 
     A cell that starts later still receives it: that is the "on request" behaviour without a service.
     """
-    import importlib
 
     import rclpy  # only here: offline `bsp plan` never imports rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     from bsp_ros.planning.files import sampled_path
+    from bsp_ros.runtime.ros import message_class as get_message
     from bsp_ros.streams import joints_for
     from msg_adapters.trajectory import build_handle_path, build_joint_trajectory
-
-    def get_message(type_name: str) -> Any:  # "pkg/msg/Type" -> the rosidl class (no rosidl_runtime_py needed)
-        package, kind, name = type_name.split("/")
-        return getattr(importlib.import_module(f"{package}.{kind}"), name)
 
     rclpy.init()
     node = rclpy.create_node("protocol_publisher")
