@@ -14,7 +14,7 @@ from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.passive import TERMS, PassiveModel
 from bsp_ros.identification.result import IdentificationResult, ParameterName
 from bsp_ros.identification.robust import hampel_outliers, high_frequency_sd, robust_sd
-from bsp_ros.model import gravity_regressor
+from bsp_ros.model import contact_jacobian, gravity_regressor
 from bsp_ros.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_scalar, check_positive
 
@@ -243,7 +243,8 @@ def _elastic_check(
                 f"elastic passive moment at the {joint}: an angle-dependent term is supported by the data "
                 f"(chi2 {statistic:.0f}) and is confounded with gravity (|corr| {corr:.2f}); modelling it moves "
                 f"the {problem.names[worst][1]} static moment by {100 * change[worst]:.1f}%: the static moments "
-                f"may be biased (try --passive {wider.label})"
+                f"may be biased (try --passive {wider.label}; an F/T sensor offset no tare removed looks the same: "
+                "apply one with --tare)"
             )
     return notes
 
@@ -314,36 +315,108 @@ def _transition_widths(
         near = [c for value, _, c in profile if value <= chosen[0] + TRANSITION_MIN_GAIN and np.isfinite(c)]
         spread[j] = 0.5 * (max(near) - min(near)) if near else 0.0
     return widths, spread
-    k = len(config.passive.terms)
+
+
+# An unmodelled term counts when its coefficients differ from 0 at this significance (HAC chi-square) AND
+# modelling it moves a static moment or a Coulomb amplitude by more than this many of its std: only then
+# would the estimate be wrong beyond its std without it.
+MODEL_CHECK_P = 1e-6
+MODEL_CHECK_SHIFT_SD = 1.0
+# Candidate speeds (rad/s) of a Stribeck-like excess of friction at low speed, sign(v) exp(-(v / v_s)^2).
+STRIBECK_SPEEDS_RAD_S = (0.002, 0.004, 0.008, 0.016, 0.032)
+
+
+def _augmented(problem: _Problem, extra: np.ndarray, names: list[ParameterName]) -> _Problem:
+    """``problem`` with extra unbounded columns ``extra`` (N, n, m)."""
+    return _Problem(
+        problem.names + names,
+        np.concatenate((problem.regressor, extra), axis=2),
+        problem.torque,
+        problem.rows,
+        np.concatenate((problem.lower, np.full(len(names), -np.inf))),
+        np.concatenate((problem.upper, np.full(len(names), np.inf))),
+    )
+
+
+def _term_test(
+    problem: _Problem, fit: _Fit, extra: np.ndarray, names: list[ParameterName], watched: list[int]
+) -> tuple[float, float, int, _Fit]:
+    """Fit with the extra columns; return the p-value of their coefficients, the largest shift of a
+    ``watched`` parameter in std of the wider fit, which one, and the wider fit."""
+    wide = _fit(_augmented(problem, extra, names))
+    p = len(problem.names)
+    picks = list(range(p, p + len(names)))
+    theta = wide.values[picks]
+    try:
+        statistic = float(theta @ np.linalg.solve(wide.covariance[np.ix_(picks, picks)], theta))
+    except np.linalg.LinAlgError:
+        return 1.0, 0.0, watched[0], wide
+    std = np.sqrt(np.clip(np.diag(wide.covariance)[watched], 1e-300, None))
+    shift = np.abs(wide.values[watched] - fit.values[watched]) / std
+    worst = int(np.argmax(shift))
+    return float(chi2.sf(statistic, len(picks))), float(shift[worst]), watched[worst], wide
+
+
+def _drift_check(data: IdentificationData, problem: _Problem, fit: _Fit) -> list[str]:
+    """A wrench offset that changes linearly over the session (an F/T sensor drifting with temperature):
+    the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x)."""
+    n = data.n_joints
+    t_s = (data.t_ns - data.t_ns[data.t_ns.size // 2]) / 1e9
+    jacobian = contact_jacobian(data.q_rad, data.lengths_m)  # (N, 3, n)
+    extra = -np.transpose(jacobian, (0, 2, 1)) * t_s[:, None, None]  # (N, n, 3)
+    axes = [k for k, axis in enumerate(("fy", "fz", "mx")) if np.linalg.norm(extra[:, :, k]) > 0]
+    names: list[ParameterName] = [(f"drift_{('fy', 'fz', 'mx')[k]}", "sensor") for k in axes]
+    p_value, shift, worst, wide = _term_test(problem, fit, extra[:, :, axes], names, list(range(n)))
+    if p_value >= MODEL_CHECK_P:
+        return []
+    rate = np.zeros(3)
+    rate[axes] = wide.values[len(problem.names) :]
+    span_s = float(t_s[-1] - t_s[0])
+    # A drifting sensor's offset at any moment is unknown (a tare holds at the moment it was taken): what the
+    # offset changes over the session alone moves the static moments by this much, as a constant offset would.
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
-    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
-    total = float((w * problem.torque**2).sum())
+    delta_torque = -np.einsum("tki,k->ti", jacobian, rate * span_s)
+    delta = np.linalg.lstsq(fit.design, np.einsum("tip,ti,ti->p", problem.regressor, w, delta_torque), rcond=None)[0]
+    std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
+    offset_shift = np.abs(delta[:n]) / std
+    if max(shift, float(offset_shift.max())) <= MODEL_CHECK_SHIFT_SD:
+        return []
+    if offset_shift.max() > shift:
+        shift, worst = float(offset_shift.max()), int(np.argmax(offset_shift))
+    force_rate = float(np.hypot(rate[0], rate[1]))
+    return [
+        f"the wrench drifts during the session (an F/T sensor offset changing by about {1e3 * force_rate:.2g} mN/s, "
+        f"{force_rate * span_s:.2g} N over {span_s:.0f} s): that moves the {problem.names[worst][1]} static moment "
+        f"by {shift:.1f} std, and no tare holds for the whole session; let the sensor warm up, re-tare and record again"
+    ]
 
-    def ssr(a: np.ndarray, b: np.ndarray) -> float:
-        try:
-            return total - float(b @ np.linalg.solve(a, b))
-        except np.linalg.LinAlgError:
-            return np.inf
 
-    base = ssr(design, moment)
-    for j in range(n):
+def _stribeck_check(data: IdentificationData, problem: _Problem, fit: _Fit, config: JointConfig) -> list[str]:
+    """Friction that is larger at low speed than at high speed (Stribeck-like), joint by joint: the Coulomb
+    amplitude of a sign step is then a speed-dependent average, not the joint's friction."""
+    if "coulomb" not in config.passive.terms:
+        return []
+    n, k = data.n_joints, len(config.passive.terms)
+    notes = []
+    for j, joint in enumerate(joints_for(n)):
+        speed = np.abs(data.velocity_rad_s[:, j])
         column = n + j * k + config.passive.terms.index("coulomb")
-        x_j, w_j, y_j = problem.regressor[:, j, :], w[:, j], problem.torque[:, j]
-        best, best_width = base, 0.0
-        for width in TRANSITION_WIDTHS_RAD_S:
-            c = np.tanh(data.velocity_rad_s[:, j] / width)
-            a, b = design.copy(), moment.copy()
-            cross = (x_j * (w_j * c)[:, None]).sum(axis=0)
-            cross[column] = (w_j * c * c).sum()
-            a[column, :], a[:, column] = cross, cross
-            b[column] = (w_j * c * y_j).sum()
-            value = ssr(a, b)
-            if value < best:
-                best, best_width = value, float(width)
-        if base - best > TRANSITION_MIN_GAIN:
-            widths[j] = best_width
-    return widths
+        best: tuple[float, float, float] | None = None
+        for speed_s in STRIBECK_SPEEDS_RAD_S:
+            extra = np.zeros((data.t_ns.size, n, 1))
+            extra[:, j, 0] = np.sign(data.velocity_rad_s[:, j]) * np.exp(-((speed / speed_s) ** 2))
+            if not np.any(extra[problem.rows[:, j], j, 0]):
+                continue
+            p_value, shift, _, _ = _term_test(problem, fit, extra, [("stribeck_nm", joint)], [column])
+            if best is None or p_value < best[0]:
+                best = (p_value, shift, speed_s)
+        if best is not None and best[0] < MODEL_CHECK_P and best[1] > MODEL_CHECK_SHIFT_SD:
+            notes.append(
+                f"friction at the {joint} depends on speed (Stribeck-like, larger below about "
+                f"{1e3 * best[2]:.2g} mrad/s): modelling it moves its Coulomb amplitude by {best[1]:.1f} std; the "
+                "amplitude of a sign step is a speed-dependent average here"
+            )
+    return notes
 
 
 def _spikes(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
@@ -534,6 +607,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
+    if config.check_elastic and not problems:
+        unmodelled = _drift_check(data, problem, fit) + _stribeck_check(data, problem, fit, config)
+        warnings += unmodelled
+        if unmodelled:
+            problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
     if config.check_elastic and not problems:
         elastic = _elastic_check(data, config, problem.rows, fit, widths)
         warnings += elastic
