@@ -163,6 +163,35 @@ def estimate_from_result(result: Any) -> dict[str, Any]:
     return {"valid": bool(result.valid), "static_moments_kgm": values, "covariance": covariance}
 
 
+def estimate_from_document(document: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The ``estimate`` argument of :func:`live_support` from an estimate document (CONTRACT.md schema).
+
+    The static moments' covariance is rebuilt from their std and the document's ``diagnostics.correlation``
+    (over ``diagnostics.parameters``); without those, their std alone (no correlation). None when the
+    document holds no static moments.
+    """
+    segments = document.get("segments") or {}
+    names = [s for s in ("upper_arm", "forearm", "hand") if s in segments]
+    try:
+        values = np.array([float(segments[s]["static_moment_kgm"]["value"]) for s in names])
+        std = np.array([float(segments[s]["static_moment_kgm"]["std"]) for s in names])
+    except (KeyError, TypeError, ValueError):
+        return None
+    if not names or not (np.isfinite(values).all() and np.isfinite(std).all()):
+        return None
+    correlation = np.eye(len(names))
+    diagnostics = document.get("diagnostics") or {}
+    order = list(diagnostics.get("parameters") or [])
+    matrix = diagnostics.get("correlation")
+    picks = [order.index(f"static_moment_kgm/{s}") if f"static_moment_kgm/{s}" in order else -1 for s in names]
+    if matrix is not None and min(picks) >= 0:
+        block = np.array([[matrix[i][j] for j in picks] for i in picks], dtype=np.float64)
+        if np.isfinite(block).all():
+            correlation = block
+    valid = bool((document.get("quality") or {}).get("valid"))
+    return {"valid": valid, "static_moments_kgm": values, "covariance": correlation * np.outer(std, std)}
+
+
 def live_support(
     estimate: Mapping[str, Any] | None,
     q_rad: npt.ArrayLike | None,

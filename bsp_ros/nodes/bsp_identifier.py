@@ -26,6 +26,7 @@ from bsp_ros.runtime.qos import rclpy_qos
 from bsp_ros.runtime.ros import RosNode, has_message, log_error, message_class, require_rclpy
 from bsp_ros.runtime.worker import LatestJobWorker
 from bsp_ros.streams import segments_for
+from bsp_ros.weight_support import live_support
 from msg_adapters.diagnostics import (
     ERROR,
     OK,
@@ -36,7 +37,7 @@ from msg_adapters.diagnostics import (
 )
 from msg_adapters.joint_state import JointStateSample, build_joint_state, read_joint_state
 from msg_adapters.tf import read_tf_message
-from msg_adapters.wrench import read_wrench_stamped
+from msg_adapters.wrench import WrenchSample, build_wrench_stamped, read_wrench_stamped
 
 NAME = "bsp_identifier"
 MODES = ("windowed", "recursive")
@@ -68,6 +69,14 @@ PARAMETERS = (
         "wrench_frame_rotation_xyzw",
         [0.0, 0.0, 0.0, 1.0],
         "rotation world <- wrench frame as a unit quaternion [x, y, z, w], used without tf",
+    ),
+    Param(
+        "support_fraction",
+        0.0,
+        "share of the identified arm's gravity torques the robot should carry (bsp/weight_support, published "
+        "at the joint-state rate while the estimate is valid; 0: not published)",
+        lo=0.0,
+        hi=1.0,
     ),
     Param(
         "tf_wait_s",
@@ -134,6 +143,9 @@ class BspIdentifierNode(RosNode):
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
         self.offload.run(jobs.ping)
+        self.support_fraction = float(p["support_fraction"])
+        self.support_estimate: dict[str, Any] | None = None  # set by the worker thread with each estimate
+        self.support_diagnostics: dict[str, str] = {}
         self.update_s: deque[float] = deque(maxlen=int(10 * p["update_hz"]) + 1)  # compute time of the last ~10 s
         self.types = message_class
         estimates = rclpy_qos("estimates")
@@ -147,6 +159,9 @@ class BspIdentifierNode(RosNode):
             s: self.create_publisher(message_class("geometry_msgs/msg/InertiaStamped"), f"bsp/{s}/inertia", estimates)
             for s in segments_for(self.n)
         }
+        self.support_pub = self.create_publisher(
+            message_class("geometry_msgs/msg/WrenchStamped"), "bsp/weight_support", rclpy_qos("default")
+        )
         self.diag_pub = self.create_publisher(
             message_class("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", rclpy_qos("default")
         )
@@ -198,10 +213,12 @@ class BspIdentifierNode(RosNode):
         self.counts["joint_states" if accepted else "refused"] += 1
 
     def on_joint_state(self, msg: Any) -> None:
-        """Causally filtered joint angles and direction velocities (the recursive mode)."""
+        """Causally filtered joint angles and direction velocities: the weight support, and the recursive mode."""
+        sample = read_joint_state(msg)
+        if self.support_fraction > 0.0:
+            self.publish_support(sample)
         if self.mode != "recursive":
             return
-        sample = read_joint_state(msg)
         self.last_receive["joint_states"] = self.now_ns()
         accepted = self.recursive.add_joint_state(sample.t_ns, sample.position, sample.velocity)
         self.counts["joint_states" if accepted else "refused"] += 1
@@ -226,7 +243,18 @@ class BspIdentifierNode(RosNode):
                 self.passive_pub.publish(build_joint_state(self.types, passive))
         self.counts["wrench" if accepted else "refused"] += 1
 
-    # -- outputs --------------------------------------------------------------------------------------
+    # -- outputs ---------------------------------------------------------------------------------------
+    def publish_support(self, sample: JointStateSample) -> None:
+        """The wrench the robot should apply to the hand at these angles, only while the estimate is valid."""
+        q = sample.position if sample.position.size == self.n and np.isfinite(sample.position).all() else None
+        decision = live_support(self.support_estimate, q, self.lengths, self.support_fraction)
+        self.support_diagnostics = {f"weight_support.{k}": v for k, v in decision.diagnostics().items()}
+        if decision.wrench is None:
+            return
+        f_y, f_z, m_x = (float(v) for v in decision.wrench.wrench_yzx)
+        support = WrenchSample(sample.t_ns, self.world_frame, np.array([0.0, f_y, f_z]), np.array([m_x, 0.0, 0.0]))
+        self.support_pub.publish(build_wrench_stamped(self.types, support))
+
     def stale_reason(self) -> str | None:
         now = self.now_ns()
         for name, last in self.last_receive.items():
@@ -314,6 +342,7 @@ class BspIdentifierNode(RosNode):
         if "passive" in outputs.cdr:
             self.passive_pub.publish(outputs.cdr["passive"])
         self.published += 1
+        self.support_estimate = outputs.support
         level = OK if outputs.valid else (WARN if "waiting" in outputs.message else ERROR)
         timing = {}
         if self.update_s:  # how long an update takes: near the period, the node cannot keep up
@@ -329,6 +358,7 @@ class BspIdentifierNode(RosNode):
             **timing,
             "wrench_frame_source": self.frame_source,
             **frames,
+            **self.support_diagnostics,
         }
         status = DiagnosticStatusData.with_values(level, NAME, outputs.message, "", values)
         diagnostics = DiagnosticArraySample(self.now_ns(), "", (status,))

@@ -16,6 +16,7 @@ from bsp_ros.identification.data import IdentificationData
 from bsp_ros.identification.result import IdentificationResult
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowSamples
 from bsp_ros.pipeline import IdentifyOptions, fuse
+from bsp_ros.weight_support import estimate_from_document
 from msg_adapters.diagnostics import build_diagnostic_array
 from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import build_joint_state
@@ -64,6 +65,8 @@ class EstimateOutputs:
     valid: bool
     message: str
     cdr: dict[str, bytes]
+    # The static moments and their covariance for the weight support (bsp_ros.weight_support), or None.
+    support: dict[str, Any] | None = None
 
 
 def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive: bool) -> EstimateOutputs:
@@ -91,7 +94,7 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
         passive = passive_moments_from_estimate(document, stamp_ns)
         if passive is not None and with_passive:
             out["passive"] = cdr(build_joint_state(types, passive), "sensor_msgs/msg/JointState")
-    return EstimateOutputs(valid, str(document["quality"]["message"]), out)
+    return EstimateOutputs(valid, str(document["quality"]["message"]), out, estimate_from_document(document))
 
 
 def window_estimate(window: WindowSamples) -> EstimateOutputs:

@@ -10,12 +10,17 @@ import numpy as np
 from bsp_ros.errors import BspError
 from bsp_ros.estimate import estimate_document, invalid_document
 from bsp_ros.identification.data import IdentificationData
+from bsp_ros.identification.sensitivity import account_for_tare
 from bsp_ros.joint_angles import kinematics_from_angles, resample_kinematics
 from bsp_ros.model import contact_torques_nm
 from bsp_ros.online.buffer import TimedBuffer
 from bsp_ros.online.guard import StreamGuard
 from bsp_ros.pipeline import IdentifyOptions, fuse, identify_data
 from bsp_ros.validation import check_finite_scalar, check_positive
+
+# Warnings of the model checks (identification/joint.py) that make an estimate invalid; live they run every
+# ``elastic_check_every`` updates and their verdict holds in between.
+MODEL_CHECK_WARNINGS = ("elastic passive moment", "the wrench drifts", "depends on speed (Stribeck")
 
 
 @dataclass(frozen=True)
@@ -64,6 +69,8 @@ class WindowSamples:
     angle_t_ns : (M,) joint-angle stamps (ns), from 2 s before the window (filter run-in);
     angle_rows : (M, 2n) unfiltered angles (rad) then segment lengths (m).
     refused : refused samples by input and reason; clock_jumps : clock jumps seen so far.
+    rotation_world_from_sensor : (3, 3) the wrench sensor's orientation, wrench_frame_id : its frame, when a
+        tare was applied to the wrench (its uncertainty then joins the estimate's).
     """
 
     wrench_t_ns: np.ndarray
@@ -72,6 +79,9 @@ class WindowSamples:
     angle_rows: np.ndarray
     refused: dict[str, int]
     clock_jumps: int
+    # The wrench sensor's orientation and frame, for a tare's uncertainty (set by the node when it applies one).
+    rotation_world_from_sensor: np.ndarray | None = None
+    wrench_frame_id: str = ""
 
 
 def block_average(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -223,9 +233,25 @@ class WindowedIdentifier:
             self._updates += 1
             result = identify_data(data, self.config.options, check_elastic=check)
             if check:
-                self._elastic_warnings = [w for w in result.warnings if w.startswith("elastic")]
-            else:
+                self._elastic_warnings = [w for w in result.warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
+            elif self._elastic_warnings:
+                # Between checks the last verdict stands: an effect the model lacks does not come and go.
                 result.warnings += self._elastic_warnings
+                if result.valid:
+                    result.valid = False
+                    result.message = (
+                        "the data show an effect the model lacks that biases the estimate (see warnings; "
+                        "checked every few updates)"
+                    )
+            if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
+                quality = account_for_tare(
+                    result,
+                    data,
+                    window.rotation_world_from_sensor,
+                    window.wrench_frame_id,
+                    self.config.options.tare,
+                    lambda d: identify_data(d, self.config.options, check_elastic=False),
+                )
         except BspError as error:
             return self._invalid(str(error), last_wrench)
         posterior = fuse(result, data, self.config.options.subject) if result.valid else None
@@ -238,4 +264,6 @@ class WindowedIdentifier:
             "config": self.config.options.config(),
         }
         document = estimate_document(result, data, posterior, self.config.options.subject, info)
+        if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
+            document["quality"].update(quality)
         return WindowEstimate(document, result.valid, last_wrench)
