@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 import traceback
@@ -26,6 +27,7 @@ from bsp_ros.runtime.qos import rclpy_qos
 from bsp_ros.runtime.ros import RosNode, has_message, log_error, message_class, require_rclpy
 from bsp_ros.runtime.worker import LatestJobWorker
 from bsp_ros.streams import segments_for
+from bsp_ros.tare import Tare, read_tare_file
 from bsp_ros.weight_support import live_support
 from msg_adapters.diagnostics import (
     ERROR,
@@ -69,6 +71,12 @@ PARAMETERS = (
         "wrench_frame_rotation_xyzw",
         [0.0, 0.0, 0.0, 1.0],
         "rotation world <- wrench frame as a unit quaternion [x, y, z, w], used without tf",
+    ),
+    Param(
+        "tare_file",
+        "",
+        "a `bsp tare` file (bsp_ros/tare/1) of this sensor: its offset and handle load are removed from every "
+        "wrench and its uncertainty joins the windowed estimate's ('': none, and the estimate says so)",
     ),
     Param(
         "support_fraction",
@@ -127,7 +135,15 @@ class BspIdentifierNode(RosNode):
             passive = PassiveModel.parse(p["passive"])
         except (BspError, ValueError) as exc:
             raise InputError(f"{NAME}: parameter passive: {exc}") from exc
-        self.options = IdentifyOptions(method=p["method"], passive=passive, subject=subject)
+        self.tare: Tare | None = None
+        if p["tare_file"]:
+            try:
+                self.tare = read_tare_file(p["tare_file"])
+            except BspError as exc:
+                raise InputError(f"{NAME}: parameter tare_file {p['tare_file']}: {exc}") from exc
+            self.get_logger().info(f"tare {p['tare_file']} of frame {self.tare.frame_id!r} applied to every wrench")
+        self.wrench_rotation: tuple[str, np.ndarray] | None = None  # the latest wrench's frame and rotation
+        self.options = IdentifyOptions(method=p["method"], passive=passive, subject=subject, tare=self.tare)
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
         self.recursive = RecursiveFeed(self.n, self.options.passive)
         self.lengths: np.ndarray | None = None
@@ -231,7 +247,15 @@ class BspIdentifierNode(RosNode):
         if rotation is None:
             self.counts["waiting_for_tf"] = self.counts.get("waiting_for_tf", 0) + 1
             return
-        force, torque = rotation @ sample.force_n, rotation @ sample.torque_nm
+        force_n, torque_nm = sample.force_n, sample.torque_nm
+        if self.tare is not None:
+            if sample.frame_id != self.tare.frame_id:
+                self.counts["tare_frame_mismatch"] = self.counts.get("tare_frame_mismatch", 0) + 1
+                return
+            load_force_n, load_torque_nm = self.tare.predicted_wrench(rotation)
+            force_n, torque_nm = force_n - load_force_n, torque_nm - load_torque_nm
+        self.wrench_rotation = (sample.frame_id, rotation)
+        force, torque = rotation @ force_n, rotation @ torque_nm
         wrench_yzx = np.array([force[1], force[2], torque[0]])
         if self.mode == "windowed":
             accepted = self.windowed.add_wrench(sample.t_ns, wrench_yzx)
@@ -294,6 +318,9 @@ class BspIdentifierNode(RosNode):
             document["mode"] = self.mode
             self.publish(jobs.outputs_from_document(document, stamp, with_passive=True), counts)
             return
+        if self.tare is not None and self.wrench_rotation is not None:
+            frame_id, rotation = self.wrench_rotation
+            window = dataclasses.replace(window, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
         ready, self.ready = self.ready, None
         if ready is not None and ready[0] == self.generation:
             self.publish(ready[1], counts)

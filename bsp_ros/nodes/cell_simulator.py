@@ -50,6 +50,14 @@ PARAMETERS = (
         "fixed-axis roll, pitch, yaw of the sensor frame in world",
         "deg",
     ),
+    Param("force_bias_n", [0.0, 0.0, 0.0], "sensor force offset, sensor frame (an imperfect tare)", "N"),
+    Param("force_drift_n_per_s", [0.0, 0.0, 0.0], "sensor force offset drift, sensor frame", "N/s"),
+    Param("handle_mass_kg", 0.0, "handle mass between sensor and hand", "kg", lo=0.0, hi=10.0),
+    Param("handle_com_m", [0.0, 0.0, 0.0], "handle centre of mass, sensor frame", "m"),
+    Param("spike_fraction", 0.0, "share of wrench samples that are spikes", "", lo=0.0, hi=0.5),
+    Param("passive_offset_nm", [0.0], "elastic passive offset per joint ([0.0]: none)", "Nm"),
+    Param("friction_transition_rad_s", 0.0, "width of a smooth (tanh) friction transition", "rad/s", lo=0.0, hi=1.0),
+    Param("trajectory_file", "", "follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in motion"),
     Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
     Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
     # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
@@ -97,9 +105,27 @@ class CellSimulatorNode(RosNode):
             seed=p["seed"],
             start_ns=self.start_wall_ns,
             duration_s=max(self.duration_s, 1.0),
-            sensor=dataclasses.replace(base.sensor, wrench_hz=wrench_hz, roll_pitch_yaw_deg=tuple(rpy)),
+            sensor=dataclasses.replace(
+                base.sensor,
+                wrench_hz=wrench_hz,
+                roll_pitch_yaw_deg=tuple(rpy),
+                force_bias_n=tuple(p["force_bias_n"]),
+                force_drift_n_per_s=tuple(p["force_drift_n_per_s"]),
+                handle_mass_kg=p["handle_mass_kg"],
+                handle_com_m=tuple(p["handle_com_m"]),
+                spike_fraction=p["spike_fraction"],
+            ),
             markers=dataclasses.replace(base.markers, marker_hz=marker_hz, dropout_fraction=p["dropout_fraction"]),
+            passive=dataclasses.replace(
+                base.passive,
+                offset_nm=tuple(p["passive_offset_nm"]) if any(p["passive_offset_nm"]) else (),
+                friction_transition_rad_s=p["friction_transition_rad_s"],
+            ),
         )
+        if p["trajectory_file"]:
+            from bsp_ros.planning import planned_trajectory_from_file
+
+            spec = dataclasses.replace(spec, trajectory=planned_trajectory_from_file(p["trajectory_file"]))
         self.simulator = sim.CellSimulator(spec)
         self.frame_id = spec.sensor.frame_id
         self.wrench_period_ns = int(1e9 / wrench_hz)

@@ -55,6 +55,20 @@ def test_a_parameter_out_of_range_is_refused_naming_it(ros_domain: int) -> None:
     assert "update_hz" in out.stderr and "Traceback" not in out.stderr
 
 
+def test_a_tare_file_that_is_not_a_tare_is_refused_naming_it(ros_domain: int, tmp_path: Path) -> None:
+    bad = tmp_path / "tare.yaml"
+    bad.write_text("schema: something/else\n")
+    out = subprocess.run(
+        [sys.executable, "-m", "bsp_ros.nodes.bsp_identifier", "--ros-args", "-p", f"tare_file:={bad}"],
+        env=_env(ros_domain),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert out.returncode == 2, out.stderr
+    assert "tare_file" in out.stderr and str(bad) in out.stderr and "Traceback" not in out.stderr
+
+
 def test_an_integer_for_a_float_parameter_is_refused_with_a_hint(ros_domain: int) -> None:
     out = subprocess.run(
         [sys.executable, "-m", "bsp_ros.nodes.bsp_identifier", "--ros-args", "-p", "window_s:=20"],

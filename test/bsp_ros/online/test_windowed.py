@@ -78,3 +78,29 @@ def test_block_average_slows_a_fast_stream_and_keeps_its_mean() -> None:
     np.testing.assert_array_equal(stamps, t_ns.reshape(-1, 5)[:, 2])
     same_t, _ = block_average(t_ns[::10], values[::10], 200.0)
     assert same_t.size == 100
+
+
+def test_a_tare_s_uncertainty_joins_the_window_estimate(live_streams) -> None:
+    import dataclasses
+
+    from bsp_ros.pipeline import IdentifyOptions
+    from bsp_ros.simulation import SensorSpec, TareSpec, human_arm_cell, simulate_tare, tare_rotations
+    from bsp_ros.tare import estimate_tare
+
+    simulated, stamps, wrench, _, raw = live_streams
+    cell = human_arm_cell(sensor=SensorSpec(handle_mass_kg=0.3, handle_com_m=(0.0, 0.02, 0.05)), seed=2)
+    spec = TareSpec(duration_s=20.0, swing_rpy_deg=(20.0, 20.0, 0.0))
+    recording = simulate_tare(cell, spec)
+    rotations = tare_rotations(cell, spec, (recording.wrench.t_ns - cell.start_ns) * 1e-9 - spec.start_offset_s)
+    w = recording.wrench
+    tare = estimate_tare(w.t_ns, w.force_n, w.torque_nm, w.frame_id, rotations)
+    plain, tared = WindowedIdentifier(3), WindowedIdentifier(3, WindowConfig(options=IdentifyOptions(tare=tare)))
+    for identifier in (plain, tared):
+        _feed(identifier, stamps, wrench, raw)
+    rotation = simulated.session.rotation_world_from_sensor
+    window = dataclasses.replace(tared.snapshot(), rotation_world_from_sensor=rotation, wrench_frame_id=w.frame_id)
+    with_tare = tared.estimate_window(window).document
+    without = plain.estimate_window(plain.snapshot()).document
+    assert with_tare["quality"]["tare"]["applied"] is True
+    for segment, q in with_tare["segments"].items():
+        assert q["static_moment_kgm"]["std"] > without["segments"][segment]["static_moment_kgm"]["std"]
