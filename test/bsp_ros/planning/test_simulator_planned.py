@@ -38,3 +38,50 @@ def test_the_sinusoidal_trajectory_still_works() -> None:
     spec = sim.human_arm_cell(seed=2, duration_s=5.0)
     assert isinstance(spec.trajectory, sim.TrajectorySpec)
     assert sim.simulate_cell(spec).truth.to_dict()["trajectory"]["elbow"]["center_deg"] == 29.5
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_the_cell_simulator_node_follows_a_plan_file(plan: Plan, ros_domains, tmp_path) -> None:
+    """`cell_simulator --ros-args -p trajectory_file:=plan.json` publishes markers along the planned angles."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from bsp_ros.planning.files import write_plan_json
+    from bsp_ros.runtime.ros import Client
+    from msg_adapters.pose import read_pose_stamped
+
+    path = write_plan_json(tmp_path / "plan.json", plan)
+    domain = ros_domains()
+    client = Client("plan_listener", domain)
+    markers: dict[str, dict[int, np.ndarray]] = {"shoulder": {}, "elbow": {}}
+    truth: dict = {}
+    for name, frames in markers.items():
+        client.subscribe(
+            "geometry_msgs/msg/PoseStamped",
+            f"/mocap/{name}",
+            lambda m, frames=frames: frames.__setitem__(read_pose_stamped(m).t_ns, read_pose_stamped(m).position_m),
+            "sensor_data",
+        )
+    on_truth = lambda m: truth.update(json.loads(m.data))  # noqa: E731
+    client.subscribe("std_msgs/msg/String", "sim/truth", on_truth, "tf_static_listener")
+    node = subprocess.Popen(
+        [sys.executable, "-m", "bsp_ros.nodes.cell_simulator", "--ros-args", "-p", f"trajectory_file:={path}"],
+        env={**os.environ, "ROS_DOMAIN_ID": str(domain)},
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        both = lambda: truth and len(set(markers["shoulder"]) & set(markers["elbow"])) > 100  # noqa: E731
+        assert client.spin_until(both, 60), (len(markers["shoulder"]), truth.keys())
+        stamps = sorted(set(markers["shoulder"]) & set(markers["elbow"]))
+        upper_arm = np.array([markers["elbow"][t] - markers["shoulder"][t] for t in stamps])
+        q1 = np.arctan2(upper_arm[:, 2], upper_arm[:, 1])
+        planned = plan.trajectory.angles_rad((np.array(stamps) - truth["start_time_ns"]) / 1e9)[:, 0]
+        assert np.abs(q1 - planned).max() < 0.01  # marker noise over a 0.3 m upper arm: well below 10 mrad
+    finally:
+        node.kill()
+        node.wait(5)
+        client.close()
