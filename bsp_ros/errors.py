@@ -32,6 +32,6 @@ class StoreError(BspError):
 
 
 class RuntimeBackendError(BspError):
-    """The middleware (rclpy or Cyclone DDS) cannot be started or used."""
+    """The middleware (rclpy) cannot be started or used."""
 
     exit_code = 6

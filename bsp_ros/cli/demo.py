@@ -28,6 +28,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--subject", choices=("human", "paper-arm"), default="human")
     parser.add_argument("--mode", choices=("windowed", "recursive"), default="windowed")
+    parser.add_argument(
+        "--support-fraction",
+        type=float_within(0.0, 1.0),
+        default=0.5,
+        help="share of the arm's gravity torques bsp/weight_support asks the robot to carry, 0-1 (default 0.5)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
         "--domain", type=int, default=None, help="ROS domain id (default: derived from the pid, 2..101)"
@@ -66,6 +72,17 @@ def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: fl
     return "\n".join(lines)
 
 
+def render_support(msg: Any, support_fraction: float) -> str:
+    """One line: the latest bsp/weight_support wrench, or that none is published (no valid estimate yet)."""
+    if msg is None:
+        return f"weight support ({support_fraction:g} of the arm's gravity torques): none yet (no valid estimate)"
+    force, torque = msg.wrench.force, msg.wrench.torque
+    return (
+        f"weight support ({support_fraction:g} of the arm's gravity torques), on the hand in world: "
+        f"F_y {force.y:+.2f} N, F_z {force.z:+.2f} N, M_x {torque.x:+.3f} Nm"
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Start the nodes, watch the estimates converge, print the final errors."""
     from bsp_ros.runtime.ros import Client, has_message
@@ -75,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
     n_segments = "3" if args.subject == "human" else "2"
     identifier = ["-p", f"n_segments:={n_segments}", "-p", f"mode:={args.mode}"]
+    identifier += ["-p", f"support_fraction:={float(args.support_fraction)}"]
     if not has_message("tf2_msgs/msg/TFMessage"):
         # No /tf_static without tf2_msgs: the identifier gets the simulated sensor's rotation as a parameter.
         from bsp_ros.simulation import human_arm_cell, paper_mechanical_arm_cell
@@ -97,6 +115,9 @@ def run(args: argparse.Namespace) -> int:
     client.subscribe(
         "std_msgs/msg/String", "sim/truth", lambda m: truth.update(json.loads(m.data)), "tf_static_listener"
     )
+    client.subscribe(
+        "geometry_msgs/msg/WrenchStamped", "bsp/weight_support", lambda m: latest.__setitem__("support", m)
+    )
     processes = [
         subprocess.Popen(
             [sys.executable, "-m", f"bsp_ros.nodes.{name}", "--ros-args", *node_args[name]],
@@ -117,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
                 print(f"bsp demo: node(s) {failed} stopped", file=sys.stderr)
                 break
             table = render(latest.get("doc"), truth, time.monotonic() - start)
+            table += "\n" + render_support(latest.get("support"), args.support_fraction)
             print(("\033[2J\033[H" if interactive else "") + table + ("" if interactive else "\n"), flush=True)
     finally:
         for process in processes:
@@ -131,4 +153,5 @@ def run(args: argparse.Namespace) -> int:
     document = latest.get("doc")
     print("\nfinal estimate (truth beside it):")
     print(render(document, truth, time.monotonic() - start))
+    print(render_support(latest.get("support"), args.support_fraction))
     return 0 if document is not None and document["quality"]["valid"] else 1

@@ -70,7 +70,7 @@ def message_class(type_name: str) -> Any:
         wheel = "ros-jazzy-" + package.replace("_", "-")
         raise RuntimeBackendError(
             f"message type {type_name} needs the Python package {package!r}, which is not installed "
-            f"(pip install {wheel}, or apt's ros-jazzy-{package.replace('_', '-')} on a cell): {exc}"
+            f"(apt's {wheel} on a cell, or `pip install {wheel}` where PyPI has that wheel: tf2_msgs has none): {exc}"
         ) from exc
     try:
         return getattr(module, name)

@@ -273,12 +273,9 @@ def test_tf_static_without_tf2_msgs_is_skipped_by_name_and_clock_runs(
     from bsp_ros.runtime.ros import Client
 
     domain = _domain(4)
-    player = _bsp(
-        "play", source_bag, "--rate", 5, "--clock", "--domain", domain, "--wait-subscribers", 0,
-        "--topics", "/tf_static", "/ft_sensor/wrench",
-    )  # fmt: skip
-    procs.append(player)
     clock: list[int] = []
+    # The listener first, and real-time playback (10 s): best-effort /clock samples sent before discovery
+    # completes are lost, and at 5x the whole bag could pass in that time.
     with Client("clock_listener", domain) as client:
         client.subscribe(
             "rosgraph_msgs/msg/Clock",
@@ -286,6 +283,11 @@ def test_tf_static_without_tf2_msgs_is_skipped_by_name_and_clock_runs(
             lambda m: clock.append(m.clock.sec * 1_000_000_000 + m.clock.nanosec),
             "sensor_data",
         )
+        player = _bsp(
+            "play", source_bag, "--rate", 1, "--clock", "--domain", domain, "--wait-subscribers", 0,
+            "--topics", "/tf_static", "/ft_sensor/wrench",
+        )  # fmt: skip
+        procs.append(player)
         client.spin_until(lambda: len(clock) > 5 or player.poll() is not None, 30)
     assert len(clock) > 5 and all(b >= a for a, b in itertools.pairwise(clock))
     player.send_signal(signal.SIGINT)
