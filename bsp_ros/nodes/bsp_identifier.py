@@ -22,9 +22,10 @@ from bsp_ros.online.recursive_feed import RecursiveFeed
 from bsp_ros.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate, WindowSamples
 from bsp_ros.pipeline import IdentifyOptions
 from bsp_ros.runtime.offload import ProcessOffload
-from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.runtime.parameters import Param, declare_parameters
 from bsp_ros.runtime.qos import rclpy_qos
-from bsp_ros.runtime.ros import RosNode, has_message, log_error, message_class, require_rclpy
+from bsp_ros.runtime.ros import RosNode, has_message, message_class
+from bsp_ros.runtime.spin import run_node
 from bsp_ros.runtime.worker import LatestJobWorker
 from bsp_ros.streams import segments_for
 from bsp_ros.tare import Tare, read_tare_file
@@ -394,39 +395,10 @@ class BspIdentifierNode(RosNode):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros bsp_identifier``); ``args``: a command line like ``sys.argv``."""
-    if wants_help(args):
-        print(help_text(NAME, BspIdentifierNode.__doc__ or "", PARAMETERS))
-        return 0
-    try:
-        require_rclpy()
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
     # A callback thread waiting for the GIL waits up to the switch interval (5 ms by default) while
     # another thread (the middleware, an estimate's worker) runs; 0.2 ms keeps a 1 kHz stream's latency low.
     sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = BspIdentifierNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    except Exception:
-        if rclpy.ok():
-            raise
-        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(NAME, BspIdentifierNode, BspIdentifierNode.__doc__ or "", PARAMETERS, args)
 
 
 if __name__ == "__main__":

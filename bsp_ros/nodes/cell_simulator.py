@@ -13,10 +13,11 @@ from typing import Any
 import numpy as np
 
 from bsp_ros import simulation as sim
-from bsp_ros.errors import BspError, InputError
-from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.errors import InputError
+from bsp_ros.runtime.parameters import Param, declare_parameters
 from bsp_ros.runtime.qos import rclpy_qos
-from bsp_ros.runtime.ros import RosNode, has_message, log_error, message_class, require_rclpy
+from bsp_ros.runtime.ros import RosNode, has_message, message_class
+from bsp_ros.runtime.spin import run_node
 from msg_adapters.pose import PoseSample, build_pose_stamped
 from msg_adapters.rotation import quaternion_from_matrix
 from msg_adapters.tf import TransformSample, build_tf_message
@@ -229,36 +230,7 @@ class CellSimulatorNode(RosNode):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros cell_simulator``); ``args``: a command line like ``sys.argv``."""
-    if wants_help(args):
-        print(help_text(NAME, CellSimulatorNode.__doc__ or "", PARAMETERS))
-        return 0
-    try:
-        require_rclpy()
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = CellSimulatorNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    except Exception:
-        if rclpy.ok():
-            raise
-        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(NAME, CellSimulatorNode, CellSimulatorNode.__doc__ or "", PARAMETERS, args)
 
 
 if __name__ == "__main__":

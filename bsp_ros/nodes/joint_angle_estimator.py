@@ -8,11 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.errors import BspError
 from bsp_ros.online.causal_angles import CausalAnglesConfig, CausalJointAngles
-from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.runtime.parameters import Param, declare_parameters
 from bsp_ros.runtime.qos import rclpy_qos
-from bsp_ros.runtime.ros import RosNode, log_error, message_class, require_rclpy
+from bsp_ros.runtime.ros import RosNode, message_class
+from bsp_ros.runtime.spin import run_node
 from bsp_ros.streams import joints_for, markers_for, segments_for
 from msg_adapters.diagnostics import (
     ERROR,
@@ -151,36 +151,7 @@ class JointAngleEstimatorNode(RosNode):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros joint_angle_estimator``); ``args``: a command line like ``sys.argv``."""
-    if wants_help(args):
-        print(help_text(NAME, JointAngleEstimatorNode.__doc__ or "", PARAMETERS))
-        return 0
-    try:
-        require_rclpy()
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = JointAngleEstimatorNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    except Exception:
-        if rclpy.ok():
-            raise
-        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(NAME, JointAngleEstimatorNode, JointAngleEstimatorNode.__doc__ or "", PARAMETERS, args)
 
 
 if __name__ == "__main__":

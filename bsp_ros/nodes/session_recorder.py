@@ -7,9 +7,10 @@ import sys
 from typing import Any
 
 from bsp_ros.errors import BspError
-from bsp_ros.runtime.parameters import Param, declare_parameters, help_text, wants_help
+from bsp_ros.runtime.parameters import Param, declare_parameters
 from bsp_ros.runtime.qos import rclpy_qos
-from bsp_ros.runtime.ros import RosNode, log_error, message_class, require_rclpy
+from bsp_ros.runtime.ros import RosNode, message_class
+from bsp_ros.runtime.spin import run_node
 from bsp_ros.session_end import SessionEndDetector
 from bsp_ros.store import check_subject_id, open_store
 
@@ -86,36 +87,7 @@ class SessionRecorderNode(RosNode):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros session_recorder``); ``args``: a command line like ``sys.argv``."""
-    if wants_help(args):
-        print(help_text(NAME, SessionRecorderNode.__doc__ or "", PARAMETERS))
-        return 0
-    try:
-        require_rclpy()
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = SessionRecorderNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except BspError as exc:
-        log_error(NAME, exc)
-        return exc.exit_code
-    except Exception:
-        if rclpy.ok():
-            raise
-        # A callback cut short by the shutdown (SIGINT/SIGTERM: its publisher's context is gone) is no error.
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(NAME, SessionRecorderNode, SessionRecorderNode.__doc__ or "", PARAMETERS, args)
 
 
 if __name__ == "__main__":

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import os
 import sqlite3
+import tempfile
 from abc import ABC, abstractmethod
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +67,31 @@ def _check_sqlite_header(file: Path) -> None:
         raise StoreError(f"cannot open store {file}: it is {what}, not a bsp_ros session store; not touching it")
 
 
+def _create_sqlite_file(file: Path) -> None:
+    """Create an empty SQLite database at ``file`` atomically: built aside, then linked in place.
+
+    SQLite itself creates an empty file first and writes its header later; another process opening the
+    store in between (a therapist's ``bsp sessions list`` while the session recorder starts) would find an
+    empty file, which is refused as "not a store". Linking a finished file never shows that state, and
+    ``os.link`` fails instead of replacing a file another process created meanwhile.
+    """
+    handle, name = tempfile.mkstemp(prefix=f".{file.name}.", suffix=".new", dir=file.parent)
+    os.close(handle)  # mkstemp's file is private (0600) and empty, which SQLite takes as a new database
+    aside = Path(name)
+    try:
+        with closing(sqlite3.connect(aside)) as conn:
+            # Switching a new database to WAL writes its first page (header included).
+            conn.execute("PRAGMA journal_mode = WAL").fetchone()
+        # Health data: owner only (mkstemp's 0600 is kept); -wal and -shm inherit this.
+        try:
+            os.link(aside, file)
+        except FileExistsError:
+            pass  # created by another process meanwhile: use theirs
+    finally:
+        for leftover in (aside, Path(f"{aside}-wal"), Path(f"{aside}-shm")):
+            leftover.unlink(missing_ok=True)
+
+
 class SqliteBackend(Backend):
     """A SQLite file in WAL mode with ``synchronous=FULL`` and ``secure_delete=ON``."""
 
@@ -79,11 +105,10 @@ class SqliteBackend(Backend):
         _check_sqlite_header(file)
         try:
             file.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-            fresh = not file.exists()
+            if not file.exists():
+                _create_sqlite_file(file)
             # Autocommit mode: transactions are explicit BEGIN IMMEDIATE ... COMMIT.
             self._conn = sqlite3.connect(file, timeout=10.0, isolation_level=None)
-            if fresh:
-                os.chmod(file, 0o600)  # health data: owner only; -wal and -shm inherit this
             self._conn.execute("PRAGMA busy_timeout = 10000")
             names = {row[0] for row in self._conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
             if names and "bsp_meta" not in names:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import sqlite3
+import threading
 from pathlib import Path
 
 import pytest
@@ -123,6 +124,31 @@ def test_file_that_is_not_a_database_is_refused(tmp_path: Path) -> None:
     with pytest.raises(StoreError, match="cannot open store"):
         open_store(path)
     assert path.read_text().startswith("this is not a database")
+
+
+def test_stores_opened_at_once_by_several_processes_never_see_an_empty_file(tmp_path: Path) -> None:
+    # A session recorder creating the store while a therapist lists sessions: SQLite alone shows the
+    # second an empty file, which the store refuses as not a store.
+    paths = [tmp_path / f"s{k}.sqlite" for k in range(20)]
+    errors: list[BaseException] = []
+
+    def open_all() -> None:
+        for path in paths:
+            try:
+                with open_store(path) as store:
+                    store.sessions()
+            except BaseException as error:
+                errors.append(error)
+
+    threads = [threading.Thread(target=open_all) for _ in range(6)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert errors == []
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.endswith(("-wal", "-shm"))) == sorted(
+        p.name for p in paths
+    )
 
 
 def test_sqlite_store_is_wal_full_and_private(tmp_path: Path) -> None:
