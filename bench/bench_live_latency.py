@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.runtime.ros import Client, has_message
+from bsp_ros.runtime.ros import EXECUTOR_ENV, Client, has_message
 from msg_adapters.diagnostics import read_diagnostic_array
 from msg_adapters.stamps import stamp_to_ns
 
@@ -201,8 +201,8 @@ def _wrench_frame_parameter() -> list[str]:
 class Cell:
     """The three nodes as processes on one private domain."""
 
-    def __init__(self, domain: int, log_dir: str | None) -> None:
-        self.env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
+    def __init__(self, domain: int, log_dir: str | None, executor: str) -> None:
+        self.env = {**os.environ, "ROS_DOMAIN_ID": str(domain), EXECUTOR_ENV: executor}
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen[bytes]] = {}
 
@@ -252,11 +252,13 @@ def received(counts: dict[str, int]) -> int:
     return sum(counts.get(k, 0) for k in RECEIVED_KEYS)
 
 
-def run_mode(mode: str, domain: int, duration_s: float, warmup_s: float, log_dir: str | None) -> dict[str, Any]:
-    """Run the cell in one identifier mode and return what was measured."""
+def run_mode(
+    mode: str, executor: str, domain: int, duration_s: float, warmup_s: float, log_dir: str | None
+) -> dict[str, Any]:
+    """Run the cell in one identifier mode, its nodes on one rclpy executor, and return what was measured."""
     listener = Listener(domain)
-    cell = Cell(domain, log_dir)
-    result: dict[str, Any] = {"mode": mode, "domain": domain}
+    cell = Cell(domain, log_dir, executor)
+    result: dict[str, Any] = {"mode": mode, "executor": executor, "domain": domain}
     try:
         cell.start("joint_angle_estimator", [f"marker_hz:={MARKER_HZ}"])
         cell.start("bsp_identifier", [f"mode:={mode}", f"update_hz:={UPDATE_HZ}", *_wrench_frame_parameter()])
@@ -308,7 +310,10 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
     listener: Listener = r["listener"]
     mode, t0, t1, start = r["mode"], r["t0"], r["t1"], r["start"]
     targets: list[tuple[str, bool, str]] = []
-    print(f"\n=== mode:={mode}  (domain {r['domain']}, measured {duration_s:.0f} s after the warm-up)")
+    print(
+        f"\n=== mode:={mode}, nodes on the {r['executor']} executor  (domain {r['domain']},"
+        f" measured {duration_s:.0f} s after the warm-up)"
+    )
     if not all(r["alive"].values()):
         print(f"  WARNING: a node exited during the run: {r['alive']}")
 
@@ -337,7 +342,13 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
     lat_stamp = e_recv[matched] - e_stamp[matched]
     lat_pub = e_pub[matched] - wp[idx[matched]]
     if r.get("dump"):
-        np.savez(f"{r['dump']}_{mode}.npz", stamp=e_stamp[matched], lat_recv=lat_recv, lat_pub=lat_pub, start=start)
+        np.savez(
+            f"{r['dump']}_{mode}_{r['executor']}.npz",
+            stamp=e_stamp[matched],
+            lat_recv=lat_recv,
+            lat_pub=lat_pub,
+            start=start,
+        )
     print(
         f"  end-to-end latency: wrench -> {topic} stamped with it ({int(matched.sum())} of {e_stamp.size} matched;"
         " invalid estimates carry the wall clock)"
@@ -457,9 +468,12 @@ def main() -> int:
     parser.add_argument("--duration", type=float, default=600.0, help="measured seconds per mode (after warm-up)")
     parser.add_argument("--warmup", type=float, default=20.0, help="seconds before measuring")
     parser.add_argument("--modes", default="windowed,recursive", help="comma-separated identifier modes")
+    parser.add_argument(
+        "--executors", default="events,single", help="comma-separated node executors (BSP_EXECUTOR), side by side"
+    )
     parser.add_argument("--domain", type=int, default=60 + (os.getpid() % 20) * 2, help="first private domain id")
     parser.add_argument("--log-dir", default=None, help="keep the nodes' output here")
-    parser.add_argument("--dump", default=None, help="save per-wrench latencies to <DUMP>_<mode>.npz")
+    parser.add_argument("--dump", default=None, help="save per-wrench latencies to <DUMP>_<mode>_<executor>.npz")
     args = parser.parse_args()
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # unwind, so that the nodes are stopped too
     signal.signal(signal.SIGINT, signal.default_int_handler)  # also when started in the background
@@ -472,17 +486,20 @@ def main() -> int:
         f"live cell: wrench {WRENCH_HZ:.0f} Hz, markers {MARKER_HZ:.0f} Hz, speed {SPEED}, {args.duration:.0f} s"
         f" per mode after {args.warmup:.0f} s warm-up; {os.cpu_count()} cores, load average {' '.join(load)}"
     )
+    executors = [e.strip() for e in args.executors.split(",") if e.strip()]
     rows: list[tuple[str, str, bool, str]] = []
-    for k, mode in enumerate(modes):
-        log_dir = os.path.join(args.log_dir, mode) if args.log_dir else None
+    runs = [(mode, executor) for mode in modes for executor in executors]
+    for k, (mode, executor) in enumerate(runs):
+        label = f"{mode}/{executor}"
+        log_dir = os.path.join(args.log_dir, mode, executor) if args.log_dir else None
         if log_dir:
             os.makedirs(log_dir, exist_ok=True)
-        result = run_mode(mode, args.domain + k, args.duration, args.warmup, log_dir)
+        result = run_mode(mode, executor, args.domain + k, args.duration, args.warmup, log_dir)
         result["dump"] = args.dump
-        rows += [(mode, *t) for t in report(result, args.duration)]
+        rows += [(label, *t) for t in report(result, args.duration)]
     print("\ntargets")
-    for mode, name, ok, figure in rows:
-        print(f"  {'PASS' if ok else 'FAIL'}  {mode:9s} {name:62s} {figure}")
+    for label, name, ok, figure in rows:
+        print(f"  {'PASS' if ok else 'FAIL'}  {label:16s} {name:62s} {figure}")
     return 0
 
 

@@ -2,50 +2,14 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from bsp_ros.errors import BspError, InputError
+from bsp_ros.errors import BspError
 from bsp_ros.runtime.parameters import Param, help_text, wants_help
-from bsp_ros.runtime.ros import log_error, require_rclpy
+from bsp_ros.runtime.ros import log_error, make_executor, require_rclpy
 
-__all__ = ["EXECUTOR_ENV", "make_executor", "run_node"]
-
-# Which rclpy executor spins a node: "events" (rclpy.experimental.EventsExecutor, C++ dispatch, several
-# times less CPU per message than the Python one) or "single" (rclpy.executors.SingleThreadedExecutor).
-EXECUTOR_ENV = "BSP_EXECUTOR"
-EXECUTORS = ("events", "single")
-
-
-def make_executor(kind: str | None = None) -> tuple[Any, str]:
-    """An rclpy executor for the default context, and the name of the one made.
-
-    Parameters
-    ----------
-    kind : {"events", "single"}, optional
-        Omitted: ``$BSP_EXECUTOR``, else ``"events"`` where this rclpy has it and ``"single"`` otherwise.
-
-    Returns
-    -------
-    executor, name : rclpy executor, str
-    """
-    requested = kind if kind is not None else os.environ.get(EXECUTOR_ENV, "")
-    if requested and requested not in EXECUTORS:
-        raise InputError(f"{EXECUTOR_ENV}={requested!r}: expected one of {', '.join(EXECUTORS)}")
-    if requested in ("", "events"):
-        try:
-            from rclpy.experimental import EventsExecutor
-        except ImportError:
-            if requested == "events":
-                raise InputError(
-                    f"{EXECUTOR_ENV}=events: this rclpy has no rclpy.experimental.EventsExecutor"
-                ) from None
-        else:
-            return EventsExecutor(), "events"
-    from rclpy.executors import SingleThreadedExecutor
-
-    return SingleThreadedExecutor(), "single"
+__all__ = ["run_node"]
 
 
 def run_node(
