@@ -55,6 +55,6 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": ["bsp = bsp_ros.cli:main"]
-        + [f"{node} = bsp_ros.nodes.{node}:main" for node in NODES],
+        + [f"{node} = bsp_ros.live.nodes.{node}:main" for node in NODES],
     },
 )

@@ -36,7 +36,7 @@ from bsp_ros.bag import read_session
 
 def task(path):
     if IDENTIFY:  # everything `bsp identify` does but printing: read, angles, identification, prior fusion
-        from bsp_ros.offline import identify_bag
+        from bsp_ros.bag.offline import identify_bag
         document = identify_bag(path)
         return sum(document["bag"]["messages"].values())
     result = read_session(path)
@@ -86,7 +86,7 @@ def main() -> int:
     args = parser.parse_args()
 
     from bsp_ros.bag import write_session_bag
-    from bsp_ros.simulation import human_arm_cell, simulate_cell
+    from bsp_ros.core.simulation import human_arm_cell, simulate_cell
 
     with tempfile.TemporaryDirectory() as tmp:
         bag = args.keep or Path(tmp) / "session"

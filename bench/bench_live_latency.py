@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.runtime.ros import EXECUTOR_ENV, Client, has_message
+from bsp_ros.live.runtime.ros import EXECUTOR_ENV, Client, has_message
 from msg_adapters.diagnostics import read_diagnostic_array
 from msg_adapters.stamps import stamp_to_ns
 
@@ -112,7 +112,7 @@ class RawStamps(threading.Thread):
         super().__init__(name="bench-raw-stamps", daemon=True)
         from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-        from bsp_ros.runtime.qos import qos_spec
+        from bsp_ros.live.runtime.qos import qos_spec
 
         self.client = Client("bench_raw_listener", domain)
         for topic, (type_name, profile, stream) in topics.items():
@@ -132,7 +132,7 @@ class RawStamps(threading.Thread):
 
     @staticmethod
     def client_message(type_name: str) -> Any:
-        from bsp_ros.runtime.ros import message_class
+        from bsp_ros.live.runtime.ros import message_class
 
         return message_class(type_name)
 
@@ -191,7 +191,7 @@ def _wrench_frame_parameter() -> list[str]:
     """The simulated sensor's rotation for the identifier where /tf_static cannot carry it (no tf2_msgs)."""
     if has_message("tf2_msgs/msg/TFMessage"):
         return []
-    from bsp_ros.simulation import human_arm_cell
+    from bsp_ros.core.simulation import human_arm_cell
     from msg_adapters.rotation import quaternion_from_matrix
 
     xyzw = quaternion_from_matrix(human_arm_cell().sensor.rotation_world_from_sensor)
@@ -210,7 +210,7 @@ class Cell:
         args = ["--ros-args", *[a for p in params for a in ("-p", p)]] if params else []
         out = open(os.path.join(self.log_dir, f"{name}.log"), "wb") if self.log_dir else subprocess.DEVNULL
         self.processes[name] = subprocess.Popen(
-            [sys.executable, "-m", f"bsp_ros.nodes.{name}", *args], env=self.env, stdout=out, stderr=out
+            [sys.executable, "-m", f"bsp_ros.live.nodes.{name}", *args], env=self.env, stdout=out, stderr=out
         )
 
     def alive(self) -> dict[str, bool]:

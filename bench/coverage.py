@@ -25,11 +25,11 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros import glitches
-from bsp_ros import simulation as sim
-from bsp_ros.estimate import estimate_document
-from bsp_ros.identification.data import identification_data_from_session
-from bsp_ros.pipeline import IdentifyOptions, fuse, identify_data, identify_session
+from bsp_ros.core import glitches
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.estimate import estimate_document
+from bsp_ros.core.identification.data import identification_data_from_session
+from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data, identify_session
 
 SCENARIOS = (
     "clean",

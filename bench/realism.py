@@ -2,10 +2,10 @@
 
 Usage: ``python bench/realism.py [--seeds 3] [--duration 120] [--only NAME ...] [--no-tare] [--json OUT]``
 
-For every nuisance and seed, a 3-segment human-arm session is simulated (``bsp_ros.simulation``) and identified
-with the default options (``bsp_ros.pipeline.identify_session``, body mass and height given); "with tare" first
+For every nuisance and seed, a 3-segment human-arm session is simulated (``bsp_ros.core.simulation``) and identified
+with the default options (``bsp_ros.core.pipeline.identify_session``, body mass and height given); "with tare" first
 simulates the cell's tare recording (20 s, a minute before the session, the sensor swung 20 deg in roll and
-pitch, orientation known as from ``/tf``), estimates it (``bsp_ros.tare``) and applies it. Per nuisance and
+pitch, orientation known as from ``/tf``), estimates it (``bsp_ros.core.tare``) and applies it. Per nuisance and
 mode the table shows, over the seeds: the worst static-moment error (% of the truth, worst segment, worst
 seed), the worst Coulomb error (%), the largest |z| = |estimate - truth| / std of those data-sourced parameters,
 how many estimates were valid, how many were valid yet beyond 3 std ("bad"), and the most frequent warning
@@ -27,10 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.errors import BspError
-from bsp_ros.fusion import SubjectInfo
-from bsp_ros.pipeline import IdentifyOptions, identify_session
-from bsp_ros.simulation import (
+from bsp_ros.core.fusion import SubjectInfo
+from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+from bsp_ros.core.simulation import (
     CellSpec,
     MarkerSpec,
     TareSpec,
@@ -39,7 +38,8 @@ from bsp_ros.simulation import (
     simulate_tare,
     tare_rotations,
 )
-from bsp_ros.tare import estimate_tare
+from bsp_ros.core.tare import estimate_tare
+from bsp_ros.errors import BspError
 
 COULOMB = (0.5, 0.28, 0.06)
 TARE = TareSpec(duration_s=20.0, start_offset_s=-60.0, swing_rpy_deg=(20.0, 20.0, 0.0))

@@ -9,7 +9,7 @@ import numpy as np
 import numpy.typing as npt
 
 #: Maps a ROS type name such as ``geometry_msgs/msg/WrenchStamped`` to its message class
-#: (rosbags: ``lambda n: typestore.types[n]``; rclpy: ``bsp_ros.runtime.ros.message_class``).
+#: (rosbags: ``lambda n: typestore.types[n]``; rclpy: ``bsp_ros.live.runtime.ros.message_class``).
 TypeLookup = Callable[[str], type]
 
 

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.streams import MarkerSeries
+from bsp_ros.core.streams import MarkerSeries
 from msg_adapters._types import TypeLookup, as_vector
 from msg_adapters.stamps import build_header, read_header
 from msg_adapters.wrench import build_vector3, read_vector3

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from bsp_ros.streams import WrenchSeries
+from bsp_ros.core.streams import WrenchSeries
 from msg_adapters._types import TypeLookup, as_vector
 from msg_adapters.stamps import build_header, read_header
 

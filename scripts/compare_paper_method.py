@@ -2,7 +2,7 @@
 
 import argparse
 
-from bsp_ros.paper_comparison import compare_on_mechanical_arm, format_table
+from bsp_ros.core.paper_comparison import compare_on_mechanical_arm, format_table
 
 parser = argparse.ArgumentParser(description=__doc__)
 parser.add_argument("--seed", type=int, default=0)

@@ -17,11 +17,11 @@ import argparse
 
 import numpy as np
 
-from bsp_ros import simulation as sim
-from bsp_ros.identification.data import identification_data_from_session
-from bsp_ros.identification.joint import JointConfig, identify_joint
-from bsp_ros.identification.passive import PassiveModel
-from bsp_ros.planning import JointLimits, NominalArm, PlanRequest, plan_protocol, predict_covariance
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.identification.data import identification_data_from_session
+from bsp_ros.core.identification.joint import JointConfig, identify_joint
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.planning import JointLimits, NominalArm, PlanRequest, plan_protocol, predict_covariance
 
 MODEL = PassiveModel.parse("coulomb+offset+stiffness")
 RANGES_DEG = ((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0))

@@ -15,11 +15,11 @@ import argparse
 
 import numpy as np
 
-from bsp_ros import simulation as sim
-from bsp_ros.identification.data import identification_data_from_session
-from bsp_ros.identification.joint import JointConfig, identify_joint
-from bsp_ros.identification.passive import PassiveModel
-from bsp_ros.planning import JointLimits, NominalArm, PlanRequest, compare_with_scatter, plan_protocol
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.identification.data import identification_data_from_session
+from bsp_ros.core.identification.joint import JointConfig, identify_joint
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.planning import JointLimits, NominalArm, PlanRequest, compare_with_scatter, plan_protocol
 
 PASSIVE = sim.PassiveTruth(
     coulomb_nm=(0.5, 0.28, 0.06), offset_nm=(0.2, 0.2, 0.2), stiffness_nm_per_rad=(1.0, 1.5, 0.2)

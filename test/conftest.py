@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from bsp_ros import simulation as sim
+from bsp_ros.core import simulation as sim
 
 
 def noise_free(spec: sim.CellSpec) -> sim.CellSpec:

@@ -209,10 +209,10 @@ def test_colcon_build_installs_nodes_that_import(tmp_path: Path) -> None:
     assert (prefix / "share" / "bsp_ros" / "launch" / "bsp_cell.launch.py").is_file()
     assert (prefix / "share" / "bsp_ros" / "config" / "bsp_cell.yaml").is_file()
     assert (prefix / "share" / "ament_index" / "resource_index" / "packages" / "bsp_ros").is_file()
-    nodes = ["bsp_ros.nodes." + n for n in ("cell_simulator", "joint_angle_estimator", "bsp_identifier")]
+    nodes = ["bsp_ros.live.nodes." + n for n in ("cell_simulator", "joint_angle_estimator", "bsp_identifier")]
     script = (
         "import importlib\n"
-        f"for name in {[*nodes, 'bsp_ros.nodes.session_recorder', 'bsp_ros.cli']!r}:\n"
+        f"for name in {[*nodes, 'bsp_ros.live.nodes.session_recorder', 'bsp_ros.cli']!r}:\n"
         "    module = importlib.import_module(name)\n"
         f"    assert module.__file__.startswith({str(site)!r}), (name, module.__file__)\n"
         "    assert callable(module.main), name\n"

@@ -24,7 +24,7 @@ from bsp_ros.bag.mcap_scan import ChannelInfo, ProgressCallback, ScanResult, che
 from bsp_ros.bag.metadata import METADATA_FILE, BagMetadata, read_metadata
 from bsp_ros.bag.report import ReadReport, TopicReport
 from bsp_ros.bag.topics import TF_TYPE, WORLD_FRAME, TopicMap
-from bsp_ros.streams import MarkerSeries, Session, WrenchSeries
+from bsp_ros.core.streams import MarkerSeries, Session, WrenchSeries
 from msg_adapters import (
     TransformSample,
     read_pose_stamped,

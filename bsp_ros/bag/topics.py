@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from bsp_ros.streams import MARKERS_3
+from bsp_ros.core.streams import MARKERS_3
 
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
 POSE_TYPE = "geometry_msgs/msg/PoseStamped"

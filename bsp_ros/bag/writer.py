@@ -19,7 +19,7 @@ from bsp_ros.bag.cdr import encode_fixed
 from bsp_ros.bag.errors import BagWriteError
 from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, dump_metadata, dump_qos, qos_profile
 from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, WORLD_FRAME, WRENCH_TYPE, TopicMap
-from bsp_ros.streams import MARKERS_3, Session
+from bsp_ros.core.streams import MARKERS_3, Session
 from msg_adapters import TransformSample, build_tf_message, quaternion_from_matrix
 
 TRUTH_FILE = "truth.json"

@@ -85,7 +85,7 @@ def render_support(msg: Any, support_fraction: float) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Start the nodes, watch the estimates converge, print the final errors."""
-    from bsp_ros.runtime.ros import Client, has_message
+    from bsp_ros.live.runtime.ros import Client, has_message
 
     # 1..101: the ROS 2 domain ids safe on Linux; 0 (everyone's default) is left alone.
     domain = args.domain if args.domain is not None else 2 + os.getpid() % 100
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
     identifier += ["-p", f"support_fraction:={float(args.support_fraction)}"]
     if not has_message("tf2_msgs/msg/TFMessage"):
         # No /tf_static without tf2_msgs: the identifier gets the simulated sensor's rotation as a parameter.
-        from bsp_ros.simulation import human_arm_cell, paper_mechanical_arm_cell
+        from bsp_ros.core.simulation import human_arm_cell, paper_mechanical_arm_cell
         from msg_adapters.rotation import quaternion_from_matrix
 
         spec = human_arm_cell() if args.subject == "human" else paper_mechanical_arm_cell()
@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     )
     processes = [
         subprocess.Popen(
-            [sys.executable, "-m", f"bsp_ros.nodes.{name}", "--ros-args", *node_args[name]],
+            [sys.executable, "-m", f"bsp_ros.live.nodes.{name}", "--ros-args", *node_args[name]],
             env=env,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,

@@ -10,7 +10,7 @@ from typing import Any
 
 from bsp_ros.errors import BspError, InputError
 
-# bsp_ros.pipeline.METHODS, spelled out here so the parser needs no scipy (a test keeps the two equal).
+# bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy (a test keeps the two equal).
 METHODS = ("joint", "paper")
 
 # Distinct exit codes per failure, so scripts can tell them apart (0 valid, 1 written but invalid).
@@ -34,7 +34,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Identify static moments, masses, COMs and passive joint moments from a bag.",
     )
     parser.add_argument("bag", type=Path, help="rosbag2 directory or .mcap file")
-    parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/estimate/1) here")
+    parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
     parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
     parser.add_argument("--passive", default="coulomb", help="passive model, e.g. coulomb+viscous (default coulomb)")
     parser.add_argument("--body-mass", type=float, metavar="KG", help="body mass for the anthropometric prior")
@@ -84,7 +84,7 @@ def _topics(args: argparse.Namespace) -> Any:
 def _read_tare(path: Path | None) -> Any:
     if path is None:
         return None
-    from bsp_ros.tare import read_tare_file
+    from bsp_ros.core.tare import read_tare_file
 
     return read_tare_file(path)
 
@@ -147,10 +147,10 @@ def format_table(document: dict[str, Any]) -> str:
 def run(args: argparse.Namespace) -> int:
     """Identify the bag; print the result; write the JSON."""
     from bsp_ros.bag.errors import BagError
-    from bsp_ros.fusion import SubjectInfo
-    from bsp_ros.identification.passive import PassiveModel
-    from bsp_ros.offline import identify_bag
-    from bsp_ros.pipeline import IdentifyOptions
+    from bsp_ros.bag.offline import identify_bag
+    from bsp_ros.core.fusion import SubjectInfo
+    from bsp_ros.core.identification.passive import PassiveModel
+    from bsp_ros.core.pipeline import IdentifyOptions
     from bsp_ros.validation import check_output_file
 
     # Before the identification: a result that cannot be written is not worth computing.

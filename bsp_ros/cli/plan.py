@@ -161,10 +161,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def _request(args: argparse.Namespace) -> Any:
-    from bsp_ros.anthropometry import length_from_height_m
-    from bsp_ros.identification.passive import PassiveModel
-    from bsp_ros.planning import JointLimits, NoiseSpec, NominalArm, PlanRequest
-    from bsp_ros.streams import segments_for
+    from bsp_ros.core.anthropometry import length_from_height_m
+    from bsp_ros.core.identification.passive import PassiveModel
+    from bsp_ros.core.planning import JointLimits, NoiseSpec, NominalArm, PlanRequest
+    from bsp_ros.core.streams import segments_for
 
     if args.lengths:
         lengths = tuple(args.lengths)
@@ -194,7 +194,7 @@ def _request(args: argparse.Namespace) -> Any:
 
 def format_plan(plan: Any) -> str:
     """The plan summary and predicted std table, as printed."""
-    from bsp_ros.streams import joints_for
+    from bsp_ros.core.streams import joints_for
 
     joints = joints_for(plan.request.nominal.n_joints)
     lines = [
@@ -219,7 +219,7 @@ def format_plan(plan: Any) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Plan, write the files, print the predicted stds; publish on request."""
-    from bsp_ros.planning import plan_protocol, write_plan_csv, write_plan_json
+    from bsp_ros.core.planning import plan_protocol, write_plan_csv, write_plan_json
 
     plan = plan_protocol(_request(args))
     print(format_plan(plan))
@@ -245,9 +245,9 @@ def _publish(plan: Any, args: argparse.Namespace) -> None:
     from rclpy.executors import ExternalShutdownException
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-    from bsp_ros.planning.files import sampled_path
-    from bsp_ros.runtime.ros import message_class as get_message
-    from bsp_ros.streams import joints_for
+    from bsp_ros.core.planning.files import sampled_path
+    from bsp_ros.core.streams import joints_for
+    from bsp_ros.live.runtime.ros import message_class as get_message
     from msg_adapters.trajectory import build_handle_path, build_joint_trajectory
 
     rclpy.init()

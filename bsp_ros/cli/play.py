@@ -79,7 +79,7 @@ def _announce(out: Callable[[str], None]) -> Callable[[Any], None]:
 
 def run(args: argparse.Namespace) -> int:
     """Play the bag; return the exit code (0, or 1 if the bag was damaged)."""
-    from bsp_ros.replay import play_bag
+    from bsp_ros.live.replay import play_bag
 
     if args.wait_subscribers < 0 or args.ack_timeout < 0:
         raise InputError("--wait-subscribers and --ack-timeout must be >= 0")

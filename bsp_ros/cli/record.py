@@ -36,7 +36,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Record until stopped; return the exit code."""
-    from bsp_ros.recorder import parse_topic_specs, record
+    from bsp_ros.live.recorder import parse_topic_specs, record
     from bsp_ros.validation import check_output_dir
 
     check_output_dir("--out", args.out)  # a clear error before subscribing (the recorder refuses an existing bag)

@@ -40,8 +40,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Write the requested outputs; return the exit code."""
-    from bsp_ros.report import analyse, write_csv, write_html, write_pdf, write_pngs  # matplotlib: only when run
-    from bsp_ros.store import open_store
+    from bsp_ros.clinic.report import analyse, write_csv, write_html, write_pdf, write_pngs  # matplotlib: only when run
+    from bsp_ros.clinic.store import open_store
 
     if not (args.out or args.pdf or args.png or args.csv):
         raise InputError("nothing to write: give --out FILE, --pdf FILE, --png DIR and/or --csv FILE")

@@ -9,8 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.errors import InputError, StoreError
-from bsp_ros.store import (
+from bsp_ros.clinic.store import (
     WALL_CLOCK_START_NS,
     SessionRecord,
     Store,
@@ -20,7 +19,8 @@ from bsp_ros.store import (
     parse_time_ns,
     write_sessions_csv,
 )
-from bsp_ros.store.subject import check_pseudonymous_id
+from bsp_ros.clinic.store.subject import check_pseudonymous_id
+from bsp_ros.errors import InputError, StoreError
 
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 
@@ -94,10 +94,10 @@ def is_bag(path: Path) -> bool:
 
 def _identify_bag(path: Path) -> dict[str, Any]:
     try:
-        identify_bag = getattr(importlib.import_module("bsp_ros.offline"), "identify_bag", None)
-        problem = "bsp_ros.offline has no identify_bag"
+        identify_bag = getattr(importlib.import_module("bsp_ros.bag.offline"), "identify_bag", None)
+        problem = "bsp_ros.bag.offline has no identify_bag"
     except ImportError as error:
-        identify_bag, problem = None, f"bsp_ros.offline cannot be imported: {error}"
+        identify_bag, problem = None, f"bsp_ros.bag.offline cannot be imported: {error}"
     if identify_bag is None:
         raise StoreError(
             f"cannot identify bag {path} here ({problem}); "
@@ -112,17 +112,17 @@ def _identify_bag(path: Path) -> dict[str, Any]:
 
 
 def bag_repeatability(path: Path) -> dict[str, Any] | None:
-    """The ``repeatability`` block (SEM and MDC95 per parameter, :mod:`bsp_ros.mdc`) of a bag, or None.
+    """The ``repeatability`` block (SEM and MDC95 per parameter, :mod:`bsp_ros.clinic.mdc`) of a bag, or None.
 
     Each full cycle of motion is identified on its own with the default settings of `bsp identify`;
     a bag that cannot be read for this gives None (and a note), not an error: the estimate is stored anyway.
     """
     from bsp_ros.bag import read_session
+    from bsp_ros.clinic.mdc import repeatability
+    from bsp_ros.core.identification.data import identification_data_from_session
+    from bsp_ros.core.identification.joint import JointConfig
+    from bsp_ros.core.pipeline import IdentifyOptions
     from bsp_ros.errors import BspError
-    from bsp_ros.identification.data import identification_data_from_session
-    from bsp_ros.identification.joint import JointConfig
-    from bsp_ros.mdc import repeatability
-    from bsp_ros.pipeline import IdentifyOptions
 
     options = IdentifyOptions()
     try:

@@ -99,7 +99,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def _spec(args: argparse.Namespace) -> Any:
     """The CellSpec the options describe (validation is the simulator's)."""
-    from bsp_ros import simulation
+    from bsp_ros.core import simulation
 
     if args.subject == "human":
         subject = {
@@ -194,7 +194,7 @@ def _spec(args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     """Simulate and write the bag; return the exit code."""
     from bsp_ros.bag import TRUTH_FILE, BagWriteError, write_session_bag
-    from bsp_ros.simulation import simulate_cell
+    from bsp_ros.core.simulation import simulate_cell
     from bsp_ros.validation import check_output_dir
 
     out: Path = args.out
@@ -228,8 +228,8 @@ def _run_tare(args: argparse.Namespace, spec: Any) -> int:
     import numpy as np
 
     from bsp_ros.bag import TRUTH_FILE, write_session_bag
-    from bsp_ros.simulation import TareSpec, simulate_tare
-    from bsp_ros.streams import Session
+    from bsp_ros.core.simulation import TareSpec, simulate_tare
+    from bsp_ros.core.streams import Session
     from msg_adapters import TransformSample, quaternion_from_matrix
 
     options: dict[str, Any] = {"duration_s": args.duration}

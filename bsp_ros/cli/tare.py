@@ -28,7 +28,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "Estimate the force/torque sensor's offset and the handle's load from a recording taken with the "
             "handle free (no arm attached; at least 5 s). If the sensor's orientation (from /tf_static and /tf) "
             "varied enough, the handle's mass and centre of mass are separated from the offset; otherwise the "
-            "constant load at the recorded orientation is estimated. Writes a YAML file (schema bsp_ros/tare/1) "
+            "constant load at the recorded orientation is estimated. Writes a YAML file (schema bsp_ros/core/tare/1) "
             "for `bsp identify BAG --tare FILE`. Exit codes: 0 written, 2 bad option, 3 unusable recording, "
             "6 no middleware (--live), 10-16 bag errors as for `bsp identify`."
         ),
@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bsp_ros.bag.errors import BagError
-    from bsp_ros.tare import MIN_TARE_DURATION_S, estimate_tare, recording_warnings, write_tare_file
+    from bsp_ros.core.tare import MIN_TARE_DURATION_S, estimate_tare, recording_warnings, write_tare_file
 
     out: Path = args.out
     if out.exists():

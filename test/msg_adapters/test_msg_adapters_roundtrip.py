@@ -10,7 +10,7 @@ import pytest
 from rosbags.typesys import Stores, get_typestore
 
 import msg_adapters as ma
-from bsp_ros.streams import MarkerSeries, WrenchSeries
+from bsp_ros.core.streams import MarkerSeries, WrenchSeries
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from bsp_ros.bag import write_session_bag
-from bsp_ros.simulation import SimulatedSession, human_arm_cell, paper_mechanical_arm_cell, simulate_cell
+from bsp_ros.core.simulation import SimulatedSession, human_arm_cell, paper_mechanical_arm_cell, simulate_cell
 
 
 @pytest.fixture(scope="session")

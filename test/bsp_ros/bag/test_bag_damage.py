@@ -25,9 +25,9 @@ from bsp_ros.bag import (
     read_session,
     write_session_bag,
 )
+from bsp_ros.core.simulation import SimulatedSession
+from bsp_ros.core.streams import MarkerSeries, Session, WrenchSeries
 from bsp_ros.errors import BagError
-from bsp_ros.simulation import SimulatedSession
-from bsp_ros.streams import MarkerSeries, Session, WrenchSeries
 from msg_adapters import PoseSample, WrenchSample, build_pose_stamped, build_wrench_stamped
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)

@@ -19,8 +19,8 @@ from rosbags.typesys import Stores, get_typestore
 from bsp_ros.bag import BagWriteError, read_session, write_session_bag
 from bsp_ros.bag.writer import TRUTH_FILE
 from bsp_ros.cli import main as bsp_main
-from bsp_ros.simulation import SimulatedSession
-from bsp_ros.streams import Session, WrenchSeries
+from bsp_ros.core.simulation import SimulatedSession
+from bsp_ros.core.streams import Session, WrenchSeries
 
 TOPIC = {
     "shoulder": "/mocap/shoulder",

@@ -8,10 +8,10 @@ from typing import Any
 import pytest
 from bag_surgery import flip_bit_of_value, rewrite_without_crcs
 
-from bsp_ros import glitches
 from bsp_ros.bag import write_session_bag
-from bsp_ros.offline import identify_bag
-from bsp_ros.simulation import SimulatedSession, human_arm_cell, simulate_cell
+from bsp_ros.bag.offline import identify_bag
+from bsp_ros.core import glitches
+from bsp_ros.core.simulation import SimulatedSession, human_arm_cell, simulate_cell
 
 
 @pytest.fixture(scope="module")

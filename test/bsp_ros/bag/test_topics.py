@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from bsp_ros.bag import POSE_TYPE, WRENCH_TYPE, MessageTypeError, TopicMap, read_session
-from bsp_ros.simulation import SimulatedSession
+from bsp_ros.core.simulation import SimulatedSession
 
 
 def test_a_marker_topic_given_as_the_wrench_topic_fails_the_type_check(

@@ -144,7 +144,7 @@ def test_a_valid_estimate_still_ends_in_the_json(bag: Path, tmp_path: Path) -> N
     out = tmp_path / "new_dir" / "e.json"
     code = main(["identify", str(bag), "--json", str(out), "--format", "none"])
     assert code in (0, 1)
-    assert json.loads(out.read_text())["schema"] == "bsp_ros/estimate/1"
+    assert json.loads(out.read_text())["schema"] == "bsp_ros/core/estimate/1"
 
 
 @pytest.mark.parametrize("option", ["--out", "--csv", "--png"])

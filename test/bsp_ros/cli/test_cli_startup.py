@@ -45,6 +45,6 @@ def test_the_command_table_lists_every_subcommand_module() -> None:
 
 
 def test_identify_offers_the_methods_the_pipeline_knows() -> None:
-    from bsp_ros.pipeline import METHODS
+    from bsp_ros.core.pipeline import METHODS
 
     assert identify.METHODS == METHODS

@@ -27,7 +27,7 @@ def test_identified_parameters_match_the_truth_within_the_core_tolerances(human_
     code, estimate = _identify(human_bag, tmp_path / "e.json", "--body-mass", "75", "--height", "1.78")
     truth = json.loads((human_bag / "truth.json").read_text())
     assert code == 0
-    assert estimate["schema"] == "bsp_ros/estimate/1"
+    assert estimate["schema"] == "bsp_ros/core/estimate/1"
     assert estimate["quality"]["valid"]
     for segment, quantities in estimate["segments"].items():
         true = truth["segments"][segment]
@@ -86,8 +86,8 @@ def test_silly_subject_data_is_refused_with_the_value_named(human_bag, capsys) -
 def _write_modified(tmp_path: Path, name: str, change) -> Path:
     import dataclasses
 
-    from bsp_ros import simulation as sim
     from bsp_ros.bag import write_session_bag
+    from bsp_ros.core import simulation as sim
 
     simulated = sim.simulate_cell(sim.human_arm_cell(seed=8, duration_s=60.0))
     wrench = change(simulated.session.wrench)

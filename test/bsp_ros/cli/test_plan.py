@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from bsp_ros.cli import build_parser, main
-from bsp_ros.planning import planned_trajectory_from_file
+from bsp_ros.core.planning import planned_trajectory_from_file
 
 LIMITS = ["--shoulder", "0", "1.2", "--shoulder-range", "-70", "-10", "--elbow-range", "10", "100"]
 

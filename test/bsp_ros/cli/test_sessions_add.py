@@ -12,9 +12,9 @@ import yaml
 
 from bsp_ros.bag.writer import write_session_bag
 from bsp_ros.cli import main
-from bsp_ros.simulation import paper_mechanical_arm_cell, simulate_cell
-from bsp_ros.store import open_store
-from bsp_ros.store.samples import sample_estimate
+from bsp_ros.clinic.store import open_store
+from bsp_ros.clinic.store.samples import sample_estimate
+from bsp_ros.core.simulation import paper_mechanical_arm_cell, simulate_cell
 
 BOOT_START_NS = 1000 * 10**9  # a controller clock counting from boot: 1000 s
 WALL_START_NS = 1_717_225_200 * 10**9  # 2024-06-01T07:00:00Z

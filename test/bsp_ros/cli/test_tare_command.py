@@ -37,7 +37,7 @@ def test_swinging_tare_file_holds_offset_and_handle(bags, tmp_path) -> None:
     assert main(["tare", str(bags["swing"]), "--out", str(tmp_path / "t.yaml")]) == 0
     doc = yaml.safe_load((tmp_path / "t.yaml").read_text())
     truth = json.loads((bags["swing"] / "truth.json").read_text())
-    assert doc["schema"] == "bsp_ros/tare/1" and doc["load"] == "separated" and doc["frame_id"] == "ft_sensor"
+    assert doc["schema"] == "bsp_ros/core/tare/1" and doc["load"] == "separated" and doc["frame_id"] == "ft_sensor"
     assert doc["recording"]["n_samples"] == 2000 and doc["recording"]["source"] == "tare_swing"
     force = doc["force_offset_n"]
     assert np.all(np.abs(np.subtract(force["value"], truth["force_offset_n"])) < 4 * np.array(force["std"]))

@@ -1,0 +1,69 @@
+"""Identify a recorded bag: read it, identify, and attach what the read found to the estimate."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from bsp_ros.bag import TopicMap, read_session
+from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+
+
+def identify_bag(
+    path: str | Path,
+    options: IdentifyOptions | None = None,
+    topics: TopicMap | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[str, Any]:
+    """The CONTRACT.md estimate of a rosbag2 MCAP bag, with a ``bag`` section on what was read and lost.
+
+    Damage (CRC errors, truncation) does not stop the identification of what is intact; it is reported in
+    ``bag`` and as a warning in ``quality.warnings``.
+
+    Raises
+    ------
+    BspError
+        The bag is missing, not a bag, empty, lacks a required topic or carries a wrong type.
+    """
+    read = read_session(path, topics=topics, progress=progress)
+    report = read.report
+    document = identify_session(read.session, options, {"source": Path(path).name})
+    warnings = document["quality"]["warnings"]
+    if report.damaged:
+        warnings.insert(
+            0,
+            f"bag damaged: {report.crc_errors} chunk CRC errors, truncated={report.truncated}, "
+            f"{report.lost_messages if report.lost_messages is not None else 'unknown'} messages lost; "
+            "identified from the intact part",
+        )
+    warnings[1:1] = [w for w in report.warnings if w not in warnings]
+    quality = document["quality"]
+    if report.rotation_source == "assumed" and not quality["valid"]:
+        frame = read.session.wrench.frame_id
+        quality["message"] = (
+            f"missing transform world -> {frame} (/tf_static lost or never recorded): the wrench was taken as "
+            f"given in world; {quality['message']}"
+        )
+    # Samples implausible in themselves (not merely off the model's fit): the signature of bit damage.
+    implausible = {k: v for k, v in quality.get("removed_samples", {}).items() if k.startswith(("wrench", "marker"))}
+    if report.chunks_without_crc and implausible:
+        # Without chunk CRCs, bit damage shows only as implausible values: say how many were removed.
+        total = sum(implausible.values())
+        warnings.insert(
+            0,
+            f"possible undetected bag damage: chunks carry no CRC and {total} implausible samples were removed "
+            f"({', '.join(f'{k} {v}' for k, v in implausible.items())})",
+        )
+    document["bag"] = {
+        "files": [Path(f).name for f in report.files],
+        "messages": {topic: t.read for topic, t in report.topics.items()},
+        "lost_messages": report.lost_messages,
+        "crc_errors": report.crc_errors,
+        "truncated": report.truncated,
+        "chunks_without_crc": report.chunks_without_crc,
+        "rotation_source": report.rotation_source,
+        "damage": list(report.damage),
+        "implausible_samples_removed": implausible,
+    }
+    return document

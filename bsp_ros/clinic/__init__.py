@@ -1,0 +1,1 @@
+"""The clinic: the session store, minimal detectable change, and therapist-facing reports."""

@@ -1,0 +1,124 @@
+"""The stored session as plain data: quantities, quality and one session record."""
+
+from __future__ import annotations
+
+import datetime as dt
+from dataclasses import dataclass, field
+from typing import Any
+
+SOURCES = ("data", "prior", "data+prior")
+GROUPS = ("segments", "joints")
+
+_EPOCH = dt.datetime(1970, 1, 1, tzinfo=dt.timezone.utc)
+
+ParamKey = tuple[str, str, str]
+"""``(group, part, quantity)``, e.g. ``("joints", "elbow", "coulomb_nm")``."""
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One estimated quantity.
+
+    Attributes
+    ----------
+    value : the estimate, or None if the estimate held no finite value.
+    std : one standard deviation, or None if not finite.
+    source : ``data``, ``prior`` or ``data+prior``.
+    """
+
+    value: float | None
+    std: float | None
+    source: str
+
+
+@dataclass(frozen=True)
+class Quality:
+    """How far an estimate can be trusted.
+
+    Attributes
+    ----------
+    valid : the estimator's overall validity flag.
+    n_samples : samples used, if reported.
+    condition_number : condition number of the regression, None if not finite or not reported.
+    residual_rms_nm : RMS residual moment per joint (N m).
+    warnings : the estimator's warnings, in order.
+    tare_applied : whether a tare (sensor offset and handle payload) was subtracted; False when not recorded.
+    tare_file : the tare file's name, if one was applied.
+    """
+
+    valid: bool
+    n_samples: int | None = None
+    condition_number: float | None = None
+    residual_rms_nm: dict[str, float] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
+    tare_applied: bool = False
+    tare_file: str | None = None
+
+
+@dataclass(frozen=True)
+class SessionRecord:
+    """One identification session of one subject.
+
+    Attributes
+    ----------
+    subject : pseudonymous subject id.
+    session_time_ns : session start, ns since the Unix epoch (UTC).
+    source : the recording the estimate came from (a bag or file name, no directories).
+    method : the identification method, if recorded.
+    config : the method's configuration.
+    subject_info : anthropometric inputs for priors (``body_mass_kg``, ``height_m``, ``sex``), if given.
+    estimate_schema : the estimate's schema tag.
+    quality : validity and fit diagnostics.
+    parameters : every quantity, keyed by ``(group, part, quantity)``.
+    id : row id once stored, else None.
+    added_ns : when the session was stored, ns since the epoch; None before.
+    repeatability : the estimate's ``repeatability`` block (method, per-parameter SEM and MDC95, see
+        :mod:`bsp_ros.clinic.mdc`), keyed by estimate path ``group.part.quantity``; empty if none was computed.
+    """
+
+    subject: str
+    session_time_ns: int
+    source: str
+    method: str | None
+    config: dict[str, Any]
+    subject_info: dict[str, Any]
+    estimate_schema: str
+    quality: Quality
+    parameters: dict[ParamKey, Quantity]
+    id: int | None = None
+    added_ns: int | None = None
+    repeatability: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def session_time(self) -> dt.datetime:
+        """The session start as an aware UTC datetime."""
+        return ns_to_datetime(self.session_time_ns)
+
+
+@dataclass(frozen=True)
+class SubjectSummary:
+    """A subject's sessions at a glance.
+
+    Attributes
+    ----------
+    subject : pseudonymous subject id.
+    n_sessions : number of stored sessions.
+    first_ns, last_ns : the first and last session start, ns since the epoch.
+    n_invalid : sessions whose estimate is flagged not valid.
+    """
+
+    subject: str
+    n_sessions: int
+    first_ns: int
+    last_ns: int
+    n_invalid: int
+
+
+def ns_to_datetime(time_ns: int) -> dt.datetime:
+    """``time_ns`` (ns since the Unix epoch) as an aware UTC datetime (microsecond resolution)."""
+    return _EPOCH + dt.timedelta(microseconds=time_ns // 1000)
+
+
+def format_time(time_ns: int) -> str:
+    """``time_ns`` as ISO 8601 UTC to the second, e.g. ``2024-03-01T09:30:00Z``."""
+    return ns_to_datetime(time_ns).strftime("%Y-%m-%dT%H:%M:%SZ")

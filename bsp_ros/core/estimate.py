@@ -1,0 +1,155 @@
+"""The `bsp_ros/core/estimate/1` document of CONTRACT.md, built from an identification and a fused prior."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from bsp_ros import __version__
+from bsp_ros.core.fusion import Posterior, SubjectInfo
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.streams import joints_for, segments_for
+
+SCHEMA = "bsp_ros/core/estimate/1"
+
+
+def quantity(value: float, std: float, source: str) -> dict[str, Any]:
+    """One CONTRACT.md quantity; a value that could not be computed is ``null``, never NaN."""
+
+    def clean(number: float) -> float | None:
+        return float(number) if math.isfinite(number) else None
+
+    return {"value": clean(value), "std": clean(std), "source": source}
+
+
+def invalid_document(method: str, message: str) -> dict[str, Any]:
+    """An estimate document with no parameters, marked invalid with ``message`` (live inputs not usable)."""
+    return {
+        "schema": SCHEMA,
+        "method": method,
+        "segments": {},
+        "joints": {},
+        "quality": {
+            "valid": False,
+            "n_samples": 0,
+            "condition_number": None,
+            "residual_rms_nm": {},
+            "warnings": [],
+            "message": message,
+            "level": "invalid",
+        },
+    }
+
+
+def estimate_document(
+    result: IdentificationResult,
+    data: IdentificationData,
+    posterior: Posterior | None,
+    subject: SubjectInfo,
+    session: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Build the estimate JSON (as a dict) of CONTRACT.md.
+
+    ``static_moment_kgm`` is the grouped, identifiable static moment ``beta_j``; ``first_moment_kgm`` is the
+    segment's own ``m_j l_j``, which like ``mass_kg`` and ``com_m`` needs the anthropometric prior.
+
+    Parameters
+    ----------
+    result : the identification.
+    data : what it was identified from (segment lengths).
+    posterior : masses and COMs fused with the prior, None if the fusion could not run.
+    subject : the subject facts used for the prior.
+    session : extra facts about the session (times, source, configuration).
+
+    Returns
+    -------
+    A JSON-ready dict (strict JSON: no NaN).
+    """
+    n = data.n_joints
+    segments: dict[str, dict[str, Any]] = {}
+    for j, segment in enumerate(segments_for(n)):
+        entry = {
+            "length_m": quantity(data.lengths_m[j], data.lengths_std_m[j], "data"),
+            "static_moment_kgm": quantity(
+                result.value("static_moment_kgm", segment), result.std_of("static_moment_kgm", segment), "data"
+            ),
+        }
+        if posterior is not None:
+            cov = posterior.covariance
+            entry["mass_kg"] = quantity(posterior.mean[j], math.sqrt(cov[j, j]), posterior.source(j))
+            entry["com_m"] = quantity(posterior.mean[n + j], math.sqrt(cov[n + j, n + j]), posterior.source(n + j))
+            share = max(posterior.prior_share[j], posterior.prior_share[n + j])
+            entry["first_moment_kgm"] = quantity(
+                posterior.first_moments_kgm[j],
+                posterior.first_moments_std_kgm[j],
+                "prior" if share > 0.999 else "data+prior",
+            )
+        else:
+            for key in ("mass_kg", "com_m", "first_moment_kgm"):
+                entry[key] = quantity(float("nan"), float("nan"), "prior")
+        segments[segment] = entry
+    joints: dict[str, dict[str, Any]] = {joint: {} for joint in joints_for(n)}
+    for i, (key, owner) in enumerate(result.names):
+        if owner in joints:
+            joints[owner][key] = quantity(result.values[i], result.std[i], "data")
+    quality: dict[str, Any] = {
+        "valid": bool(result.valid),
+        "n_samples": int(result.n_samples),
+        "condition_number": float(result.condition_number) if math.isfinite(result.condition_number) else None,
+        "residual_rms_nm": {k: float(v) for k, v in result.residual_rms_nm.items()},
+        "warnings": list(result.warnings) + (list(posterior.notes) if posterior else []),
+        "message": result.message,
+        "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
+        "removed_samples": removed_samples(result, data),
+    }
+    sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
+    if sensitivity:
+        # What the data cannot test at one operating point, and what it would cost if false.
+        quality["assumptions"] = [
+            {
+                "assumption": "no elastic passive offset at any joint (a constant passive moment is confounded "
+                "with gravity over a small range of motion)",
+                "static_moment_shift_kgm_per_0_05_nm": sensitivity,
+            }
+        ]
+    correlation = _correlation(result.covariance)
+    document: dict[str, Any] = {
+        "schema": SCHEMA,
+        "method": result.method,
+        "segments": segments,
+        "joints": joints,
+        "quality": quality,
+        "subject": {"body_mass_kg": subject.body_mass_kg, "height_m": subject.height_m, "sex": subject.sex},
+        "diagnostics": {
+            "parameters": [f"{key}/{owner}" for key, owner in result.names],
+            "correlation": [[_finite(c) for c in row] for row in correlation],
+            **{k: v for k, v in result.diagnostics.items() if k != "paper_pi"},
+            **({"paper_pi": result.diagnostics["paper_pi"]} if "paper_pi" in result.diagnostics else {}),
+        },
+        "software": {"name": "bsp_ros", "version": __version__},
+    }
+    if session:
+        document["session"] = session
+    return document
+
+
+def removed_samples(result: IdentificationResult, data: IdentificationData) -> dict[str, int]:
+    """Implausible samples removed before or during the fit, by kind (``wrench_spikes``, ``marker_elbow``...)."""
+    found = result.diagnostics.get("removed_samples", {})
+    merged = dict(data.removed_samples)
+    if isinstance(found, dict):
+        merged.update({str(k): int(v) for k, v in found.items()})
+    return merged
+
+
+def _finite(number: float) -> float | None:
+    return round(float(number), 6) if math.isfinite(number) else None
+
+
+def _correlation(covariance: np.ndarray) -> np.ndarray:
+    std = np.sqrt(np.clip(np.diag(covariance), 0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.asarray(covariance / np.outer(std, std))

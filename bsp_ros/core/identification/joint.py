@@ -1,0 +1,673 @@
+"""Our default identification: all joints in one weighted, bounded least-squares problem."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import lsq_linear
+from scipy.stats import chi2
+
+from bsp_ros.core.identification.covariance import correlation_from_covariance, hac_covariance
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.passive import TERMS, PassiveModel
+from bsp_ros.core.identification.result import IdentificationResult, ParameterName
+from bsp_ros.core.identification.robust import hampel_outliers, high_frequency_sd, robust_sd
+from bsp_ros.core.model import contact_jacobian, gravity_regressor
+from bsp_ros.core.streams import joints_for, segments_for
+from bsp_ros.validation import check_finite_scalar, check_positive
+
+
+@dataclass(frozen=True)
+class JointConfig:
+    """Settings of the stacked identification.
+
+    Attributes
+    ----------
+    passive : the passive moment model (Coulomb by default).
+    deadband_fraction : rows of a joint whose direction speed is below this fraction of its typical speed
+        are left out of the fit: there the sign of the motion, hence the Coulomb term, is ambiguous.
+    deadband_noise_sd : and rows below this many standard deviations of the velocity noise.
+    min_samples : fewer usable samples make the estimate invalid.
+    min_range_deg : a joint moving less than this has no excitation (invalid).
+    min_direction_share : each direction of motion must hold this share of a joint's rows (Coulomb).
+    max_condition : a larger column-scaled condition number makes the estimate invalid.
+    check_elastic : test whether an elastic term the model lacks would change the static moments.
+    outlier_sd : torque samples further than this many robust standard deviations from the rolling median
+        of their neighbours (wrench spikes), or from the fit, are removed.
+    spike_window : samples in that rolling median.
+    max_misfit : the residual RMS of a joint above this multiple of the sensor noise the data shows
+        (robust, from first differences) means the model does not fit: invalid.
+    max_outlier_shift : if removing the samples far off the fit moves a parameter by more than this many
+        standard deviations, the estimate hangs on a few samples: invalid.
+    min_row_share : with a Coulomb term, a joint whose direction of motion is trustworthy in fewer than
+        this share of the samples makes the estimate invalid.
+    """
+
+    passive: PassiveModel = field(default_factory=PassiveModel)
+    deadband_fraction: float = 0.1
+    deadband_noise_sd: float = 4.0
+    min_samples: int = 200
+    min_range_deg: float = 0.2
+    min_direction_share: float = 0.05
+    max_condition: float = 1e4
+    check_elastic: bool = True
+    outlier_sd: float = 8.0
+    spike_window: int = 11
+    max_misfit: float = 4.0
+    min_row_share: float = 0.5
+    max_outlier_shift: float = 2.0
+
+    def __post_init__(self) -> None:
+        check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)
+        check_finite_scalar("deadband_noise_sd", self.deadband_noise_sd, 0.0, 100.0)
+        check_positive("min_samples", self.min_samples)
+        check_finite_scalar("min_range_deg", self.min_range_deg, 0.0, 90.0)
+        check_finite_scalar("min_direction_share", self.min_direction_share, 0.0, 0.5)
+        check_positive("max_condition", self.max_condition)
+        check_positive("outlier_sd", self.outlier_sd, 1000.0)
+        check_positive("spike_window", self.spike_window, 10_001)
+        check_positive("max_misfit", self.max_misfit)
+        check_finite_scalar("min_row_share", self.min_row_share, 0.0, 1.0)
+        check_finite_scalar("max_outlier_shift", self.max_outlier_shift, 0.0, 1e6)
+
+
+@dataclass(frozen=True)
+class _Problem:
+    names: list[ParameterName]
+    regressor: np.ndarray  # (N, n, p)
+    torque: np.ndarray  # (N, n)
+    rows: np.ndarray  # (N, n) bool: row used
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Fit:
+    values: np.ndarray
+    covariance: np.ndarray
+    residual: np.ndarray  # (N, n), NaN off the used rows
+    sigma: np.ndarray  # (n,)
+    condition: float
+    lags: int
+    design: np.ndarray  # (p, p) X^T W X over the used rows
+    weights: np.ndarray  # (n,) per-joint weights 1 / sigma^2
+
+
+def _build_problem(
+    data: IdentificationData, passive: PassiveModel, rows: np.ndarray, widths: np.ndarray | None = None
+) -> _Problem:
+    """The stacked problem; ``widths`` (n,) rad/s > 0 replace a joint's Coulomb ``sign(v)`` by ``tanh(v / w)``."""
+    n = data.n_joints
+    joints, segments = joints_for(n), segments_for(n)
+    k = len(passive.terms)
+    regressor = np.zeros((data.t_ns.size, n, n + n * k))
+    regressor[:, :, :n] = gravity_regressor(data.q_rad)
+    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments]
+    lower = [0.0] * n
+    for j, joint in enumerate(joints):
+        regressor[:, j, n + j * k : n + (j + 1) * k] = passive.columns(data.q_rad, data.velocity_rad_s, j)
+        for term in passive.terms:
+            key, _, bound = TERMS[term]
+            names.append((key, joint))
+            lower.append(bound)
+        if widths is not None and widths[j] > 0 and "coulomb" in passive.terms:
+            column = n + j * k + passive.terms.index("coulomb")
+            regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
+    return _Problem(names, regressor, data.tau_nm, rows, np.array(lower), np.full(len(names), np.inf))
+
+
+def _triangular(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``R, c`` with ``|a x - b|^2 = |R x - c|^2 + const``: the bounded problem at p x p cost.
+
+    Normal equations with Cholesky are fast for tall, column-scaled, well-conditioned ``a``; QR otherwise.
+    """
+    gram = a.T @ a
+    try:
+        lower = np.linalg.cholesky(gram)
+        if np.linalg.cond(lower) < 1e6:
+            return lower.T, np.linalg.solve(lower, a.T @ b)
+    except np.linalg.LinAlgError:
+        pass
+    q_factor, r_factor = np.linalg.qr(a, mode="reduced")
+    return r_factor, q_factor.T @ b
+
+
+def _weighted_solve(problem: _Problem, weights: np.ndarray) -> np.ndarray:
+    root = np.sqrt(weights)[None, :, None]
+    a = (problem.regressor * root)[problem.rows]
+    b = (problem.torque * root[..., 0])[problem.rows]
+    # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
+    scale = np.linalg.norm(a, axis=0)
+    scale[scale == 0] = 1.0
+    r_factor, rhs = _triangular(a / scale, b)
+    solution = lsq_linear(
+        r_factor, rhs, bounds=(problem.lower * scale, problem.upper * scale), method="bvls", tol=1e-12
+    )
+    return np.asarray(solution.x / scale)
+
+
+def _fit(problem: _Problem) -> _Fit:
+    n = problem.torque.shape[1]
+    weights = np.ones(n)
+    values = _weighted_solve(problem, weights)
+    for _ in range(2):  # reweight by per-joint residual variance (Gautier and Poignet 2001)
+        residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+        counts = problem.rows.sum(axis=0)
+        sigma = np.sqrt(np.where(problem.rows, residual**2, 0.0).sum(axis=0) / np.maximum(counts, 1))
+        sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(problem.torque).max()), 1e-9))
+        weights = 1.0 / sigma**2
+        values = _weighted_solve(problem, weights)
+    residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+    w = np.where(problem.rows, weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    scores = np.einsum("tip,ti->tp", problem.regressor, w * np.where(problem.rows, residual, 0.0))
+    used_samples = problem.rows.any(axis=1)
+    covariance, lags = hac_covariance(design, scores[used_samples])
+    a = (problem.regressor * np.sqrt(weights)[None, :, None])[problem.rows]
+    norms = np.linalg.norm(a, axis=0)
+    # Singular values of the column-scaled matrix are those of its triangular factor.
+    singular = np.linalg.svd(_triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0], compute_uv=False)
+    condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+    residual_used = np.where(problem.rows, residual, np.nan)
+    return _Fit(values, covariance, residual_used, sigma, condition, lags, design, weights)
+
+
+def _motion_rows(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
+    """Rows with a trustworthy direction of motion (all rows when the model has no Coulomb term)."""
+    speed = np.abs(data.velocity_rad_s)
+    if "coulomb" not in config.passive.terms:
+        return np.ones_like(speed, dtype=bool), []
+    typical = np.percentile(speed, 95, axis=0)
+    noise = np.nan_to_num(data.velocity_noise_rad_s, nan=0.0)
+    deadband = np.maximum(config.deadband_fraction * typical, config.deadband_noise_sd * noise)
+    notes = []
+    for j, joint in enumerate(joints_for(data.n_joints)):
+        if noise[j] > 0 and config.deadband_noise_sd * noise[j] > 0.5 * typical[j]:
+            notes.append(
+                f"uncertain direction of motion at the {joint}: velocity noise {noise[j]:.2g} rad/s against "
+                f"a typical speed of {typical[j]:.2g} rad/s"
+            )
+    return speed > deadband[None, :], notes
+
+
+def _excitation_problems(data: IdentificationData, rows: np.ndarray, config: JointConfig) -> list[str]:
+    problems = []
+    if data.t_ns.size < config.min_samples:
+        problems.append(f"too few samples: {data.t_ns.size} < {config.min_samples}")
+        return problems
+    range_deg = np.degrees(np.ptp(data.q_rad, axis=0))
+    for j, joint in enumerate(joints_for(data.n_joints)):
+        if range_deg[j] < config.min_range_deg:
+            problems.append(f"no motion at the {joint}: range {range_deg[j]:.3f} deg < {config.min_range_deg} deg")
+        elif "coulomb" in config.passive.terms:
+            signs = np.sign(data.velocity_rad_s[rows[:, j], j])
+            share = min((signs > 0).mean(), (signs < 0).mean()) if signs.size else 0.0
+            if share < config.min_direction_share:
+                problems.append(f"the {joint} moved in one direction only ({100 * share:.1f}% of rows the other way)")
+    return problems
+
+
+def _elastic_check(
+    data: IdentificationData, config: JointConfig, rows: np.ndarray, base: _Fit, widths: np.ndarray
+) -> list[str]:
+    """Warn when an elastic term the model lacks is supported by the data and moves the static moments."""
+    missing = [t for t in ("offset", "stiffness") if t not in config.passive.terms]
+    if not missing:
+        return []
+    wider = PassiveModel(config.passive.terms + tuple(missing))
+    problem = _build_problem(data, wider, rows, widths)
+    fit = _fit(problem)
+    n = data.n_joints
+    notes = []
+    base_beta, wide_beta = base.values[:n], fit.values[:n]
+    change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
+    correlation = correlation_from_covariance(fit.covariance)
+    for joint in joints_for(n):
+        picks = [
+            i
+            for i, (key, owner) in enumerate(problem.names)
+            if owner == joint and key in ("offset_nm", "stiffness_nm_per_rad")
+        ]
+        sub = fit.covariance[np.ix_(picks, picks)]
+        theta = fit.values[picks]
+        try:
+            statistic = float(theta @ np.linalg.solve(sub, theta))
+        except np.linalg.LinAlgError:
+            continue
+        if chi2.sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005:
+            worst = int(np.argmax(change))
+            corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
+            notes.append(
+                f"elastic passive moment at the {joint}: an angle-dependent term is supported by the data "
+                f"(chi2 {statistic:.0f}) and is confounded with gravity (|corr| {corr:.2f}); modelling it moves "
+                f"the {problem.names[worst][1]} static moment by {100 * change[worst]:.1f}%: the static moments "
+                f"may be biased (try --passive {wider.label}; an F/T sensor offset no tare removed looks the same: "
+                "apply one with --tare)"
+            )
+    return notes
+
+
+# Torque deviations and misfits below this never count (Nm): no rehab cell's sensor resolves them, and a
+# noise-free simulation would otherwise be judged against its rounding errors.
+MIN_OUTLIER_NM = 1e-3
+
+
+# Candidate widths of a smooth friction transition, tanh(v / w) (rad/s): 0.25 to 16 mrad/s.
+TRANSITION_WIDTHS_RAD_S = 0.00025 * 2.0 ** (np.arange(25) / 4.0)
+# A smooth transition is detected when it lowers the weighted residual sum of squares by this much (a
+# chi-square-like figure, inflated by autocorrelation): clean sessions give at most ~1, sessions with 5%
+# marker dropouts (noisy directions at each run's ends) up to ~200 rarely, a 1 mrad/s transition over
+# 60 s 110 at the wrist and 1200 at the elbow.
+TRANSITION_MIN_GAIN = 100.0
+
+
+def _transition_widths(
+    problem: _Problem, fit: _Fit, data: IdentificationData, config: JointConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """Width of a smooth Coulomb transition at each joint, and how uncertain that leaves the amplitude.
+
+    A profile over :data:`TRANSITION_WIDTHS_RAD_S` (and the sign step, width 0), one joint at a time, on
+    the weighted normal equations: swapping one column costs O(N), not a new fit.
+
+    Returns
+    -------
+    widths : (n,) rad/s; 0 where a sign step fits as well (gain below :data:`TRANSITION_MIN_GAIN`).
+    spread : (n,) half the range (Nm) of the Coulomb amplitudes over the widths the data cannot tell from
+        the chosen one (residual within :data:`TRANSITION_MIN_GAIN` of it): a model uncertainty the
+        covariance of one fit does not hold.
+    """
+    n = data.n_joints
+    widths, spread = np.zeros(n), np.zeros(n)
+    if "coulomb" not in config.passive.terms:
+        return widths, spread
+    k = len(config.passive.terms)
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    total = float((w * problem.torque**2).sum())
+
+    def solve(a: np.ndarray, b: np.ndarray) -> tuple[float, np.ndarray]:
+        try:
+            x = np.linalg.solve(a, b)
+        except np.linalg.LinAlgError:
+            return np.inf, np.full(b.size, np.nan)
+        return total - float(b @ x), x
+
+    base, base_x = solve(design, moment)
+    for j in range(n):
+        column = n + j * k + config.passive.terms.index("coulomb")
+        x_j, w_j, y_j = problem.regressor[:, j, :], w[:, j], problem.torque[:, j]
+        profile = [(base, 0.0, float(base_x[column]))]
+        for width in TRANSITION_WIDTHS_RAD_S:
+            c = np.tanh(data.velocity_rad_s[:, j] / width)
+            a, b = design.copy(), moment.copy()
+            cross = (x_j * (w_j * c)[:, None]).sum(axis=0)
+            cross[column] = (w_j * c * c).sum()
+            a[column, :], a[:, column] = cross, cross
+            b[column] = (w_j * c * y_j).sum()
+            value, x = solve(a, b)
+            profile.append((value, float(width), float(x[column])))
+        best = min(profile)
+        chosen = best if base - best[0] > TRANSITION_MIN_GAIN else profile[0]
+        widths[j] = chosen[1]
+        near = [c for value, _, c in profile if value <= chosen[0] + TRANSITION_MIN_GAIN and np.isfinite(c)]
+        spread[j] = 0.5 * (max(near) - min(near)) if near else 0.0
+    return widths, spread
+
+
+# An unmodelled term counts when its coefficients differ from 0 at this significance (HAC chi-square) AND
+# modelling it moves a static moment or a Coulomb amplitude by more than this many of its std: only then
+# would the estimate be wrong beyond its std without it.
+MODEL_CHECK_P = 1e-6
+MODEL_CHECK_SHIFT_SD = 1.0
+# Candidate speeds (rad/s) of a Stribeck-like excess of friction at low speed, sign(v) exp(-(v / v_s)^2).
+STRIBECK_SPEEDS_RAD_S = (0.002, 0.004, 0.008, 0.016, 0.032)
+
+
+def _augmented(problem: _Problem, extra: np.ndarray, names: list[ParameterName]) -> _Problem:
+    """``problem`` with extra unbounded columns ``extra`` (N, n, m)."""
+    return _Problem(
+        problem.names + names,
+        np.concatenate((problem.regressor, extra), axis=2),
+        problem.torque,
+        problem.rows,
+        np.concatenate((problem.lower, np.full(len(names), -np.inf))),
+        np.concatenate((problem.upper, np.full(len(names), np.inf))),
+    )
+
+
+def _term_test(
+    problem: _Problem, fit: _Fit, extra: np.ndarray, names: list[ParameterName], watched: list[int]
+) -> tuple[float, float, int, _Fit]:
+    """Fit with the extra columns; return the p-value of their coefficients, the largest shift of a
+    ``watched`` parameter in std of the wider fit, which one, and the wider fit."""
+    wide = _fit(_augmented(problem, extra, names))
+    p = len(problem.names)
+    picks = list(range(p, p + len(names)))
+    theta = wide.values[picks]
+    try:
+        statistic = float(theta @ np.linalg.solve(wide.covariance[np.ix_(picks, picks)], theta))
+    except np.linalg.LinAlgError:
+        return 1.0, 0.0, watched[0], wide
+    std = np.sqrt(np.clip(np.diag(wide.covariance)[watched], 1e-300, None))
+    shift = np.abs(wide.values[watched] - fit.values[watched]) / std
+    worst = int(np.argmax(shift))
+    return float(chi2.sf(statistic, len(picks))), float(shift[worst]), watched[worst], wide
+
+
+def _drift_check(data: IdentificationData, problem: _Problem, fit: _Fit) -> list[str]:
+    """A wrench offset that changes linearly over the session (an F/T sensor drifting with temperature):
+    the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x)."""
+    n = data.n_joints
+    t_s = (data.t_ns - data.t_ns[data.t_ns.size // 2]) / 1e9
+    jacobian = contact_jacobian(data.q_rad, data.lengths_m)  # (N, 3, n)
+    extra = -np.transpose(jacobian, (0, 2, 1)) * t_s[:, None, None]  # (N, n, 3)
+    axes = [k for k, axis in enumerate(("fy", "fz", "mx")) if np.linalg.norm(extra[:, :, k]) > 0]
+    names: list[ParameterName] = [(f"drift_{('fy', 'fz', 'mx')[k]}", "sensor") for k in axes]
+    p_value, shift, worst, wide = _term_test(problem, fit, extra[:, :, axes], names, list(range(n)))
+    if p_value >= MODEL_CHECK_P:
+        return []
+    rate = np.zeros(3)
+    rate[axes] = wide.values[len(problem.names) :]
+    span_s = float(t_s[-1] - t_s[0])
+    # A drifting sensor's offset at any moment is unknown (a tare holds at the moment it was taken): what the
+    # offset changes over the session alone moves the static moments by this much, as a constant offset would.
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    delta_torque = -np.einsum("tki,k->ti", jacobian, rate * span_s)
+    delta = np.linalg.lstsq(fit.design, np.einsum("tip,ti,ti->p", problem.regressor, w, delta_torque), rcond=None)[0]
+    std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
+    offset_shift = np.abs(delta[:n]) / std
+    if max(shift, float(offset_shift.max())) <= MODEL_CHECK_SHIFT_SD:
+        return []
+    if offset_shift.max() > shift:
+        shift, worst = float(offset_shift.max()), int(np.argmax(offset_shift))
+    force_rate = float(np.hypot(rate[0], rate[1]))
+    return [
+        f"the wrench drifts during the session (an F/T sensor offset changing by about {1e3 * force_rate:.2g} mN/s, "
+        f"{force_rate * span_s:.2g} N over {span_s:.0f} s): that moves the {problem.names[worst][1]} static moment "
+        f"by {shift:.1f} std, and no tare holds for the whole session; let the sensor warm up, re-tare and record again"
+    ]
+
+
+def _stribeck_check(
+    data: IdentificationData, problem: _Problem, fit: _Fit, config: JointConfig, widths: np.ndarray
+) -> list[str]:
+    """Friction that is larger at low speed than at high speed (Stribeck-like), joint by joint: the Coulomb
+    amplitude of a sign step is then a speed-dependent average, not the joint's friction. Joints with a
+    modelled smooth transition (``widths`` > 0) are left out: a tanh step plus a low-speed bump fit direction
+    errors near reversals, and the transition's uncertainty is already in their Coulomb variance."""
+    if "coulomb" not in config.passive.terms:
+        return []
+    n, k = data.n_joints, len(config.passive.terms)
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    notes = []
+    for j, joint in enumerate(joints_for(n)):
+        if widths[j] > 0:
+            continue
+        speed = np.abs(data.velocity_rad_s[:, j])
+        column = n + j * k + config.passive.terms.index("coulomb")
+        # The speed by a profile on the bordered normal equations (O(N) per candidate), then one full fit.
+        best_gain, best_speed = 0.0, 0.0
+        for speed_s in STRIBECK_SPEEDS_RAD_S:
+            c = np.sign(data.velocity_rad_s[:, j]) * np.exp(-((speed / speed_s) ** 2)) * w[:, j]
+            cross = problem.regressor[:, j, :].T @ c
+            cc = float(c @ (c / np.where(w[:, j] > 0, w[:, j], 1.0)))
+            a = np.block([[design, cross[:, None]], [cross[None, :], np.array([[cc]])]])
+            rhs = np.append(moment, float(c @ problem.torque[:, j]))
+            try:
+                gain = float(rhs @ np.linalg.solve(a, rhs)) - float(moment @ np.linalg.solve(design, moment))
+            except np.linalg.LinAlgError:
+                continue
+            if gain > best_gain:
+                best_gain, best_speed = gain, speed_s
+        if best_speed == 0.0:
+            continue
+        extra = np.zeros((data.t_ns.size, n, 1))
+        extra[:, j, 0] = np.sign(data.velocity_rad_s[:, j]) * np.exp(-((speed / best_speed) ** 2))
+        p_value, shift, _, wide = _term_test(problem, fit, extra, [("stribeck_nm", joint)], [column])
+        # Only an excess of friction at low speed is Stribeck-like; a deficit is what direction-of-motion
+        # errors near reversals (e.g. around marker gaps) look like, and the transition test covers it.
+        if wide.values[-1] > 0 and p_value < MODEL_CHECK_P and shift > MODEL_CHECK_SHIFT_SD:
+            notes.append(
+                f"friction at the {joint} depends on speed (Stribeck-like, larger below about "
+                f"{1e3 * best_speed:.2g} mrad/s): modelling it moves its Coulomb amplitude by {shift:.1f} std; the "
+                "amplitude of a sign step is a speed-dependent average here"
+            )
+    return notes
+
+
+def _spikes(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
+    """Samples whose torques jump off the rolling median of their neighbours (wrench spikes), or not finite."""
+    finite = np.isfinite(data.tau_nm).all(axis=1)
+    flags = ~finite
+    if finite.sum() >= 3:
+        flags[finite] = hampel_outliers(
+            data.tau_nm[finite], config.spike_window, config.outlier_sd, floor=MIN_OUTLIER_NM
+        )
+    count = int(flags.sum())
+    if not count:
+        return flags, []
+    return flags, [
+        f"removed {count} wrench sample{'s' if count > 1 else ''} off the local robust spread (joint torques more "
+        f"than {config.outlier_sd:g} robust sd from the rolling median of {config.spike_window} samples)"
+    ]
+
+
+def _fit_outliers(fit: _Fit, config: JointConfig) -> np.ndarray:
+    """(N,) samples with a residual beyond ``outlier_sd`` robust standard deviations at any joint."""
+    scale = robust_sd(fit.residual, axis=0)
+    with np.errstate(invalid="ignore"):
+        far = np.abs(fit.residual) > np.maximum(config.outlier_sd * scale, MIN_OUTLIER_NM)[None, :]
+    return np.asarray(far.any(axis=1))
+
+
+def _misfit(fit: _Fit) -> tuple[np.ndarray, np.ndarray]:
+    """Per joint: the sensor noise the data shows (Nm) and the residual RMS as a multiple of it."""
+    noise = high_frequency_sd(fit.residual)
+    rms = np.sqrt(np.nanmean(fit.residual**2, axis=0))
+    return noise, rms / np.maximum(noise, 1e-12)
+
+
+# The elastic offset whose effect on the static moments the estimate states (Nm).
+SENSITIVITY_OFFSET_NM = 0.05
+
+
+def _offset_sensitivity(problem: _Problem, fit: _Fit, n: int) -> dict[str, dict[str, float]]:
+    """Joint -> segment -> how far an unmodelled constant passive offset of 0.05 Nm at that joint moves the
+    static moment (kg m), to first order: ``A^-1 X^T W u`` with ``u`` the offset's torque column."""
+    joints, segments = joints_for(n), segments_for(n)
+    out: dict[str, dict[str, float]] = {}
+    if any(key == "offset_nm" for key, _ in problem.names):
+        return out  # the offset is modelled: nothing assumed
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    try:
+        for j, joint in enumerate(joints):
+            rhs = SENSITIVITY_OFFSET_NM * problem.regressor[:, j, :].T @ w[:, j]
+            shift = np.linalg.solve(fit.design, rhs)[:n]
+            out[joint] = {segment: float(v) for segment, v in zip(segments, shift, strict=True)}
+    except np.linalg.LinAlgError:
+        return {}
+    return out
+
+
+def _failed(
+    data: IdentificationData, names: list[ParameterName], problems: list[str], warnings: list[str]
+) -> IdentificationResult:
+    p = len(names)
+    return IdentificationResult(
+        "joint",
+        names,
+        np.full(p, np.nan),
+        np.full((p, p), np.nan),
+        False,
+        "; ".join(problems),
+        warnings,
+        n_samples=int(data.t_ns.size),
+    )
+
+
+def identify_joint(data: IdentificationData, config: JointConfig | None = None) -> IdentificationResult:
+    """Identify static moments and passive moments of all joints in one stacked problem.
+
+    Wrench spikes are removed before the fit and samples far off the fit after it (counted in the
+    warnings); if removing the latter moves a parameter by more than its standard deviation, the
+    estimate is not valid: it would hang on a few samples. Nor is it valid when the residuals are far
+    above the sensor noise the data shows (the model does not fit), when a static moment sits at its
+    bound 0, or when most samples of a joint lie in the direction dead band.
+
+    Parameters
+    ----------
+    data : samples with joint angles, direction velocities and measured torques.
+    config : passive model and validity thresholds.
+
+    Returns
+    -------
+    IdentificationResult with a HAC covariance; ``valid`` False with a message when excitation is poor.
+    """
+    config = config or JointConfig()
+    n = data.n_joints
+    joints = joints_for(n)
+    rows, notes = _motion_rows(data, config)
+    spikes, spike_notes = _spikes(data, config)
+    rows &= ~spikes[:, None]
+    problems = _excitation_problems(data, rows, config)
+    problem = _build_problem(data, config.passive, rows)
+    warnings = list(data.warnings) + spike_notes + notes
+    if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
+        problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
+        return _failed(data, problem.names, problems, warnings)
+    usable = int((~spikes).sum())
+    if "coulomb" in config.passive.terms:
+        for j, joint in enumerate(joints):
+            share = rows[:, j].sum() / max(usable, 1)
+            if share < config.min_row_share:
+                problems.append(
+                    f"most samples of the {joint} were dropped: only {100 * share:.0f}% move clearly enough to "
+                    "tell the direction of motion"
+                )
+    fit = _fit(problem)
+    widths, spread = _transition_widths(problem, fit, data, config)
+    if widths.any():
+        problem = _build_problem(data, config.passive, rows, widths)
+        fit = _fit(problem)
+        for j, joint in enumerate(joints):
+            if widths[j] == 0:
+                continue
+            beyond = float((np.abs(data.velocity_rad_s[rows[:, j], j]) > 3 * widths[j]).sum()) / max(usable, 1)
+            warnings.append(
+                f"friction at the {joint} changes direction smoothly (tanh width about {1e3 * widths[j]:.2g} mrad/s, "
+                f"modelled); {100 * beyond:.0f}% of samples move faster than 3 widths"
+            )
+            if beyond < config.min_row_share:
+                problems.append(
+                    f"the {joint} hardly leaves its friction transition (width about {1e3 * widths[j]:.2g} mrad/s, "
+                    f"{100 * beyond:.0f}% of samples beyond 3 widths): its Coulomb amplitude is not identified"
+                )
+    far = _fit_outliers(fit, config)
+    n_far = int(far.sum())
+    n_removed = 0
+    if n_far > 0.05 * usable:
+        problems.append(
+            f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
+        )
+    elif n_far:
+        kept = _build_problem(data, config.passive, rows & ~far[:, None], widths)
+        refit = _fit(kept)
+        # Against the larger std of the two fits: samples far off the fit (a filter's edge, a glitch) also
+        # inflate the std of the fit that keeps them.
+        std = np.sqrt(np.clip(np.maximum(np.diag(refit.covariance), np.diag(fit.covariance)), 0.0, None))
+        shift = np.abs(refit.values - fit.values) / np.maximum(std, 1e-300)
+        warnings.append(
+            f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over "
+            f"{config.outlier_sd:g} robust sd)"
+        )
+        if shift.max() > config.max_outlier_shift:
+            worst = int(np.argmax(shift))
+            key, owner = problem.names[worst]
+            problems.append(
+                f"the fit hangs on a few samples: removing {n_far} far off it moves {key} at the {owner} by "
+                f"{shift[worst]:.1f} std"
+            )
+        problem, fit, n_removed = kept, refit, n_far
+    if spread.any():
+        # Whether friction steps or changes smoothly at low speed is itself uncertain: its effect on each
+        # Coulomb amplitude joins that amplitude's variance (independent of the other parameters).
+        covariance = fit.covariance.copy()
+        k = len(config.passive.terms)
+        for j in range(n):
+            index = n + j * k + config.passive.terms.index("coulomb")
+            covariance[index, index] += spread[j] ** 2
+        fit = dataclasses.replace(fit, covariance=covariance)
+    noise, misfit = _misfit(fit)
+    for j, joint in enumerate(joints):
+        if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
+            problems.append(
+                f"the model does not fit at the {joint}: residual RMS {misfit[j] * noise[j]:.3g} Nm is "
+                f"{misfit[j]:.1f} times the sensor noise ({noise[j]:.2g} Nm) the data shows (a missing or "
+                "wrong sensor transform, an unmodelled load or passive moment?)"
+            )
+    if fit.condition > config.max_condition:
+        problems.append(f"poor excitation: condition number {fit.condition:.3g} > {config.max_condition:g}")
+    correlation = correlation_from_covariance(fit.covariance)
+    max_corr_with_gravity = {}
+    for i, (key, owner) in enumerate(problem.names):
+        if i >= n:
+            corr = float(np.max(np.abs(correlation[i, :n])))
+            max_corr_with_gravity[f"{key}/{owner}"] = corr
+            if corr > 0.95:
+                warnings.append(f"confounded: {key} at the {owner} is correlated with gravity (|corr| {corr:.3f})")
+        std = np.sqrt(max(fit.covariance[i, i], 0.0))
+        at_bound = np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12
+        if at_bound and i < n:
+            problems.append(f"the {owner} static moment sits at its bound 0: the data do not support it")
+        elif at_bound and std > 0:
+            warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
+        if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
+            warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
+    if config.check_elastic and not problems:
+        unmodelled = _drift_check(data, problem, fit) + _stribeck_check(data, problem, fit, config, widths)
+        warnings += unmodelled
+        if unmodelled:
+            problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
+    if config.check_elastic and not problems:
+        elastic = _elastic_check(data, config, problem.rows, fit, widths)
+        warnings += elastic
+        if elastic:
+            problems.append(
+                "an elastic passive moment the model lacks is supported by the data and biases the static moments "
+                "(see warnings)"
+            )
+    sensitivity = _offset_sensitivity(problem, fit, n)
+    valid = not problems and bool(np.isfinite(fit.values).all())
+    message = "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples"
+    residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)}
+    used = problem.rows.sum(axis=0)
+    removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_removed}
+    return IdentificationResult(
+        "joint",
+        problem.names,
+        fit.values,
+        fit.covariance,
+        valid,
+        message,
+        warnings,
+        fit.condition,
+        residual_rms,
+        int(data.t_ns.size),
+        {
+            "hac_lags": fit.lags,
+            "max_corr_with_gravity": max_corr_with_gravity,
+            "passive_model": config.passive.label,
+            "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
+            "sensor_noise_nm": {j: float(v) for j, v in zip(joints, noise, strict=True)},
+            "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},
+            "removed_samples": {k: v for k, v in removed.items() if v},
+            "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
+            "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
+            "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
+        },
+    )

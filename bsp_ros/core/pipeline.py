@@ -1,0 +1,131 @@
+"""One call from a session's streams to the estimate document: angles, identification, prior fusion."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.estimate import estimate_document
+from bsp_ros.core.fusion import (
+    Posterior,
+    SubjectInfo,
+    anthropometric_prior,
+    fuse_static_moments,
+    implausible_static_moments,
+)
+from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
+from bsp_ros.core.identification.joint import JointConfig, identify_joint
+from bsp_ros.core.identification.paper import PaperConfig, identify_paper
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.identification.sensitivity import account_for_tare
+from bsp_ros.core.joint_angles import KinematicsConfig
+from bsp_ros.core.streams import Session
+from bsp_ros.core.tare import Tare, corrected_session
+from bsp_ros.errors import BspError
+
+METHODS = ("joint", "paper")
+
+
+@dataclass(frozen=True)
+class IdentifyOptions:
+    """Everything `bsp identify` can be told about the method and the subject."""
+
+    method: str = "joint"
+    passive: PassiveModel = field(default_factory=PassiveModel)
+    subject: SubjectInfo = field(default_factory=SubjectInfo)
+    kinematics: KinematicsConfig = field(default_factory=KinematicsConfig)
+    tare: Tare | None = None
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            from bsp_ros.errors import InputError
+
+            raise InputError(f"method must be one of {METHODS}, got {self.method!r}")
+
+    def config(self) -> dict[str, Any]:
+        """The settings as a JSON-ready dict (kept with each stored session)."""
+        return {
+            "method": self.method,
+            "passive": self.passive.label,
+            "angle_cutoff_hz": self.kinematics.cutoff_hz,
+            "direction_cutoff_hz": self.kinematics.direction_cutoff_hz,
+            "max_gap_s": self.kinematics.max_gap_s,
+        }
+
+
+def identify_data(
+    data: IdentificationData, options: IdentifyOptions, check_elastic: bool = True
+) -> IdentificationResult:
+    """Run the chosen identification method on prepared samples.
+
+    ``check_elastic`` runs the test for an unmodelled elastic passive term (a second fit): a live window
+    may run it on only some updates. A valid result whose static moments are implausible for a human arm
+    (:func:`bsp_ros.core.fusion.implausible_static_moments`) is made invalid.
+    """
+    if options.method == "paper":
+        result = identify_paper(data, PaperConfig())
+    else:
+        result = identify_joint(data, JointConfig(passive=options.passive, check_elastic=check_elastic))
+    if result.valid:
+        _, beta, _ = result.block("static_moment_kgm")
+        implausible = implausible_static_moments(options.subject, data.lengths_m, beta)
+        if implausible:
+            result.valid = False
+            result.message = "; ".join(implausible)
+    return result
+
+
+def fuse(result: IdentificationResult, data: IdentificationData, subject: SubjectInfo) -> Posterior | None:
+    """Masses and COMs from the prior and the identified static moments; None if they are not usable."""
+    _, beta, beta_cov = result.block("static_moment_kgm")
+    if not (np.isfinite(beta).all() and np.isfinite(beta_cov).all()):
+        return None
+    try:
+        return fuse_static_moments(anthropometric_prior(subject, data.lengths_m), data.lengths_m, beta, beta_cov)
+    except (np.linalg.LinAlgError, ValueError) as error:
+        result.warnings.append(f"masses and COMs could not be fused with the prior: {error}")
+        return None
+
+
+def identify_session(
+    session: Session, options: IdentifyOptions | None = None, session_info: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """Identify a whole session; return the CONTRACT.md estimate document.
+
+    Raises
+    ------
+    BspError
+        The streams cannot give any estimate (no overlap, missing markers); poor excitation is not an
+        error but ``quality.valid`` False.
+    """
+    options = options or IdentifyOptions()
+    session = corrected_session(session, options.tare)
+    data = identification_data_from_session(session, options.kinematics)
+    result = identify_data(data, options)
+    offsets = account_for_tare(
+        result,
+        data,
+        session.rotation_world_from_sensor,
+        session.wrench.frame_id,
+        options.tare,
+        lambda d: identify_data(d, options, check_elastic=False),
+    )
+    posterior = fuse(result, data, options.subject) if result.valid else None
+    info = {
+        "start_time_ns": int(data.t_ns[0]),
+        "end_time_ns": int(data.t_ns[-1]),
+        "duration_s": float(data.t_ns[-1] - data.t_ns[0]) / 1e9,
+        "n_wrench_samples": data.n_wrench_samples,
+        "method": options.method,
+        "config": options.config(),
+        **(session_info or {}),
+    }
+    document = estimate_document(result, data, posterior, options.subject, info)
+    document["quality"].update(offsets)
+    return document
+
+
+__all__ = ["METHODS", "BspError", "IdentifyOptions", "fuse", "identify_data", "identify_session"]

@@ -1,0 +1,44 @@
+"""Protocol planning: robot trajectories that make every reported parameter identifiable."""
+
+from bsp_ros.core.planning.compare import compare_with_result, compare_with_scatter
+from bsp_ros.core.planning.files import (
+    PLAN_SCHEMA,
+    plan_to_dict,
+    planned_trajectory_from_file,
+    write_plan_csv,
+    write_plan_json,
+)
+from bsp_ros.core.planning.information import NoiseSpec, NominalArm, Prediction, predict_covariance
+from bsp_ros.core.planning.planner import InfeasiblePlanError, Plan, PlanRequest, plan_protocol, trajectory_from_points
+from bsp_ros.core.planning.safety import (
+    JointLimits,
+    check_reachable,
+    check_trajectory_within,
+    joint_angles_from_handle_poses,
+)
+from bsp_ros.core.planning.trajectory import PlannedTrajectory, handle_poses_world
+
+__all__ = [
+    "PLAN_SCHEMA",
+    "InfeasiblePlanError",
+    "JointLimits",
+    "NoiseSpec",
+    "NominalArm",
+    "Plan",
+    "PlanRequest",
+    "PlannedTrajectory",
+    "Prediction",
+    "check_reachable",
+    "check_trajectory_within",
+    "compare_with_result",
+    "compare_with_scatter",
+    "handle_poses_world",
+    "joint_angles_from_handle_poses",
+    "plan_protocol",
+    "plan_to_dict",
+    "planned_trajectory_from_file",
+    "predict_covariance",
+    "trajectory_from_points",
+    "write_plan_csv",
+    "write_plan_json",
+]

@@ -1,0 +1,329 @@
+"""Predicted parameter covariance of the stacked identification for a trajectory, before the session."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from bsp_ros.core.anthropometry import check_body_mass_kg, check_sex, segment_norm
+from bsp_ros.core.identification.joint import JointConfig
+from bsp_ros.core.identification.passive import TERMS, PassiveModel
+from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.joint_angles import KinematicsConfig, _direction_noise_gain
+from bsp_ros.core.model import (
+    absolute_angles_rad,
+    check_lengths_m,
+    contact_jacobian,
+    contact_torques_nm,
+    gravity_regressor,
+    static_moments_kgm,
+)
+from bsp_ros.core.streams import joints_for, segments_for
+from bsp_ros.errors import InputError
+from bsp_ros.validation import check_finite_array, check_finite_scalar, check_positive
+
+
+class Trajectory(Protocol):
+    """What a prediction needs of a joint trajectory (``TrajectorySpec`` and ``PlannedTrajectory`` have it)."""
+
+    @property
+    def n_joints(self) -> int: ...
+
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class NoiseSpec:
+    """Sensor noise the prediction assumes (the simulator's defaults).
+
+    Attributes
+    ----------
+    force_noise_n : white force noise per axis, N (1 sd).
+    torque_noise_nm : white moment noise per axis, Nm (1 sd).
+    marker_noise_m : white marker position noise per axis, m (1 sd).
+    wrench_hz : wrench rate, Hz.
+    marker_hz : marker frame rate, Hz.
+    """
+
+    force_noise_n: float = 0.05
+    torque_noise_nm: float = 0.005
+    marker_noise_m: float = 1e-4
+    wrench_hz: float = 100.0
+    marker_hz: float = 50.0
+
+    def __post_init__(self) -> None:
+        check_finite_scalar("force noise (N)", self.force_noise_n, 0.0, 100.0)
+        check_finite_scalar("torque noise (Nm)", self.torque_noise_nm, 0.0, 10.0)
+        check_finite_scalar("marker noise (m)", self.marker_noise_m, 0.0, 0.1)
+        check_positive("wrench rate (Hz)", self.wrench_hz, 5000.0)
+        check_positive("marker rate (Hz)", self.marker_hz, 5000.0)
+        if self.force_noise_n == 0 and self.torque_noise_nm == 0 and self.marker_noise_m == 0:
+            raise InputError("at least one noise level must be positive: a noise-free session has no std to predict")
+
+
+@dataclass(frozen=True)
+class NominalArm:
+    """The arm a prediction assumes: segment lengths and grouped static moments (and passive values).
+
+    Attributes
+    ----------
+    lengths_m : (n,) segment lengths, m.
+    static_moments_kgm : (n,) grouped static moments, kg m (CONTRACT.md).
+    passive : parameter name -> nominal value (e.g. ``("offset_nm", "elbow"): 0.2``) for relative stds.
+    """
+
+    lengths_m: tuple[float, ...]
+    static_moments_kgm: tuple[float, ...]
+    passive: dict[ParameterName, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        lengths = check_lengths_m(self.lengths_m)
+        moments = check_finite_array("static moments (kg m)", self.static_moments_kgm, (lengths.size,))
+        if (moments <= 0).any():
+            raise InputError(f"static moments must be positive, got {moments.tolist()}")
+        object.__setattr__(self, "lengths_m", tuple(float(v) for v in lengths))
+        object.__setattr__(self, "static_moments_kgm", tuple(float(v) for v in moments))
+
+    @classmethod
+    def from_anthropometry(cls, lengths_m: npt.ArrayLike, sex: str = "male", body_mass_kg: float = 75.0) -> NominalArm:
+        """Masses and COMs of the de Leva table (``bsp_ros.core.anthropometry``) for the given segment lengths."""
+        lengths = check_lengths_m(lengths_m)
+        mass = check_body_mass_kg(body_mass_kg)
+        norms = [segment_norm(check_sex(sex), name) for name in segments_for(lengths.size)]
+        masses = np.array([norm.mass_fraction * mass for norm in norms])
+        com = np.array([norm.com_fraction for norm in norms]) * lengths
+        return cls(tuple(lengths), tuple(static_moments_kgm(lengths, masses, com)))
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints (= segments)."""
+        return len(self.lengths_m)
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Predicted covariance of the stacked identification on one trajectory.
+
+    Attributes
+    ----------
+    names : (p,) parameter names, in the estimator's order.
+    covariance : (p, p) predicted covariance.
+    nominal : (p,) nominal values (NaN where none is assumed).
+    condition_number : of the column-scaled weighted regressor (the estimator's figure).
+    max_corr_with_gravity : per passive parameter ``key/joint``, the largest |correlation| with a static moment.
+    rows_used : joint -> samples above the direction deadband (whole session, at the wrench rate).
+    """
+
+    names: list[ParameterName]
+    covariance: np.ndarray
+    nominal: np.ndarray
+    condition_number: float
+    max_corr_with_gravity: dict[str, float]
+    rows_used: dict[str, int]
+
+    @property
+    def std(self) -> np.ndarray:
+        """(p,) predicted one standard deviation of each parameter."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    def std_of(self, quantity: str, owner: str) -> float:
+        """Predicted std of one parameter."""
+        return float(self.std[self.names.index((quantity, owner))])
+
+    @property
+    def max_relative_static_std(self) -> float:
+        """Largest predicted std / nominal value over the static moments."""
+        picks = [i for i, (key, _) in enumerate(self.names) if key == "static_moment_kgm"]
+        return float(np.max(self.std[picks] / np.abs(self.nominal[picks])))
+
+    def table(self) -> list[dict[str, Any]]:
+        """One row per parameter: ``quantity``, ``owner``, ``std``, ``nominal``, ``relative_std``."""
+        rows = []
+        for (key, owner), sd, value in zip(self.names, self.std, self.nominal, strict=True):
+            relative = float(sd / abs(value)) if np.isfinite(value) and value != 0 else None
+            nominal = float(value) if np.isfinite(value) else None
+            rows.append(
+                {"quantity": key, "owner": owner, "std": float(sd), "nominal": nominal, "relative_std": relative}
+            )
+        return rows
+
+
+def parameter_names(n_joints: int, passive: PassiveModel) -> list[ParameterName]:
+    """The estimator's parameter order: static moments, then each joint's passive terms."""
+    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments_for(n_joints)]
+    for joint in joints_for(n_joints):
+        names += [(TERMS[term][0], joint) for term in passive.terms]
+    return names
+
+
+def regressor(q_rad: np.ndarray, velocity_rad_s: np.ndarray, passive: PassiveModel) -> np.ndarray:
+    """The stacked regressor the estimator builds (``identification.joint``): (N, n, p).
+
+    Gravity columns from ``bsp_ros.core.model.gravity_regressor``, passive columns from ``PassiveModel.columns``.
+    """
+    n = q_rad.shape[1]
+    k = len(passive.terms)
+    out = np.zeros((q_rad.shape[0], n, n + n * k))
+    out[:, :, :n] = gravity_regressor(q_rad)
+    for j in range(n):
+        out[:, j, n + j * k : n + (j + 1) * k] = passive.columns(q_rad, velocity_rad_s, j)
+    return out
+
+
+def _angle_noise_covariance(q_rad: np.ndarray, lengths: np.ndarray, marker_noise_m: float) -> np.ndarray:
+    """(N, n, n) covariance of the raw joint angles from one marker frame's position noise.
+
+    A segment angle moves by the in-plane noise perpendicular to the segment at both of its markers,
+    over its length; neighbouring segments share a marker, which correlates them.
+    """
+    n = lengths.size
+    phi = absolute_angles_rad(q_rad)
+    cov_phi = np.zeros((q_rad.shape[0], n, n))
+    var = marker_noise_m**2
+    for j in range(n):
+        cov_phi[:, j, j] = 2.0 * var / lengths[j] ** 2
+        if j + 1 < n:
+            shared = -var * np.cos(phi[:, j + 1] - phi[:, j]) / (lengths[j] * lengths[j + 1])
+            cov_phi[:, j, j + 1] = shared
+            cov_phi[:, j + 1, j] = shared
+    relative = np.eye(n) - np.eye(n, k=-1)  # q1 = phi1, q_j = phi_j - phi_{j-1}
+    return np.asarray(relative @ cov_phi @ relative.T)
+
+
+def _residual_gain(q_rad: np.ndarray, lengths: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """(N, n, n) d(residual)/d(angle error): how an angle error at fixed wrench moves the torque residual.
+
+    The measured torque ``-J(q)^T F`` and the gravity prediction ``Y(q) beta`` both take the noisy angle.
+    """
+    tau_gravity = np.einsum("nij,j->ni", gravity_regressor(q_rad), beta)
+    jacobian = contact_jacobian(q_rad, lengths)
+    n = lengths.size
+    if n == 3:
+        wrench = np.linalg.solve(np.transpose(jacobian, (0, 2, 1)), -tau_gravity[..., None])[..., 0]
+    else:  # a two-segment chain transmits no moment: solve for the force alone
+        force = np.linalg.solve(np.transpose(jacobian[:, :2, :], (0, 2, 1)), -tau_gravity[..., None])[..., 0]
+        wrench = np.column_stack((force, np.zeros(q_rad.shape[0])))
+    step = 1e-6
+    gain = np.empty((q_rad.shape[0], n, n))
+    for k in range(n):
+        shift = np.zeros(n)
+        shift[k] = step
+        plus = contact_torques_nm(q_rad + shift, lengths, wrench) - np.einsum(
+            "nij,j->ni", gravity_regressor(q_rad + shift), beta
+        )
+        minus = contact_torques_nm(q_rad - shift, lengths, wrench) - np.einsum(
+            "nij,j->ni", gravity_regressor(q_rad - shift), beta
+        )
+        gain[:, :, k] = (plus - minus) / (2 * step)
+    return gain
+
+
+def predict_covariance(
+    trajectory: Trajectory,
+    duration_s: float,
+    nominal: NominalArm,
+    passive: PassiveModel,
+    noise: NoiseSpec | None = None,
+    config: JointConfig | None = None,
+    grid_hz: float = 10.0,
+    kinematics: KinematicsConfig | None = None,
+) -> Prediction:
+    """Predict the covariance the stacked identification (``identify_joint``) will report for a session.
+
+    The force noise maps to per-joint torque noise through ``J^T``; marker noise maps through the angles into
+    both the measured torque and the regressor. Wrench noise is white at the wrench rate; the filtered angle
+    noise is correlated over the filter's time scale, and its long-run (zero-frequency) variance is that of
+    the raw marker noise, so it counts as one independent draw per marker frame, not per wrench sample: the
+    effective sample count the estimator's HAC covariance finds. Rows below the estimator's direction
+    deadband are left out, as the estimator does.
+
+    Parameters
+    ----------
+    trajectory : the joint motion.
+    duration_s : session length, s.
+    nominal : the assumed arm (lengths, static moments) the noise maps through.
+    passive : the passive model the estimator will fit.
+    noise : sensor noise (default ``NoiseSpec()``).
+    config : the estimator's settings (deadband), default ``JointConfig(passive=passive)``.
+    grid_hz : evaluation grid, Hz; sums are scaled to the wrench and marker rates.
+    kinematics : the angle filters the estimator uses (for the direction-velocity noise).
+
+    Returns
+    -------
+    Prediction
+    """
+    noise = noise or NoiseSpec()
+    config = config or JointConfig(passive=passive)
+    kinematics = kinematics or KinematicsConfig()
+    duration = check_positive("session length (s)", duration_s, 86_400.0)
+    grid = check_positive("evaluation grid (Hz)", grid_hz, noise.wrench_hz)
+    n = nominal.n_joints
+    if trajectory.n_joints != n:
+        raise InputError(f"the trajectory has {trajectory.n_joints} joints, the arm {n} segments")
+    lengths = np.asarray(nominal.lengths_m)
+    beta = np.asarray(nominal.static_moments_kgm)
+    t = np.arange(int(duration * grid)) / grid
+    q = trajectory.angles_rad(t)
+    velocity = trajectory.velocities_rad_s(t)
+    x = regressor(q, velocity, passive)
+
+    # rows the estimator keeps: above the direction deadband (Coulomb models only)
+    angle_cov = _angle_noise_covariance(q, lengths, noise.marker_noise_m)
+    speed = np.abs(velocity)
+    if "coulomb" in passive.terms:
+        angle_sd = np.sqrt(np.einsum("nii->ni", angle_cov).mean(axis=0))
+        velocity_noise = angle_sd * _direction_noise_gain(kinematics.direction_cutoff_hz, noise.marker_hz)
+        deadband = np.maximum(
+            config.deadband_fraction * np.percentile(speed, 95, axis=0), config.deadband_noise_sd * velocity_noise
+        )
+        rows = speed > deadband[None, :]
+    else:
+        rows = np.ones_like(speed, dtype=bool)
+
+    # per-sample torque noise covariance: force (white, per wrench sample) and angles (per marker frame)
+    jacobian = contact_jacobian(q, lengths)
+    wrench_var = np.array([noise.force_noise_n**2, noise.force_noise_n**2, noise.torque_noise_nm**2])
+    force_cov = np.transpose(jacobian, (0, 2, 1)) @ (wrench_var[None, :, None] * jacobian)
+    gain = _residual_gain(q, lengths, beta)
+    marker_cov = gain @ angle_cov @ np.transpose(gain, (0, 2, 1))
+    # the estimator weights each joint by its residual variance (filtered angle noise keeps ~2 fc / f of it)
+    band = min(2.0 * kinematics.cutoff_hz / noise.marker_hz, 1.0)
+    sigma2 = np.einsum("nii->ni", force_cov).mean(axis=0) + band * np.einsum("nii->ni", marker_cov).mean(axis=0)
+    weights = 1.0 / np.maximum(sigma2, 1e-30)
+    w = np.where(rows, weights[None, :], 0.0)
+    wx = x * w[..., None]  # (N, n, p)
+    per_wrench = noise.wrench_hz / grid
+    p = x.shape[2]
+    flat = wx.reshape(-1, p)
+    design = per_wrench * (x.reshape(-1, p).T @ flat)
+    noise_cov = per_wrench * force_cov + noise.wrench_hz**2 / (noise.marker_hz * grid) * marker_cov
+    long_run = flat.T @ (noise_cov @ wx).reshape(-1, p)
+    inverse = np.linalg.pinv(design)
+    covariance = inverse @ long_run @ inverse
+    covariance = 0.5 * (covariance + covariance.T)
+
+    names = parameter_names(n, passive)
+    # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
+    norms = np.sqrt(np.clip(np.diag(design), 0.0, None))
+    condition = float("inf")
+    if (norms > 0).all() and np.isfinite(design).all():  # a column without rows: nothing to condition
+        gram = design / np.outer(norms, norms)
+        eigen = np.linalg.eigvalsh(0.5 * (gram + gram.T))
+        condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
+    variances = np.diag(covariance)
+    correlation = covariance / np.sqrt(np.outer(variances, variances) + 1e-300)
+    max_corr = {
+        f"{key}/{owner}": float(np.max(np.abs(correlation[i, :n]))) for i, (key, owner) in enumerate(names) if i >= n
+    }
+    nominal_values = np.full(len(names), np.nan)
+    nominal_values[:n] = beta
+    for i, name in enumerate(names):
+        if name in nominal.passive:
+            nominal_values[i] = nominal.passive[name]
+    rows_used = {joint: round(per_wrench * rows[:, j].sum()) for j, joint in enumerate(joints_for(n))}
+    return Prediction(names, covariance, nominal_values, condition, max_corr, rows_used)

@@ -1,0 +1,429 @@
+"""The protocol planner: operating points and direction reversals that make every parameter identifiable."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline
+from scipy.optimize import differential_evolution
+
+from bsp_ros.core.anthropometry import segment_norm
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.model import check_lengths_m, gravity_regressor, static_moments_kgm
+from bsp_ros.core.planning.information import NoiseSpec, NominalArm, Prediction, predict_covariance
+from bsp_ros.core.planning.safety import JointLimits, check_reachable, check_trajectory_within, usable_elbow_range_deg
+from bsp_ros.core.planning.trajectory import PlannedTrajectory
+from bsp_ros.core.streams import joints_for, segments_for
+from bsp_ros.errors import InputError
+from bsp_ros.validation import check_finite_array, check_positive
+
+#: Given amplitudes: the default share of each joint's range, capped in deg. Optimised: the smallest.
+AMPLITUDE_SHARE = 0.25
+MAX_AMPLITUDE_DEG = 6.0
+MIN_AMPLITUDE_DEG = 1.0
+#: Time to reach cruise speed from rest, s. Short, because near a reversal the direction of motion (hence the
+#: Coulomb sign) is uncertain: with 2 s ramps, runs of wrong signs at the wrist gave heavy-tailed errors (wrist
+#: stiffness scatter 2x the prediction over 40 seeds), with 1 s none (0.9x). 0.03 rad/s in 1 s is 0.03
+#: rad/s^2: the inertial torques stay below 1 % of gravity (``inertial_torque_ratio``).
+RAMP_S = 1.0
+#: Shortest move between reversals, s: the direction of motion is read from angles low-passed at 0.5 Hz.
+MIN_MOVE_S = 4.0
+#: Inertial torques above this share of the gravity torques break the quasi-static model (noted in the plan).
+QUASI_STATIC_SHARE = 0.01
+#: Planned speeds stay this share below the limit, so the check never rests on round-off.
+_SPEED_MARGIN = 0.98
+#: The objectives the planner minimises.
+OBJECTIVES = ("d-optimal", "static")
+# Differential evolution population per dimension, and the cost of an infeasible design (plus its excess s).
+_POPULATION = 8
+_INFEASIBLE = 1e3
+
+
+@dataclass(frozen=True)
+class PlanRequest:
+    """What the planner is given.
+
+    Attributes
+    ----------
+    nominal : the arm: segment lengths (measured, a previous estimate, or the anthropometric table) and the
+        static moments the noise maps through (``NominalArm.from_anthropometry``).
+    shoulder_yz_m : (2,) shoulder ``[y, z]`` in ``world``, m.
+    limits : the therapist's range per joint (deg) and the speed limit (rad/s).
+    duration_s : session length, s.
+    passive : the passive model the session will identify.
+    n_points : number of operating points (1-20); None tries 1, 2 and 3 and keeps the best.
+    amplitude_deg : (n,) oscillation amplitude about each operating point, deg; default a quarter of each
+        joint's range, at most 6 deg.
+    noise : sensor noise for the predicted stds.
+    objective : ``d-optimal`` (log-determinant of the predicted covariance: every parameter counts) or
+        ``static`` (largest predicted relative std of the static moments).
+    max_evaluations : budget of the optimiser (trajectory evaluations) per number of operating points.
+    """
+
+    nominal: NominalArm
+    shoulder_yz_m: tuple[float, float]
+    limits: JointLimits
+    duration_s: float = 120.0
+    passive: PassiveModel = field(default_factory=lambda: PassiveModel(("coulomb", "offset", "stiffness")))
+    n_points: int | None = None
+    amplitude_deg: tuple[float, ...] | None = None
+    noise: NoiseSpec = field(default_factory=NoiseSpec)
+    objective: str = "d-optimal"
+    max_evaluations: int = 400
+
+    def __post_init__(self) -> None:
+        n = self.nominal.n_joints
+        if self.limits.n_joints != n:
+            raise InputError(f"{self.limits.n_joints} joint ranges given for a {n}-segment arm")
+        shoulder = check_finite_array("shoulder [y, z] (m)", self.shoulder_yz_m, (2,))
+        object.__setattr__(self, "shoulder_yz_m", (float(shoulder[0]), float(shoulder[1])))
+        check_positive("session length (s)", self.duration_s, 86_400.0)
+        if self.n_points is not None and (
+            isinstance(self.n_points, bool) or not isinstance(self.n_points, int) or not 1 <= self.n_points <= 20
+        ):
+            raise InputError(f"number of operating points must be an integer within [1, 20], got {self.n_points!r}")
+        if self.objective not in OBJECTIVES:
+            raise InputError(f"objective must be one of {OBJECTIVES}, got {self.objective!r}")
+        if self.amplitude_deg is not None:
+            amplitude = check_finite_array("oscillation amplitudes (deg)", self.amplitude_deg, (n,))
+            if (amplitude <= 0).any():
+                raise InputError(f"oscillation amplitudes must be positive, got {amplitude.tolist()} deg")
+            object.__setattr__(self, "amplitude_deg", tuple(float(a) for a in amplitude))
+        if not 10 <= self.max_evaluations <= 100_000:
+            raise InputError(f"max_evaluations must be within [10, 100000], got {self.max_evaluations!r}")
+
+    def usable_range_deg(self) -> np.ndarray:
+        """(n, 2) the ranges the planner uses: the given ones, the elbow kept 5 deg from straight/folded."""
+        ranges = np.array(self.limits.range_deg, dtype=np.float64)
+        ranges[1] = usable_elbow_range_deg(*ranges[1])
+        return ranges
+
+    def amplitudes_deg(self) -> np.ndarray:
+        """(n,) the oscillation amplitudes used, deg."""
+        width = np.diff(self.usable_range_deg(), axis=1)[:, 0]
+        if self.amplitude_deg is None:
+            return np.minimum(AMPLITUDE_SHARE * width, MAX_AMPLITUDE_DEG)
+        amplitude = np.asarray(self.amplitude_deg)
+        too_wide = np.flatnonzero(2 * amplitude > width)
+        if too_wide.size:
+            j = int(too_wide[0])
+            raise InputError(
+                f"the {joints_for(amplitude.size)[j]} amplitude {amplitude[j]:g} deg does not fit its usable range "
+                f"of {width[j]:g} deg (+-amplitude about each operating point)"
+            )
+        return amplitude
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A planned protocol and what it is predicted to deliver.
+
+    Attributes
+    ----------
+    request : what was asked.
+    trajectory : the joint motion (checked against the limits and for reachability).
+    centres_deg : (K, n) operating points, deg.
+    amplitudes_deg : (n,) oscillation amplitude about each, deg.
+    prediction : predicted covariance of the identification.
+    inertia_ratio : (n,) largest inertial torque / largest gravity torque per joint (anthropometric inertia).
+    notes : what the planner changed or assumed.
+    """
+
+    request: PlanRequest
+    trajectory: PlannedTrajectory
+    centres_deg: np.ndarray
+    amplitudes_deg: np.ndarray
+    prediction: Prediction
+    inertia_ratio: np.ndarray
+    notes: list[str]
+
+
+class InfeasiblePlanError(InputError):
+    """The operating points cannot all be visited with reversals in the session at the speed limit."""
+
+    def __init__(self, message: str, excess_s: float) -> None:
+        super().__init__(message)
+        self.excess_s = excess_s
+
+
+def _move_time(distance: float, speed: float, ramp_s: float) -> float:
+    """Shortest rest-to-rest time over ``distance`` (rad) at ``speed`` (rad/s) with ramps of ``ramp_s``.
+
+    Never below ``MIN_MOVE_S``: the estimator's direction velocity (0.5 Hz) cannot follow faster reversals.
+    """
+    fastest = distance / speed + ramp_s if distance >= speed * ramp_s else 2.0 * distance / speed
+    return max(fastest, MIN_MOVE_S)
+
+
+def _move_knots(start: float, stop: float, t0: float, t1: float, ramp_s: float) -> list[tuple[float, float, float]]:
+    """Knots ``(t, q, qdot)`` after ``t0`` of a trapezoidal move: constant acceleration, cruise, deceleration.
+
+    A cubic Hermite piece between knots at rest and at cruise speed whose distance is that of a linear
+    ramp is exactly the constant-acceleration parabola, so the knots represent the profile exactly.
+    """
+    duration = t1 - t0
+    ramp = min(ramp_s, duration / 2.0)
+    cruise = (stop - start) / (duration - ramp)
+    if ramp == duration / 2.0:
+        return [(t0 + ramp, 0.5 * (start + stop), cruise), (t1, stop, 0.0)]
+    return [
+        (t0 + ramp, start + 0.5 * cruise * ramp, cruise),
+        (t1 - ramp, stop - 0.5 * cruise * ramp, cruise),
+        (t1, stop, 0.0),
+    ]
+
+
+def _moves(centres: np.ndarray, amplitude: float, speed: float, ramp_s: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Per operating point: the first oscillation end reached, and the transfer time to it; the half-cycle."""
+    firsts, transfers = [], []
+    here = centres[0] - amplitude
+    for centre in centres:
+        first = centre - amplitude if here <= centre else centre + amplitude
+        firsts.append(first)
+        transfers.append(_move_time(abs(first - here), speed, ramp_s) if first != here else 0.0)
+        here = first  # an even number of half-cycles ends where the oscillation started
+    return np.array(firsts), np.array(transfers), _move_time(2 * amplitude, speed, ramp_s)
+
+
+def _joint_knots(centres: np.ndarray, amplitude: float, windows: np.ndarray, speed: float, ramp_s: float) -> np.ndarray:
+    """One joint's knots: per window, move next to the operating point, then oscillate about it.
+
+    An even number of half-cycles per window (at the speed limit, then stretched to fill the window, so
+    slower, never faster); every move is trapezoidal, at rest at both ends. Returns (K, 3) ``t, q, qdot``.
+    """
+    firsts, transfers, half_cycle = _moves(centres, amplitude, speed, ramp_s)
+    edges = np.concatenate(([0.0], np.cumsum(windows)))
+    knots = [(0.0, float(firsts[0]), 0.0)]
+    for k, centre in enumerate(centres):
+        count = 2 * math.floor((windows[k] - transfers[k]) / (2 * half_cycle) + 1e-9)
+        stretch = windows[k] / (transfers[k] + count * half_cycle)
+        t = edges[k]
+        if transfers[k] > 0:
+            knots += _move_knots(knots[-1][1], float(firsts[k]), t, t + transfers[k] * stretch, ramp_s)
+            t = knots[-1][0]
+        side = -1.0 if firsts[k] < centre else 1.0
+        for _ in range(count):
+            side = -side
+            stop = edges[k + 1] if _ == count - 1 else t + half_cycle * stretch
+            knots += _move_knots(knots[-1][1], float(centre + side * amplitude), t, stop, ramp_s)
+            t = stop
+    return np.array(knots)
+
+
+def trajectory_from_points(
+    centres_rad: np.ndarray,
+    amplitudes_rad: np.ndarray,
+    duration_s: float,
+    max_speed_rad_s: float,
+    ramp_s: float = RAMP_S,
+) -> PlannedTrajectory:
+    """The rest-to-rest trajectory visiting operating points with oscillations about each.
+
+    Parameters
+    ----------
+    centres_rad : (K, n) operating points, rad, visited in order.
+    amplitudes_rad : (n,) oscillation amplitude per joint, rad.
+    duration_s : session length, s.
+    max_speed_rad_s : speed limit; the moves peak below it.
+    ramp_s : time to reach cruise speed from rest (constant acceleration), s.
+
+    Returns
+    -------
+    PlannedTrajectory whose knots are the union of the joints' own knots (each joint is cubic between
+    them, so the Hermite representation is exact). Each operating point gets the time its slowest joint
+    needs to reach it and reverse twice, plus an equal share of what is left.
+
+    Raises
+    ------
+    InfeasiblePlanError
+        The points cannot all be visited, with two reversals each, in ``duration_s``.
+    """
+    k_points, n = centres_rad.shape
+    speed = _SPEED_MARGIN * max_speed_rad_s
+    moves = [_moves(centres_rad[:, j], float(amplitudes_rad[j]), speed, ramp_s) for j in range(n)]
+    needed = np.max([transfers + 2 * half for _, transfers, half in moves], axis=0)
+    if needed.sum() > duration_s:
+        raise InfeasiblePlanError(
+            f"the session is too short: visiting {k_points} operating points with two direction reversals each at "
+            f"{max_speed_rad_s:g} rad/s takes {needed.sum():.1f} s, the session has {duration_s:g} s (fewer "
+            "operating points, smaller amplitudes, or a longer session)",
+            float(needed.sum() - duration_s),
+        )
+    windows = needed + (duration_s - needed.sum()) / k_points
+    per_joint = [_joint_knots(centres_rad[:, j], float(amplitudes_rad[j]), windows, speed, ramp_s) for j in range(n)]
+    union = np.unique(np.concatenate([knots[:, 0] for knots in per_joint]))
+    union = union[np.concatenate(([True], np.diff(union) > 1e-6))]
+    q = np.empty((union.size, n))
+    qdot = np.empty((union.size, n))
+    for j, knots in enumerate(per_joint):
+        spline = CubicHermiteSpline(knots[:, 0], knots[:, 1], knots[:, 2])
+        q[:, j] = spline(np.clip(union, 0.0, knots[-1, 0]))
+        qdot[:, j] = spline.derivative()(np.clip(union, 0.0, knots[-1, 0]))
+    qdot[[0, -1]] = 0.0
+    return PlannedTrajectory(union, q, qdot)
+
+
+def _objective_value(prediction: Prediction, objective: str) -> float:
+    if objective == "static":
+        return math.log(prediction.max_relative_static_std)
+    # D-optimality on the column-scaled covariance: invariant to units
+    scale = np.sqrt(np.diag(prediction.covariance))
+    sign, logdet = np.linalg.slogdet(prediction.covariance / np.outer(scale, scale))
+    return float((2.0 * np.sum(np.log(scale)) + (logdet if sign > 0 else 1e3)) / scale.size)
+
+
+def plan_protocol(request: PlanRequest, grid_hz: float = 2.0) -> Plan:
+    """Design a trajectory that optimises identifiability within the limits, and predict its stds.
+
+    With ``request.n_points`` None, plans with 1, 2 and 3 operating points and keeps the best objective
+    (a number of points the session has no time for is skipped).
+
+    Parameters
+    ----------
+    request : the subject, limits, session and noise.
+    grid_hz : evaluation grid of the optimiser's predictions, Hz.
+
+    Returns
+    -------
+    Plan
+
+    Raises
+    ------
+    InputError
+        The limits leave no room (range narrower than the oscillation, session too short), or the
+        result would leave the limits or the workspace (never expected: it is checked, not assumed).
+    """
+    if request.n_points is not None:
+        return _plan_points(request, request.n_points, grid_hz)
+    plans, errors = [], []
+    for k_points in (1, 2, 3):
+        try:
+            plans.append(_plan_points(request, k_points, grid_hz))
+        except InfeasiblePlanError as error:
+            errors.append(error)
+    if not plans:
+        raise errors[0]
+    return min(plans, key=lambda plan: _objective_value(plan.prediction, request.objective))
+
+
+def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
+    """One plan with ``k_points`` operating points.
+
+    The amplitudes (n, unless given) and the operating points (K x n, each within its range less the
+    amplitude) are optimised with scipy's differential evolution (seeded: the same request gives the same
+    plan); the joints oscillate about each point at the speed limit, each at its own pace, so their motions
+    are not in step.
+    """
+    n = request.nominal.n_joints
+    ranges = np.radians(request.usable_range_deg())
+    width = ranges[:, 1] - ranges[:, 0]
+    # amplitudes: given, or optimised between a small wobble and half the range (one sweep end to end)
+    fixed = None if request.amplitude_deg is None else np.radians(request.amplitudes_deg())
+    smallest = np.minimum(np.radians(MIN_AMPLITUDE_DEG), 0.25 * width)
+    notes = []
+    given = np.array(request.limits.range_deg)
+    if not np.allclose(np.degrees(ranges[1]), given[1]):
+        notes.append(
+            f"elbow range narrowed to {np.degrees(ranges[1]).round(2).tolist()} deg: 5 deg away from a straight or "
+            "folded arm"
+        )
+
+    def decode(unit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        unit = np.clip(unit, 0.0, 1.0)
+        if fixed is None:
+            amplitudes = smallest + unit[:n] * (0.5 * width - smallest)
+            unit = unit[n:]
+        else:
+            amplitudes = fixed
+        low = ranges[:, 0] + amplitudes
+        span = np.maximum(ranges[:, 1] - amplitudes - low, 0.0)
+        return low[None, :] + unit.reshape(k_points, n) * span[None, :], amplitudes
+
+    def build(unit: np.ndarray) -> PlannedTrajectory:
+        centres, amplitudes = decode(unit)
+        return trajectory_from_points(centres, amplitudes, request.duration_s, request.limits.max_speed_rad_s)
+
+    def cost(unit: np.ndarray) -> float:
+        try:
+            trajectory = build(unit)
+        except InfeasiblePlanError as error:
+            return _INFEASIBLE + error.excess_s
+        prediction = predict_covariance(
+            trajectory, request.duration_s, request.nominal, request.passive, request.noise, grid_hz=grid_hz
+        )
+        value = _objective_value(prediction, request.objective)
+        return value if math.isfinite(value) else _INFEASIBLE
+
+    dims = n * k_points + (n if fixed is None else 0)
+    generations = max(request.max_evaluations // (_POPULATION * dims) - 1, 1)
+    result = differential_evolution(
+        cost, [(0.0, 1.0)] * dims, seed=0, popsize=_POPULATION, maxiter=generations, tol=1e-4, polish=False
+    )
+    if result.fun >= _INFEASIBLE:
+        build(result.x)  # raises the InfeasiblePlanError that names what does not fit
+    best = result.x
+    trajectory = build(best)
+    check_trajectory_within(trajectory, request.limits)
+    check_reachable(trajectory, request.nominal.lengths_m, request.shoulder_yz_m)
+    centres, amplitudes = decode(best)
+    prediction = predict_covariance(trajectory, request.duration_s, request.nominal, request.passive, request.noise)
+    ratio = inertial_torque_ratio(trajectory, request.nominal)
+    for joint, share in zip(joints_for(n), ratio, strict=True):
+        if share >= QUASI_STATIC_SHARE:
+            notes.append(
+                f"not quasi-static: inertial torques at the {joint} reach {100 * share:.2f}% of gravity (limit "
+                f"{100 * QUASI_STATIC_SHARE:g}%): lower --max-speed"
+            )
+    notes.append(f"optimiser: {result.nfev} evaluations, objective {request.objective} {cost(best):.4g}")
+    return Plan(request, trajectory, np.degrees(centres), np.degrees(amplitudes), prediction, ratio, notes)
+
+
+def inertial_torque_ratio(
+    trajectory: PlannedTrajectory, nominal: NominalArm, sex: str = "male", body_mass_kg: float = 75.0
+) -> np.ndarray:
+    """Largest inertial joint torque over the largest gravity torque, per joint, along the trajectory.
+
+    The inertia is the anthropometric one (de Leva masses and COMs for the nominal lengths; each segment a
+    uniform rod about its COM); the torque is Lagrange's ``d/dt dT/dqdot - dT/dq``.
+
+    Returns
+    -------
+    (n,) ratios (quasi-static when well below 0.01).
+    """
+    lengths = check_lengths_m(nominal.lengths_m)
+    n = lengths.size
+    norms = [segment_norm(sex, name) for name in segments_for(n)]
+    masses = np.array([norm.mass_fraction for norm in norms]) * body_mass_kg
+    com = np.array([norm.com_fraction for norm in norms]) * lengths
+    rod = masses * lengths**2 / 12.0
+    t = np.linspace(0.0, trajectory.duration_s, int(trajectory.duration_s * 20) + 1)
+    q = trajectory.angles_rad(t)
+    qdot = trajectory.velocities_rad_s(t)
+
+    def kinetic(angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+        phi = np.cumsum(angles, axis=1)
+        omega = np.cumsum(rates, axis=1)
+        energy = np.zeros(angles.shape[0])
+        vy = np.zeros(angles.shape[0])
+        vz = np.zeros(angles.shape[0])
+        for j in range(n):
+            cy = vy - com[j] * omega[:, j] * np.sin(phi[:, j])
+            cz = vz + com[j] * omega[:, j] * np.cos(phi[:, j])
+            energy += 0.5 * masses[j] * (cy**2 + cz**2) + 0.5 * rod[j] * omega[:, j] ** 2
+            vy = vy - lengths[j] * omega[:, j] * np.sin(phi[:, j])
+            vz = vz + lengths[j] * omega[:, j] * np.cos(phi[:, j])
+        return energy
+
+    step = 1e-6
+    momentum = np.empty_like(q)
+    force = np.empty_like(q)
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = step
+        momentum[:, i] = (kinetic(q, qdot + e) - kinetic(q, qdot - e)) / (2 * step)
+        force[:, i] = (kinetic(q + e, qdot) - kinetic(q - e, qdot)) / (2 * step)
+    inertial = np.gradient(momentum, t, axis=0) - force
+    gravity = np.einsum("tij,j->ti", gravity_regressor(q), static_moments_kgm(lengths, masses, com))
+    return np.abs(inertial).max(axis=0) / np.maximum(np.abs(gravity).max(axis=0), 1e-12)

@@ -1,0 +1,405 @@
+"""`bsp_identifier`: wrench, joint states, wrench frame -> live estimates of segment parameters and passive moments."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import time
+import traceback
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.fusion import SubjectInfo
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.core.streams import segments_for
+from bsp_ros.core.tare import Tare, read_tare_file
+from bsp_ros.core.weight_support import live_support
+from bsp_ros.errors import BspError, InputError
+from bsp_ros.live.nodes import estimate_jobs as jobs
+from bsp_ros.live.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
+from bsp_ros.live.online.recursive_feed import RecursiveFeed
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate, WindowSamples
+from bsp_ros.live.runtime.offload import ProcessOffload
+from bsp_ros.live.runtime.parameters import Param, declare_parameters
+from bsp_ros.live.runtime.qos import rclpy_qos
+from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
+from bsp_ros.live.runtime.spin import run_node
+from bsp_ros.live.runtime.worker import LatestJobWorker
+from msg_adapters.diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    DiagnosticArraySample,
+    DiagnosticStatusData,
+    build_diagnostic_array,
+)
+from msg_adapters.joint_state import JointStateSample, build_joint_state, read_joint_state
+from msg_adapters.tf import read_tf_message
+from msg_adapters.wrench import WrenchSample, build_wrench_stamped, read_wrench_stamped
+
+NAME = "bsp_identifier"
+MODES = ("windowed", "recursive")
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+
+PARAMETERS = (
+    Param("mode", "windowed", "windowed (sliding window) or recursive (per sample)", choices=MODES),
+    Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
+    Param("window_s", 30.0, "sliding window length", "s", lo=1.0, hi=3600.0),
+    Param("update_hz", 5.0, "estimate rate", "Hz", lo=0.1, hi=100.0),
+    Param("stale_s", 0.4, "an input silent this long makes the estimate invalid", "s", lo=0.01, hi=60.0),
+    Param(
+        "method", "joint", "joint (ours) or paper (the method paper's sequential procedure)", choices=("joint", "paper")
+    ),
+    Param("passive", "coulomb", "passive model, e.g. coulomb+viscous"),
+    Param("body_mass_kg", 0.0, "subject body mass for the prior (0: unknown)", "kg", lo=0.0, hi=300.0),
+    Param("height_m", 0.0, "subject height (0: unknown)", "m", lo=0.0, hi=2.5),
+    Param("sex", "male", "anthropometric table", choices=("male", "female")),
+    Param("world_frame", "world", "frame of the markers and of gravity (z up)"),
+    Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
+    Param(
+        "wrench_frame_source",
+        "auto",
+        "where the wrench frame's rotation comes from: tf (/tf_static and /tf), parameter "
+        "(wrench_frame_rotation_xyzw), or auto (tf if tf2_msgs is installed, else the parameter)",
+        choices=("auto", "tf", "parameter"),
+    ),
+    Param(
+        "wrench_frame_rotation_xyzw",
+        [0.0, 0.0, 0.0, 1.0],
+        "rotation world <- wrench frame as a unit quaternion [x, y, z, w], used without tf",
+    ),
+    Param(
+        "tare_file",
+        "",
+        "a `bsp tare` file (bsp_ros/core/tare/1) of this sensor: its offset and handle load are removed from every "
+        "wrench and its uncertainty joins the windowed estimate's ('': none, and the estimate says so)",
+    ),
+    Param(
+        "support_fraction",
+        0.0,
+        "share of the identified arm's gravity torques the robot should carry (bsp/weight_support, published "
+        "at the joint-state rate while the estimate is valid; 0: not published)",
+        lo=0.0,
+        hi=1.0,
+    ),
+    Param(
+        "tf_wait_s",
+        2.0,
+        "wait this long for the wrench frame's transform before taking it as world",
+        "s",
+        lo=0.0,
+        hi=60.0,
+    ),
+)
+
+
+class BspIdentifierNode(RosNode):
+    """Identifies online, in a sliding window (default) or recursively, and publishes the estimates.
+
+    An estimate is published invalid (level ERROR) when an input is stale (nothing received for
+    ``stale_s`` of wall time), and samples that are non-finite, out of order or duplicated never enter it.
+    The callbacks adapt messages and hand them to the online blocks (``bsp_ros.live.online``).
+    """
+
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        p = declare_parameters(self, PARAMETERS)
+        self.mode = p["mode"]
+        self.n = p["n_segments"]
+        self.stale_s = p["stale_s"]
+        self.world_frame = p["world_frame"]
+        try:
+            parameter_rotation = rotation_from_quaternion_xyzw(p["wrench_frame_rotation_xyzw"])
+        except ValueError as exc:
+            raise InputError(f"{NAME}: parameter wrench_frame_rotation_xyzw: {exc}") from exc
+        tf_installed = has_message(TF_TYPE)
+        source = p["wrench_frame_source"]
+        if source == "tf" and not tf_installed:
+            raise InputError(
+                f"{NAME}: wrench_frame_source is tf but {TF_TYPE} is not installed; "
+                "give wrench_frame_rotation_xyzw with wrench_frame_source:=parameter"
+            )
+        use_tf = source == "tf" or (source == "auto" and tf_installed)
+        self.frames = WrenchFrames(self.world_frame, use_tf, parameter_rotation, p["tf_wait_s"])
+        self.frame_source = "tf (/tf_static, /tf)" if use_tf else "parameter wrench_frame_rotation_xyzw"
+        self.get_logger().info(
+            f"wrench frame rotation from {self.frame_source}"
+            + ("" if use_tf else f" = {p['wrench_frame_rotation_xyzw']} ({TF_TYPE} not used)")
+        )
+        subject = SubjectInfo(p["body_mass_kg"] or None, p["height_m"] or None, p["sex"])
+        try:
+            passive = PassiveModel.parse(p["passive"])
+        except (BspError, ValueError) as exc:
+            raise InputError(f"{NAME}: parameter passive: {exc}") from exc
+        self.tare: Tare | None = None
+        if p["tare_file"]:
+            try:
+                self.tare = read_tare_file(p["tare_file"])
+            except BspError as exc:
+                raise InputError(f"{NAME}: parameter tare_file {p['tare_file']}: {exc}") from exc
+            self.get_logger().info(f"tare {p['tare_file']} of frame {self.tare.frame_id!r} applied to every wrench")
+        self.wrench_rotation: tuple[str, np.ndarray] | None = None  # the latest wrench's frame and rotation
+        self.options = IdentifyOptions(method=p["method"], passive=passive, subject=subject, tare=self.tare)
+        self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
+        self.recursive = RecursiveFeed(self.n, self.options.passive)
+        self.lengths: np.ndarray | None = None
+        self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
+        self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
+        self.published = 0
+        self.worker = LatestJobWorker(f"{NAME}-estimate")
+        # The estimates run in a child process (see ProcessOffload); a worker thread waits for them.
+        # In recursive mode the per-sample filter here comes first and the child only fuses at 5 Hz: it runs
+        # in the background. A windowed estimate is the main work and keeps a normal priority.
+        background = self.mode == "recursive"
+        self.offload = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, background))
+        self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
+        self.ready: tuple[int, jobs.EstimateOutputs] | None = None
+        self.offload.run(jobs.ping)
+        self.support_fraction = float(p["support_fraction"])
+        self.support_estimate: dict[str, Any] | None = None  # set by the worker thread with each estimate
+        self.support_diagnostics: dict[str, str] = {}
+        self.update_s: deque[float] = deque(maxlen=int(10 * p["update_hz"]) + 1)  # compute time of the last ~10 s
+        self.types = message_class
+        estimates = rclpy_qos("estimates")
+        self.estimate_pub = self.create_publisher(
+            message_class("diagnostic_msgs/msg/DiagnosticArray"), "bsp/estimate", estimates
+        )
+        self.json_pub = self.create_publisher(message_class("std_msgs/msg/String"), "bsp/estimate_json", estimates)
+        joint_state = message_class("sensor_msgs/msg/JointState")
+        self.passive_pub = self.create_publisher(joint_state, "bsp/passive_moments", estimates)
+        self.inertia_pubs = {
+            s: self.create_publisher(message_class("geometry_msgs/msg/InertiaStamped"), f"bsp/{s}/inertia", estimates)
+            for s in segments_for(self.n)
+        }
+        self.support_pub = self.create_publisher(
+            message_class("geometry_msgs/msg/WrenchStamped"), "bsp/weight_support", rclpy_qos("default")
+        )
+        self.diag_pub = self.create_publisher(
+            message_class("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", rclpy_qos("default")
+        )
+        wrench = message_class("geometry_msgs/msg/WrenchStamped")
+        self.create_subscription(wrench, p["wrench_topic"], self.on_wrench, rclpy_qos("sensor_input"))
+        self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, estimates)
+        self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, estimates)
+        self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
+        if use_tf:
+            tf = message_class(TF_TYPE)
+            self.create_subscription(tf, "/tf_static", self.on_tf, rclpy_qos("tf_static_listener"))
+            self.create_subscription(tf, "/tf", self.on_tf, rclpy_qos("tf"))
+        self.create_timer(1.0 / p["update_hz"], self.on_update)
+
+    def now_ns(self) -> int:
+        """The node clock (system time unless ``use_sim_time``), ns."""
+        return int(self.get_clock().now().nanoseconds)
+
+    def destroy_node(self) -> None:
+        """Stop the worker thread and the worker process, then the node."""
+        self.worker.close()
+        self.offload.close()
+        super().destroy_node()
+
+    # -- inputs ---------------------------------------------------------------------------------------
+    def on_tf(self, msg: Any) -> None:
+        """New transforms; a changed wrench rotation restarts the estimate."""
+        for frame_id in self.frames.on_transforms(read_tf_message(msg)):
+            # Samples already buffered were rotated the old way: they must not mix with new ones.
+            self.get_logger().warning(f"transform of {frame_id} changed: estimate restarted")
+            self.windowed.reset()
+            self.recursive.reset()
+
+    def on_lengths(self, msg: Any) -> None:
+        """Segment lengths from the joint angle estimator."""
+        sample = read_joint_state(msg)
+        if sample.position.size == self.n and np.isfinite(sample.position).all() and (sample.position > 0).all():
+            self.lengths = sample.position
+
+    def on_raw_angles(self, msg: Any) -> None:
+        """Unfiltered joint angles: the windowed mode filters them with zero phase, like `bsp identify`."""
+        sample = read_joint_state(msg)
+        if self.mode != "windowed":
+            return
+        self.last_receive["joint_states"] = self.now_ns()
+        if self.lengths is None or sample.position.size != self.n:
+            return
+        accepted = self.windowed.add_joint_state(sample.t_ns, sample.position, self.lengths)
+        self.counts["joint_states" if accepted else "refused"] += 1
+
+    def on_joint_state(self, msg: Any) -> None:
+        """Causally filtered joint angles and direction velocities: the weight support, and the recursive mode."""
+        sample = read_joint_state(msg)
+        if self.support_fraction > 0.0:
+            self.publish_support(sample)
+        if self.mode != "recursive":
+            return
+        self.last_receive["joint_states"] = self.now_ns()
+        accepted = self.recursive.add_joint_state(sample.t_ns, sample.position, sample.velocity)
+        self.counts["joint_states" if accepted else "refused"] += 1
+
+    def on_wrench(self, msg: Any) -> None:
+        """One wrench: into world axes, then into the window or the recursive filter."""
+        sample = read_wrench_stamped(msg)
+        self.last_receive["wrench"] = self.now_ns()
+        rotation = self.frames.rotation_for(sample.frame_id, self.now_ns())
+        if rotation is None:
+            self.counts["waiting_for_tf"] = self.counts.get("waiting_for_tf", 0) + 1
+            return
+        force_n, torque_nm = sample.force_n, sample.torque_nm
+        if self.tare is not None:
+            if sample.frame_id != self.tare.frame_id:
+                self.counts["tare_frame_mismatch"] = self.counts.get("tare_frame_mismatch", 0) + 1
+                return
+            load_force_n, load_torque_nm = self.tare.predicted_wrench(rotation)
+            force_n, torque_nm = force_n - load_force_n, torque_nm - load_torque_nm
+        self.wrench_rotation = (sample.frame_id, rotation)
+        force, torque = rotation @ force_n, rotation @ torque_nm
+        wrench_yzx = np.array([force[1], force[2], torque[0]])
+        if self.mode == "windowed":
+            accepted = self.windowed.add_wrench(sample.t_ns, wrench_yzx)
+        else:
+            accepted, coulomb_nm = self.recursive.add_wrench(sample.t_ns, wrench_yzx, self.lengths)
+            joints = self.recursive.passive_joints
+            if coulomb_nm is not None and len(joints) == coulomb_nm.size:
+                passive = JointStateSample(sample.t_ns, "", joints, np.zeros(0), np.zeros(0), coulomb_nm)
+                self.passive_pub.publish(build_joint_state(self.types, passive))
+        self.counts["wrench" if accepted else "refused"] += 1
+
+    # -- outputs ---------------------------------------------------------------------------------------
+    def publish_support(self, sample: JointStateSample) -> None:
+        """The wrench the robot should apply to the hand at these angles, only while the estimate is valid."""
+        q = sample.position if sample.position.size == self.n and np.isfinite(sample.position).all() else None
+        decision = live_support(self.support_estimate, q, self.lengths, self.support_fraction)
+        self.support_diagnostics = {f"weight_support.{k}": v for k, v in decision.diagnostics().items()}
+        if decision.wrench is None:
+            return
+        f_y, f_z, m_x = (float(v) for v in decision.wrench.wrench_yzx)
+        support = WrenchSample(sample.t_ns, self.world_frame, np.array([0.0, f_y, f_z]), np.array([m_x, 0.0, 0.0]))
+        self.support_pub.publish(build_wrench_stamped(self.types, support))
+
+    def stale_reason(self) -> str | None:
+        now = self.now_ns()
+        for name, last in self.last_receive.items():
+            if last is None:
+                return f"waiting for {name}"
+            if now - last > self.stale_s * 1e9:
+                return f"stale input: no {name} for {(now - last) / 1e9:.2f} s"
+        if self.lengths is None:
+            return "waiting for segment lengths"
+        return None
+
+    def on_update(self) -> None:
+        """Publish the estimate (invalid if an input is stale) and the node's health.
+
+        The slow part runs in a worker process, waited for by a worker thread, so that the wrench callbacks
+        never wait for an estimate; here, on the executor thread, only what it needs is copied.
+        """
+        reason = self.stale_reason()
+        counts = dict(self.counts)
+        if self.mode == "windowed":
+            self._update_windowed(reason, counts)
+        else:
+            self._update_recursive(reason, counts)
+
+    def _update_windowed(self, reason: str | None, counts: dict[str, int]) -> None:
+        """Publish on the timer grid: the estimate computed since the last tick (of that tick's window), then
+        start the next one. Consumers get an update every period, one period after the window it describes
+        (its stamp says which). A quick verdict (stale, waiting) goes out at once and supersedes any estimate
+        still computing."""
+        window = self.windowed.snapshot() if reason is None else None
+        if window is None or isinstance(window, WindowEstimate):
+            self.generation += 1
+            if window is None:
+                document, stamp = invalid_document(self.options.method, str(reason)), self.now_ns()
+            else:
+                document, stamp = window.document, window.last_wrench_t_ns or self.now_ns()
+            document["mode"] = self.mode
+            self.publish(jobs.outputs_from_document(document, stamp, with_passive=True), counts)
+            return
+        if self.tare is not None and self.wrench_rotation is not None:
+            frame_id, rotation = self.wrench_rotation
+            window = dataclasses.replace(window, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
+        ready, self.ready = self.ready, None
+        if ready is not None and ready[0] == self.generation:
+            self.publish(ready[1], counts)
+        generation = self.generation
+        self.worker.submit(lambda: self._compute_window(window, generation))
+
+    def _compute_window(self, window: WindowSamples, generation: int) -> None:
+        """On the worker thread: identify a window in the worker process; keep it for the next tick."""
+        self.ready = (generation, self._timed(lambda: self.offload.run(jobs.window_estimate, window)))
+
+    def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
+        """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
+        job: Callable[[], jobs.EstimateOutputs]
+        if reason is not None:
+            document, now = invalid_document(self.options.method, reason), self.now_ns()
+            document["mode"] = self.mode
+            job = lambda: jobs.outputs_from_document(document, now, with_passive=False)  # noqa: E731 - in order
+        else:
+            assert self.lengths is not None  # stale_reason() waits for them
+            result, lengths = self.recursive.identifier.result(), self.lengths.copy()
+            stamp = self.recursive.guard.last_t_ns or 0
+            job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp)  # noqa: E731
+        self.worker.submit(lambda: self.publish(self._timed(job), counts))
+
+    def _timed(self, job: Callable[[], jobs.EstimateOutputs]) -> jobs.EstimateOutputs:
+        """On the worker thread: run an estimate job and record how long it took; a job that fails
+        unexpectedly gives an invalid estimate (published, not lost) and a logged traceback."""
+        started = time.perf_counter()
+        try:
+            outputs = job()
+        except Exception as exc:
+            self.get_logger().error(f"estimate failed: {traceback.format_exc()}")
+            document = invalid_document(self.options.method, f"internal error: {exc!r}")
+            document["mode"] = self.mode
+            outputs = jobs.outputs_from_document(document, self.now_ns(), with_passive=False)
+        self.update_s.append(time.perf_counter() - started)
+        return outputs
+
+    def publish(self, outputs: jobs.EstimateOutputs, counts: dict[str, int]) -> None:
+        """Write an estimate's serialised messages, then the node's health on /diagnostics."""
+        self.estimate_pub.publish(outputs.cdr["estimate"])
+        self.json_pub.publish(outputs.cdr["json"])
+        for key, data in outputs.cdr.items():
+            if key.startswith("inertia/"):
+                self.inertia_pubs[key.removeprefix("inertia/")].publish(data)
+        if "passive" in outputs.cdr:
+            self.passive_pub.publish(outputs.cdr["passive"])
+        self.published += 1
+        self.support_estimate = outputs.support
+        level = OK if outputs.valid else (WARN if "waiting" in outputs.message else ERROR)
+        timing = {}
+        if self.update_s:  # how long an update takes: near the period, the node cannot keep up
+            timing = {
+                "update_ms_mean": f"{1e3 * np.mean(self.update_s):.1f}",
+                "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
+            }
+        frames = {f"wrench_frame.{f}": source for f, source in self.frames.sources.items()}
+        values = {
+            **counts,
+            "published": self.published,
+            "updates_dropped": self.worker.dropped,
+            **timing,
+            "wrench_frame_source": self.frame_source,
+            **frames,
+            **self.support_diagnostics,
+        }
+        status = DiagnosticStatusData.with_values(level, NAME, outputs.message, "", values)
+        diagnostics = DiagnosticArraySample(self.now_ns(), "", (status,))
+        self.diag_pub.publish(build_diagnostic_array(self.types, diagnostics))
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point (``ros2 run bsp_ros bsp_identifier``); ``args``: a command line like ``sys.argv``."""
+    # A callback thread waiting for the GIL waits up to the switch interval (5 ms by default) while
+    # another thread (the middleware, an estimate's worker) runs; 0.2 ms keeps a 1 kHz stream's latency low.
+    sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))
+    return run_node(NAME, BspIdentifierNode, BspIdentifierNode.__doc__ or "", PARAMETERS, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

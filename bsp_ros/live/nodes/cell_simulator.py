@@ -1,0 +1,237 @@
+"""`cell_simulator`: the simulated cell publishing wrench, marker poses, /tf_static (if tf2_msgs) and the truth."""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import json
+import os
+import sys
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core import simulation as sim
+from bsp_ros.errors import InputError
+from bsp_ros.live.runtime.parameters import Param, declare_parameters
+from bsp_ros.live.runtime.qos import rclpy_qos
+from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
+from bsp_ros.live.runtime.spin import run_node
+from msg_adapters.pose import PoseSample, build_pose_stamped
+from msg_adapters.rotation import quaternion_from_matrix
+from msg_adapters.tf import TransformSample, build_tf_message
+from msg_adapters.wrench import WrenchSample, build_wrench_stamped
+
+NAME = "cell_simulator"
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+
+PARAMETERS = (
+    Param(
+        "subject",
+        "human",
+        "simulated arm: human (3 segments) or paper-arm (2 segments)",
+        choices=("human", "paper-arm"),
+    ),
+    Param("seed", 0, "random seed", lo=0, hi=2**31 - 1),
+    Param("speed", 1.0, "simulated seconds per wall second", "", lo=0.01, hi=100.0),
+    Param("wrench_hz", 100.0, "wrench rate", "Hz", lo=1.0, hi=5000.0),
+    Param("marker_hz", 50.0, "marker rate", "Hz", lo=1.0, hi=1000.0),
+    Param("duration_s", 0.0, "simulated session length (0: endless)", "s", lo=0.0, hi=1e6),
+    Param("dropout_fraction", 0.0, "share of marker frames lost", "", lo=0.0, hi=0.9),
+    Param("nan_burst_period_s", 0.0, "a NaN burst every this many s (0: none)", "s", lo=0.0),
+    Param("nan_burst_s", 0.2, "length of a NaN burst", "s", lo=0.0, hi=10.0),
+    Param("stall_at_s", 0.0, "the sensor stops publishing at this time (0: never)", "s", lo=0.0),
+    Param("die_at_s", 0.0, "the process exits at this time (0: never)", "s", lo=0.0),
+    Param("clock_jump_at_s", 0.0, "stamps jump backwards at this time (0: never)", "s", lo=0.0),
+    Param("clock_jump_s", 10.0, "size of the backwards jump", "s", lo=0.0, hi=1e6),
+    Param(
+        "sensor_roll_pitch_yaw_deg",
+        [180.0, 0.0, 30.0],
+        "fixed-axis roll, pitch, yaw of the sensor frame in world",
+        "deg",
+    ),
+    Param("force_bias_n", [0.0, 0.0, 0.0], "sensor force offset, sensor frame (an imperfect tare)", "N"),
+    Param("force_drift_n_per_s", [0.0, 0.0, 0.0], "sensor force offset drift, sensor frame", "N/s"),
+    Param("handle_mass_kg", 0.0, "handle mass between sensor and hand", "kg", lo=0.0, hi=10.0),
+    Param("handle_com_m", [0.0, 0.0, 0.0], "handle centre of mass, sensor frame", "m"),
+    Param("spike_fraction", 0.0, "share of wrench samples that are spikes", "", lo=0.0, hi=0.5),
+    Param("passive_offset_nm", [0.0], "elastic passive offset per joint ([0.0]: none)", "Nm"),
+    Param("friction_transition_rad_s", 0.0, "width of a smooth (tanh) friction transition", "rad/s", lo=0.0, hi=1.0),
+    Param("trajectory_file", "", "follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in motion"),
+    Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
+    Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
+    # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
+    # 1 kHz (a coarser tick publishes bursts, which delay the last sample of each burst downstream).
+    Param("tick_s", 0.001, "publish the samples that fell due every this long", "s", lo=0.0005, hi=0.1),
+)
+
+
+@dataclasses.dataclass
+class _Queue:
+    """Messages simulated ahead, (simulated time ns, message), and the next time to simulate."""
+
+    next_ns: int
+    items: collections.deque[tuple[int, Any]] = dataclasses.field(default_factory=collections.deque)
+
+
+class CellSimulatorNode(RosNode):
+    """Paces :class:`bsp_ros.core.simulation.CellSimulator` against the clock and publishes its streams.
+
+    The sensor frame's transform goes out on /tf_static when tf2_msgs is installed; the node logs the
+    quaternion either way (the identifier's ``wrench_frame_rotation_xyzw`` without tf). Faults on request
+    (parameters): marker dropouts, NaN bursts in the wrench, a stalled sensor (stops publishing the wrench),
+    a dying process, and a backwards clock jump of the stamps.
+    """
+
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        p = declare_parameters(self, PARAMETERS)
+        self.speed = p["speed"]
+        self.duration_s = p["duration_s"]
+        self.nan_burst_period_s = p["nan_burst_period_s"]
+        self.nan_burst_s = p["nan_burst_s"]
+        self.stall_at_s = p["stall_at_s"]
+        self.die_at_s = p["die_at_s"]
+        self.jump_at_s = p["clock_jump_at_s"]
+        self.jump_s = p["clock_jump_s"]
+        wrench_hz, marker_hz = p["wrench_hz"], p["marker_hz"]
+        rpy = p["sensor_roll_pitch_yaw_deg"]
+        if len(rpy) != 3:
+            raise InputError(f"{NAME}: sensor_roll_pitch_yaw_deg needs 3 angles, got {rpy}")
+        self.start_wall_ns = self.now_ns()
+        base = sim.human_arm_cell() if p["subject"] == "human" else sim.paper_mechanical_arm_cell()
+        spec = dataclasses.replace(
+            base,
+            seed=p["seed"],
+            start_ns=self.start_wall_ns,
+            duration_s=max(self.duration_s, 1.0),
+            sensor=dataclasses.replace(
+                base.sensor,
+                wrench_hz=wrench_hz,
+                roll_pitch_yaw_deg=tuple(rpy),
+                force_bias_n=tuple(p["force_bias_n"]),
+                force_drift_n_per_s=tuple(p["force_drift_n_per_s"]),
+                handle_mass_kg=p["handle_mass_kg"],
+                handle_com_m=tuple(p["handle_com_m"]),
+                spike_fraction=p["spike_fraction"],
+            ),
+            markers=dataclasses.replace(base.markers, marker_hz=marker_hz, dropout_fraction=p["dropout_fraction"]),
+            passive=dataclasses.replace(
+                base.passive,
+                offset_nm=tuple(p["passive_offset_nm"]) if any(p["passive_offset_nm"]) else (),
+                friction_transition_rad_s=p["friction_transition_rad_s"],
+            ),
+        )
+        if p["trajectory_file"]:
+            from bsp_ros.core.planning import planned_trajectory_from_file
+
+            spec = dataclasses.replace(spec, trajectory=planned_trajectory_from_file(p["trajectory_file"]))
+        self.simulator = sim.CellSimulator(spec)
+        self.frame_id = spec.sensor.frame_id
+        self.wrench_period_ns = int(1e9 / wrench_hz)
+        self.marker_period_ns = int(1e9 / marker_hz)
+        self.wrench_queue = _Queue(self.start_wall_ns)
+        self.marker_queue = _Queue(self.start_wall_ns)
+        self.types = message_class
+        sensor_data = rclpy_qos("sensor_data")
+        self.wrench_pub = self.create_publisher(
+            message_class("geometry_msgs/msg/WrenchStamped"), p["wrench_topic"], sensor_data
+        )
+        pose = message_class("geometry_msgs/msg/PoseStamped")
+        self.marker_pubs = {
+            name: self.create_publisher(pose, p["marker_topic_prefix"] + name, sensor_data)
+            for name in self.simulator.marker_names
+        }
+        quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
+        if has_message(TF_TYPE):
+            tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
+            transform = TransformSample(self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion)
+            tf_pub.publish(build_tf_message(message_class, [transform]))
+        self.get_logger().info(
+            f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {[round(float(v), 9) for v in quaternion]} "
+            + ("on /tf_static" if has_message(TF_TYPE) else f"(not on /tf_static: {TF_TYPE} is not installed)")
+        )
+        truth_pub = self.create_publisher(message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static"))
+        truth = {**self.simulator.truth.to_dict(), "start_time_ns": self.start_wall_ns}
+        truth_pub.publish(message_class("std_msgs/msg/String")(data=json.dumps(truth)))
+        self.create_timer(p["tick_s"], self.tick)
+        self.get_logger().info(
+            f"simulating a {self.simulator.n_segments}-segment arm at {self.speed:.1f}x real time, "
+            f"wrench {wrench_hz:.0f} Hz, markers {marker_hz:.0f} Hz"
+        )
+
+    def now_ns(self) -> int:
+        """The node clock, ns."""
+        return int(self.get_clock().now().nanoseconds)
+
+    def _sim_now_ns(self) -> int:
+        return self.start_wall_ns + int((self.now_ns() - self.start_wall_ns) * self.speed)
+
+    def _stamp(self, t_ns: np.ndarray) -> np.ndarray:
+        """Apply the clock-jump fault to stamps (the physics keeps going)."""
+        if self.jump_at_s > 0:
+            jumped = t_ns - self.start_wall_ns >= self.jump_at_s * 1e9
+            return np.where(jumped, t_ns - int(self.jump_s * 1e9), t_ns)
+        return t_ns
+
+    def tick(self) -> None:
+        """Publish every sample whose simulated time has come."""
+        now = self._sim_now_ns()
+        elapsed_s = (now - self.start_wall_ns) / 1e9
+        if self.die_at_s and elapsed_s >= self.die_at_s:
+            self.get_logger().warning("fault: the simulated sensor dies now")
+            os._exit(3)
+        if self.duration_s and elapsed_s >= self.duration_s:
+            now = min(now, self.start_wall_ns + int(self.duration_s * 1e9))
+        stalled = bool(self.stall_at_s and elapsed_s >= self.stall_at_s)
+        for wrench in self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench):
+            if not stalled:
+                self.wrench_pub.publish(build_wrench_stamped(self.types, wrench))
+        for name, pose in self._due(self.marker_queue, now, self.marker_period_ns, self._simulate_markers):
+            self.marker_pubs[name].publish(build_pose_stamped(self.types, pose))
+
+    def _due(
+        self, queue: _Queue, now_ns: int, period_ns: int, simulate: Callable[[np.ndarray], list[Any]]
+    ) -> list[Any]:
+        """The queued messages stamped up to ``now_ns``; the physics is simulated ahead in 0.1 s chunks, since
+        one vectorised call per sample would cost more than publishing it."""
+        while queue.next_ns <= now_ns:
+            chunk = np.arange(queue.next_ns, queue.next_ns + max(int(0.1e9), period_ns), period_ns, dtype=np.int64)
+            queue.next_ns = int(chunk[-1]) + period_ns
+            queue.items.extend(simulate(chunk))
+        due = []
+        while queue.items and queue.items[0][0] <= now_ns:
+            due.append(queue.items.popleft()[1])
+        return due
+
+    def _simulate_wrench(self, t_ns: np.ndarray) -> list[tuple[int, Any]]:
+        series = self.simulator.sample_wrench(t_ns)
+        force, torque = series.force_n.copy(), series.torque_nm.copy()
+        if self.nan_burst_period_s > 0:
+            phase = ((t_ns - self.start_wall_ns) / 1e9) % self.nan_burst_period_s
+            burst = phase > self.nan_burst_period_s - self.nan_burst_s
+            force[burst] = np.nan
+        stamps = self._stamp(series.t_ns)
+        samples = [WrenchSample(int(stamps[k]), self.frame_id, force[k], torque[k]) for k in range(stamps.size)]
+        return list(zip(t_ns.tolist(), samples, strict=True))  # messages are built when published
+
+    def _simulate_markers(self, t_ns: np.ndarray) -> list[tuple[int, tuple[str, Any]]]:
+        identity = np.array([0.0, 0.0, 0.0, 1.0])
+        out = []
+        for name, series in self.simulator.sample_markers(t_ns).items():
+            stamps = self._stamp(series.t_ns)
+            for k in range(stamps.size):
+                pose = PoseSample(int(stamps[k]), "world", series.position_m[k], identity)
+                out.append((int(series.t_ns[k]), (name, pose)))
+        out.sort(key=lambda item: item[0])  # frames in time order, markers of a frame together
+        return out
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point (``ros2 run bsp_ros cell_simulator``); ``args``: a command line like ``sys.argv``."""
+    return run_node(NAME, CellSimulatorNode, CellSimulatorNode.__doc__ or "", PARAMETERS, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,134 @@
+"""The estimates `bsp_identifier` computes in its worker process (module-level, so they pickle by name)."""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from rosbags.typesys import Stores, get_typestore
+
+from bsp_ros.core.estimate import estimate_document
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.pipeline import IdentifyOptions, fuse
+from bsp_ros.core.weight_support import estimate_from_document
+from bsp_ros.live.estimate_messages import (
+    diagnostics_from_estimate,
+    inertias_from_estimate,
+    passive_moments_from_estimate,
+)
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowSamples
+from msg_adapters.diagnostics import build_diagnostic_array
+from msg_adapters.inertia import build_inertia_stamped
+from msg_adapters.joint_state import build_joint_state
+
+_windowed: WindowedIdentifier | None = None  # the child's own: it keeps the elastic-check schedule
+_store: Any = None
+
+
+def _typestore() -> Any:
+    """The rosbags Jazzy type store: it serialises CDR in the worker process without rclpy."""
+    global _store
+    if _store is None:
+        _store = get_typestore(Stores.ROS2_JAZZY)
+    return _store
+
+
+def init_worker(n_segments: int, config: WindowConfig, background: bool = False) -> None:
+    """Set up the worker process; ``background`` runs it only on otherwise idle CPU time.
+
+    Linux's ``SCHED_IDLE`` never takes a core from a normal thread, such as the recursive filter's
+    1 kHz path in the node; elsewhere the lowest ``nice`` does what it can.
+    """
+    global _windowed
+    if background:
+        try:
+            os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+        except (AttributeError, OSError):
+            os.nice(19)
+    _windowed = WindowedIdentifier(n_segments, config)
+
+
+def ping() -> bool:
+    """Nothing: the first call waits until the child has imported numpy and scipy."""
+    return True
+
+
+@dataclass(frozen=True)
+class EstimateOutputs:
+    """One estimate, serialised for its topics: what the node's worker thread only has to write.
+
+    Building and serialising the messages here, in the worker process, keeps the node's interpreter lock
+    free for the 1 kHz wrench path. ``cdr`` maps an output (``estimate``, ``json``, ``inertia/<segment>``,
+    ``passive``) to serialised CDR, which rclpy's ``Publisher.publish`` takes as it is.
+    """
+
+    valid: bool
+    message: str
+    cdr: dict[str, bytes]
+    # The static moments and their covariance for the weight support (bsp_ros.core.weight_support), or None.
+    support: dict[str, Any] | None = None
+
+
+def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive: bool) -> EstimateOutputs:
+    """Serialise an estimate document (CONTRACT.md schema) for ``bsp/estimate``, ``bsp/estimate_json``,
+    ``bsp/<segment>/inertia`` and, when ``with_passive``, ``bsp/passive_moments``."""
+    store = _typestore()
+
+    def types(name: str) -> Any:
+        return store.types[name]
+
+    def cdr(msg: Any, type_name: str) -> bytes:
+        return bytes(store.serialize_cdr(msg, type_name))
+
+    out = {
+        "estimate": cdr(
+            build_diagnostic_array(types, diagnostics_from_estimate(document, stamp_ns)),
+            "diagnostic_msgs/msg/DiagnosticArray",
+        ),
+        "json": cdr(types("std_msgs/msg/String")(data=json.dumps(document, allow_nan=False)), "std_msgs/msg/String"),
+    }
+    valid = bool(document["quality"]["valid"])
+    if valid:
+        for segment, inertia in inertias_from_estimate(document, stamp_ns).items():
+            out[f"inertia/{segment}"] = cdr(build_inertia_stamped(types, inertia), "geometry_msgs/msg/InertiaStamped")
+        passive = passive_moments_from_estimate(document, stamp_ns)
+        if passive is not None and with_passive:
+            out["passive"] = cdr(build_joint_state(types, passive), "sensor_msgs/msg/JointState")
+    return EstimateOutputs(valid, str(document["quality"]["message"]), out, estimate_from_document(document))
+
+
+def window_estimate(window: WindowSamples) -> EstimateOutputs:
+    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench."""
+    assert _windowed is not None, "init_worker was not run"
+    estimate = _windowed.estimate_window(window)
+    estimate.document["mode"] = "windowed"
+    return outputs_from_document(estimate.document, estimate.last_wrench_t_ns or 0, with_passive=True)
+
+
+def recursive_estimate(
+    result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, stamp_ns: int
+) -> EstimateOutputs:
+    """The estimate of a recursive filter state (its passive moments go out per sample, not here)."""
+    document = recursive_document(result, lengths_m, options)
+    document["mode"] = "recursive"
+    return outputs_from_document(document, stamp_ns, with_passive=False)
+
+
+def recursive_document(result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions) -> dict[str, Any]:
+    """The estimate document of a recursive result (fused with the anthropometric prior when valid)."""
+    n = lengths_m.size
+    data = IdentificationData(
+        np.zeros(0, dtype=np.int64),
+        np.zeros((0, n)),
+        np.zeros((0, n)),
+        np.zeros((0, n)),
+        lengths_m,
+        np.zeros(n),
+        np.zeros(n),
+    )
+    posterior = fuse(result, data, options.subject) if result.valid else None
+    return estimate_document(result, data, posterior, options.subject)

@@ -1,0 +1,158 @@
+"""`joint_angle_estimator`: marker poses -> `arm/joint_states` with causal filters and a staleness watchdog."""
+
+from __future__ import annotations
+
+import functools
+import sys
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.streams import joints_for, markers_for, segments_for
+from bsp_ros.live.online.causal_angles import CausalAnglesConfig, CausalJointAngles
+from bsp_ros.live.runtime.parameters import Param, declare_parameters
+from bsp_ros.live.runtime.qos import rclpy_qos
+from bsp_ros.live.runtime.ros import RosNode, message_class
+from bsp_ros.live.runtime.spin import run_node
+from msg_adapters.diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    DiagnosticArraySample,
+    DiagnosticStatusData,
+    build_diagnostic_array,
+)
+from msg_adapters.joint_state import JointStateSample, build_joint_state
+from msg_adapters.pose import read_pose_stamped
+
+NAME = "joint_angle_estimator"
+
+
+PARAMETERS = (
+    Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
+    Param("marker_hz", 50.0, "nominal mocap frame rate", "Hz", lo=1.0, hi=1000.0),
+    Param("cutoff_hz", 5.0, "causal low-pass of the angles", "Hz", lo=0.1, hi=100.0),
+    Param("direction_cutoff_hz", 0.5, "low-pass of the direction velocity", "Hz", lo=0.01, hi=10.0),
+    Param("max_gap_s", 0.1, "longer marker gaps restart the filters", "s", lo=0.0, hi=10.0),
+    Param("stale_s", 0.5, "no frame for this long: stale", "s", lo=0.01, hi=60.0),
+    Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
+)
+
+
+class JointAngleEstimatorNode(RosNode):
+    """Collects each mocap frame's markers, estimates the angles causally and publishes them.
+
+    A frame is processed once all of its markers arrived; a newer complete frame drops older incomplete
+    ones (occlusion). `arm/joint_states` are stamped by the angle filter's group delay before their frame,
+    the instant the filtered angle describes, so that angles and wrench line up (an uncompensated lag
+    biases the Coulomb terms). `arm/joint_angles_raw` carries each frame's unfiltered angles at the frame
+    stamp (the windowed identifier filters them with zero phase, as offline); `arm/segment_lengths` the
+    running-median segment lengths (JointState with segment names, position = length in m).
+    """
+
+    def __init__(self) -> None:
+        super().__init__(NAME)
+        p = declare_parameters(self, PARAMETERS)
+        n_segments = p["n_segments"]
+        self.stale_s = p["stale_s"]
+        self.n = n_segments
+        self.names = markers_for(n_segments)
+        config = CausalAnglesConfig(
+            p["marker_hz"], p["cutoff_hz"], min(p["direction_cutoff_hz"], p["cutoff_hz"]), p["max_gap_s"]
+        )
+        self.estimator = CausalJointAngles(n_segments, config)
+        self.delay_ns = int(self.estimator.group_delay_s() * 1e9)
+        self.frames: dict[int, dict[str, np.ndarray]] = {}
+        self.last_frame_ns: int | None = None
+        self.last_receive_wall_ns: int | None = None
+        self.counts = {"frames": 0, "incomplete_frames": 0, "refused": 0}
+        self.types = message_class
+        estimates = rclpy_qos("estimates")
+        joint_state = message_class("sensor_msgs/msg/JointState")
+        self.state_pub = self.create_publisher(joint_state, "arm/joint_states", estimates)
+        self.length_pub = self.create_publisher(joint_state, "arm/segment_lengths", estimates)
+        self.raw_pub = self.create_publisher(joint_state, "arm/joint_angles_raw", estimates)
+        self.diag_pub = self.create_publisher(
+            message_class("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", rclpy_qos("default")
+        )
+        pose = message_class("geometry_msgs/msg/PoseStamped")
+        for name in self.names:
+            self.create_subscription(
+                pose,
+                p["marker_topic_prefix"] + name,
+                functools.partial(self.on_pose, name),
+                rclpy_qos("sensor_input"),
+            )
+        self.last_lengths: np.ndarray | None = None
+        self.create_timer(1.0, self.on_watchdog)
+
+    def now_ns(self) -> int:
+        """The node clock, ns."""
+        return int(self.get_clock().now().nanoseconds)
+
+    def on_pose(self, marker: str, msg: Any) -> None:
+        """Store one marker; process the frame once complete."""
+        pose = read_pose_stamped(msg)
+        self.last_receive_wall_ns = self.now_ns()
+        if not np.isfinite(pose.position_m).all() or pose.t_ns <= 0:
+            self.counts["refused"] += 1
+            return
+        if self.last_frame_ns is not None and pose.t_ns <= self.last_frame_ns:
+            if self.last_frame_ns - pose.t_ns > 1e9:  # the clock jumped back: start over
+                self.estimator = CausalJointAngles(self.n, self.estimator.config)
+                self.frames.clear()
+                self.last_frame_ns = None
+            else:
+                self.counts["refused"] += 1
+                return
+        frame = self.frames.setdefault(pose.t_ns, {})
+        frame[marker] = pose.position_m
+        if len(frame) == len(self.names):
+            for stamp in [s for s in self.frames if s < pose.t_ns]:
+                del self.frames[stamp]
+                self.counts["incomplete_frames"] += 1
+            del self.frames[pose.t_ns]
+            self.process(pose.t_ns, frame)
+        elif len(self.frames) > 50:  # bound memory under heavy occlusion
+            del self.frames[min(self.frames)]
+            self.counts["incomplete_frames"] += 1
+
+    def process(self, t_ns: int, frame: dict[str, np.ndarray]) -> None:
+        """Causal angles of one complete frame -> `arm/joint_states`."""
+        self.last_frame_ns = t_ns
+        self.counts["frames"] += 1
+        sample = self.estimator.update(t_ns, frame)
+        raw, lengths = self.estimator.last_raw_q_rad, self.estimator.lengths_m
+        if raw is not None and lengths is not None and self.estimator.accepted(t_ns):
+            raw_state = JointStateSample(t_ns, "", joints_for(self.n), raw, np.zeros(0), np.zeros(0))
+            self.raw_pub.publish(build_joint_state(self.types, raw_state))
+            if self.last_lengths is None or self.counts["frames"] % 50 == 0:
+                self.last_lengths = lengths
+                length_state = JointStateSample(t_ns, "", segments_for(self.n), lengths, np.zeros(0), np.zeros(0))
+                self.length_pub.publish(build_joint_state(self.types, length_state))
+        if sample is None:
+            return
+        stamp = t_ns - self.delay_ns
+        state = JointStateSample(stamp, "", joints_for(self.n), sample.q_rad, sample.velocity_rad_s, np.zeros(0))
+        self.state_pub.publish(build_joint_state(self.types, state))
+
+    def on_watchdog(self) -> None:
+        """Publish the node's health on /diagnostics; stale when frames stopped."""
+        now = self.now_ns()
+        if self.last_receive_wall_ns is None:
+            level, message = WARN, "waiting for markers"
+        elif now - self.last_receive_wall_ns > self.stale_s * 1e9:
+            level, message = ERROR, f"stale: no marker for {(now - self.last_receive_wall_ns) / 1e9:.1f} s"
+        else:
+            level, message = OK, "tracking"
+        status = DiagnosticStatusData.with_values(level, f"{NAME}", message, "", self.counts)
+        self.diag_pub.publish(build_diagnostic_array(self.types, DiagnosticArraySample(now, "", (status,))))
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point (``ros2 run bsp_ros joint_angle_estimator``); ``args``: a command line like ``sys.argv``."""
+    return run_node(NAME, JointAngleEstimatorNode, JointAngleEstimatorNode.__doc__ or "", PARAMETERS, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

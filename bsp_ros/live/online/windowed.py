@@ -1,0 +1,271 @@
+"""Sliding-window identification for live use: the batch estimator over the last `window_s` seconds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.estimate import estimate_document, invalid_document
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.sensitivity import account_for_tare
+from bsp_ros.core.joint_angles import kinematics_from_angles, resample_kinematics
+from bsp_ros.core.model import contact_torques_nm
+from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data
+from bsp_ros.errors import BspError
+from bsp_ros.live.online.buffer import TimedBuffer
+from bsp_ros.live.online.guard import StreamGuard
+from bsp_ros.validation import check_finite_scalar, check_positive
+
+# Warnings of the model checks (identification/joint.py) that make an estimate invalid; live they run every
+# ``elastic_check_every`` updates and their verdict holds in between.
+MODEL_CHECK_WARNINGS = ("elastic passive moment", "the wrench drifts", "depends on speed (Stribeck")
+
+
+@dataclass(frozen=True)
+class WindowConfig:
+    """Settings of :class:`WindowedIdentifier`.
+
+    Attributes
+    ----------
+    window_s : length of the sliding window (s).
+    stale_s : an input whose newest stamp is older than this (against the other input or the caller's
+        clock) makes the estimate invalid.
+    options : method, passive model and subject, as for `bsp identify`.
+    max_rate_hz : faster wrench streams are block-averaged down to this rate before identifying, so an
+        update at 1 kHz costs what one at 200 Hz does; the angles (50-100 Hz) carry no more information.
+    """
+
+    window_s: float = 30.0
+    stale_s: float = 0.5
+    options: IdentifyOptions = field(default_factory=IdentifyOptions)
+    max_rate_hz: float = 200.0
+    # The model checks (elastic, drift, Stribeck) refit the window several times; at 5 Hz every 25th update
+    # (5 s) keeps an update well inside its period, and their verdict holds in between.
+    elastic_check_every: int = 25
+
+    def __post_init__(self) -> None:
+        check_positive("window_s", self.window_s, 3600.0)
+        check_finite_scalar("stale_s", self.stale_s, 0.01, 60.0)
+        check_positive("max_rate_hz", self.max_rate_hz, 1e5)
+        check_positive("elastic_check_every", self.elastic_check_every, 1000)
+
+
+@dataclass(frozen=True)
+class WindowEstimate:
+    """One update: the estimate document (CONTRACT.md schema) and the newest wrench stamp it used."""
+
+    document: dict[str, Any]
+    valid: bool
+    last_wrench_t_ns: int | None
+
+
+@dataclass(frozen=True)
+class WindowSamples:
+    """A copy of one window's samples, taken by :meth:`WindowedIdentifier.snapshot`.
+
+    Attributes
+    ----------
+    wrench_t_ns : (N,) wrench stamps (ns); wrench_yzx : (N, 3) ``[F_y, F_z, M_x]`` in ``world``.
+    angle_t_ns : (M,) joint-angle stamps (ns), from 2 s before the window (filter run-in);
+    angle_rows : (M, 2n) unfiltered angles (rad) then segment lengths (m).
+    refused : refused samples by input and reason; clock_jumps : clock jumps seen so far.
+    rotation_world_from_sensor : (3, 3) the wrench sensor's orientation, wrench_frame_id : its frame, when a
+        tare was applied to the wrench (its uncertainty then joins the estimate's).
+    """
+
+    wrench_t_ns: np.ndarray
+    wrench_yzx: np.ndarray
+    angle_t_ns: np.ndarray
+    angle_rows: np.ndarray
+    refused: dict[str, int]
+    clock_jumps: int
+    # The wrench sensor's orientation and frame, for a tare's uncertainty (set by the node when it applies one).
+    rotation_world_from_sensor: np.ndarray | None = None
+    wrench_frame_id: str = ""
+
+
+def block_average(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Means of consecutive blocks of samples so that the rate is at most ``max_rate_hz``.
+
+    Parameters
+    ----------
+    t_ns : (N,) increasing stamps (ns).
+    values : (N, k) samples.
+    max_rate_hz : the highest rate wanted.
+
+    Returns
+    -------
+    Block mean stamps (M,) int64 and values (M, k); the inputs unchanged when already slow enough.
+    """
+    if t_ns.size < 2:
+        return t_ns, values
+    rate_hz = (t_ns.size - 1) / ((t_ns[-1] - t_ns[0]) / 1e9) if t_ns[-1] > t_ns[0] else 0.0
+    block = int(np.ceil(rate_hz / max_rate_hz))
+    if block <= 1:
+        return t_ns, values
+    usable = (t_ns.size // block) * block
+    start = t_ns.size - usable  # keep the newest samples whole
+    t_blocks = t_ns[start:].reshape(-1, block)
+    stamps = t_blocks[:, 0] + (t_blocks - t_blocks[:, :1]).mean(axis=1).round().astype(np.int64)
+    return stamps, values[start:].reshape(-1, block, values.shape[1]).mean(axis=1)
+
+
+class WindowedIdentifier:
+    """Wrench and unfiltered joint-angle samples in, an estimate of the last ``window_s`` seconds out.
+
+    The angles are filtered here with zero phase over the window, exactly as `bsp identify` does offline.
+
+    Samples that are non-finite, out of order or duplicated are refused and counted; a backwards clock
+    jump clears both buffers, so no estimate mixes samples from either side of it.
+    """
+
+    def __init__(self, n_segments: int, config: WindowConfig | None = None) -> None:
+        self.n = n_segments
+        self.config = config or WindowConfig()
+        horizon_ns = int((self.config.window_s + 5.0) * 1e9)
+        self.wrench = TimedBuffer(3, horizon_ns)
+        self.angles = TimedBuffer(2 * n_segments, horizon_ns)
+        self.wrench_guard = StreamGuard("wrench")
+        self._updates = 0
+        self._elastic_warnings: list[str] = []
+        self.angle_guard = StreamGuard("joint_states")
+
+    def add_wrench(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
+        """Add ``[F_y, F_z, M_x]`` in ``world`` at ``t_ns``; False if refused."""
+        verdict = self.wrench_guard.check(t_ns, wrench_yzx)
+        if verdict in ("jump", "gap"):
+            self.reset()
+            self.wrench_guard.last_t_ns = t_ns
+        if verdict == "refused":
+            return False
+        self.wrench.append(t_ns, wrench_yzx)
+        return True
+
+    def add_joint_state(self, t_ns: int, q_rad: np.ndarray, lengths_m: np.ndarray) -> bool:
+        """Add joint angles (rad) and segment lengths (m) at ``t_ns``; False if refused."""
+        row = np.concatenate((q_rad, lengths_m))
+        verdict = self.angle_guard.check(t_ns, row)
+        if verdict in ("jump", "gap"):
+            self.reset()
+            self.angle_guard.last_t_ns = t_ns
+        if verdict == "refused":
+            return False
+        self.angles.append(t_ns, row)
+        return True
+
+    def reset(self) -> None:
+        """Forget every sample (a new session or a clock jump)."""
+        self.wrench.clear()
+        self.angles.clear()
+
+    def _invalid(self, message: str, last_wrench_t_ns: int | None = None) -> WindowEstimate:
+        document = invalid_document(self.config.options.method, message)
+        return WindowEstimate(document, False, last_wrench_t_ns or self.wrench.last_t_ns)
+
+    def estimate(self, now_ns: int | None = None) -> WindowEstimate:
+        """Identify over the newest window: :meth:`snapshot` then :meth:`estimate_window`.
+
+        Parameters
+        ----------
+        now_ns : the caller's clock, in the stamps' time base; None judges staleness between the inputs only.
+        """
+        window = self.snapshot(now_ns)
+        return window if isinstance(window, WindowEstimate) else self.estimate_window(window)
+
+    def snapshot(self, now_ns: int | None = None) -> WindowSamples | WindowEstimate:
+        """Copy the newest window's samples (cheap), or an invalid estimate when an input is missing or stale.
+
+        The copy can be identified on another thread (:meth:`estimate_window`) while samples keep arriving.
+
+        Parameters
+        ----------
+        now_ns : the caller's clock, in the stamps' time base; None judges staleness between the inputs only.
+        """
+        last_wrench, last_angle = self.wrench.last_t_ns, self.angles.last_t_ns
+        if last_wrench is None or last_angle is None:
+            return self._invalid("waiting for wrench and joint states")
+        stale_ns = self.config.stale_s * 1e9
+        newest = max(last_wrench, last_angle) if now_ns is None else now_ns
+        for name, last in (("wrench", last_wrench), ("joint states", last_angle)):
+            if newest - last > stale_ns:
+                return self._invalid(f"stale input: newest {name} is {(newest - last) / 1e9:.2f} s old")
+        start = last_wrench - int(self.config.window_s * 1e9)
+        refused = {
+            **{f"wrench_{k}": v for k, v in self.wrench_guard.refused.items()},
+            **{f"joint_states_{k}": v for k, v in self.angle_guard.refused.items()},
+        }
+        return WindowSamples(
+            *self.wrench.since(start),
+            *self.angles.since(start - int(2e9)),
+            refused,
+            self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
+        )
+
+    def estimate_window(self, window: WindowSamples) -> WindowEstimate:
+        """Identify a window copied by :meth:`snapshot` (the slow part: ~30-100 ms for 30 s at 1 kHz).
+
+        Only one thread at a time may call this (it keeps the elastic-check schedule).
+        """
+        last_wrench = int(window.wrench_t_ns[-1])
+        t_w, wrench = block_average(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
+        t_a, rows = window.angle_t_ns, window.angle_rows
+        try:
+            lengths = np.median(rows[:, self.n :], axis=0)
+            kinematics = kinematics_from_angles(
+                t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
+            )
+            q, velocity, valid = resample_kinematics(kinematics, t_w)
+            if valid.sum() < 2:
+                return self._invalid("no wrench sample in the window has joint angles", last_wrench)
+            tau = contact_torques_nm(q[valid], lengths, wrench[valid])
+            data = IdentificationData(
+                t_w[valid],
+                q[valid],
+                velocity[valid],
+                tau,
+                lengths,
+                np.zeros(self.n),
+                kinematics.direction_velocity_noise_rad_s,
+                int(t_w.size),
+                [],
+            )
+            check = self._updates % self.config.elastic_check_every == 0
+            self._updates += 1
+            result = identify_data(data, self.config.options, check_elastic=check)
+            if check:
+                self._elastic_warnings = [w for w in result.warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
+            elif self._elastic_warnings:
+                # Between checks the last verdict stands: an effect the model lacks does not come and go.
+                result.warnings += self._elastic_warnings
+                if result.valid:
+                    result.valid = False
+                    result.message = (
+                        "the data show an effect the model lacks that biases the estimate (see warnings; "
+                        "checked every few updates)"
+                    )
+            if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
+                quality = account_for_tare(
+                    result,
+                    data,
+                    window.rotation_world_from_sensor,
+                    window.wrench_frame_id,
+                    self.config.options.tare,
+                    lambda d: identify_data(d, self.config.options, check_elastic=False),
+                )
+        except BspError as error:
+            return self._invalid(str(error), last_wrench)
+        posterior = fuse(result, data, self.config.options.subject) if result.valid else None
+        info = {
+            "start_time_ns": int(t_w[0]),
+            "end_time_ns": int(t_w[-1]),
+            "window_s": self.config.window_s,
+            "refused_samples": window.refused,
+            "clock_jumps": window.clock_jumps,
+            "config": self.config.options.config(),
+        }
+        document = estimate_document(result, data, posterior, self.config.options.subject, info)
+        if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
+            document["quality"].update(quality)
+        return WindowEstimate(document, result.valid, last_wrench)

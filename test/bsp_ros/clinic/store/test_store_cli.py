@@ -1,0 +1,138 @@
+"""`bsp sessions` end to end: add JSON (and bags), list, show, export, erase, and clear errors."""
+
+from __future__ import annotations
+
+import json
+import sys
+import types
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bsp_ros.cli import main
+from bsp_ros.clinic.store import open_store
+from bsp_ros.clinic.store.samples import SAMPLE_START_NS, sample_estimate
+
+
+def _write(path: Path, estimate: dict[str, Any]) -> Path:
+    path.write_text(json.dumps(estimate))
+    return path
+
+
+def _bsp(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_add_list_show_export_erase(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    store = str(tmp_path / "s.sqlite")
+    first = _write(tmp_path / "a.json", sample_estimate(1))
+    second = _write(tmp_path / "b.json", sample_estimate(2, start_time_ns=SAMPLE_START_NS + 10**12))
+    code, out, _ = _bsp(capsys, "sessions", "add", str(first), "--subject", "P007", "--store", store)
+    assert code == 0 and out.startswith("added session 1 of P007 at 2024-06-01T07:00:00Z from session.mcap")
+    assert _bsp(capsys, "sessions", "add", str(second), "--subject", "P007", "--store", store)[0] == 0
+    code, out, _ = _bsp(capsys, "sessions", "list", "--store", store)
+    assert code == 0 and "P007" in out and " 2 " in out
+    code, out, _ = _bsp(capsys, "sessions", "show", "P007", "--store", store)
+    assert code == 0 and out.count("session ") == 2 and "forearm.static_moment_kgm" in out
+    code, out, _ = _bsp(capsys, "sessions", "show", "P007", "--json", "--store", store)
+    shown = json.loads(out)
+    assert shown[0]["joints"]["elbow"]["coulomb_nm"] == sample_estimate(1)["joints"]["elbow"]["coulomb_nm"]
+    csv_path = tmp_path / "out.csv"
+    assert _bsp(capsys, "sessions", "export", "--csv", str(csv_path), "--store", store)[0] == 0
+    assert len(csv_path.read_text().splitlines()) == 1 + 2 * 18
+    code, out, _ = _bsp(capsys, "sessions", "erase", "P007", "--store", store)
+    assert code == 0 and "erased 2 session(s) of P007" in out
+    code, _, err = _bsp(capsys, "sessions", "show", "P007", "--store", store)
+    assert code == 5 and "unknown subject P007" in err
+
+
+def test_store_from_environment(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: Any) -> None:
+    monkeypatch.setenv("BSP_STORE", str(tmp_path / "env.sqlite"))
+    assert (
+        _bsp(capsys, "sessions", "add", str(_write(tmp_path / "a.json", sample_estimate(1))), "--subject", "E1")[0] == 0
+    )
+    assert (tmp_path / "env.sqlite").exists()
+
+
+def test_time_and_source_options_fill_a_bare_estimate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    store = str(tmp_path / "s.sqlite")
+    bare = _write(tmp_path / "rec-3.json", sample_estimate(1, start_time_ns=None, source=None, method=None))
+    code, _, err = _bsp(capsys, "sessions", "add", str(bare), "--subject", "S1", "--store", store)
+    assert code == 5 and "--time" in err
+    code, out, _ = _bsp(
+        capsys, "sessions", "add", str(bare), "--subject", "S1", "--time", "2024-06-02T08:00:00Z", "--store", store
+    )
+    assert code == 0 and "at 2024-06-02T08:00:00Z from rec-3.json" in out
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("{not json", "is not valid JSON"),
+        ("[1, 2, 3]", "holds a JSON list"),
+        (json.dumps({"type": "FeatureCollection", "features": []}), "foreign JSON"),
+        (json.dumps({"schema": "bsp_ros/core/estimate/2"}), "unsupported estimate schema"),
+    ],
+)
+def test_bad_input_is_a_clear_error_and_nothing_lost(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], content: str, message: str
+) -> None:
+    store = str(tmp_path / "s.sqlite")
+    assert (
+        _bsp(
+            capsys,
+            "sessions",
+            "add",
+            str(_write(tmp_path / "ok.json", sample_estimate(1))),
+            "--subject",
+            "S1",
+            "--store",
+            store,
+        )[0]
+        == 0
+    )
+    bad = tmp_path / "bad.json"
+    bad.write_text(content)
+    code, out, err = _bsp(capsys, "sessions", "add", str(bad), "--subject", "S1", "--store", store)
+    assert code == 5 and message in err and out == ""
+    with open_store(store) as opened:
+        assert len(opened.sessions("S1")) == 1
+
+
+def test_duplicate_and_bad_subject(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    store = str(tmp_path / "s.sqlite")
+    path = str(_write(tmp_path / "a.json", sample_estimate(1)))
+    assert _bsp(capsys, "sessions", "add", path, "--subject", "S1", "--store", store)[0] == 0
+    code, _, err = _bsp(capsys, "sessions", "add", path, "--subject", "S1", "--store", store)
+    assert code == 5 and "duplicate session" in err
+    code, _, err = _bsp(capsys, "sessions", "add", path, "--subject", "Jane Doe", "--store", store)
+    assert code == 2 and "not a pseudonym" in err
+    code, _, err = _bsp(capsys, "sessions", "add", str(tmp_path / "missing.json"), "--subject", "S1", "--store", store)
+    assert code == 2 and "does not exist" in err
+
+
+def test_bag_without_offline_identification_is_a_clear_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: Any
+) -> None:
+    monkeypatch.setitem(sys.modules, "bsp_ros.bag.offline", None)  # import fails as if not written yet
+    bag = tmp_path / "rec.mcap"
+    bag.write_bytes(b"\x89MCAP0\r\n")
+    code, _, err = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(tmp_path / "s.sqlite"))
+    assert code == 5 and "bsp identify BAG --json" in err
+
+
+def test_bag_is_identified_then_stored(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: Any) -> None:
+    seen: list[Path] = []
+
+    def identify_bag(path: Path) -> dict[str, Any]:
+        seen.append(Path(path))
+        return sample_estimate(4, source=None)
+
+    monkeypatch.setitem(sys.modules, "bsp_ros.bag.offline", types.SimpleNamespace(identify_bag=identify_bag))
+    bag = tmp_path / "rec_0007"
+    bag.mkdir()  # a rosbag2 directory
+    code, out, _ = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(tmp_path / "s.sqlite"))
+    assert code == 0 and seen == [bag] and "from rec_0007" in out

@@ -1,0 +1,92 @@
+"""Offset sensitivity of the identified parameters: against a closed form and against simulated offsets."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
+from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.identification.sensitivity import (
+    add_tare_covariance,
+    offset_sensitivity,
+    offset_torques_nm,
+    tare_quality,
+)
+from bsp_ros.core.model import gravity_regressor
+from bsp_ros.core.pipeline import identify_session
+from bsp_ros.core.simulation import SensorSpec, human_arm_cell, simulate_cell
+
+
+@pytest.fixture(scope="module")
+def data() -> IdentificationData:
+    return identification_data_from_session(simulate_cell(human_arm_cell(duration_s=30.0, seed=3)).session)
+
+
+def _regressor(d: IdentificationData) -> np.ndarray:
+    n = d.n_joints
+    columns = np.zeros((d.t_ns.size, n, 2 * n))
+    columns[:, :, :n] = gravity_regressor(d.q_rad)
+    columns[:, np.arange(n), n + np.arange(n)] = np.sign(d.velocity_rad_s)
+    return columns.reshape(-1, 2 * n)
+
+
+def _ols(d: IdentificationData) -> IdentificationResult:
+    values = np.linalg.lstsq(_regressor(d), d.tau_nm.reshape(-1), rcond=None)[0]
+    return IdentificationResult(
+        "ols", [("static_moment_kgm", "x")] * values.size, values, np.eye(values.size), True, ""
+    )
+
+
+def test_finite_differences_equal_the_least_squares_closed_form(data: IdentificationData) -> None:
+    rotation = SensorSpec().rotation_world_from_sensor
+    g, _ = offset_sensitivity(data, rotation, _ols)
+    unit = offset_torques_nm(data, rotation).reshape(6, -1).T  # (N n, 6)
+    closed = np.linalg.pinv(_regressor(data)) @ unit  # (A^T A)^-1 A^T D
+    np.testing.assert_allclose(g, closed, rtol=1e-6, atol=1e-9)
+
+
+def test_offset_torques_are_minus_j_transpose_of_the_rotated_offset(data: IdentificationData) -> None:
+    # Identity rotation: a unit force along x is out of plane (no torque); along z it is a vertical push.
+    unit = offset_torques_nm(data, np.eye(3))
+    np.testing.assert_array_equal(unit[0], 0.0)
+    y_contact = (data.lengths_m * np.cos(np.cumsum(data.q_rad, axis=1))).sum(axis=1)
+    np.testing.assert_allclose(unit[2][:, 0], -y_contact)  # -(dz/dq1) * Fz
+    np.testing.assert_allclose(unit[3], -1.0)  # a unit moment about x loads every joint by -1 Nm
+
+
+def test_reported_sensitivity_predicts_what_a_real_offset_does() -> None:
+    clean = identify_session(simulate_cell(human_arm_cell(duration_s=60.0, seed=5)).session)
+    offset = simulate_cell(human_arm_cell(duration_s=60.0, seed=5, sensor=SensorSpec(force_bias_n=(0.0, 0.0, 0.2))))
+    spoiled = identify_session(offset.session)
+    block = clean["quality"]["offset_sensitivity"]
+    assert clean["quality"]["tare"] == {"applied": False, "file": None}
+    for segment, entry in clean["segments"].items():
+        moved = spoiled["segments"][segment]["static_moment_kgm"]["value"] - entry["static_moment_kgm"]["value"]
+        predicted = 2.0 * block["static_moment_kgm"][segment][2]  # per 0.1 N -> 0.2 N along sensor z
+        assert moved == pytest.approx(predicted, rel=0.05, abs=1e-5), segment
+
+
+def test_tare_covariance_adds_g_sigma_g_transpose() -> None:
+    result = IdentificationResult("x", [("static_moment_kgm", "upper_arm")] * 2, np.zeros(2), np.eye(2), True, "")
+    g = np.arange(12.0).reshape(2, 6)
+    sigma = np.diag([1.0, 2.0, 3.0, 4.0, 5.0, 6.0])
+    added = add_tare_covariance(result, g, sigma)
+    np.testing.assert_allclose(result.covariance, np.eye(2) + g @ sigma @ g.T)
+    np.testing.assert_allclose(added, g @ sigma @ g.T)
+
+
+def test_quality_says_null_where_the_estimate_could_not_be_differentiated() -> None:
+    names = [("static_moment_kgm", "upper_arm"), ("static_moment_kgm", "forearm"), ("coulomb_nm", "shoulder")]
+    result = IdentificationResult("x", names, np.array([0.8, 0.2, 0.5]), np.eye(3), False, "")
+    block = tare_quality(result, None, "ft_sensor", None)
+    assert block["tare"] == {"applied": False, "file": None}
+    assert block["offset_sensitivity"]["static_moment_kgm"] == {"upper_arm": None, "forearm": None}
+    g = np.zeros((3, 6))
+    g[1, 1] = -0.05  # kgm per N
+    block = tare_quality(dataclasses.replace(result, valid=True), g, "ft_sensor", "cell.tare.yaml")
+    assert block["tare"]["applied"] and block["tare"]["file"] == "cell.tare.yaml"
+    assert block["offset_sensitivity"]["static_moment_kgm"]["forearm"] == pytest.approx([0.0, -0.005, 0.0])
+    assert block["offset_sensitivity"]["static_moment_percent"]["forearm"] == pytest.approx(2.5)

@@ -1,0 +1,81 @@
+"""A VALID that means trustworthy: smooth friction transitions, elastic offsets and the stated assumption."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
+from bsp_ros.core.identification.joint import identify_joint
+from bsp_ros.core.pipeline import identify_session
+
+COULOMB_NM = np.array([0.5, 0.28, 0.06])
+
+
+def data_with_transition(width_rad_s: float, seed: int = 0) -> tuple[IdentificationData, sim.SessionTruth]:
+    """60 s of the human arm whose friction is ``c tanh(v / width)`` (added to the torques of a
+    friction-free simulation, with the true joint velocities)."""
+    spec = sim.human_arm_cell(seed=seed, duration_s=60.0, passive=sim.PassiveTruth(coulomb_nm=(0.0, 0.0, 0.0)))
+    simulated = sim.simulate_cell(spec)
+    data = identification_data_from_session(simulated.session)
+    simulator = sim.CellSimulator(spec)
+    velocity = simulator.joint_velocities_rad_s(simulator.seconds_since_start(data.t_ns))
+    return dataclasses.replace(data, tau_nm=data.tau_nm + COULOMB_NM * np.tanh(velocity / width_rad_s)), simulated.truth
+
+
+def test_a_narrow_friction_transition_is_modelled_and_the_coulomb_amplitudes_cover_the_truth() -> None:
+    data, truth = data_with_transition(0.001)
+    result = identify_joint(data)
+    assert result.valid, result.message
+    assert any("changes direction smoothly" in w for w in result.warnings)
+    for j, joint in enumerate(("shoulder", "elbow", "wrist")):
+        z = (result.value("coulomb_nm", joint) - COULOMB_NM[j]) / result.std_of("coulomb_nm", joint)
+        assert abs(z) < 3, (joint, z)
+    for segment, beta in zip(truth.segment_names, truth.static_moments_kgm, strict=True):
+        assert abs(result.value("static_moment_kgm", segment) - beta) < 3 * result.std_of("static_moment_kgm", segment)
+
+
+def test_a_joint_that_never_leaves_the_transition_is_flagged_not_reported_as_measured() -> None:
+    """At 2 mrad/s the wrist (peak 5.8 mrad/s) stays inside its transition."""
+    data, _ = data_with_transition(0.002)
+    result = identify_joint(data)
+    assert not result.valid
+    assert "wrist hardly leaves its friction transition" in result.message
+
+
+def test_a_sign_step_is_not_taken_for_a_transition() -> None:
+    data, _ = data_with_transition(1e-9)  # tanh at 1 nrad/s is the sign step
+    result = identify_joint(data)
+    assert result.valid, result.message
+    assert not any(result.diagnostics["friction_transition_rad_s"].values())
+
+
+@pytest.fixture(scope="module")
+def clean_document() -> dict:
+    return identify_session(sim.simulate_cell(sim.human_arm_cell(seed=6, duration_s=60.0)).session)
+
+
+def test_the_no_offset_assumption_is_stated_with_a_sensitivity_that_matches_a_real_offset(clean_document) -> None:
+    (assumption,) = clean_document["quality"]["assumptions"]
+    assert "no elastic passive offset" in assumption["assumption"]
+    predicted = assumption["static_moment_shift_kgm_per_0_05_nm"]["wrist"]["hand"]
+    spec = sim.human_arm_cell(seed=6, duration_s=60.0)
+    offset = dataclasses.replace(spec.passive, offset_nm=(0.0, 0.0, 0.05))
+    biased = identify_session(sim.simulate_cell(dataclasses.replace(spec, passive=offset)).session)
+    shift = (
+        biased["segments"]["hand"]["static_moment_kgm"]["value"]
+        - clean_document["segments"]["hand"]["static_moment_kgm"]["value"]
+    )
+    assert shift == pytest.approx(predicted, rel=0.1)
+
+
+def test_an_elastic_offset_makes_the_estimate_invalid_with_its_cause_named() -> None:
+    spec = sim.human_arm_cell(seed=7, duration_s=60.0)
+    passive = dataclasses.replace(spec.passive, offset_nm=(0.2, 0.2, 0.2))
+    quality = identify_session(sim.simulate_cell(dataclasses.replace(spec, passive=passive)).session)["quality"]
+    assert not quality["valid"]
+    assert "elastic passive moment" in quality["message"]
+    assert any(w.startswith("elastic passive moment at the") for w in quality["warnings"])

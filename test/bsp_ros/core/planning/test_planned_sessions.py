@@ -1,0 +1,94 @@
+"""Identification on planned sessions: offsets and stiffness separated from gravity; the paper's protocol is not."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from planning_cases import ELASTIC_TRUTH
+
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.identification.data import identification_data_from_session
+from bsp_ros.core.identification.joint import JointConfig, identify_joint
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.planning import Plan, compare_with_result, compare_with_scatter
+
+ELASTIC_MODEL = PassiveModel.parse("coulomb+offset+stiffness")
+
+
+def _identify(
+    trajectory: object, seed: int, passive: sim.PassiveTruth = ELASTIC_TRUTH
+) -> tuple[IdentificationResult, dict]:
+    session = sim.simulate_cell(sim.human_arm_cell(seed=seed, passive=passive, trajectory=trajectory))
+    result = identify_joint(identification_data_from_session(session.session), JointConfig(passive=ELASTIC_MODEL))
+    return result, session.truth.to_dict()
+
+
+def _truth(truth: dict, key: str, owner: str) -> float:
+    return float(truth["segments" if owner in truth["segments"] else "joints"][owner][key])
+
+
+@pytest.fixture(scope="module")
+def planned_result(plan: Plan) -> tuple[IdentificationResult, dict]:
+    return _identify(plan.trajectory, seed=3)
+
+
+def test_planned_session_is_valid(planned_result) -> None:
+    result, _ = planned_result
+    assert result.valid, result.message
+
+
+def test_planned_session_static_moments_within_one_percent(planned_result) -> None:
+    result, truth = planned_result
+    for segment in ("upper_arm", "forearm", "hand"):
+        value = result.value("static_moment_kgm", segment)
+        assert value == pytest.approx(_truth(truth, "static_moment_kgm", segment), rel=0.01), segment
+
+
+def test_planned_session_offsets_and_elbow_stiffness_within_ten_percent(planned_result) -> None:
+    result, truth = planned_result
+    for joint in ("shoulder", "elbow", "wrist"):
+        assert result.value("offset_nm", joint) == pytest.approx(0.2, rel=0.10), joint
+    assert result.value("stiffness_nm_per_rad", "elbow") == pytest.approx(1.5, rel=0.10)
+    assert _truth(truth, "offset_nm", "elbow") == 0.2
+
+
+def test_planned_session_truth_within_three_std(planned_result) -> None:
+    result, truth = planned_result
+    for (key, owner), value, std in zip(result.names, result.values, result.std, strict=True):
+        assert abs(value - _truth(truth, key, owner)) < 3 * std, (key, owner, value, std)
+
+
+def test_paper_protocol_with_the_same_truth_is_flagged_confounded() -> None:
+    result, truth = _identify(sim.human_arm_cell().trajectory, seed=3)
+    confounded = [w for w in result.warnings if w.startswith("confounded")]
+    assert confounded, result.warnings
+    assert result.weak or not result.valid
+    # flagged, and not valid-and-wrong: every estimate is within 3 of its (large) std
+    for (key, owner), value, std in zip(result.names, result.values, result.std, strict=True):
+        assert abs(value - _truth(truth, key, owner)) < 3 * std, (key, owner, value, std)
+
+
+def test_wrist_coulomb_within_five_percent_with_wrist_range_five_degrees(wrist_limited_plan: Plan) -> None:
+    low, high = (np.degrees(v[2]) for v in wrist_limited_plan.trajectory.range_rad)
+    assert -5.0 - 1e-9 <= low and high <= 5.0 + 1e-9
+    result, _ = _identify(wrist_limited_plan.trajectory, seed=4)
+    assert result.valid, result.message
+    assert result.value("coulomb_nm", "wrist") == pytest.approx(0.06, rel=0.05)
+
+
+def test_predicted_std_matches_the_reported_std(plan: Plan, planned_result) -> None:
+    result, _ = planned_result
+    for row in compare_with_result(plan.prediction, result):
+        assert 1 / 1.5 < float(row["ratio"]) < 1.5, row
+
+
+def test_predicted_std_matches_the_scatter_of_eight_sessions(plan: Plan) -> None:
+    # Stiffness at every joint keeps all estimates off their bounds (a bound truncates the scatter). Eight
+    # sessions estimate a std to about +-25 %, hence factor 2 here; scripts/plan_std_sweep.py runs 20 for 1.5.
+    passive = sim.PassiveTruth(
+        coulomb_nm=(0.5, 0.28, 0.06), offset_nm=(0.2, 0.2, 0.2), stiffness_nm_per_rad=(1.0, 1.5, 0.2)
+    )
+    results = [_identify(plan.trajectory, seed, passive)[0] for seed in range(8)]
+    for row in compare_with_scatter(plan.prediction, results):
+        assert 0.5 < float(row["ratio"]) < 2.0, row

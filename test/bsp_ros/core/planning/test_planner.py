@@ -1,0 +1,59 @@
+"""The planner: within the limits, reversals in every joint, quasi-static, better than the paper's protocol."""
+
+from __future__ import annotations
+
+import numpy as np
+from planning_cases import RANGES_DEG, SHOULDER_YZ_M, nominal_arm
+
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.planning import JointLimits, Plan, check_reachable, check_trajectory_within, predict_covariance
+
+
+def test_plan_stays_within_the_ranges_and_speed(plan: Plan) -> None:
+    check_trajectory_within(plan.trajectory, JointLimits(RANGES_DEG))
+    check_reachable(plan.trajectory, nominal_arm().lengths_m, SHOULDER_YZ_M)
+    assert max(plan.trajectory.peak_speed_rad_s) <= 0.03
+    assert plan.trajectory.duration_s == 120.0
+
+
+def test_plan_reverses_direction_in_every_joint(plan: Plan) -> None:
+    t = np.arange(0.0, 120.0, 0.05)
+    velocity = plan.trajectory.velocities_rad_s(t)
+    for j in range(3):
+        moving = velocity[np.abs(velocity[:, j]) > 0.005, j]
+        reversals = int(np.count_nonzero(np.diff(np.sign(moving))))
+        assert reversals >= 1, j
+        assert min((moving > 0).mean(), (moving < 0).mean()) > 0.2, j
+
+
+def test_plan_is_quasi_static(plan: Plan) -> None:
+    assert np.all(plan.inertia_ratio < 0.01), plan.inertia_ratio
+    assert np.all(plan.inertia_ratio > 0)
+
+
+def test_plan_predicts_far_smaller_stds_than_the_paper_protocol(plan: Plan) -> None:
+    paper = predict_covariance(
+        sim.human_arm_cell().trajectory, 120.0, nominal_arm(), PassiveModel.parse("coulomb+offset+stiffness")
+    )
+    assert plan.prediction.max_relative_static_std < paper.max_relative_static_std / 10
+    assert plan.prediction.std_of("offset_nm", "shoulder") < paper.std_of("offset_nm", "shoulder") / 10
+
+
+def test_planning_is_deterministic(wrist_limited_plan: Plan) -> None:
+    from bsp_ros.core.planning import plan_protocol
+
+    again = plan_protocol(wrist_limited_plan.request)
+    np.testing.assert_array_equal(again.trajectory.knots[1], wrist_limited_plan.trajectory.knots[1])
+
+
+def test_a_two_segment_chain_is_planned_within_its_limits() -> None:
+    from bsp_ros.core.planning import NominalArm, PlanRequest, plan_protocol
+
+    limits = JointLimits(((-60.0, -15.0), (20.0, 80.0)))
+    plan = plan_protocol(
+        PlanRequest(NominalArm.from_anthropometry((0.3, 0.3)), SHOULDER_YZ_M, limits, n_points=1, max_evaluations=60)
+    )
+    assert plan.trajectory.n_joints == 2
+    check_trajectory_within(plan.trajectory, limits)
+    assert [name for name, _ in plan.prediction.names].count("offset_nm") == 2

@@ -1,0 +1,77 @@
+"""Masses and COMs: the anthropometric prior fused with identified static moments."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior, fuse_static_moments
+from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+from bsp_ros.errors import InputError
+
+
+@pytest.fixture(scope="module")
+def documents_and_truths():
+    """Six subjects drawn from the prior, identified with paper-like noise."""
+    out = []
+    for seed in range(6):
+        subject = sim.SubjectTruth.from_anthropometry("female", 62.0, 1.66, 3, rng=np.random.default_rng(100 + seed))
+        session = sim.simulate_cell(sim.human_arm_cell(subject=subject, seed=100 + seed))
+        document = identify_session(session.session, IdentifyOptions(subject=SubjectInfo(62.0, 1.66, "female")))
+        out.append((document, session.truth.to_dict()))
+    return out
+
+
+def test_truth_lies_within_three_std_for_99_percent_of_parameters(documents_and_truths) -> None:
+    z = []
+    for document, truth in documents_and_truths:
+        for group in ("segments", "joints"):
+            for owner, quantities in document[group].items():
+                for key, q in quantities.items():
+                    z.append((q["value"] - truth[group][owner][key]) / q["std"])
+    z = np.abs(np.array(z))
+    assert len(z) == 6 * 18
+    assert (z < 3).mean() >= 0.99, np.sort(z)[-5:]
+    assert np.median(z) > 0.2  # honest, not inflated to pass
+
+
+def test_mass_and_com_are_marked_data_plus_prior_and_static_moments_data(documents_and_truths) -> None:
+    document, _ = documents_and_truths[0]
+    forearm = document["segments"]["forearm"]
+    assert forearm["static_moment_kgm"]["source"] == "data"
+    assert forearm["length_m"]["source"] == "data"
+    assert forearm["mass_kg"]["source"] in ("data+prior", "prior")
+    assert forearm["com_m"]["source"] in ("data+prior", "prior")
+
+
+def test_data_narrows_the_prior() -> None:
+    lengths = np.array([0.29, 0.27, 0.09])
+    prior = anthropometric_prior(SubjectInfo(75.0, None, "male"), lengths)
+    beta = np.array([0.82, 0.28, 0.032])
+    posterior = fuse_static_moments(prior, lengths, beta, np.diag((1e-4 * beta) ** 2))
+    assert (posterior.prior_share <= 1.0 + 1e-9).all()
+    assert posterior.prior_share[2] < 0.5  # the hand's mass and COM share m3 l3 = beta_hand
+    np.testing.assert_allclose(posterior.first_moments_kgm[2], 0.032, rtol=1e-3)
+
+
+def test_without_body_mass_the_prior_is_population_wide_and_says_so() -> None:
+    prior = anthropometric_prior(SubjectInfo(), np.array([0.29, 0.27, 0.09]))
+    assert any("no body mass given" in note for note in prior.notes)
+    with_mass = anthropometric_prior(SubjectInfo(78.0), np.array([0.29, 0.27, 0.09]))
+    assert (np.diag(prior.covariance)[:3] > np.diag(with_mass.covariance)[:3]).all()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "named"),
+    [
+        ({"body_mass_kg": -70.0}, "body mass"),
+        ({"body_mass_kg": 1000.0}, "body mass"),
+        ({"body_mass_kg": float("nan")}, "body mass"),
+        ({"height_m": 17.5}, "height"),
+        ({"sex": "robot"}, "sex"),
+    ],
+)
+def test_absurd_subject_data_is_refused_with_the_value_named(kwargs, named) -> None:
+    with pytest.raises(InputError, match=named):
+        SubjectInfo(**kwargs)

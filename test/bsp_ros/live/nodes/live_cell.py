@@ -1,0 +1,74 @@
+"""Starts the node suite as separate processes on a private ROS domain and listens to its estimates (rclpy)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from typing import Any
+
+from bsp_ros.live.runtime.ros import Client
+
+
+def wrench_frame_parameter(roll_pitch_yaw_deg: tuple[float, float, float] = (180.0, 0.0, 30.0)) -> str:
+    """``wrench_frame_rotation_xyzw:=[...]`` of a simulated sensor frame (the identifier's source without tf2_msgs;
+    where tf2_msgs is installed the identifier reads /tf_static instead and ignores it)."""
+    from bsp_ros.core.simulation import rotation_from_rpy_deg
+    from msg_adapters.rotation import quaternion_from_matrix
+
+    xyzw = quaternion_from_matrix(rotation_from_rpy_deg(*roll_pitch_yaw_deg))
+    return "wrench_frame_rotation_xyzw:=[" + ", ".join(repr(float(v)) for v in xyzw) + "]"
+
+
+class LiveCell:
+    """The cell simulator, joint angle estimator and identifier on one domain, plus an in-process listener."""
+
+    def __init__(self, domain: int, simulator_params: list[str], identifier_params: list[str] | None = None) -> None:
+        self.domain = domain
+        self.env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
+        self.client = Client("test_listener", domain)
+        self.estimates: list[tuple[float, dict[str, Any]]] = []
+        self.truth: dict[str, Any] = {}
+        self.client.subscribe("std_msgs/msg/String", "bsp/estimate_json", self._on_estimate, "estimates")
+        self.client.subscribe(
+            "std_msgs/msg/String", "sim/truth", lambda m: self.truth.update(json.loads(m.data)), "tf_static_listener"
+        )
+        self.simulator_params = simulator_params
+        self.processes: dict[str, subprocess.Popen[bytes]] = {}
+        self.start("joint_angle_estimator", [])
+        identifier_params = list(identifier_params or [])
+        if not any(p.startswith("wrench_frame_rotation_xyzw:=") for p in identifier_params):
+            identifier_params.append(wrench_frame_parameter())
+        self.start("bsp_identifier", identifier_params)
+        self.start("cell_simulator", simulator_params)
+
+    def _on_estimate(self, msg: Any) -> None:
+        self.estimates.append((time.monotonic(), json.loads(msg.data)))
+
+    def start(self, name: str, params: list[str]) -> None:
+        args = ["--ros-args", *[a for p in params for a in ("-p", p)]] if params else []
+        self.processes[name] = subprocess.Popen(
+            [sys.executable, "-m", f"bsp_ros.live.nodes.{name}", *args],
+            env=self.env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+
+    def kill(self, name: str) -> None:
+        self.processes[name].kill()
+        self.processes[name].wait(5)
+
+    def spin_until(self, predicate: Any, timeout_s: float) -> bool:
+        return self.client.spin_until(predicate, timeout_s)
+
+    def latest(self) -> dict[str, Any] | None:
+        return self.estimates[-1][1] if self.estimates else None
+
+    def close(self) -> None:
+        for process in self.processes.values():
+            process.kill()
+        for process in self.processes.values():
+            process.wait(5)
+        self.client.close()

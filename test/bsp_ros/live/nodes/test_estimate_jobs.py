@@ -1,0 +1,52 @@
+"""The identifier's worker-process outputs: serialised messages that decode back to the estimate."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from bsp_ros.core.identification.recursive import RecursiveIdentifier
+from bsp_ros.core.model import gravity_regressor
+from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.live.nodes import estimate_jobs as jobs
+from bsp_ros.live.nodes.estimate_jobs import _typestore as typestore
+from msg_adapters.diagnostics import read_diagnostic_array
+
+
+def _valid_recursive_result():
+    rng = np.random.default_rng(5)
+    beta = np.array([0.8, 0.3, 0.05])
+    identifier = RecursiveIdentifier(3)
+    for k in range(30_000):
+        phase = np.array([1.0, 1.3, 1.7]) * k / 1000
+        q, v = np.array([0.3, 0.6, 0.2]) + 0.2 * np.sin(phase), 0.2 * np.cos(phase)
+        tau = gravity_regressor(q[None])[0] @ beta + 0.3 * np.sign(v) + rng.normal(0, 0.01, 3)
+        identifier.update(k * 1_000_000, q, v, tau)
+    result = identifier.result()
+    assert result.valid, result.message
+    return result
+
+
+def test_recursive_outputs_decode_to_the_same_estimate() -> None:
+    store = typestore()
+    outputs = jobs.recursive_estimate(_valid_recursive_result(), np.array([0.3, 0.27, 0.08]), IdentifyOptions(), 42)
+    assert outputs.valid and set(outputs.cdr) == {
+        "estimate",
+        "json",
+        *(f"inertia/{s}" for s in ("upper_arm", "forearm", "hand")),
+    }
+    document = json.loads(store.deserialize_cdr(outputs.cdr["json"], "std_msgs/msg/String").data)
+    assert document["mode"] == "recursive" and document["quality"]["valid"]
+    assert abs(document["segments"]["upper_arm"]["static_moment_kgm"]["value"] - 0.8) < 0.01
+    array = read_diagnostic_array(store.deserialize_cdr(outputs.cdr["estimate"], "diagnostic_msgs/msg/DiagnosticArray"))
+    assert array.t_ns == 42 and any(s.name.endswith("/quality") for s in array.status)
+    inertia = store.deserialize_cdr(outputs.cdr["inertia/hand"], "geometry_msgs/msg/InertiaStamped")
+    assert inertia.inertia.m == document["segments"]["hand"]["mass_kg"]["value"]
+
+
+def test_an_invalid_document_has_no_inertia_or_passive_outputs() -> None:
+    from bsp_ros.core.estimate import invalid_document
+
+    outputs = jobs.outputs_from_document(invalid_document("joint", "stale input"), 7, with_passive=True)
+    assert not outputs.valid and outputs.message == "stale input" and set(outputs.cdr) == {"estimate", "json"}

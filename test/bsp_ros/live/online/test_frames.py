@@ -1,0 +1,50 @@
+"""The wrench frame's rotation: TF tree, fixed quaternion parameter, or world."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bsp_ros.core.simulation import rotation_from_rpy_deg
+from bsp_ros.live.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
+from msg_adapters.rotation import quaternion_from_matrix
+from msg_adapters.tf import TransformSample
+
+R_SENSOR = rotation_from_rpy_deg(180.0, 0.0, 30.0)
+
+
+def _transform(rotation: np.ndarray, child: str = "ft_sensor") -> TransformSample:
+    return TransformSample(0, "world", child, np.zeros(3), quaternion_from_matrix(rotation))
+
+
+def test_quaternion_parameter_gives_the_rotation_and_refuses_a_non_unit_one() -> None:
+    np.testing.assert_allclose(rotation_from_quaternion_xyzw(quaternion_from_matrix(R_SENSOR)), R_SENSOR, atol=1e-12)
+    with pytest.raises(ValueError, match="norm"):
+        rotation_from_quaternion_xyzw([0.0, 0.0, 0.0, 2.0])
+    with pytest.raises(ValueError, match="4 finite"):
+        rotation_from_quaternion_xyzw([0.0, 0.0, 1.0])
+
+
+def test_without_tf_every_frame_but_world_takes_the_parameter() -> None:
+    frames = WrenchFrames("world", use_tf=False, parameter_rotation=R_SENSOR, tf_wait_s=2.0)
+    np.testing.assert_allclose(frames.rotation_for("ft_sensor", 0), R_SENSOR)
+    np.testing.assert_allclose(frames.rotation_for("world", 0), np.eye(3))
+    assert frames.sources == {"ft_sensor": "parameter", "world": "world"}
+
+
+def test_with_tf_the_transform_wins_and_a_change_is_reported() -> None:
+    frames = WrenchFrames("world", use_tf=True, parameter_rotation=np.eye(3), tf_wait_s=2.0)
+    frames.on_transforms([_transform(R_SENSOR)])
+    np.testing.assert_allclose(frames.rotation_for("ft_sensor", 0), R_SENSOR, atol=1e-12)
+    assert frames.sources["ft_sensor"] == "tf"
+    turned = rotation_from_rpy_deg(180.0, 0.0, 45.0)
+    assert frames.on_transforms([_transform(turned)]) == ["ft_sensor"]
+    np.testing.assert_allclose(frames.rotation_for("ft_sensor", 0), turned, atol=1e-12)
+
+
+def test_with_tf_a_frame_without_transform_waits_then_is_world() -> None:
+    frames = WrenchFrames("world", use_tf=True, parameter_rotation=R_SENSOR, tf_wait_s=2.0)
+    assert frames.rotation_for("ft_sensor", 1_000_000_000) is None
+    assert frames.rotation_for("ft_sensor", 2_500_000_000) is None
+    np.testing.assert_allclose(frames.rotation_for("ft_sensor", 3_000_000_001), np.eye(3))
+    assert frames.sources["ft_sensor"] == "world (no transform)"

@@ -1,0 +1,59 @@
+"""The recursive identifier: convergence, freezing without excitation, reset."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bsp_ros.core.identification.recursive import RecursiveIdentifier
+from bsp_ros.core.model import contact_torques_nm
+
+
+def _run(identifier: RecursiveIdentifier, stamps, wrench, angles, still_after_s: float | None = None) -> None:
+    k = 0
+    for i, t in enumerate(stamps):
+        while k + 1 < len(angles) and angles[k + 1][0] <= t:
+            k += 1
+        if angles[k][0] > t:
+            continue
+        sample = angles[k][1]
+        velocity = sample.velocity_rad_s
+        if still_after_s is not None and (t - stamps[0]) / 1e9 > still_after_s:
+            velocity = np.zeros(3)
+        tau = contact_torques_nm(sample.q_rad[None], sample.lengths_m, wrench[i][None])[0]
+        identifier.update(int(t), sample.q_rad, velocity, tau)
+
+
+def test_recursive_estimate_converges_to_the_truth(live_streams) -> None:
+    simulated, stamps, wrench, angles, _raw = live_streams
+    identifier = RecursiveIdentifier(3)
+    _run(identifier, stamps, wrench, angles)
+    result = identifier.result()
+    assert result.valid, result.message
+    truth = simulated.truth
+    for j in range(3):
+        assert result.values[j] == pytest.approx(truth.static_moments_kgm[j], rel=0.01)
+    for joint in ("shoulder", "elbow", "wrist"):
+        assert result.value("coulomb_nm", joint) == pytest.approx(
+            truth.to_dict()["joints"][joint]["coulomb_nm"], rel=0.1
+        )
+
+
+def test_without_excitation_the_estimate_and_its_covariance_are_frozen(live_streams) -> None:
+    _, stamps, wrench, angles, _raw = live_streams
+    identifier = RecursiveIdentifier(3)
+    _run(identifier, stamps[: len(stamps) // 2], wrench, angles)
+    before_values, before_cov = identifier.theta.copy(), identifier.covariance.copy()
+    updates = identifier.n_updates
+    _run(identifier, stamps, wrench, angles, still_after_s=0.0)  # the arm held still: no direction of motion
+    np.testing.assert_array_equal(identifier.theta, before_values)
+    np.testing.assert_allclose(identifier.covariance, before_cov)
+    assert identifier.n_updates == updates
+
+
+def test_reset_forgets_everything(live_streams) -> None:
+    _, stamps, wrench, angles, _raw = live_streams
+    identifier = RecursiveIdentifier(3)
+    _run(identifier, stamps[:2000], wrench, angles)
+    identifier.reset()
+    assert identifier.n_updates == 0 and not identifier.result().valid

@@ -1,0 +1,106 @@
+"""The sliding-window identifier: accuracy from live-like streams and refusal of bad samples."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
+
+
+def _feed(identifier: WindowedIdentifier, stamps, wrench, raw, corrupt=None) -> None:
+    events = [(int(t), 0, i) for i, t in enumerate(stamps)] + [(t, 1, k) for k, (t, _, _) in enumerate(raw)]
+    for t, kind, index in sorted(events):
+        if kind == 0:
+            values = wrench[index] if corrupt is None else corrupt(index, wrench[index])
+            identifier.add_wrench(t, values)
+        else:
+            _, q_rad, lengths_m = raw[index]
+            identifier.add_joint_state(t, q_rad, lengths_m)
+
+
+def test_window_estimate_matches_the_truth(live_streams) -> None:
+    simulated, stamps, wrench, _, raw = live_streams
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=30.0))
+    _feed(identifier, stamps, wrench, raw)
+    estimate = identifier.estimate()
+    assert estimate.valid, estimate.document["quality"]
+    truth = simulated.truth.to_dict()
+    for segment, q in estimate.document["segments"].items():
+        assert q["static_moment_kgm"]["value"] == pytest.approx(
+            truth["segments"][segment]["static_moment_kgm"], rel=0.005
+        )
+    for joint, q in estimate.document["joints"].items():
+        assert q["coulomb_nm"]["value"] == pytest.approx(truth["joints"][joint]["coulomb_nm"], rel=0.10)
+    assert estimate.document["session"]["end_time_ns"] - estimate.document["session"]["start_time_ns"] <= 30e9
+
+
+def test_nan_out_of_order_and_duplicate_samples_are_refused_and_counted(live_streams) -> None:
+    _, stamps, wrench, _, raw = live_streams
+    identifier = WindowedIdentifier(3)
+    _feed(identifier, stamps, wrench, raw, corrupt=lambda i, w: np.full(3, np.nan) if i % 100 == 0 else w)
+    assert identifier.wrench_guard.refused["non_finite"] == len(range(0, len(stamps), 100))
+    last = identifier.wrench.last_t_ns
+    assert not identifier.add_wrench(last, wrench[0])  # duplicate
+    assert not identifier.add_wrench(last - 5_000_000, wrench[0])  # out of order by 5 ms
+    assert identifier.wrench_guard.refused["out_of_order"] == 2
+    assert identifier.estimate().valid
+
+
+def test_a_backwards_clock_jump_restarts_the_window(live_streams) -> None:
+    _, stamps, wrench, _, raw = live_streams
+    identifier = WindowedIdentifier(3)
+    _feed(identifier, stamps, wrench, raw)
+    assert identifier.add_wrench(int(stamps[0]) - 10_000_000_000, wrench[0])  # 10 s before the session began
+    assert len(identifier.wrench) == 1 and len(identifier.angles) == 0
+    estimate = identifier.estimate()
+    assert not estimate.valid
+
+
+def test_stale_joint_states_make_the_estimate_invalid(live_streams) -> None:
+    _, stamps, wrench, _, raw = live_streams
+    identifier = WindowedIdentifier(3, WindowConfig(stale_s=0.5))
+    cut = raw[: len(raw) // 2]
+    _feed(identifier, stamps, wrench, cut)
+    estimate = identifier.estimate()
+    assert not estimate.valid
+    assert "stale input: newest joint states" in estimate.document["quality"]["message"]
+
+
+def test_block_average_slows_a_fast_stream_and_keeps_its_mean() -> None:
+    from bsp_ros.live.online.windowed import block_average
+
+    t_ns = 1_000_000_000 + np.arange(1000, dtype=np.int64) * 1_000_000  # 1 kHz
+    values = np.column_stack((np.arange(1000.0), np.ones(1000)))
+    stamps, means = block_average(t_ns, values, 200.0)
+    assert stamps.size == 200
+    np.testing.assert_allclose(means[:, 0], np.arange(1000.0).reshape(-1, 5).mean(axis=1))
+    np.testing.assert_array_equal(stamps, t_ns.reshape(-1, 5)[:, 2])
+    same_t, _ = block_average(t_ns[::10], values[::10], 200.0)
+    assert same_t.size == 100
+
+
+def test_a_tare_s_uncertainty_joins_the_window_estimate(live_streams) -> None:
+    import dataclasses
+
+    from bsp_ros.core.pipeline import IdentifyOptions
+    from bsp_ros.core.simulation import SensorSpec, TareSpec, human_arm_cell, simulate_tare, tare_rotations
+    from bsp_ros.core.tare import estimate_tare
+
+    simulated, stamps, wrench, _, raw = live_streams
+    cell = human_arm_cell(sensor=SensorSpec(handle_mass_kg=0.3, handle_com_m=(0.0, 0.02, 0.05)), seed=2)
+    spec = TareSpec(duration_s=20.0, swing_rpy_deg=(20.0, 20.0, 0.0))
+    recording = simulate_tare(cell, spec)
+    rotations = tare_rotations(cell, spec, (recording.wrench.t_ns - cell.start_ns) * 1e-9 - spec.start_offset_s)
+    w = recording.wrench
+    tare = estimate_tare(w.t_ns, w.force_n, w.torque_nm, w.frame_id, rotations)
+    plain, tared = WindowedIdentifier(3), WindowedIdentifier(3, WindowConfig(options=IdentifyOptions(tare=tare)))
+    for identifier in (plain, tared):
+        _feed(identifier, stamps, wrench, raw)
+    rotation = simulated.session.rotation_world_from_sensor
+    window = dataclasses.replace(tared.snapshot(), rotation_world_from_sensor=rotation, wrench_frame_id=w.frame_id)
+    with_tare = tared.estimate_window(window).document
+    without = plain.estimate_window(plain.snapshot()).document
+    assert with_tare["quality"]["tare"]["applied"] is True
+    for segment, q in with_tare["segments"].items():
+        assert q["static_moment_kgm"]["std"] > without["segments"][segment]["static_moment_kgm"]["std"]
