@@ -454,11 +454,20 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
         f"    identifier counters: {', '.join(f'{k} {v}' for k, v in counts.items())}"
         f" -> took {got}, lost {published - got} over the whole run"
     )
-    if at_t0 is not None:
-        stamp0, counts0 = at_t0
-        pub_all = np.frombuffer(listener.wrench.pub, dtype=np.int64)
-        backlog = int((pub_all <= stamp0).sum()) - received(counts0)
-        print(f"    identifier backlog at the end of the warm-up: {backlog} wrench published but not yet counted")
+    at_t1 = identifier_counts(listener, t1)
+    if at_t0 is not None and at_t1 is not None:
+        # The simulator publishes on a grid (stamp = start + k * PERIOD_NS), so the number published up to a
+        # counter's stamp follows from the stamp; the difference to what the identifier took is its loss
+        # plus what is still queued (a few samples at most when it keeps up).
+        (stamp0, counts0), (stamp1, counts1) = at_t0, at_t1
+        published0 = min(published, max(0, (stamp0 - start) // PERIOD_NS + 1))
+        published1 = min(published, max(0, (stamp1 - start) // PERIOD_NS + 1))
+        warmup_short = published0 - received(counts0)
+        measured_short = (published1 - published0) - (received(counts1) - received(counts0))
+        print(
+            f"    not taken by the identifier: {warmup_short} of {published0} by the end of the warm-up (lost or"
+            f" queued), {measured_short} of {published1 - published0} during the measured run"
+        )
     targets.append(("zero loss over the whole run", published == got, f"{published - got} lost"))
     return targets
 
