@@ -13,17 +13,21 @@ from pathlib import Path
 import pytest
 from node_processes import ROOT
 
-from bsp_ros.live.runtime.ros import Client
+from bsp_ros.live.runtime.ros import EXECUTOR_ENV, Client
 
 NODES = ("bsp_identifier", "cell_simulator", "joint_angle_estimator", "session_recorder")
 
 
-def _env(domain: int) -> dict[str, str]:
-    return {
+def _env(domain: int, executor: str | None = None) -> dict[str, str]:
+    env = {
         **os.environ,
         "ROS_DOMAIN_ID": str(domain),
         "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
     }
+    env.pop(EXECUTOR_ENV, None)
+    if executor is not None:
+        env[EXECUTOR_ENV] = executor
+    return env
 
 
 @pytest.mark.parametrize("name", NODES)
@@ -81,10 +85,23 @@ def test_an_integer_for_a_float_parameter_is_refused_with_a_hint(ros_domain: int
     assert "window_s" in out.stderr and "decimal point" in out.stderr and "Traceback" not in out.stderr
 
 
+def test_an_unknown_executor_is_refused_naming_it(ros_domain: int) -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "bsp_ros.live.nodes.joint_angle_estimator"],
+        env=_env(ros_domain, "threads"),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert out.returncode == 2, out.stderr
+    assert f"{EXECUTOR_ENV}='threads'" in out.stderr and "Traceback" not in out.stderr
+
+
 @pytest.mark.dds
+@pytest.mark.parametrize("executor", ["events", "single"])
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
 def test_a_stopped_identifier_exits_cleanly_without_leaked_semaphores(
-    stop: signal.Signals, ros_domain: int, tmp_path: Path
+    stop: signal.Signals, executor: str, ros_domain: int, tmp_path: Path
 ) -> None:
     # The cell's params file, as `ros2 launch` passes it; the node is up once it publishes its health
     # (its worker process started before that).
@@ -93,7 +110,7 @@ def test_a_stopped_identifier_exits_cleanly_without_leaked_semaphores(
     with log.open("wb") as stderr:
         process = subprocess.Popen(
             [sys.executable, "-m", "bsp_ros.live.nodes.bsp_identifier", "--ros-args", "--params-file", str(config)],
-            env=_env(ros_domain),
+            env=_env(ros_domain, executor),
             stdout=subprocess.DEVNULL,
             stderr=stderr,
         )
@@ -112,3 +129,4 @@ def test_a_stopped_identifier_exits_cleanly_without_leaked_semaphores(
     time.sleep(1.0)  # multiprocessing's resource tracker outlives the node by a moment and would warn then
     text = log.read_text()
     assert "leaked semaphore" not in text and "Traceback" not in text, text
+    assert f"spinning on the {executor} executor" in text, text
