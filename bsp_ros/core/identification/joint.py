@@ -43,6 +43,10 @@ class JointConfig:
         standard deviations, the estimate hangs on a few samples: invalid.
     min_row_share : with a Coulomb term, a joint whose direction of motion is trustworthy in fewer than
         this share of the samples makes the estimate invalid.
+    confounded_corr, confounded_rel_std : a passive term is reported confounded with gravity when its
+        correlation with a static moment exceeds ``confounded_corr`` and that static moment is uncertain by
+        more than ``confounded_rel_std`` of its value: a high correlation alone is harmless when the session
+        pins both down (a planned protocol), and the warning says what the confounding costs.
     """
 
     passive: PassiveModel = field(default_factory=PassiveModel)
@@ -58,6 +62,8 @@ class JointConfig:
     max_misfit: float = 4.0
     min_row_share: float = 0.5
     max_outlier_shift: float = 2.0
+    confounded_corr: float = 0.95
+    confounded_rel_std: float = 0.01
 
     def __post_init__(self) -> None:
         check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)
@@ -71,6 +77,8 @@ class JointConfig:
         check_positive("max_misfit", self.max_misfit)
         check_finite_scalar("min_row_share", self.min_row_share, 0.0, 1.0)
         check_finite_scalar("max_outlier_shift", self.max_outlier_shift, 0.0, 1e6)
+        check_finite_scalar("confounded_corr", self.confounded_corr, 0.0, 1.0)
+        check_finite_scalar("confounded_rel_std", self.confounded_rel_std, 0.0, 1e6)
 
 
 @dataclass(frozen=True)
@@ -613,14 +621,22 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     if fit.condition > config.max_condition:
         problems.append(f"poor excitation: condition number {fit.condition:.3g} > {config.max_condition:g}")
     correlation = correlation_from_covariance(fit.covariance)
+    all_std = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
     max_corr_with_gravity = {}
     for i, (key, owner) in enumerate(problem.names):
         if i >= n:
-            corr = float(np.max(np.abs(correlation[i, :n])))
+            partner = int(np.argmax(np.abs(correlation[i, :n])))
+            corr = float(abs(correlation[i, partner]))
             max_corr_with_gravity[f"{key}/{owner}"] = corr
-            if corr > 0.95:
-                warnings.append(f"confounded: {key} at the {owner} is correlated with gravity (|corr| {corr:.3f})")
-        std = np.sqrt(max(fit.covariance[i, i], 0.0))
+            value = fit.values[partner]
+            rel_std = all_std[partner] / value if value > 0 else np.inf
+            if corr > config.confounded_corr and rel_std > config.confounded_rel_std:
+                warnings.append(
+                    f"confounded: {key} at the {owner} is correlated with gravity (|corr| {corr:.3f}); the "
+                    f"{problem.names[partner][1]} static moment is uncertain by {rel_std:.1%} "
+                    "(a session at several operating points separates them: bsp plan)"
+                )
+        std = all_std[i]
         at_bound = np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12
         if at_bound and i < n:
             problems.append(f"the {owner} static moment sits at its bound 0: the data do not support it")

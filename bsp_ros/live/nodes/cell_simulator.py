@@ -56,6 +56,9 @@ PARAMETERS = (
     Param("handle_mass_kg", 0.0, "handle mass between sensor and hand", "kg", lo=0.0, hi=10.0),
     Param("handle_com_m", [0.0, 0.0, 0.0], "handle centre of mass, sensor frame", "m"),
     Param("spike_fraction", 0.0, "share of wrench samples that are spikes", "", lo=0.0, hi=0.5),
+    Param("marker_jump_at_s", 0.0, "one frame of marker_jump_name jumps at this time (0: never)", "s", lo=0.0),
+    Param("marker_jump_name", "elbow", "the marker of the one-frame jump"),
+    Param("marker_jump_m", [0.0, 0.67, 0.0], "the one-frame jump (a swapped marker moves ~0.67 m), world", "m"),
     Param("passive_offset_nm", [0.0], "elastic passive offset per joint ([0.0]: none)", "Nm"),
     Param("friction_transition_rad_s", 0.0, "width of a smooth (tanh) friction transition", "rad/s", lo=0.0, hi=1.0),
     Param("trajectory_file", "", "follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in motion"),
@@ -80,8 +83,8 @@ class CellSimulatorNode(RosNode):
 
     The sensor frame's transform goes out on /tf_static when tf2_msgs is installed; the node logs the
     quaternion either way (the identifier's ``wrench_frame_rotation_xyzw`` without tf). Faults on request
-    (parameters): marker dropouts, NaN bursts in the wrench, a stalled sensor (stops publishing the wrench),
-    a dying process, and a backwards clock jump of the stamps.
+    (parameters): marker dropouts, a one-frame marker jump, NaN bursts in the wrench, a stalled sensor (stops
+    publishing the wrench), a dying process, and a backwards clock jump of the stamps.
     """
 
     def __init__(self) -> None:
@@ -95,6 +98,12 @@ class CellSimulatorNode(RosNode):
         self.die_at_s = p["die_at_s"]
         self.jump_at_s = p["clock_jump_at_s"]
         self.jump_s = p["clock_jump_s"]
+        self.marker_jump_at_s = p["marker_jump_at_s"]
+        self.marker_jump_name = p["marker_jump_name"]
+        self.marker_jump_m = np.asarray(p["marker_jump_m"], dtype=float)
+        if self.marker_jump_m.shape != (3,) or not np.isfinite(self.marker_jump_m).all():
+            raise InputError(f"{NAME}: marker_jump_m needs 3 finite coordinates, got {p['marker_jump_m']}")
+        self.marker_jumped = False
         wrench_hz, marker_hz = p["wrench_hz"], p["marker_hz"]
         rpy = p["sensor_roll_pitch_yaw_deg"]
         if len(rpy) != 3:
@@ -128,6 +137,11 @@ class CellSimulatorNode(RosNode):
 
             spec = dataclasses.replace(spec, trajectory=planned_trajectory_from_file(p["trajectory_file"]))
         self.simulator = sim.CellSimulator(spec)
+        if self.marker_jump_name not in self.simulator.marker_names:
+            raise InputError(
+                f"{NAME}: marker_jump_name {self.marker_jump_name!r} is not a marker of this arm"
+                f" ({', '.join(self.simulator.marker_names)})"
+            )
         self.frame_id = spec.sensor.frame_id
         self.wrench_period_ns = int(1e9 / wrench_hz)
         self.marker_period_ns = int(1e9 / marker_hz)
@@ -221,8 +235,16 @@ class CellSimulatorNode(RosNode):
         out = []
         for name, series in self.simulator.sample_markers(t_ns).items():
             stamps = self._stamp(series.t_ns)
+            position_m = series.position_m
+            if self.marker_jump_at_s > 0 and not self.marker_jumped and name == self.marker_jump_name:
+                due = np.flatnonzero(series.t_ns - self.start_wall_ns >= self.marker_jump_at_s * 1e9)
+                if due.size:
+                    position_m = position_m.copy()
+                    position_m[due[0]] += self.marker_jump_m  # one frame only: a swapped or misread marker
+                    self.marker_jumped = True
+                    self.get_logger().warning(f"fault: marker {name} jumps by {self.marker_jump_m} m for one frame")
             for k in range(stamps.size):
-                pose = PoseSample(int(stamps[k]), "world", series.position_m[k], identity)
+                pose = PoseSample(int(stamps[k]), "world", position_m[k], identity)
                 out.append((int(series.t_ns[k]), (name, pose)))
         out.sort(key=lambda item: item[0])  # frames in time order, markers of a frame together
         return out

@@ -145,7 +145,9 @@ class JointAngleEstimatorNode(RosNode):
             level, message = ERROR, f"stale: no marker for {(now - self.last_receive_wall_ns) / 1e9:.1f} s"
         else:
             level, message = OK, "tracking"
-        status = DiagnosticStatusData.with_values(level, f"{NAME}", message, "", self.counts)
+        # Frames inconsistent with the rigid chain (a swapped marker, a jump no arm makes): counted, not used.
+        values = {**self.counts, "rejected_frames": self.estimator.n_rejected}
+        status = DiagnosticStatusData.with_values(level, f"{NAME}", message, "", values)
         self.diag_pub.publish(build_diagnostic_array(self.types, DiagnosticArraySample(now, "", (status,))))
 
 

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import pytest
 from live_cell import LiveCell, wrench_frame_parameter
+
+from msg_adapters.diagnostics import read_diagnostic_array
 
 pytestmark = [pytest.mark.dds, pytest.mark.slow]
 
@@ -100,6 +103,36 @@ def test_nan_bursts_and_a_backwards_clock_jump_never_poison_a_valid_estimate(cel
             assert abs(z) < 5, (name, z, document["quality"])
     refused = [d["session"]["refused_samples"]["wrench_non_finite"] for d in valid if "session" in d]
     assert max(refused) > 0  # the NaN bursts were seen and refused
+
+
+def test_one_marker_frame_jumping_0_67_m_leaves_the_live_estimate_right(cell) -> None:
+    # The adversarial case of a swapped elbow marker: one frame 0.67 m off once made the live windows report
+    # an elbow Coulomb of <= 0.035 Nm (truth 0.28) as valid. Here the jump is at 20 s of simulated time, and
+    # every valid window holding it must stay right.
+    jump_at_s = 20.0
+    c = cell(6, ["speed:=2.0", "seed:=4", f"marker_jump_at_s:={jump_at_s}"], ["window_s:=60.0"])
+    rejected: list[int] = []
+
+    def on_diagnostics(msg: Any) -> None:
+        for status in read_diagnostic_array(msg).status:
+            if status.name == "joint_angle_estimator":
+                rejected.append(int(dict(status.values)["rejected_frames"]))
+
+    c.client.subscribe("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", on_diagnostics, "default")
+    c.spin_until(lambda: False, 40)  # 80 s of simulated time: windows before, across and after the jump
+    assert rejected and rejected[-1] >= 1, rejected  # the jump reached the estimator and was set aside
+    start_ns = c.truth["start_time_ns"]
+    holding = [d for _, d in c.estimates if d["quality"]["valid"] and _window_end_s(d, start_ns) > jump_at_s + 1.0]
+    assert len(holding) > 20, [d["quality"]["message"] for _, d in c.estimates[-5:]]
+    for document in holding:
+        for name, z in _z_scores(document, c.truth).items():
+            assert abs(z) < 5, (name, z, _window_end_s(document, start_ns))
+    for name, error in _errors(holding[-1], c.truth).items():
+        assert error < (0.005 if "static_moment" in name else 0.10), (name, error)
+
+
+def _window_end_s(document: dict, start_ns: int) -> float:
+    return (document["session"]["end_time_ns"] - start_ns) / 1e9
 
 
 def test_a_rotated_sensor_without_tf_is_identified_with_the_quaternion_parameter(cell) -> None:
