@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.identification.data import identification_data_from_session
-from bsp_ros.core.identification.joint import identify_joint
+from bsp_ros.core.identification.joint import _near_gaps, identify_joint
 from bsp_ros.core.identification.result import IdentificationResult
 
 
@@ -44,3 +45,25 @@ def test_stribeck_like_friction_makes_the_estimate_invalid_and_names_the_joint()
     result = identified(3, passive__stribeck_ratio=1.5, passive__stribeck_speed_rad_s=0.01)
     assert not result.valid
     assert any("friction at the elbow depends on speed (Stribeck-like" in w for w in result.warnings)
+
+
+def test_samples_far_off_the_fit_next_to_marker_gaps_are_named_as_such() -> None:
+    # Marker dropouts (5 %, 20 frames on average) leave gaps in the angles; at their edges the direction
+    # of motion is least certain and a few samples get friction's sign wrong (seed 0: 9 such samples).
+    spec = sim.human_arm_cell(seed=0, duration_s=120.0)
+    spec = dataclasses.replace(
+        spec, markers=dataclasses.replace(spec.markers, dropout_fraction=0.05, dropout_mean_frames=20.0)
+    )
+    result = identify_joint(identification_data_from_session(sim.simulate_cell(spec).session))
+    assert result.valid, result.message
+    far = [w for w in result.warnings if "far off the fit" in w]
+    assert len(far) == 1 and "of a gap in the joint angles (marker dropouts" in far[0], result.warnings
+
+
+def test_near_gaps_marks_the_samples_beside_a_gap_only() -> None:
+    t_ns = np.concatenate(
+        [np.arange(0, 1_000_000_000, 10_000_000), np.arange(2_000_000_000, 3_000_000_000, 10_000_000)]
+    )
+    near = _near_gaps(t_ns, 0.05)
+    # The last 6 samples before the gap (0.94-0.99 s) and the first 6 after it (2.00-2.05 s).
+    assert np.flatnonzero(near).tolist() == [*range(94, 100), *range(100, 106)]
