@@ -23,7 +23,13 @@ from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.nodes import estimate_jobs as jobs
 from bsp_ros.live.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
-from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate, WindowSamples
+from bsp_ros.live.online.windowed import (
+    MODEL_CHECK_PENDING,
+    WindowConfig,
+    WindowedIdentifier,
+    WindowEstimate,
+    WindowSamples,
+)
 from bsp_ros.live.runtime.offload import ProcessOffload
 from bsp_ros.live.runtime.parameters import Param, declare_parameters
 from bsp_ros.live.runtime.qos import rclpy_qos
@@ -160,6 +166,17 @@ class BspIdentifierNode(RosNode):
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
         self.offload.run(jobs.ping)
+        # Windowed: the model checks (drift, Stribeck, elastic; several refits) run every elastic_check_every
+        # updates in a second process, beside the regular updates, which apply their latest verdict; an
+        # estimate in line with a check would come a period late every few seconds.
+        self.model_verdict: list[str] = [MODEL_CHECK_PENDING]
+        self.updates = 0
+        self.checker: ProcessOffload | None = None
+        self.check_worker: LatestJobWorker | None = None
+        if self.mode == "windowed":
+            self.checker = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, False))
+            self.check_worker = LatestJobWorker(f"{NAME}-model-check")
+            self.checker.run(jobs.ping)
         self.support_fraction = float(p["support_fraction"])
         self.support_estimate: dict[str, Any] | None = None  # set by the worker thread with each estimate
         self.support_diagnostics: dict[str, str] = {}
@@ -201,6 +218,9 @@ class BspIdentifierNode(RosNode):
         """Stop the worker thread and the worker process, then the node."""
         self.worker.close()
         self.offload.close()
+        if self.check_worker is not None and self.checker is not None:
+            self.check_worker.close()
+            self.checker.close()
         super().destroy_node()
 
     # -- inputs ---------------------------------------------------------------------------------------
@@ -211,6 +231,7 @@ class BspIdentifierNode(RosNode):
             self.get_logger().warning(f"transform of {frame_id} changed: estimate restarted")
             self.windowed.reset()
             self.recursive.reset()
+            self.model_verdict = [MODEL_CHECK_PENDING]
 
     def on_lengths(self, msg: Any) -> None:
         """Segment lengths from the joint angle estimator."""
@@ -325,12 +346,24 @@ class BspIdentifierNode(RosNode):
         ready, self.ready = self.ready, None
         if ready is not None and ready[0] == self.generation:
             self.publish(ready[1], counts)
-        generation = self.generation
-        self.worker.submit(lambda: self._compute_window(window, generation))
+        generation, verdict = self.generation, list(self.model_verdict)
+        self.worker.submit(lambda: self._compute_window(window, generation, verdict))
+        if self.check_worker is not None and self.updates % self.windowed.config.elastic_check_every == 0:
+            self.check_worker.submit(lambda: self._check_window(window))
+        self.updates += 1
 
-    def _compute_window(self, window: WindowSamples, generation: int) -> None:
+    def _compute_window(self, window: WindowSamples, generation: int, verdict: list[str]) -> None:
         """On the worker thread: identify a window in the worker process; keep it for the next tick."""
-        self.ready = (generation, self._timed(lambda: self.offload.run(jobs.window_estimate, window)))
+        self.ready = (generation, self._timed(lambda: self.offload.run(jobs.window_estimate, window, verdict)))
+
+    def _check_window(self, window: WindowSamples) -> None:
+        """On the model-check thread: the model checks of a window, in the checker process; the verdict
+        holds for the updates that follow until the next check."""
+        assert self.checker is not None
+        try:
+            self.model_verdict = self.checker.run(jobs.window_model_check, window)
+        except BspError as exc:  # the checker died: restarted; the previous verdict holds until the next check
+            self.get_logger().error(f"model check failed: {exc}")
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
         """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""

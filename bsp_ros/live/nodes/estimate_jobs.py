@@ -101,12 +101,19 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
     return EstimateOutputs(valid, str(document["quality"]["message"]), out, estimate_from_document(document))
 
 
-def window_estimate(window: WindowSamples) -> EstimateOutputs:
-    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench."""
+def window_estimate(window: WindowSamples, verdict: list[str] | None = None) -> EstimateOutputs:
+    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench;
+    ``verdict``: the latest model-check warnings (None: the checks run here on their schedule)."""
     assert _windowed is not None, "init_worker was not run"
-    estimate = _windowed.estimate_window(window)
+    estimate = _windowed.estimate_window(window, verdict)
     estimate.document["mode"] = "windowed"
     return outputs_from_document(estimate.document, estimate.last_wrench_t_ns or 0, with_passive=True)
+
+
+def window_model_check(window: WindowSamples) -> list[str]:
+    """The model checks of a window (``WindowedIdentifier.model_check``), run beside the regular updates."""
+    assert _windowed is not None, "init_worker was not run"
+    return _windowed.model_check(window)
 
 
 def recursive_estimate(

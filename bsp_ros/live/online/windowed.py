@@ -21,6 +21,8 @@ from bsp_ros.validation import check_finite_scalar, check_positive
 # Warnings of the model checks (identification/joint.py) that make an estimate invalid; live they run every
 # ``elastic_check_every`` updates and their verdict holds in between.
 MODEL_CHECK_WARNINGS = ("elastic passive moment", "the wrench drifts", "depends on speed (Stribeck")
+# The verdict before the first model check of a session has come back (see WindowedIdentifier.model_check).
+MODEL_CHECK_PENDING = "the model checks (sensor drift, friction shape, elastic terms) have not run on this session yet"
 
 
 @dataclass(frozen=True)
@@ -203,46 +205,78 @@ class WindowedIdentifier:
             self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
         )
 
-    def estimate_window(self, window: WindowSamples) -> WindowEstimate:
-        """Identify a window copied by :meth:`snapshot` (the slow part: ~30-100 ms for 30 s at 1 kHz).
-
-        Only one thread at a time may call this (it keeps the elastic-check schedule).
-        """
-        last_wrench = int(window.wrench_t_ns[-1])
+    def _window_data(self, window: WindowSamples) -> tuple[IdentificationData, np.ndarray] | str:
+        """The identification data of a window and its wrench stamps, or why there are none."""
         t_w, wrench = block_average(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
         t_a, rows = window.angle_t_ns, window.angle_rows
+        lengths = np.median(rows[:, self.n :], axis=0)
+        kinematics = kinematics_from_angles(
+            t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
+        )
+        q, velocity, valid = resample_kinematics(kinematics, t_w)
+        if valid.sum() < 2:
+            return "no wrench sample in the window has joint angles"
+        tau = contact_torques_nm(q[valid], lengths, wrench[valid])
+        data = IdentificationData(
+            t_w[valid],
+            q[valid],
+            velocity[valid],
+            tau,
+            lengths,
+            np.zeros(self.n),
+            kinematics.direction_velocity_noise_rad_s,
+            int(t_w.size),
+            [],
+        )
+        return data, t_w
+
+    def model_check(self, window: WindowSamples) -> list[str]:
+        """Run the model checks (drift, Stribeck, elastic) on a window; their warnings, empty if it passes.
+
+        The checks refit the window several times (a few hundred ms for 30 s): live, they run beside the
+        regular updates (another process), and :meth:`estimate_window` applies their latest verdict.
+        A window that cannot be identified gives no verdict (empty).
+        """
         try:
-            lengths = np.median(rows[:, self.n :], axis=0)
-            kinematics = kinematics_from_angles(
-                t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
-            )
-            q, velocity, valid = resample_kinematics(kinematics, t_w)
-            if valid.sum() < 2:
-                return self._invalid("no wrench sample in the window has joint angles", last_wrench)
-            tau = contact_torques_nm(q[valid], lengths, wrench[valid])
-            data = IdentificationData(
-                t_w[valid],
-                q[valid],
-                velocity[valid],
-                tau,
-                lengths,
-                np.zeros(self.n),
-                kinematics.direction_velocity_noise_rad_s,
-                int(t_w.size),
-                [],
-            )
-            check = self._updates % self.config.elastic_check_every == 0
+            prepared = self._window_data(window)
+            if isinstance(prepared, str):
+                return []
+            result = identify_data(prepared[0], self.config.options, check_elastic=True)
+        except BspError:
+            return []
+        return [w for w in result.warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
+
+    def estimate_window(self, window: WindowSamples, verdict: list[str] | None = None) -> WindowEstimate:
+        """Identify a window copied by :meth:`snapshot` (the slow part: ~30-100 ms for 30 s at 1 kHz).
+
+        Parameters
+        ----------
+        window : the samples.
+        verdict : the latest :meth:`model_check` warnings, run by the caller ([MODEL_CHECK_PENDING] before
+            the first has come back); any makes the estimate invalid. None: the checks run here, every
+            ``elastic_check_every`` calls, and their verdict holds in between (one thread at a time).
+        """
+        last_wrench = int(window.wrench_t_ns[-1])
+        try:
+            prepared = self._window_data(window)
+            if isinstance(prepared, str):
+                return self._invalid(prepared, last_wrench)
+            data, t_w = prepared
+            check = verdict is None and self._updates % self.config.elastic_check_every == 0
             self._updates += 1
             result = identify_data(data, self.config.options, check_elastic=check)
             if check:
                 self._elastic_warnings = [w for w in result.warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
-            elif self._elastic_warnings:
+            held = self._elastic_warnings if verdict is None else verdict
+            if not check and held:
                 # Between checks the last verdict stands: an effect the model lacks does not come and go.
-                result.warnings += self._elastic_warnings
+                result.warnings += [w for w in held if w != MODEL_CHECK_PENDING]
                 if result.valid:
                     result.valid = False
                     result.message = (
-                        "the data show an effect the model lacks that biases the estimate (see warnings; "
+                        MODEL_CHECK_PENDING
+                        if held == [MODEL_CHECK_PENDING]
+                        else "the data show an effect the model lacks that biases the estimate (see warnings; "
                         "checked every few updates)"
                     )
             if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
+from bsp_ros.live.online.windowed import MODEL_CHECK_PENDING, WindowConfig, WindowedIdentifier, WindowSamples
 
 
 def _feed(identifier: WindowedIdentifier, stamps, wrench, raw, corrupt=None) -> None:
@@ -104,3 +104,40 @@ def test_a_tare_s_uncertainty_joins_the_window_estimate(live_streams) -> None:
     assert with_tare["quality"]["tare"]["applied"] is True
     for segment, q in with_tare["segments"].items():
         assert q["static_moment_kgm"]["std"] > without["segments"][segment]["static_moment_kgm"]["std"]
+
+
+def _window(live_streams, drift_n_per_s: float = 0.0):
+    _, stamps, wrench, _, raw = live_streams
+    drifted = wrench.copy()
+    drifted[:, 1] += drift_n_per_s * (np.asarray(stamps) - stamps[0]) / 1e9  # vertical force offset creeping up
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=60.0))
+    _feed(identifier, stamps, drifted, raw)
+    window = identifier.snapshot()
+    assert isinstance(window, WindowSamples)
+    return identifier, window
+
+
+def test_model_check_of_a_clean_window_passes(live_streams) -> None:
+    identifier, window = _window(live_streams)
+    assert identifier.model_check(window) == []
+
+
+def test_model_check_names_a_drifting_sensor(live_streams) -> None:
+    identifier, window = _window(live_streams, drift_n_per_s=0.01)
+    verdict = identifier.model_check(window)
+    assert any("the wrench drifts" in w for w in verdict), verdict
+
+
+def test_estimate_is_invalid_until_the_first_model_check_is_back(live_streams) -> None:
+    identifier, window = _window(live_streams)
+    pending = identifier.estimate_window(window, [MODEL_CHECK_PENDING])
+    assert not pending.valid and pending.document["quality"]["message"] == MODEL_CHECK_PENDING
+    assert identifier.estimate_window(window, []).valid
+
+
+def test_a_failed_model_check_holds_for_the_updates_given_it(live_streams) -> None:
+    identifier, window = _window(live_streams, drift_n_per_s=0.01)
+    verdict = identifier.model_check(window)
+    estimate = identifier.estimate_window(window, verdict)
+    assert not estimate.valid and "effect the model lacks" in estimate.document["quality"]["message"]
+    assert all(w in estimate.document["quality"]["warnings"] for w in verdict)
