@@ -137,10 +137,27 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sessions", type=int, default=200)
     parser.add_argument("--duration", type=float, default=120.0)
-    parser.add_argument("--scenario", choices=SCENARIOS, default="clean")
+    parser.add_argument(
+        "--scenario", choices=(*SCENARIOS, "all"), default="clean", help="all: every scenario, and the pooled coverage"
+    )
     parser.add_argument("--first-seed", type=int, default=0)
     args = parser.parse_args()
-    print(json.dumps(run(args.scenario, args.sessions, args.duration, args.first_seed), indent=1))
+    if args.scenario != "all":
+        print(json.dumps(run(args.scenario, args.sessions, args.duration, args.first_seed), indent=1))
+        return
+    results = [run(scenario, args.sessions, args.duration, args.first_seed) for scenario in SCENARIOS]
+    print(f"{'scenario':18s} {'valid':>9s} {'parameters':>10s} {'within 3 std':>12s}  worst |z|")
+    for r in results:
+        within = "-" if r["within_3_std"] is None else f"{100 * r['within_3_std']:.2f} %"
+        worst = f"{r['worst'][0][0]:.2f}" if r["worst"] else "-"
+        print(f"{r['scenario']:18s} {r['valid']:>4d}/{r['sessions']:<4d} {r['parameters']:>10d} {within:>12s}  {worst}")
+    parameters = sum(r["parameters"] for r in results)
+    inside = sum(r["parameters"] * (r["within_3_std"] or 0.0) for r in results)
+    sessions, valid = sum(r["sessions"] for r in results), sum(r["valid"] for r in results)
+    print(
+        f"pooled: {valid}/{sessions} sessions valid, {parameters} data-sourced parameters of valid estimates,"
+        f" {100 * inside / max(parameters, 1):.2f} % within 3 std ({sum(r['seconds'] for r in results):.0f} s)"
+    )
 
 
 if __name__ == "__main__":

@@ -168,13 +168,14 @@ class BspIdentifierNode(RosNode):
         self.offload.run(jobs.ping)
         # Windowed: the model checks (drift, Stribeck, elastic; several refits) run every elastic_check_every
         # updates in a second process, beside the regular updates, which apply their latest verdict; an
-        # estimate in line with a check would come a period late every few seconds.
+        # estimate in line with a check would come a period late every few seconds. The checker runs on idle
+        # CPU time only (SCHED_IDLE): a verdict may wait, an update on the timer grid should not.
         self.model_verdict: list[str] = [MODEL_CHECK_PENDING]
         self.updates = 0
         self.checker: ProcessOffload | None = None
         self.check_worker: LatestJobWorker | None = None
         if self.mode == "windowed":
-            self.checker = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, False))
+            self.checker = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, True))
             self.check_worker = LatestJobWorker(f"{NAME}-model-check")
             self.checker.run(jobs.ping)
         self.support_fraction = float(p["support_fraction"])
