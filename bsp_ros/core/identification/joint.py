@@ -487,8 +487,8 @@ def _near_gaps(t_ns: np.ndarray, edge_s: float) -> np.ndarray:
     gaps = np.flatnonzero(step > 3 * np.median(step))
     if gaps.size == 0:
         return near
-    edges = np.concatenate([t_ns[gaps], t_ns[gaps + 1]])
-    position = np.searchsorted(edges := np.sort(edges), t_ns)
+    edges = np.sort(np.concatenate([t_ns[gaps], t_ns[gaps + 1]]))  # the last sample before, first after
+    position = np.searchsorted(edges, t_ns)
     before = np.abs(t_ns - edges[np.clip(position - 1, 0, edges.size - 1)])
     after = np.abs(edges[np.clip(position, 0, edges.size - 1)] - t_ns)
     return np.asarray(np.minimum(before, after) <= edge_s * 1e9)

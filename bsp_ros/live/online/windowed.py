@@ -25,6 +25,11 @@ MODEL_CHECK_WARNINGS = ("elastic passive moment", "the wrench drifts", "depends 
 MODEL_CHECK_PENDING = "the model checks (sensor drift, friction shape, elastic terms) have not run on this session yet"
 
 
+def model_check_warnings(warnings: list[str]) -> list[str]:
+    """The warnings of an identification that come from its model checks (the verdict that holds)."""
+    return [w for w in warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
+
+
 @dataclass(frozen=True)
 class WindowConfig:
     """Settings of :class:`WindowedIdentifier`.
@@ -244,7 +249,7 @@ class WindowedIdentifier:
             result = identify_data(prepared[0], self.config.options, check_elastic=True)
         except BspError:
             return []
-        return [w for w in result.warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
+        return model_check_warnings(result.warnings)
 
     def estimate_window(self, window: WindowSamples, verdict: list[str] | None = None) -> WindowEstimate:
         """Identify a window copied by :meth:`snapshot` (the slow part: ~30-100 ms for 30 s at 1 kHz).
@@ -266,7 +271,7 @@ class WindowedIdentifier:
             self._updates += 1
             result = identify_data(data, self.config.options, check_elastic=check)
             if check:
-                self._elastic_warnings = [w for w in result.warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
+                self._elastic_warnings = model_check_warnings(result.warnings)
             held = self._elastic_warnings if verdict is None else verdict
             if not check and held:
                 # Between checks the last verdict stands: an effect the model lacks does not come and go.

@@ -98,7 +98,7 @@ EXECUTORS = ("events", "single")
 
 
 def make_executor(kind: str | None = None, context: Any = None) -> tuple[Any, str]:
-    """An rclpy executor for the default context, and the name of the one made.
+    """An rclpy executor for ``context`` (rclpy's default one when omitted), and the name of the one made.
 
     Parameters
     ----------
