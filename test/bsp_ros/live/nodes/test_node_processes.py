@@ -85,6 +85,22 @@ def test_an_integer_for_a_float_parameter_is_refused_with_a_hint(ros_domain: int
     assert "window_s" in out.stderr and "decimal point" in out.stderr and "Traceback" not in out.stderr
 
 
+@pytest.mark.parametrize(
+    ("param", "needle"),
+    [("marker_jump_name:=knee", "marker_jump_name 'knee'"), ("marker_jump_m:=[0.1, 0.2]", "marker_jump_m")],
+)
+def test_a_bad_marker_jump_is_refused_naming_it(param: str, needle: str, ros_domain: int) -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "bsp_ros.live.nodes.cell_simulator", "--ros-args", "-p", param],
+        env=_env(ros_domain),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert out.returncode == 2, out.stderr
+    assert needle in out.stderr and "Traceback" not in out.stderr
+
+
 def test_an_unknown_executor_is_refused_naming_it(ros_domain: int) -> None:
     out = subprocess.run(
         [sys.executable, "-m", "bsp_ros.live.nodes.joint_angle_estimator"],
