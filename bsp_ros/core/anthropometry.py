@@ -26,6 +26,8 @@ class SegmentNorm:
     com_fraction : COM distance from the proximal joint / segment length.
     com_fraction_sd : one standard deviation of that fraction.
     length_m : mean segment length of the reference population.
+    gyration_fraction : radius of gyration about the COM for rotation in the sagittal plane (about the
+        medio-lateral, "transverse" axis) / segment length.
     """
 
     mass_fraction: float
@@ -33,22 +35,26 @@ class SegmentNorm:
     com_fraction: float
     com_fraction_sd: float
     length_m: float
+    gyration_fraction: float = 0.0
 
 
 # Mass and COM fractions: de Leva 1996 (NOTES.md 2). Spreads: Zatsiorsky-Seluyanov give 9-13 % (1 sd) for
 # the population; individuals deviate from tables by up to 40-60 %, so the mass prior is 20 % (1 sd) wide.
 # The upper-arm COM direction is disputed (42.3 % vs 57.7 % from the shoulder): its prior is kept wide.
+# Radii of gyration: de Leva 1996 Table 4, about the transverse (medio-lateral) axis, the axis of flexion in
+# the sagittal plane. Individuals deviate from them like the masses: the inertia prior is wide.
+GYRATION_REL_SD = 0.15
 _MASS_REL_SD = 0.20
 DE_LEVA: dict[str, dict[str, SegmentNorm]] = {
     "male": {
-        "upper_arm": SegmentNorm(0.0271, 0.0271 * _MASS_REL_SD, 0.5772, 0.08, 0.2817),
-        "forearm": SegmentNorm(0.0162, 0.0162 * _MASS_REL_SD, 0.4574, 0.03, 0.2689),
-        "hand": SegmentNorm(0.0061, 0.0061 * _MASS_REL_SD, 0.7900, 0.05, 0.0862),
+        "upper_arm": SegmentNorm(0.0271, 0.0271 * _MASS_REL_SD, 0.5772, 0.08, 0.2817, 0.269),
+        "forearm": SegmentNorm(0.0162, 0.0162 * _MASS_REL_SD, 0.4574, 0.03, 0.2689, 0.265),
+        "hand": SegmentNorm(0.0061, 0.0061 * _MASS_REL_SD, 0.7900, 0.05, 0.0862, 0.513),
     },
     "female": {
-        "upper_arm": SegmentNorm(0.0255, 0.0255 * _MASS_REL_SD, 0.5754, 0.08, 0.2751),
-        "forearm": SegmentNorm(0.0138, 0.0138 * _MASS_REL_SD, 0.4559, 0.03, 0.2643),
-        "hand": SegmentNorm(0.0056, 0.0056 * _MASS_REL_SD, 0.7474, 0.05, 0.0780),
+        "upper_arm": SegmentNorm(0.0255, 0.0255 * _MASS_REL_SD, 0.5754, 0.08, 0.2751, 0.260),
+        "forearm": SegmentNorm(0.0138, 0.0138 * _MASS_REL_SD, 0.4559, 0.03, 0.2643, 0.257),
+        "hand": SegmentNorm(0.0056, 0.0056 * _MASS_REL_SD, 0.7474, 0.05, 0.0780, 0.454),
     },
 }
 
@@ -87,3 +93,8 @@ def segment_norm(sex: str, segment: str) -> SegmentNorm:
 def length_from_height_m(sex: str, segment: str, height_m: float) -> float:
     """Table segment length (m) scaled to a subject of ``height_m``."""
     return segment_norm(sex, segment).length_m * check_height_m(height_m) / REFERENCE_HEIGHT_M[sex]
+
+
+def inertia_com_kgm2(sex: str, segment: str, mass_kg: float, length_m: float) -> float:
+    """Table moment of inertia (kg m^2) of a segment about its COM, for rotation in the sagittal plane."""
+    return mass_kg * (segment_norm(sex, segment).gyration_fraction * length_m) ** 2
