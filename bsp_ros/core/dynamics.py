@@ -1,0 +1,126 @@
+"""Planar rigid-body dynamics of the arm chain in its base (identifiable) inertial parameters."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from bsp_ros.core.model import GRAVITY_M_S2
+
+# Base parameters per segment j, found as in robot identification (the masses of a planar chain with a fixed
+# first joint only ever act through the segments proximal to them, so they group):
+#   static moment  beta_j  = m_j l_j + a_j M_j          (first moment along the segment axis, kg m)
+#   perpendicular  gamma_j = m_j d_j                    (first moment normal to the axis, kg m)
+#   inertia        zeta_j  = I_j + a_j^2 M_j            (about the proximal joint, kg m^2)
+# with M_j the mass distal to segment j, d_j the COM's offset normal to the axis (+ 90 deg counter-clockwise)
+# and I_j the segment's own inertia about its proximal joint.
+BASE_KINDS = ("static_moment_kgm", "perpendicular_moment_kgm", "grouped_inertia_kgm2")
+
+
+@dataclass(frozen=True)
+class ChainMotion:
+    """Joint angles, velocities and accelerations of the chain on common stamps.
+
+    Attributes
+    ----------
+    q_rad : (N, n) joint angles (rad).
+    qd_rad_s : (N, n) joint velocities (rad/s).
+    qdd_rad_s2 : (N, n) joint accelerations (rad/s^2).
+    """
+
+    q_rad: np.ndarray
+    qd_rad_s: np.ndarray
+    qdd_rad_s2: np.ndarray
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Planar cross product (moment about +x) of (..., 2) vectors ``[y, z]``."""
+    return np.asarray(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
+
+
+def _perp(v: np.ndarray) -> np.ndarray:
+    """(..., 2) vectors turned 90 deg counter-clockwise (the angular velocity's cross product)."""
+    return np.stack((-v[..., 1], v[..., 0]), axis=-1)
+
+
+def base_regressor(
+    q_rad: npt.ArrayLike,
+    qd_rad_s: npt.ArrayLike,
+    qdd_rad_s2: npt.ArrayLike,
+    lengths_m: npt.ArrayLike,
+    gravity_m_s2: float = GRAVITY_M_S2,
+) -> np.ndarray:
+    """Joint torques of gravity and inertia, linear in the base parameters.
+
+    ``M(q) q'' + C(q, q') q' + tau_G(q) = Y @ [beta_1..beta_n, gamma_1..gamma_n, zeta_1..zeta_n]``: the
+    left-hand side of ``M q'' + C q' + tau_G + tau_p = -J^T F`` (CONTRACT.md, extended to dynamics). With
+    ``q' = q'' = 0`` the beta columns are :func:`bsp_ros.core.model.gravity_regressor`.
+
+    Parameters
+    ----------
+    q_rad, qd_rad_s, qdd_rad_s2 : (N, n) joint angles (rad), velocities (rad/s), accelerations (rad/s^2).
+    lengths_m : (n,) segment lengths a_j (m).
+    gravity_m_s2 : g (m/s^2), acting along -z.
+
+    Returns
+    -------
+    (N, n, 3n) regressor ``Y[t, i, k]``: torque at joint i per unit of base parameter k.
+    """
+    q = np.atleast_2d(np.asarray(q_rad, dtype=np.float64))
+    qd = np.atleast_2d(np.asarray(qd_rad_s, dtype=np.float64))
+    qdd = np.atleast_2d(np.asarray(qdd_rad_s2, dtype=np.float64))
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    count, n = q.shape
+    phi, omega, alpha = np.cumsum(q, axis=1), np.cumsum(qd, axis=1), np.cumsum(qdd, axis=1)
+    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)  # (N, n, 2) unit vector along each segment
+    normal = _perp(axis)
+    # Joint positions and accelerations: P_0 is the fixed shoulder, P_{j+1} = P_j + a_j e_j.
+    points = np.zeros((count, n, 2))
+    accel = np.zeros((count, n, 2))
+    for j in range(1, n):
+        step = lengths[j - 1]
+        points[:, j] = points[:, j - 1] + step * axis[:, j - 1]
+        accel[:, j] = accel[:, j - 1] + step * (alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1])
+    regressor = np.zeros((count, n, 3 * n))
+    for j in range(n):
+        for column, h in ((j, axis[:, j]), (n + j, normal[:, j])):
+            # A first moment h of segment j: its inertial force alpha x h - omega^2 h acts at P_j's lever
+            # about joint i, h x a(P_j) is the moment of P_j's acceleration, and g h_y that of gravity.
+            force = alpha[:, j, None] * _perp(h) - omega[:, j, None] ** 2 * h
+            own = _cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0]
+            for i in range(j + 1):
+                regressor[:, i, column] = _cross(points[:, j] - points[:, i], force) + own
+        regressor[:, : j + 1, 2 * n + j] = alpha[:, j, None]
+    return regressor
+
+
+def base_parameters(
+    lengths_m: npt.ArrayLike,
+    masses_kg: npt.ArrayLike,
+    com_m: npt.ArrayLike,
+    inertia_com_kgm2: npt.ArrayLike,
+    com_normal_m: npt.ArrayLike | None = None,
+) -> np.ndarray:
+    """Base parameters ``[beta, gamma, zeta]`` (3n,) of a chain from its standard parameters.
+
+    Parameters
+    ----------
+    lengths_m, masses_kg, com_m : (n,) segment lengths, masses and COM distances along the axis.
+    inertia_com_kgm2 : (n,) inertias about each COM for rotation in the plane (kg m^2).
+    com_normal_m : (n,) COM offsets normal to the axis (m); zero when None.
+    """
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    masses = np.asarray(masses_kg, dtype=np.float64)
+    along = np.asarray(com_m, dtype=np.float64)
+    normal = np.zeros_like(along) if com_normal_m is None else np.asarray(com_normal_m, dtype=np.float64)
+    distal = np.concatenate((np.cumsum(masses[::-1])[::-1][1:], [0.0]))
+    own = np.asarray(inertia_com_kgm2, dtype=np.float64) + masses * (along**2 + normal**2)
+    return np.concatenate((masses * along + lengths * distal, masses * normal, own + lengths**2 * distal))
+
+
+def inertial_torque_nm(motion: ChainMotion, lengths_m: npt.ArrayLike, parameters: npt.ArrayLike) -> np.ndarray:
+    """``M q'' + C q'`` alone (N, n) Nm: the base regressor without gravity, times the base parameters."""
+    regressor = base_regressor(motion.q_rad, motion.qd_rad_s, motion.qdd_rad_s2, lengths_m, gravity_m_s2=0.0)
+    return np.asarray(regressor @ np.asarray(parameters, dtype=np.float64))
