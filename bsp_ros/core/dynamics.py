@@ -82,7 +82,9 @@ def base_regressor(
     for j in range(1, n):
         step = lengths[j - 1]
         points[:, j] = points[:, j - 1] + step * axis[:, j - 1]
-        accel[:, j] = accel[:, j - 1] + step * (alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1])
+        accel[:, j] = accel[:, j - 1] + step * (
+            alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1]
+        )
     regressor = np.zeros((count, n, 3 * n))
     for j in range(n):
         for column, h in ((j, axis[:, j]), (n + j, normal[:, j])):

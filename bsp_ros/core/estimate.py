@@ -90,6 +90,7 @@ def estimate_document(
         else:
             for key in ("mass_kg", "com_m", "first_moment_kgm"):
                 entry[key] = quantity(float("nan"), float("nan"), "prior")
+        entry.update(base_quantities(result, posterior, data.lengths_m, j, segment))
         segments[segment] = entry
     joints: dict[str, dict[str, Any]] = {joint: {} for joint in joints_for(n)}
     for i, (key, owner) in enumerate(result.names):
@@ -134,6 +135,56 @@ def estimate_document(
     if session:
         document["session"] = session
     return document
+
+
+def source_from_prior_share(share: float | None) -> str:
+    """``data``, ``data+prior`` or ``prior`` from posterior / prior variance (None: no prior, data alone)."""
+    if share is None or not math.isfinite(share) or share < 0.05:
+        return "data"
+    return "prior" if share > 0.9 else "data+prior"
+
+
+def base_quantities(
+    result: IdentificationResult, posterior: Posterior | None, lengths_m: np.ndarray, j: int, segment: str
+) -> dict[str, dict[str, Any]]:
+    """The perpendicular moment and the inertias of segment ``j`` (empty when the model had no dynamics).
+
+    ``grouped_inertia_kgm2`` is the identifiable base parameter (about the proximal joint, the distal masses
+    lumped at the distal joint); ``inertia_kgm2`` (the segment alone, about its proximal joint) and
+    ``inertia_com_kgm2`` (about its COM) subtract what the fused masses and COMs account for.
+    """
+    shares = result.diagnostics.get("prior_share", {})
+    shares = shares if isinstance(shares, dict) else {}
+    out: dict[str, dict[str, Any]] = {}
+    for key in ("perpendicular_moment_kgm", "grouped_inertia_kgm2"):
+        if (key, segment) in result.names:
+            i = result.index(key, segment)
+            out[key] = quantity(
+                result.values[i], result.std[i], source_from_prior_share(shares.get(f"{key}/{segment}"))
+            )
+    if "grouped_inertia_kgm2" not in out or posterior is None:
+        return out
+    n = lengths_m.size
+    zeta = out["grouped_inertia_kgm2"]
+    distal = list(range(j + 1, n))
+    masses, cov = posterior.mean, posterior.covariance
+    distal_mass = float(masses[distal].sum()) if distal else 0.0
+    distal_var = float(cov[np.ix_(distal, distal)].sum()) if distal else 0.0
+    a2 = float(lengths_m[j]) ** 2
+    own = zeta["value"] - a2 * distal_mass if zeta["value"] is not None else float("nan")
+    own_std = math.sqrt((zeta["std"] or 0.0) ** 2 + a2**2 * distal_var)
+    source = zeta["source"] if not distal else ("prior" if zeta["source"] == "prior" else "data+prior")
+    out["inertia_kgm2"] = quantity(own, own_std, source)
+    m, com = float(masses[j]), float(masses[n + j])
+    about_com = own - m * com**2
+    # m l^2 from the fused mass and COM (their covariance by first-order propagation).
+    gradient = np.zeros(2 * n)
+    gradient[j], gradient[n + j] = com**2, 2 * m * com
+    com_var = float(gradient @ cov @ gradient)
+    out["inertia_com_kgm2"] = quantity(
+        about_com, math.sqrt(own_std**2 + com_var), "prior" if source == "prior" else "data+prior"
+    )
+    return out
 
 
 def removed_samples(result: IdentificationResult, data: IdentificationData) -> dict[str, int]:

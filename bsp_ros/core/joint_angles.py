@@ -32,10 +32,14 @@ class KinematicsConfig:
     outlier_sd : a marker position further than this many robust standard deviations from the rolling
         median of its neighbours (a jump no arm makes) is removed, as is a joint angle in
         :func:`kinematics_from_angles`.
+    dynamics_cutoff_hz : zero-phase low-pass cutoff of the angles whose derivatives give the velocities and
+        accelerations of the inertial torques: twice differentiated, marker noise grows with the cutoff to
+        the power 2.5, and an arm moved at rehabilitation speeds has no content above ~0.5 Hz.
     """
 
     cutoff_hz: float = 5.0
     direction_cutoff_hz: float = 0.5
+    dynamics_cutoff_hz: float = 1.0
     max_gap_s: float = 0.1
     min_run_s: float = 2.0
     max_length_error_m: float = 0.005
@@ -44,6 +48,7 @@ class KinematicsConfig:
     def __post_init__(self) -> None:
         check_positive("cutoff_hz", self.cutoff_hz, 1000.0)
         check_positive("direction_cutoff_hz", self.direction_cutoff_hz, self.cutoff_hz)
+        check_positive("dynamics_cutoff_hz", self.dynamics_cutoff_hz, 1000.0)
         check_finite_scalar("max_gap_s", self.max_gap_s, 0.0, 10.0)
         check_finite_scalar("min_run_s", self.min_run_s, 0.0, 600.0)
         check_positive("max_length_error_m", self.max_length_error_m, 1.0)
@@ -67,6 +72,8 @@ class MarkerKinematics:
     direction_velocity_noise_rad_s : (n,) standard deviation of the marker noise in the direction
         velocities (rad/s), propagated from the angle noise through the filter.
     warnings : plain-language notes on data quality.
+    velocity_rad_s, acceleration_rad_s2 : (M, n) derivatives of the angles low-passed at
+        ``dynamics_cutoff_hz`` (rad/s, rad/s^2), for the inertial torques; None when not computed.
     """
 
     t_ns: np.ndarray
@@ -79,6 +86,8 @@ class MarkerKinematics:
     direction_velocity_noise_rad_s: np.ndarray
     warnings: list[str] = field(default_factory=list)
     n_frames_rejected: dict[str, int] = field(default_factory=dict)
+    velocity_rad_s: np.ndarray | None = None
+    acceleration_rad_s2: np.ndarray | None = None
 
     @property
     def rate_hz(self) -> float:
@@ -344,6 +353,23 @@ def _filtered_runs(
     return q_rad, velocity, noise, notes
 
 
+def _motion_runs(
+    raw_q: np.ndarray, valid_q: np.ndarray, rate_hz: float, cutoff_hz: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Velocities and accelerations (rad/s, rad/s^2) of the angles low-passed at ``cutoff_hz`` (zero phase), over
+    each run where ``valid_q`` (the usable angles) is finite; NaN elsewhere."""
+    velocity = np.full_like(raw_q, np.nan)
+    acceleration = np.full_like(raw_q, np.nan)
+    for begin, end in _valid_runs(np.isfinite(valid_q).all(axis=1)):
+        if end - begin < 16:
+            continue
+        run = np.unwrap(raw_q[begin:end], axis=0)
+        smooth = _zero_phase_lowpass(run, cutoff_hz, rate_hz, order=4)
+        velocity[begin:end] = np.gradient(smooth, 1.0 / rate_hz, axis=0)
+        acceleration[begin:end] = np.gradient(velocity[begin:end], 1.0 / rate_hz, axis=0)
+    return velocity, acceleration
+
+
 def kinematics_from_angles(
     t_ns: npt.ArrayLike,
     q_rad: npt.ArrayLike,
@@ -374,7 +400,10 @@ def kinematics_from_angles(
     q_grid, velocity, noise, notes = _filtered_runs(gridded, 1e9 / step_ns, config, angle_filter)
     lengths = np.asarray(lengths_m, dtype=np.float64)
     invalid = int((~np.isfinite(q_grid).all(axis=1)).sum())
-    return MarkerKinematics(grid_ns, q_grid, velocity, lengths, np.zeros_like(lengths), {}, invalid, noise, notes)
+    qd, qdd = _motion_runs(gridded, q_grid, 1e9 / step_ns, config.dynamics_cutoff_hz)
+    return MarkerKinematics(
+        grid_ns, q_grid, velocity, lengths, np.zeros_like(lengths), {}, invalid, noise, notes, {}, qd, qdd
+    )
 
 
 def kinematics_from_markers(
@@ -436,8 +465,9 @@ def kinematics_from_markers(
         warnings.append(
             f"{n_invalid} of {grid_ns.size} marker frames give no angle (gaps over {config.max_gap_s} s or short runs)"
         )
+    qd, qdd = _motion_runs(raw_q, q_rad, 1e9 / step_ns, config.dynamics_cutoff_hz)
     return MarkerKinematics(
-        grid_ns, q_rad, velocity, lengths_m, lengths_std_m, bridged, n_invalid, noise, warnings, rejected
+        grid_ns, q_rad, velocity, lengths_m, lengths_std_m, bridged, n_invalid, noise, warnings, rejected, qd, qdd
     )
 
 
@@ -477,3 +507,18 @@ def resample_kinematics(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tu
     q_rad[~valid] = np.nan
     velocity[~valid] = np.nan
     return q_rad, velocity, valid
+
+
+def resample_motion(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Velocities and accelerations (N, n) of :class:`MarkerKinematics` at other stamps (zeros if absent)."""
+    target = np.asarray(t_ns, dtype=np.int64)
+    n = kinematics.q_rad.shape[1]
+    if kinematics.velocity_rad_s is None or kinematics.acceleration_rad_s2 is None:
+        return np.zeros((target.size, n)), np.zeros((target.size, n))
+    grid = (kinematics.t_ns - kinematics.t_ns[0]).astype(np.float64)
+    where = (target - kinematics.t_ns[0]).astype(np.float64)
+    out = []
+    for values in (kinematics.velocity_rad_s, kinematics.acceleration_rad_s2):
+        column = [np.interp(where, grid, np.nan_to_num(values[:, j])) for j in range(n)]
+        out.append(np.column_stack(column))
+    return out[0], out[1]

@@ -19,6 +19,7 @@ from bsp_ros.core.identification.data import IdentificationData, identification_
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.paper import PaperConfig, identify_paper
 from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.priors import base_prior_for_subject
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.joint_angles import KinematicsConfig
@@ -38,6 +39,7 @@ class IdentifyOptions:
     subject: SubjectInfo = field(default_factory=SubjectInfo)
     kinematics: KinematicsConfig = field(default_factory=KinematicsConfig)
     tare: Tare | None = None
+    marker_placement_sd_m: float = 0.002
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -53,6 +55,7 @@ class IdentifyOptions:
             "angle_cutoff_hz": self.kinematics.cutoff_hz,
             "direction_cutoff_hz": self.kinematics.direction_cutoff_hz,
             "max_gap_s": self.kinematics.max_gap_s,
+            "marker_placement_sd_m": self.marker_placement_sd_m,
         }
 
 
@@ -68,7 +71,13 @@ def identify_data(
     if options.method == "paper":
         result = identify_paper(data, PaperConfig())
     else:
-        result = identify_joint(data, JointConfig(passive=options.passive, check_elastic=check_elastic))
+        config = JointConfig(
+            passive=options.passive,
+            check_elastic=check_elastic,
+            base_prior=base_prior_for_subject(options.subject, data.lengths_m),
+            marker_placement_sd_m=options.marker_placement_sd_m,
+        )
+        result = identify_joint(data, config)
     if result.valid:
         _, beta, _ = result.block("static_moment_kgm")
         implausible = implausible_static_moments(options.subject, data.lengths_m, beta)

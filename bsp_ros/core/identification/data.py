@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_markers, resample_kinematics
+from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_markers, resample_kinematics, resample_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.streams import Session, WrenchSeries
 from bsp_ros.errors import DataError, InputError
@@ -28,6 +28,9 @@ class IdentificationData:
     warnings : what was removed and why.
     removed_samples : implausible samples removed before identification: ``wrench_absurd``,
         ``wrench_non_finite`` and ``marker_<name>`` (frames inconsistent with the rigid chain) -> count.
+    qd_rad_s, qdd_rad_s2 : (N, n) smooth joint velocities (rad/s) and accelerations (rad/s^2) for the inertial
+        torques; None when the source gives none (then the arm is taken as quasi-static, and the inertial
+        terms' prior uncertainty cannot be propagated).
     """
 
     t_ns: np.ndarray
@@ -40,6 +43,8 @@ class IdentificationData:
     n_wrench_samples: int = 0
     warnings: list[str] = field(default_factory=list)
     removed_samples: dict[str, int] = field(default_factory=dict)
+    qd_rad_s: np.ndarray | None = None
+    qdd_rad_s2: np.ndarray | None = None
 
     @property
     def n_joints(self) -> int:
@@ -59,6 +64,8 @@ class IdentificationData:
             stop - start,
             list(self.warnings),
             dict(self.removed_samples),
+            None if self.qd_rad_s is None else self.qd_rad_s[start:stop],
+            None if self.qdd_rad_s2 is None else self.qdd_rad_s2[start:stop],
         )
 
 
@@ -171,6 +178,7 @@ def identification_data_from_session(
     if dropped:
         notes.append(f"{dropped} of {keep.size} wrench samples inside the session have no joint angles (marker gaps)")
     tau = contact_torques_nm(q_rad[valid], kinematics.lengths_m, wrench_yzx[valid])
+    qd, qdd = resample_motion(kinematics, wrench.t_ns[valid])
     return IdentificationData(
         wrench.t_ns[valid],
         q_rad[valid],
@@ -182,4 +190,6 @@ def identification_data_from_session(
         n_wrench,
         kinematics.warnings + notes,
         removed,
+        qd,
+        qdd,
     )

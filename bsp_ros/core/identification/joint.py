@@ -9,13 +9,18 @@ import numpy as np
 from scipy.optimize import lsq_linear
 from scipy.stats import chi2
 
+from bsp_ros.core.dynamics import base_regressor
+from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.covariance import correlation_from_covariance, hac_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.passive import TERMS, PassiveModel
+from bsp_ros.core.identification.placement import placement_columns
+from bsp_ros.core.identification.priors import BasePrior, base_prior_for_subject
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.robust import hampel_outliers, high_frequency_sd, robust_sd
 from bsp_ros.core.model import contact_jacobian, gravity_regressor
 from bsp_ros.core.streams import joints_for, segments_for
+from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_scalar, check_positive
 
 
@@ -47,6 +52,12 @@ class JointConfig:
         correlation with a static moment exceeds ``confounded_corr`` and that static moment is uncertain by
         more than ``confounded_rel_std`` of its value: a high correlation alone is harmless when the session
         pins both down (a planned protocol), and the warning says what the confounding costs.
+    dynamics : the full rigid-body model: inertial torques of the static moments, perpendicular first
+        moments and grouped inertias, the latter two with Gaussian priors (``base_prior``; the default
+        subject's anthropometric prior when None), so that what the data cannot tell keeps its prior
+        uncertainty in the std instead of being taken as zero.
+    marker_placement_sd_m : how far (1 sd, m, per axis) a skin marker may sit from its joint centre: the
+        offsets enter the fit as nuisance parameters with this prior (0: markers taken as exact).
     """
 
     passive: PassiveModel = field(default_factory=PassiveModel)
@@ -64,6 +75,9 @@ class JointConfig:
     max_outlier_shift: float = 2.0
     confounded_corr: float = 0.95
     confounded_rel_std: float = 0.01
+    dynamics: bool = True
+    base_prior: BasePrior | None = None
+    marker_placement_sd_m: float = 0.002
 
     def __post_init__(self) -> None:
         check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)
@@ -79,6 +93,7 @@ class JointConfig:
         check_finite_scalar("max_outlier_shift", self.max_outlier_shift, 0.0, 1e6)
         check_finite_scalar("confounded_corr", self.confounded_corr, 0.0, 1.0)
         check_finite_scalar("confounded_rel_std", self.confounded_rel_std, 0.0, 1e6)
+        check_finite_scalar("marker_placement_sd_m", self.marker_placement_sd_m, 0.0, 0.05)
 
 
 @dataclass(frozen=True)
@@ -89,6 +104,19 @@ class _Problem:
     rows: np.ndarray  # (N, n) bool: row used
     lower: np.ndarray
     upper: np.ndarray
+    prior_mean: np.ndarray  # (p,) Gaussian prior means (0 where none)
+    prior_precision: np.ndarray  # (p,) 1 / sd^2 of the priors (0 where none)
+    passive_end: int  # parameters [n, passive_end) are the passive terms
+
+
+@dataclass(frozen=True)
+class _Extras:
+    """The base-parameter blocks beyond gravity: dynamics of the static moments, perpendicular moments and
+    grouped inertias, with their priors."""
+
+    base: np.ndarray  # (N, n, 3n) base regressor [beta, gamma, zeta]
+    prior_mean: np.ndarray  # (2n,) gamma, zeta
+    prior_sd: np.ndarray  # (2n,)
 
 
 @dataclass(frozen=True)
@@ -104,14 +132,22 @@ class _Fit:
 
 
 def _build_problem(
-    data: IdentificationData, passive: PassiveModel, rows: np.ndarray, widths: np.ndarray | None = None
+    data: IdentificationData,
+    passive: PassiveModel,
+    rows: np.ndarray,
+    widths: np.ndarray | None = None,
+    extras: _Extras | None = None,
 ) -> _Problem:
-    """The stacked problem; ``widths`` (n,) rad/s > 0 replace a joint's Coulomb ``sign(v)`` by ``tanh(v / w)``."""
+    """The stacked problem; ``widths`` (n,) rad/s > 0 replace a joint's Coulomb ``sign(v)`` by ``tanh(v / w)``.
+
+    Columns: the static moments, the passive terms joint by joint, then (with ``extras``) the perpendicular
+    moments, the grouped inertias and the marker offsets, each of the latter with its Gaussian prior.
+    """
     n = data.n_joints
     joints, segments = joints_for(n), segments_for(n)
     k = len(passive.terms)
     regressor = np.zeros((data.t_ns.size, n, n + n * k))
-    regressor[:, :, :n] = gravity_regressor(data.q_rad)
+    regressor[:, :, :n] = gravity_regressor(data.q_rad) if extras is None else extras.base[:, :, :n]
     names: list[ParameterName] = [("static_moment_kgm", s) for s in segments]
     lower = [0.0] * n
     for j, joint in enumerate(joints):
@@ -123,7 +159,17 @@ def _build_problem(
         if widths is not None and widths[j] > 0 and "coulomb" in passive.terms:
             column = n + j * k + passive.terms.index("coulomb")
             regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
-    return _Problem(names, regressor, data.tau_nm, rows, np.array(lower), np.full(len(names), np.inf))
+    p = len(names)
+    problem = _Problem(
+        names, regressor, data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), np.zeros(p), p
+    )
+    if extras is None:
+        return problem
+    extra_names: list[ParameterName] = [("perpendicular_moment_kgm", s) for s in segments]
+    extra_names += [("grouped_inertia_kgm2", s) for s in segments]
+    sd = np.asarray(extras.prior_sd)
+    precision = np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)
+    return _augmented(problem, extras.base[:, :, n:], extra_names, np.asarray(extras.prior_mean), precision)
 
 
 def _triangular(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -142,10 +188,30 @@ def _triangular(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return r_factor, q_factor.T @ b
 
 
+def _prior_rows(problem: _Problem) -> tuple[np.ndarray, np.ndarray]:
+    """Pseudo-observations ``sqrt(P) (theta - theta_0)`` of the Gaussian priors: rows (m, p) and targets (m,)."""
+    picks = np.flatnonzero(problem.prior_precision > 0)
+    root = np.sqrt(problem.prior_precision[picks])
+    rows = np.zeros((picks.size, len(problem.names)))
+    rows[np.arange(picks.size), picks] = root
+    return rows, root * problem.prior_mean[picks]
+
+
+def _normal_equations(problem: _Problem, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """``A + P``, ``X^T W y + P theta_0`` and ``y^T W y + theta_0^T P theta_0`` over the used rows."""
+    w = np.where(problem.rows, weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor) + np.diag(problem.prior_precision)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    moment += problem.prior_precision * problem.prior_mean
+    total = float((w * problem.torque**2).sum() + (problem.prior_precision * problem.prior_mean**2).sum())
+    return design, moment, total
+
+
 def _weighted_solve(problem: _Problem, weights: np.ndarray) -> np.ndarray:
     root = np.sqrt(weights)[None, :, None]
-    a = (problem.regressor * root)[problem.rows]
-    b = (problem.torque * root[..., 0])[problem.rows]
+    prior_a, prior_b = _prior_rows(problem)
+    a = np.vstack(((problem.regressor * root)[problem.rows], prior_a))
+    b = np.concatenate(((problem.torque * root[..., 0])[problem.rows], prior_b))
     # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
     scale = np.linalg.norm(a, axis=0)
     scale[scale == 0] = 1.0
@@ -169,11 +235,16 @@ def _fit(problem: _Problem) -> _Fit:
         values = _weighted_solve(problem, weights)
     residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
     w = np.where(problem.rows, weights[None, :], 0.0)
-    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
+    design, _, _ = _normal_equations(problem, weights)
     scores = np.einsum("tip,ti->tp", problem.regressor, w * np.where(problem.rows, residual, 0.0))
     used_samples = problem.rows.any(axis=1)
     covariance, lags = hac_covariance(design, scores[used_samples])
-    a = (problem.regressor * np.sqrt(weights)[None, :, None])[problem.rows]
+    if problem.prior_precision.any():
+        # The prior is an independent source of information: (A + P)^-1 (S + P) (A + P)^-1.
+        inverse = np.linalg.pinv(design)
+        covariance = covariance + inverse @ np.diag(problem.prior_precision) @ inverse
+        covariance = 0.5 * (covariance + covariance.T)
+    a = np.vstack(((problem.regressor * np.sqrt(weights)[None, :, None])[problem.rows], _prior_rows(problem)[0]))
     norms = np.linalg.norm(a, axis=0)
     # Singular values of the column-scaled matrix are those of its triangular factor.
     singular = np.linalg.svd(_triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0], compute_uv=False)
@@ -218,19 +289,26 @@ def _excitation_problems(data: IdentificationData, rows: np.ndarray, config: Joi
 
 
 def _elastic_check(
-    data: IdentificationData, config: JointConfig, rows: np.ndarray, base: _Fit, widths: np.ndarray
+    data: IdentificationData,
+    config: JointConfig,
+    rows: np.ndarray,
+    base: _Fit,
+    widths: np.ndarray,
+    extras: _Extras | None = None,
 ) -> list[str]:
     """Warn when an elastic term the model lacks is supported by the data and moves the static moments."""
     missing = [t for t in ("offset", "stiffness") if t not in config.passive.terms]
     if not missing:
         return []
     wider = PassiveModel(config.passive.terms + tuple(missing))
-    problem = _build_problem(data, wider, rows, widths)
+    problem = _build_problem(data, wider, rows, widths, extras)
     fit = _fit(problem)
     n = data.n_joints
     notes = []
     base_beta, wide_beta = base.values[:n], fit.values[:n]
     change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
+    # Against the base fit's std (marker placement included): a shift well inside it cannot make it wrong.
+    shift_sd = np.abs(wide_beta - base_beta) / np.sqrt(np.clip(np.diag(base.covariance)[:n], 1e-300, None))
     correlation = correlation_from_covariance(fit.covariance)
     for joint in joints_for(n):
         picks = [
@@ -244,7 +322,7 @@ def _elastic_check(
             statistic = float(theta @ np.linalg.solve(sub, theta))
         except np.linalg.LinAlgError:
             continue
-        if chi2.sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005:
+        if chi2.sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD:
             worst = int(np.argmax(change))
             corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
             notes.append(
@@ -292,9 +370,7 @@ def _transition_widths(
         return widths, spread
     k = len(config.passive.terms)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
-    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
-    total = float((w * problem.torque**2).sum())
+    design, moment, total = _normal_equations(problem, fit.weights)
 
     def solve(a: np.ndarray, b: np.ndarray) -> tuple[float, np.ndarray]:
         try:
@@ -334,15 +410,25 @@ MODEL_CHECK_SHIFT_SD = 1.0
 STRIBECK_SPEEDS_RAD_S = (0.002, 0.004, 0.008, 0.016, 0.032)
 
 
-def _augmented(problem: _Problem, extra: np.ndarray, names: list[ParameterName]) -> _Problem:
-    """``problem`` with extra unbounded columns ``extra`` (N, n, m)."""
+def _augmented(
+    problem: _Problem,
+    extra: np.ndarray,
+    names: list[ParameterName],
+    prior_mean: np.ndarray | None = None,
+    prior_precision: np.ndarray | None = None,
+) -> _Problem:
+    """``problem`` with extra unbounded columns ``extra`` (N, n, m), with Gaussian priors where given."""
+    m = len(names)
     return _Problem(
         problem.names + names,
         np.concatenate((problem.regressor, extra), axis=2),
         problem.torque,
         problem.rows,
-        np.concatenate((problem.lower, np.full(len(names), -np.inf))),
-        np.concatenate((problem.upper, np.full(len(names), np.inf))),
+        np.concatenate((problem.lower, np.full(m, -np.inf))),
+        np.concatenate((problem.upper, np.full(m, np.inf))),
+        np.concatenate((problem.prior_mean, np.zeros(m) if prior_mean is None else prior_mean)),
+        np.concatenate((problem.prior_precision, np.zeros(m) if prior_precision is None else prior_precision)),
+        problem.passive_end,
     )
 
 
@@ -410,8 +496,7 @@ def _stribeck_check(
         return []
     n, k = data.n_joints, len(config.passive.terms)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor)
-    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    design, moment, _ = _normal_equations(problem, fit.weights)
     notes = []
     for j, joint in enumerate(joints_for(n)):
         if widths[j] > 0:
@@ -539,6 +624,55 @@ def _failed(
     )
 
 
+def _base_extras(data: IdentificationData, config: JointConfig) -> _Extras | None:
+    """The dynamics and perpendicular-moment blocks with their priors, or None when the model is static."""
+    if not config.dynamics:
+        return None
+    n = data.n_joints
+    zeros = np.zeros_like(data.q_rad)
+    qd = zeros if data.qd_rad_s is None else data.qd_rad_s
+    qdd = zeros if data.qdd_rad_s2 is None else data.qdd_rad_s2
+    prior = config.base_prior or base_prior_for_subject(SubjectInfo(), data.lengths_m)
+    base = base_regressor(data.q_rad, qd, qdd, data.lengths_m)
+    mean = np.concatenate((prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
+    sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
+    if n != prior.inertia_mean_kgm2.size:
+        raise InputError(f"the base prior is for {prior.inertia_mean_kgm2.size} segments, the data has {n}")
+    return _Extras(base, mean, sd)
+
+
+def _placement_covariance(data: IdentificationData, problem: _Problem, fit: _Fit, sd_m: float) -> np.ndarray:
+    """Covariance (p, p) of the estimate from where the skin markers sit relative to the joint centres.
+
+    Each marker's offset (along and normal to its segment, ``sd_m`` each, independent) moves the lever arms
+    and the segment angles the fit is computed on; the estimate responds linearly, ``G = (A + P)^-1 X^T W D``.
+    Part of this cannot be told from the parameters by any data (offsets along the chain scale every lever
+    arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
+    estimated: it is a known uncertainty of every session, different every day, and belongs in the std.
+    """
+    n = data.n_joints
+    if len(problem.names) >= 3 * n and problem.names[-1][0] == "grouped_inertia_kgm2":
+        base_values = np.concatenate((fit.values[:n], fit.values[-2 * n :]))
+    else:
+        base_values = np.concatenate((fit.values[:n], np.zeros(2 * n)))
+    zeros = np.zeros_like(data.q_rad)
+    qd = zeros if data.qd_rad_s is None else data.qd_rad_s
+    qdd = zeros if data.qdd_rad_s2 is None else data.qdd_rad_s2
+    columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, data.tau_nm, base_values)
+    w = np.where(problem.rows, fit.weights[None, :], 0.0)
+    response = np.linalg.lstsq(fit.design, np.einsum("tip,ti,tim->pm", problem.regressor, w, columns), rcond=None)[0]
+    return np.asarray(sd_m**2 * response @ response.T)
+
+
+def _prior_share(problem: _Problem, covariance: np.ndarray) -> dict[str, float]:
+    """Posterior / prior variance of every parameter with a prior: near 1, the prior alone decided it."""
+    out = {}
+    for i in np.flatnonzero(problem.prior_precision > 0):
+        key, owner = problem.names[i]
+        out[f"{key}/{owner}"] = float(covariance[i, i] * problem.prior_precision[i])
+    return out
+
+
 def identify_joint(data: IdentificationData, config: JointConfig | None = None) -> IdentificationResult:
     """Identify static moments and passive moments of all joints in one stacked problem.
 
@@ -564,7 +698,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     spikes, spike_notes = _spikes(data, config)
     rows &= ~spikes[:, None]
     problems = _excitation_problems(data, rows, config)
-    problem = _build_problem(data, config.passive, rows)
+    extras = _base_extras(data, config)
+    problem = _build_problem(data, config.passive, rows, extras=extras)
     warnings = list(data.warnings) + spike_notes + notes
     if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
         problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
@@ -581,7 +716,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     fit = _fit(problem)
     widths, spread = _transition_widths(problem, fit, data, config)
     if widths.any():
-        problem = _build_problem(data, config.passive, rows, widths)
+        problem = _build_problem(data, config.passive, rows, widths, extras)
         fit = _fit(problem)
         for j, joint in enumerate(joints):
             if widths[j] == 0:
@@ -604,7 +739,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
         )
     elif n_far:
-        kept = _build_problem(data, config.passive, rows & ~far[:, None], widths)
+        kept = _build_problem(data, config.passive, rows & ~far[:, None], widths, extras)
         refit = _fit(kept)
         # Against the larger std of the two fits: samples far off the fit (a filter's edge, a glitch) also
         # inflate the std of the fit that keeps them.
@@ -638,6 +773,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             index = n + j * k + config.passive.terms.index("coulomb")
             covariance[index, index] += spread[j] ** 2
         fit = dataclasses.replace(fit, covariance=covariance)
+    # Whether the data or the prior decided a parameter, judged before the placement uncertainty is added.
+    prior_share = _prior_share(problem, fit.covariance)
+    if config.marker_placement_sd_m > 0:
+        placement = _placement_covariance(data, problem, fit, config.marker_placement_sd_m)
+        fit = dataclasses.replace(fit, covariance=fit.covariance + placement)
     noise, misfit = _misfit(fit)
     for j, joint in enumerate(joints):
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
@@ -651,7 +791,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     correlation = correlation_from_covariance(fit.covariance)
     all_std = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
     max_corr_with_gravity = {}
-    for i, (key, owner) in enumerate(problem.names):
+    for i, (key, owner) in enumerate(problem.names[: problem.passive_end]):
         if i >= n:
             partner = int(np.argmax(np.abs(correlation[i, :n])))
             corr = float(abs(correlation[i, partner]))
@@ -678,7 +818,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         if unmodelled:
             problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
     if config.check_elastic and not problems:
-        elastic = _elastic_check(data, config, problem.rows, fit, widths)
+        elastic = _elastic_check(data, config, problem.rows, fit, widths, extras)
         warnings += elastic
         if elastic:
             problems.append(
@@ -713,5 +853,6 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
             "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
             "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
+            "prior_share": prior_share,
         },
     )

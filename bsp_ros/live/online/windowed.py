@@ -10,7 +10,7 @@ import numpy as np
 from bsp_ros.core.estimate import estimate_document, invalid_document
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.sensitivity import account_for_tare
-from bsp_ros.core.joint_angles import kinematics_from_angles, resample_kinematics
+from bsp_ros.core.joint_angles import kinematics_from_angles, resample_kinematics, resample_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data
 from bsp_ros.errors import BspError
@@ -222,6 +222,7 @@ class WindowedIdentifier:
         if valid.sum() < 2:
             return "no wrench sample in the window has joint angles"
         tau = contact_torques_nm(q[valid], lengths, wrench[valid])
+        qd, qdd = resample_motion(kinematics, t_w[valid])
         data = IdentificationData(
             t_w[valid],
             q[valid],
@@ -232,6 +233,8 @@ class WindowedIdentifier:
             kinematics.direction_velocity_noise_rad_s,
             int(t_w.size),
             [],
+            qd_rad_s=qd,
+            qdd_rad_s2=qdd,
         )
         return data, t_w
 

@@ -1,0 +1,79 @@
+"""Gaussian priors on the base parameters the data may not identify: inertias and perpendicular moments."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from bsp_ros.core.anthropometry import GYRATION_REL_SD, segment_norm
+from bsp_ros.core.dynamics import base_parameters
+from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior
+from bsp_ros.core.streams import segments_for
+
+# The COM's offset from the line through the joint centres, as a share of its distance along it (1 sd): the
+# tables place it on that line; a person's soft tissue and a marker-defined axis sit a degree or two off it.
+PERPENDICULAR_PRIOR_FRACTION = 0.03
+# Prior draws to propagate the mass, COM and radius-of-gyration spreads into the grouped inertias.
+_DRAWS = 4000
+
+
+@dataclass(frozen=True)
+class BasePrior:
+    """Gaussian priors (mean, sd) on the perpendicular moments (kg m) and grouped inertias (kg m^2), (n,) each."""
+
+    perpendicular_mean_kgm: np.ndarray
+    perpendicular_sd_kgm: np.ndarray
+    inertia_mean_kgm2: np.ndarray
+    inertia_sd_kgm2: np.ndarray
+
+
+def base_prior(
+    lengths_m: npt.ArrayLike,
+    mass_mean_kg: npt.ArrayLike,
+    mass_cov: npt.ArrayLike,
+    com_mean_m: npt.ArrayLike,
+    com_cov: npt.ArrayLike,
+    sex: str = "male",
+) -> BasePrior:
+    """Priors on the base inertial parameters from the anthropometric prior of masses and COMs.
+
+    Parameters
+    ----------
+    lengths_m : (n,) segment lengths (m).
+    mass_mean_kg, com_mean_m : (n,) prior means of masses (kg) and COM distances (m).
+    mass_cov, com_cov : (n, n) their prior covariances.
+    sex : the table of radii of gyration (de Leva 1996).
+
+    Returns
+    -------
+    BasePrior; the inertias by Monte Carlo over masses, COMs and radii (seeded: the prior is deterministic).
+    """
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    n = lengths.size
+    rng = np.random.default_rng(20240229)
+    masses = np.clip(
+        rng.multivariate_normal(np.asarray(mass_mean_kg, float), np.asarray(mass_cov, float), _DRAWS), 1e-3, None
+    )
+    coms = np.clip(
+        rng.multivariate_normal(np.asarray(com_mean_m, float), np.asarray(com_cov, float), _DRAWS), 0.0, None
+    )
+    fractions = np.array([segment_norm(sex, s).gyration_fraction for s in segments_for(n)])
+    radii = fractions * lengths * np.clip(1.0 + GYRATION_REL_SD * rng.standard_normal((_DRAWS, n)), 0.3, None)
+    draws = np.array([base_parameters(lengths, m, c, m * r**2) for m, c, r in zip(masses, coms, radii, strict=True)])
+    static = draws[:, :n].mean(axis=0)
+    inertia = draws[:, 2 * n :]
+    return BasePrior(
+        np.zeros(n), PERPENDICULAR_PRIOR_FRACTION * np.abs(static), inertia.mean(axis=0), inertia.std(axis=0)
+    )
+
+
+def base_prior_for_subject(subject: SubjectInfo, lengths_m: npt.ArrayLike) -> BasePrior:
+    """:func:`base_prior` from the subject's anthropometric prior (:func:`bsp_ros.core.fusion.anthropometric_prior`)."""
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    n = lengths.size
+    prior = anthropometric_prior(subject, lengths)
+    return base_prior(
+        lengths, prior.mean[:n], prior.covariance[:n, :n], prior.mean[n:], prior.covariance[n:, n:], subject.sex
+    )
