@@ -50,13 +50,21 @@ def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str =
 
 
 def inertias_from_estimate(document: dict[str, Any], t_ns: int) -> dict[str, InertiaSample]:
-    """Segment -> mass and COM (along the segment's x axis, from its proximal joint); inertia unknown (0)."""
+    """Segment -> mass, COM and inertia in the segment's frame (x along the segment from its proximal joint,
+    z the flexion axis, y completing it): the COM at ``[com_m, d, 0]`` with ``d`` the perpendicular moment over
+    the mass, and ``izz`` the inertia about the COM for rotation in the movement plane; the out-of-plane
+    components are not observable (0)."""
     out = {}
     for segment, quantities in document.get("segments", {}).items():
         mass, com = quantities.get("mass_kg", {}).get("value"), quantities.get("com_m", {}).get("value")
         if mass is None or com is None:
             continue
-        out[segment] = InertiaSample(t_ns, segment, float(mass), np.array([float(com), 0.0, 0.0]), np.zeros((3, 3)))
+        normal = quantities.get("perpendicular_moment_kgm", {}).get("value")
+        about_com = quantities.get("inertia_com_kgm2", {}).get("value")
+        tensor = np.zeros((3, 3))
+        tensor[2, 2] = max(float(about_com), 0.0) if about_com is not None else 0.0
+        offset = float(normal) / float(mass) if normal is not None and mass > 0 else 0.0
+        out[segment] = InertiaSample(t_ns, segment, float(mass), np.array([float(com), offset, 0.0]), tensor)
     return out
 
 
