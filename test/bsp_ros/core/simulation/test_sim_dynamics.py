@@ -25,8 +25,6 @@ from bsp_ros.core.simulation import (
 )
 from bsp_ros.errors import InputError
 
-pin = pytest.importorskip("pinocchio")
-
 G = 9.81
 GOLDEN = Path(__file__).parents[3] / "data" / "simulation_quasistatic_3f2534c.json"
 
@@ -45,6 +43,7 @@ def _chain(subject: SubjectTruth) -> PlanarChain:
 
 def _pinocchio_model(subject: SubjectTruth):
     """The same chain as a pinocchio model: revolute joints about x, links along the parent's y axis."""
+    pin = pytest.importorskip("pinocchio")  # the test extra installs it (PyPI: pin)
     model = pin.Model()
     parent = 0
     for j in range(subject.n_segments):
@@ -63,6 +62,7 @@ def test_newton_euler_torques_equal_pinocchio_rnea(n: int) -> None:
     subject = _subject(n)
     model = _pinocchio_model(subject)
     data = model.createData()
+    pin = pytest.importorskip("pinocchio")
     rng = np.random.default_rng(7)
     q, qd, qdd = rng.uniform(-1.5, 1.5, (3, 40, n))
     expected = np.array([pin.rnea(model, data, q[k], qd[k], qdd[k]) for k in range(q.shape[0])])
@@ -153,6 +153,7 @@ def test_inertial_session_balances_pinocchio_torques_plus_passive_moment() -> No
     f_end = np.column_stack([f_world[:, 1], f_world[:, 2], m_world[:, 0]])
     model = _pinocchio_model(subject)
     data = model.createData()
+    pin = pytest.importorskip("pinocchio")
     q, qd, qdd = sim.joint_angles_rad(t), sim.joint_velocities_rad_s(t), sim.joint_accelerations_rad_s2(t)
     rnea = np.array([pin.rnea(model, data, q[k], qd[k], qdd[k]) for k in range(t.size)])
     expected = rnea + sim.passive_torque_nm(t)
