@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -22,83 +23,216 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "a person."
         ),
     )
-    parser.add_argument("--out", required=True, type=Path, metavar="DIR", help="bag directory to create")
+    parser.add_argument("--out", required=True, type=Path, metavar="DIR", help="bag directory to create (required)")
     parser.add_argument(
         "--subject",
         choices=("human", "paper-arm"),
         default="human",
         help="3-segment human arm, or the method paper's 2-segment mechanical arm (default: human)",
     )
-    parser.add_argument("--duration", type=float, default=120.0, metavar="S", help="length in s (default 120)")
-    parser.add_argument("--wrench-hz", type=float, metavar="HZ", help="wrench rate (default 100)")
-    parser.add_argument("--marker-hz", type=float, metavar="HZ", help="marker frame rate (default 50)")
-    parser.add_argument("--seed", type=int, default=0, metavar="N", help="seed of every random draw (default 0)")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="length in s (default: 120, or the plan's length with --trajectory)",
+    )
+    parser.add_argument("--wrench-hz", type=float, metavar="HZ", help="wrench rate (default: 100)")
+    parser.add_argument("--marker-hz", type=float, metavar="HZ", help="marker frame rate (default: 50)")
+    parser.add_argument("--seed", type=int, default=0, metavar="N", help="seed of every random draw (default: 0)")
+    motion = parser.add_argument_group("motion and physics")
+    motion.add_argument(
+        "--inertia",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="rigid-body dynamics M q'' + C q' + tau_G (segment inertias: de Leva for a human, slender bars for "
+        "the paper's arm); --no-inertia: quasi-static, as the method paper models it (default: on)",
+    )
+    motion.add_argument(
+        "--speed-scale",
+        type=float,
+        metavar="X",
+        help="run the built-in sines X times faster (periods divided by X) (default: 1)",
+    )
+    motion.add_argument(
+        "--trajectory",
+        type=Path,
+        metavar="PLAN",
+        help="follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in sines (default: the sines)",
+    )
     human = parser.add_argument_group("human subject (de Leva table means)")
-    human.add_argument("--body-mass", type=float, metavar="KG", help="body mass (default 75)")
-    human.add_argument("--height", type=float, metavar="M", help="stature (default 1.78)")
-    human.add_argument("--sex", choices=("male", "female"), help="table to use (default male)")
+    human.add_argument("--body-mass", type=float, metavar="KG", help="body mass (default: 75)")
+    human.add_argument("--height", type=float, metavar="M", help="stature (default: 1.78)")
+    human.add_argument("--sex", choices=("male", "female"), help="table to use (default: male)")
     noise = parser.add_argument_group("noise and occlusion")
-    noise.add_argument("--force-noise", type=float, metavar="N", help="force noise per axis, N (1 sd)")
-    noise.add_argument("--torque-noise", type=float, metavar="NM", help="moment noise per axis, Nm (1 sd)")
-    noise.add_argument("--marker-noise", type=float, metavar="M", help="marker noise per axis, m (1 sd)")
-    noise.add_argument("--dropout", type=float, metavar="FRACTION", help="fraction of marker frames lost (0-0.9)")
+    noise.add_argument("--force-noise", type=float, metavar="N", help="force noise per axis, N (1 sd) (default: 0.05)")
+    noise.add_argument(
+        "--torque-noise", type=float, metavar="NM", help="moment noise per axis, Nm (1 sd) (default: 0.005)"
+    )
+    noise.add_argument(
+        "--marker-noise", type=float, metavar="M", help="marker noise per axis, m (1 sd) (default: 0.0001)"
+    )
+    noise.add_argument(
+        "--dropout", type=float, metavar="FRACTION", help="fraction of marker frames lost (0-0.9) (default: 0)"
+    )
     passive = parser.add_argument_group("passive joint moments (one value per joint, shoulder first)")
-    passive.add_argument("--coulomb", type=float, nargs="+", metavar="NM", help="Coulomb amplitudes, Nm")
-    passive.add_argument("--stiffness", type=float, nargs="+", metavar="NM_PER_RAD", help="stiffnesses, Nm/rad")
-    passive.add_argument("--viscous", type=float, nargs="+", metavar="NMS", help="viscous coefficients, Nm s/rad")
-    passive.add_argument("--passive-offset", type=float, nargs="+", metavar="NM", help="constant elastic offsets, Nm")
-    passive.add_argument("--neutral", type=float, nargs="+", metavar="RAD", help="neutral angles of the stiffness, rad")
+    passive.add_argument(
+        "--coulomb",
+        type=float,
+        nargs="+",
+        metavar="NM",
+        help="Coulomb amplitudes, Nm (default: 0.5 0.28 0.06, paper arm 0.139 0.161)",
+    )
+    passive.add_argument(
+        "--stiffness", type=float, nargs="+", metavar="NM_PER_RAD", help="stiffnesses, Nm/rad (default: 0)"
+    )
+    passive.add_argument(
+        "--viscous", type=float, nargs="+", metavar="NMS", help="viscous coefficients, Nm s/rad (default: 0)"
+    )
+    passive.add_argument(
+        "--passive-offset", type=float, nargs="+", metavar="NM", help="constant elastic offsets, Nm (default: 0)"
+    )
+    passive.add_argument(
+        "--neutral", type=float, nargs="+", metavar="RAD", help="neutral angles of the stiffness, rad (default: 0)"
+    )
     passive.add_argument(
         "--friction-transition",
         type=float,
         metavar="RAD_S",
-        help="width of a smooth (tanh) friction transition, rad/s (default 0: a sign step)",
+        help="width of a smooth (tanh) friction transition, rad/s (default: 0, a sign step)",
     )
     passive.add_argument(
-        "--stribeck-ratio", type=float, metavar="R", help="friction at rest over the Coulomb level (default 1: none)"
+        "--stribeck-ratio", type=float, metavar="R", help="friction at rest over the Coulomb level (default: 1, none)"
     )
-    passive.add_argument("--stribeck-speed", type=float, metavar="RAD_S", help="Stribeck speed scale, rad/s (0.01)")
+    passive.add_argument(
+        "--stribeck-speed", type=float, metavar="RAD_S", help="Stribeck speed scale, rad/s (default: 0.01)"
+    )
     cell = parser.add_argument_group("cell nuisances (sensor frame unless stated)")
-    cell.add_argument("--force-offset", type=float, nargs=3, metavar="N", help="F/T force offset at the start, N")
-    cell.add_argument("--torque-offset", type=float, nargs=3, metavar="NM", help="F/T moment offset at the start, Nm")
-    cell.add_argument("--force-drift", type=float, nargs=3, metavar="N_PER_S", help="force offset drift, N/s")
-    cell.add_argument("--torque-drift", type=float, nargs=3, metavar="NM_PER_S", help="moment offset drift, Nm/s")
-    cell.add_argument("--handle-mass", type=float, metavar="KG", help="handle payload between sensor and hand, kg")
     cell.add_argument(
-        "--handle-com", type=float, nargs=3, metavar="M", help="handle COM from the contact point, sensor frame, m"
+        "--force-offset", type=float, nargs=3, metavar="N", help="F/T force offset at the start, N (default: 0 0 0)"
+    )
+    cell.add_argument(
+        "--torque-offset", type=float, nargs=3, metavar="NM", help="F/T moment offset at the start, Nm (default: 0 0 0)"
+    )
+    cell.add_argument(
+        "--force-drift", type=float, nargs=3, metavar="N_PER_S", help="force offset drift, N/s (default: 0 0 0)"
+    )
+    cell.add_argument(
+        "--torque-drift", type=float, nargs=3, metavar="NM_PER_S", help="moment offset drift, Nm/s (default: 0 0 0)"
+    )
+    cell.add_argument(
+        "--handle-mass", type=float, metavar="KG", help="handle payload between sensor and hand, kg (default: 0)"
+    )
+    cell.add_argument(
+        "--handle-com",
+        type=float,
+        nargs=3,
+        metavar="M",
+        help="handle COM from the contact point, sensor frame, m (default: 0 0 0)",
     )
     cell.add_argument(
         "--skin-offset",
         type=float,
         nargs="+",
         metavar="M",
-        help="skin marker offsets from the joint centres: (along, normal) per marker, proximal first, m",
+        help="skin marker offsets from the joint centres: (along, normal) per marker, proximal first, m "
+        "(default: on the centres)",
     )
     cell.add_argument(
-        "--no-tf-static", action="store_true", help="leave /tf_static out of the bag (the sensor rotation is lost)"
+        "--skin-offset-mm",
+        type=float,
+        metavar="MM",
+        help="re-place the skin markers per session: each marker's (along, normal) offset drawn uniformly within "
+        "+-MM per axis from --seed, added to --skin-offset (0-100) (default: 0)",
     )
     cell.add_argument(
-        "--spikes", type=float, metavar="FRACTION", help="fraction of wrench samples that are force spikes (0-0.5)"
+        "--no-tf-static",
+        action="store_true",
+        help="leave the sensor's transform out of the bag (/tf_static, or /tf with --sensor-turns) (default: kept)",
     )
-    cell.add_argument("--spike-size", type=float, metavar="N", help="spike amplitude, N (default 1000)")
+    cell.add_argument(
+        "--spikes",
+        type=float,
+        metavar="FRACTION",
+        help="fraction of wrench samples that are force spikes (0-0.5) (default: 0)",
+    )
+    cell.add_argument("--spike-size", type=float, metavar="N", help="spike amplitude, N (default: 1000)")
+    sensor = parser.add_argument_group("F/T sensor mounting and timing")
+    sensor.add_argument(
+        "--sensor-turns",
+        action="store_true",
+        help="the sensor sits on the robot flange and turns with the handle's pitch: the wrench is in the turning "
+        "frame and its orientation goes on /tf at every wrench sample (default: fixed, on /tf_static)",
+    )
+    sensor.add_argument(
+        "--wrench-filter-delay-s",
+        type=float,
+        metavar="S",
+        help="group delay of the sensor's causal low-pass, s (0-1) (default: 0, no filter)",
+    )
+    sensor.add_argument(
+        "--wrench-filter",
+        choices=("first-order", "moving-average"),
+        help="the low-pass: first-order (time constant = delay) or moving-average (window = 2 x delay) "
+        "(default: first-order)",
+    )
+    sensor.add_argument(
+        "--wrench-average",
+        action="store_true",
+        help="each wrench sample is the mean over its sample period (default: the value at its stamp)",
+    )
+    sensor.add_argument(
+        "--wrench-clock-offset-s",
+        type=float,
+        metavar="S",
+        help="the wrench clock runs this much behind the marker clock: samples are stamped S late (+-1) (default: 0)",
+    )
     tare = parser.add_argument_group("tare recording (--tare: the handle free, no arm; --duration is its length)")
-    tare.add_argument("--tare", action="store_true", help="write the cell's tare recording instead of a session")
+    tare.add_argument(
+        "--tare", action="store_true", help="write the cell's tare recording instead of a session (default: a session)"
+    )
     tare.add_argument(
         "--tare-swing",
         type=float,
         nargs=3,
         metavar="DEG",
-        help="swing the sensor's roll, pitch, yaw by these amplitudes (default 0 0 0: at rest), deg",
+        help="swing the sensor's roll, pitch, yaw by these amplitudes, deg (default: 0 0 0, at rest)",
     )
-    tare.add_argument("--tare-period", type=float, metavar="S", help="period of the swing, s (default 10)")
+    tare.add_argument("--tare-period", type=float, metavar="S", help="period of the swing, s (default: 10)")
     tare.add_argument(
-        "--tare-start", type=float, metavar="S", help="start relative to the session start, s (default -60)"
+        "--tare-start", type=float, metavar="S", help="start relative to the session start, s (default: -60)"
     )
     return parser
 
 
+def _check_option(option: str, value: float | None, lo: float, hi: float, unit: str = "") -> float | None:
+    """Return an optional number if it is finite and within ``[lo, hi]``; InputError naming the option."""
+    if value is None:
+        return None
+    if not (math.isfinite(value) and lo <= value <= hi):
+        raise InputError(f"{option} must be within [{lo:g}, {hi:g}]{unit}, got {value!r}")
+    return value
+
+
+def _trajectory(args: argparse.Namespace, spec: Any) -> Any:
+    """The motion: the cell's sines (sped up by --speed-scale) or the --trajectory plan."""
+    speed = _check_option("--speed-scale", args.speed_scale, 1e-3, 100.0)
+    if args.trajectory is None:
+        return spec.trajectory if speed is None else spec.trajectory.speed_scaled(speed)
+    if speed is not None:
+        raise InputError("--speed-scale applies to the built-in sines; a --trajectory plan runs at its planned speed")
+    from bsp_ros.core.planning import planned_trajectory_from_file
+
+    planned = planned_trajectory_from_file(args.trajectory)
+    if planned.n_joints != spec.n_segments:
+        raise InputError(
+            f"--trajectory {args.trajectory} moves {planned.n_joints} joints; "
+            f"--subject {args.subject} has {spec.n_segments}"
+        )
+    return planned
+
+
 def _spec(args: argparse.Namespace) -> Any:
-    """The CellSpec the options describe (validation is the simulator's)."""
+    """The CellSpec the options describe (validation is the simulator's, or names the option here)."""
     from bsp_ros.core import simulation
 
     if args.subject == "human":
@@ -143,6 +277,18 @@ def _spec(args: argparse.Namespace) -> Any:
         sensor["spike_fraction"] = args.spikes
     if args.spike_size is not None:
         sensor["spike_n"] = args.spike_size
+    if args.sensor_turns:
+        sensor["turns_with_handle"] = True
+    delay = _check_option("--wrench-filter-delay-s", args.wrench_filter_delay_s, 0.0, 1.0, " s")
+    if delay is not None:
+        sensor["filter_delay_s"] = delay
+    if args.wrench_filter is not None:
+        sensor["filter_kind"] = args.wrench_filter.replace("-", "_")
+    if args.wrench_average:
+        sensor["average_over_period"] = True
+    clock = _check_option("--wrench-clock-offset-s", args.wrench_clock_offset_s, -1.0, 1.0, " s")
+    if clock is not None:
+        sensor["clock_offset_s"] = clock
     markers: dict[str, Any] = {}
     if args.marker_hz is not None:
         markers["marker_hz"] = args.marker_hz
@@ -155,9 +301,12 @@ def _spec(args: argparse.Namespace) -> Any:
         if len(args.skin_offset) != 2 * n_markers:
             raise InputError(
                 f"--skin-offset needs {2 * n_markers} values ((along, normal) for each of {n_markers} markers), "
-                f"got {len(args.skin_offset)}"
+                f"got {len(args.skin_offset)} (a random re-placement within +-MM is --skin-offset-mm MM)"
             )
         markers["skin_offset_m"] = tuple(zip(args.skin_offset[::2], args.skin_offset[1::2], strict=True))
+    bound_mm = _check_option("--skin-offset-mm", args.skin_offset_mm, 0.0, 100.0, " mm")
+    if bound_mm is not None:
+        markers["skin_offset_bound_m"] = bound_mm / 1000.0
     passive: dict[str, Any] = {}
     for option, key in (
         ("friction_transition", "friction_transition_rad_s"),
@@ -181,13 +330,19 @@ def _spec(args: argparse.Namespace) -> Any:
                     f"for --subject {args.subject}, got {len(values)}"
                 )
             passive[field] = tuple(values)
+    trajectory = _trajectory(args, spec)
+    duration = args.duration
+    if duration is None:
+        duration = trajectory.duration_s if args.trajectory is not None else 120.0
     return dataclasses.replace(
         spec,
         sensor=dataclasses.replace(spec.sensor, **sensor),
         markers=dataclasses.replace(spec.markers, **markers),
         passive=dataclasses.replace(spec.passive, **passive),
-        duration_s=args.duration,
+        trajectory=trajectory,
+        duration_s=duration,
         seed=args.seed,
+        inertia=args.inertia,
     )
 
 
@@ -203,24 +358,51 @@ def run(args: argparse.Namespace) -> int:
     check_output_dir("--out", out)  # before simulating: under a regular file or where nothing can be created
     if args.seed < 0:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
-    spec = _spec(args)
     if args.tare:
-        return _run_tare(args, spec)
+        session_only = [
+            f"--{n.replace('_', '-')}"
+            for n in ("trajectory", "speed_scale", "sensor_turns", "skin_offset_mm")
+            if getattr(args, n) is not None and getattr(args, n) is not False
+        ]
+        if session_only:
+            raise InputError(f"{', '.join(session_only)} apply to a session only, not to a --tare recording")
+        return _run_tare(args, _spec(args))
     tare_only = [f"--{n.replace('_', '-')}" for n in ("tare_swing", "tare_period", "tare_start") if getattr(args, n)]
     if tare_only:
         raise InputError(f"{', '.join(tare_only)} apply to a tare recording only (add --tare)")
+    spec = _spec(args)
     simulated = simulate_cell(spec)
+    samples = _orientation_samples(simulated)
     write_session_bag(
-        out, simulated.session, simulated.truth.to_dict(), seed=args.seed, tf_static=spec.sensor.tf_static
+        out,
+        simulated.session,
+        simulated.truth.to_dict(),
+        seed=args.seed,
+        tf_static=spec.sensor.tf_static and not spec.sensor.turns_with_handle,
+        tf_samples=samples,
     )
     session = simulated.session
     counts = ", ".join(f"{name} {series.t_ns.size}" for name, series in session.markers.items())
     print(
-        f"wrote {out} ({session.n_segments} segments, {args.duration:g} s): wrench {session.wrench.t_ns.size}, "
-        f"markers: {counts}; truth in {out / TRUTH_FILE}",
+        f"wrote {out} ({session.n_segments} segments, {spec.duration_s:g} s"
+        f"{', inertia' if spec.inertia else ', quasi-static'}): wrench {session.wrench.t_ns.size}, "
+        f"markers: {counts}" + (f", /tf {len(samples)}" if samples else "") + f"; truth in {out / TRUTH_FILE}",
         file=sys.stdout,
     )
     return 0
+
+
+def _orientation_samples(simulated: Any) -> list[Any]:
+    """The turning sensor's orientation, one /tf transform ``world -> sensor`` per wrench sample."""
+    import numpy as np
+
+    from msg_adapters import TransformSample, quaternion_from_matrix
+
+    frame = simulated.session.wrench.frame_id
+    return [
+        TransformSample(int(t), "world", frame, np.zeros(3), quaternion_from_matrix(r))
+        for t, r in zip(simulated.tf_t_ns.tolist(), simulated.tf_rotations_world_from_sensor, strict=True)
+    ]
 
 
 def _run_tare(args: argparse.Namespace, spec: Any) -> int:
@@ -232,7 +414,7 @@ def _run_tare(args: argparse.Namespace, spec: Any) -> int:
     from bsp_ros.core.streams import Session
     from msg_adapters import TransformSample, quaternion_from_matrix
 
-    options: dict[str, Any] = {"duration_s": args.duration}
+    options: dict[str, Any] = {"duration_s": spec.duration_s}
     if args.tare_swing is not None:
         options["swing_rpy_deg"] = tuple(args.tare_swing)
     if args.tare_period is not None:
@@ -256,7 +438,7 @@ def _run_tare(args: argparse.Namespace, spec: Any) -> int:
         tf_samples=samples,
     )
     print(
-        f"wrote tare recording {args.out} ({args.duration:g} s, wrench {tare.wrench.t_ns.size}, "
+        f"wrote tare recording {args.out} ({spec.duration_s:g} s, wrench {tare.wrench.t_ns.size}, "
         f"/tf {len(samples)}); truth in {args.out / TRUTH_FILE}",
         file=sys.stdout,
     )

@@ -1,4 +1,4 @@
-"""`cell_simulator`: the simulated cell publishing wrench, marker poses, /tf_static (if tf2_msgs) and the truth."""
+"""`cell_simulator`: the simulated cell publishing wrench, marker poses, /tf_static or /tf (if tf2_msgs), truth."""
 
 from __future__ import annotations
 
@@ -62,6 +62,12 @@ PARAMETERS = (
     Param("passive_offset_nm", [0.0], "elastic passive offset per joint ([0.0]: none)", "Nm"),
     Param("friction_transition_rad_s", 0.0, "width of a smooth (tanh) friction transition", "rad/s", lo=0.0, hi=1.0),
     Param("trajectory_file", "", "follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in motion"),
+    Param("inertia", True, "rigid-body dynamics (false: quasi-static, as the method paper models it)"),
+    Param("sensor_turns", False, "the sensor turns with the handle's pitch; its orientation goes on /tf per sample"),
+    Param("wrench_filter_delay_s", 0.0, "group delay of the sensor's causal low-pass (0: none)", "s", lo=0.0, hi=1.0),
+    Param("wrench_filter", "first_order", "the sensor's low-pass", choices=("first_order", "moving_average")),
+    Param("wrench_clock_offset_s", 0.0, "wrench stamps lag the marker clock by this much", "s", lo=-1.0, hi=1.0),
+    Param("skin_offset_mm", 0.0, "skin markers re-placed per session within +- this per axis", "mm", lo=0.0, hi=100.0),
     Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
     Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
     # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
@@ -81,8 +87,10 @@ class _Queue:
 class CellSimulatorNode(RosNode):
     """Paces :class:`bsp_ros.core.simulation.CellSimulator` against the clock and publishes its streams.
 
-    The sensor frame's transform goes out on /tf_static when tf2_msgs is installed; the node logs the
-    quaternion either way (the identifier's ``wrench_frame_rotation_xyzw`` without tf). Faults on request
+    The physics (inertia, a sensor turning with the handle, its filter and clock, skin markers) is the
+    core's. The sensor frame's transform goes out on /tf_static when tf2_msgs is installed, or for a turning
+    sensor on /tf with every wrench sample; the node logs the (mounting) quaternion either way (the
+    identifier's ``wrench_frame_rotation_xyzw`` without tf). Faults on request
     (parameters): marker dropouts, a one-frame marker jump, NaN bursts in the wrench, a stalled sensor (stops
     publishing the wrench), a dying process, and a backwards clock jump of the stamps.
     """
@@ -124,8 +132,18 @@ class CellSimulatorNode(RosNode):
                 handle_mass_kg=p["handle_mass_kg"],
                 handle_com_m=tuple(p["handle_com_m"]),
                 spike_fraction=p["spike_fraction"],
+                turns_with_handle=p["sensor_turns"],
+                filter_delay_s=p["wrench_filter_delay_s"],
+                filter_kind=p["wrench_filter"],
+                clock_offset_s=p["wrench_clock_offset_s"],
             ),
-            markers=dataclasses.replace(base.markers, marker_hz=marker_hz, dropout_fraction=p["dropout_fraction"]),
+            markers=dataclasses.replace(
+                base.markers,
+                marker_hz=marker_hz,
+                dropout_fraction=p["dropout_fraction"],
+                skin_offset_bound_m=p["skin_offset_mm"] / 1000.0,
+            ),
+            inertia=p["inertia"],
             passive=dataclasses.replace(
                 base.passive,
                 offset_nm=tuple(p["passive_offset_nm"]) if any(p["passive_offset_nm"]) else (),
@@ -158,13 +176,20 @@ class CellSimulatorNode(RosNode):
             for name in self.simulator.marker_names
         }
         quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
+        self.turns = spec.sensor.turns_with_handle
+        self.tf_pub = None  # /tf of a turning sensor, one transform per wrench sample
+        where = "/tf (per sample)" if self.turns else "/tf_static"
         if has_message(TF_TYPE):
-            tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
-            transform = TransformSample(self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion)
-            tf_pub.publish(build_tf_message(message_class, [transform]))
+            if self.turns:
+                self.tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf", 100)
+            else:
+                tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
+                transform = TransformSample(self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion)
+                tf_pub.publish(build_tf_message(message_class, [transform]))
         self.get_logger().info(
             f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {[round(float(v), 9) for v in quaternion]} "
-            + ("on /tf_static" if has_message(TF_TYPE) else f"(not on /tf_static: {TF_TYPE} is not installed)")
+            + ("at the mean handle pitch; " if self.turns else "")
+            + (f"on {where}" if has_message(TF_TYPE) else f"(not on {where}: {TF_TYPE} is not installed)")
         )
         truth_pub = self.create_publisher(message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static"))
         truth = {**self.simulator.truth.to_dict(), "start_time_ns": self.start_wall_ns}
@@ -199,9 +224,11 @@ class CellSimulatorNode(RosNode):
         if self.duration_s and elapsed_s >= self.duration_s:
             now = min(now, self.start_wall_ns + int(self.duration_s * 1e9))
         stalled = bool(self.stall_at_s and elapsed_s >= self.stall_at_s)
-        for wrench in self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench):
+        for wrench, transform in self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench):
             if not stalled:
                 self.wrench_pub.publish(build_wrench_stamped(self.types, wrench))
+            if self.tf_pub is not None:  # the robot still reports its flange when the sensor stalls
+                self.tf_pub.publish(build_tf_message(self.types, [transform]))
         for name, pose in self._due(self.marker_queue, now, self.marker_period_ns, self._simulate_markers):
             self.marker_pubs[name].publish(build_pose_stamped(self.types, pose))
 
@@ -228,7 +255,17 @@ class CellSimulatorNode(RosNode):
             force[burst] = np.nan
         stamps = self._stamp(series.t_ns)
         samples = [WrenchSample(int(stamps[k]), self.frame_id, force[k], torque[k]) for k in range(stamps.size)]
-        return list(zip(t_ns.tolist(), samples, strict=True))  # messages are built when published
+        transforms: list[TransformSample | None] = [None] * stamps.size
+        if self.turns:
+            tf_ns = self.simulator.orientation_stamps_ns(series.t_ns)
+            rotations = self.simulator.rotations_world_from_sensor(self.simulator.seconds_since_start(tf_ns))
+            tf_stamps = self._stamp(tf_ns)
+            transforms = [
+                TransformSample(int(t), "world", self.frame_id, np.zeros(3), quaternion_from_matrix(r))
+                for t, r in zip(tf_stamps.tolist(), rotations, strict=True)
+            ]
+        # Messages are built when published.
+        return list(zip(t_ns.tolist(), zip(samples, transforms, strict=True), strict=True))
 
     def _simulate_markers(self, t_ns: np.ndarray) -> list[tuple[int, tuple[str, Any]]]:
         identity = np.array([0.0, 0.0, 0.0, 1.0])

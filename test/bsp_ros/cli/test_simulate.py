@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bsp_ros.bag import read_session
@@ -63,3 +64,86 @@ def test_tare_options_without_tare_are_refused(tmp_path: Path, capsys) -> None:
 def test_silly_nuisance_values_are_refused(tmp_path: Path, flag: str, capsys) -> None:
     assert main(["simulate", "--out", str(tmp_path / "s"), flag, "-1"]) == 2
     assert flag.lstrip("-").replace("-", "_") in capsys.readouterr().err
+
+
+def test_simulate_follows_a_bsp_plan_trajectory_for_the_plans_length(tmp_path: Path) -> None:
+    plan = tmp_path / "plan.json"
+    limits = ["--shoulder", "0", "1.2", "--shoulder-range", "-70", "-10", "--elbow-range", "10", "100"]
+    args = [*limits, "--wrist-range", "-5", "5", "--operating-points", "1", "--max-evaluations", "100"]
+    assert main(["plan", *args, "--duration", "30", "--json", str(plan)]) == 0
+    out = tmp_path / "planned"
+    assert main(["simulate", "--out", str(out), "--trajectory", str(plan)]) == 0
+    truth = json.loads((out / "truth.json").read_text())
+    knots = json.loads(plan.read_text())["knots"]
+    assert truth["trajectory"]["planned"] == knots and truth["simulation"]["duration_s"] == 30.0
+    read = read_session(out)
+    t_s = (read.session.wrench.t_ns - truth["simulation"]["start_ns"]) * 1e-9
+    assert 29.9 < t_s[-1] < 30.0
+    # The elbow marker follows the planned shoulder angle (markers on the joint centres).
+    from bsp_ros.core.planning import PlannedTrajectory
+
+    planned = PlannedTrajectory(knots["t_s"], knots["q_rad"], knots["qdot_rad_s"])
+    shoulder, elbow = read.session.markers["shoulder"], read.session.markers["elbow"]
+    q1 = np.arctan2(
+        elbow.position_m[:, 2] - shoulder.position_m[:, 2], elbow.position_m[:, 1] - shoulder.position_m[:, 1]
+    )
+    want = planned.angles_rad((elbow.t_ns - truth["simulation"]["start_ns"]) * 1e-9)[:, 0]
+    assert np.abs(q1 - want).max() < 0.01 and np.ptp(want) > 0.3
+
+
+def test_speed_scale_divides_the_periods_and_inertia_is_on_by_default(tmp_path: Path) -> None:
+    fast = _simulate(tmp_path / "fast", "--speed-scale", "4")
+    slow = _simulate(tmp_path / "slow", "--no-inertia")
+    assert fast["trajectory"]["shoulder"]["period_s"] == pytest.approx(22.0 / 4)
+    assert slow["trajectory"]["shoulder"]["period_s"] == 22.0
+    assert fast["simulation"]["inertia"] is True and slow["simulation"]["inertia"] is False
+    assert fast["segments"]["forearm"]["inertia_com_kgm2"] > 0
+
+
+def test_turning_sensor_timing_and_skin_options_reach_the_bag_and_the_truth(tmp_path: Path) -> None:
+    truth = _simulate(
+        tmp_path / "s",
+        *("--sensor-turns", "--wrench-filter-delay-s", "0.02", "--wrench-filter", "moving-average"),
+        *("--wrench-average", "--wrench-clock-offset-s", "0.01", "--skin-offset-mm", "5", "--seed", "8"),
+    )
+    sim = truth["simulation"]
+    assert sim["sensor_turns_with_handle"] is True and sim["wrench_filter_kind"] == "moving_average"
+    assert sim["wrench_delay_s"] == pytest.approx(0.02 + 0.005 + 0.01)
+    assert sim["skin_offset_bound_m"] == 0.005 and np.abs(sim["skin_offset_m"]).max() <= 0.005
+    topics = read_metadata(tmp_path / "s" / "metadata.yaml").topics
+    assert "/tf_static" not in topics and topics["/tf"].message_count == topics["/ft_sensor/wrench"].message_count
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--speed-scale", "0"], "--speed-scale"),
+        (["--speed-scale", "nan"], "--speed-scale"),
+        (["--wrench-filter-delay-s", "-0.1"], "--wrench-filter-delay-s"),
+        (["--wrench-clock-offset-s", "5"], "--wrench-clock-offset-s"),
+        (["--skin-offset-mm", "-1"], "--skin-offset-mm"),
+        (["--skin-offset", "0.01"], "--skin-offset-mm MM"),
+        (["--trajectory", "/nonexistent/plan.json"], "/nonexistent/plan.json"),
+        (["--tare", "--sensor-turns"], "--sensor-turns"),
+    ],
+)
+def test_bad_new_options_end_in_one_line_naming_the_option_and_exit_2(
+    tmp_path: Path, args: list[str], needle: str, capsys
+) -> None:
+    assert main(["simulate", "--out", str(tmp_path / "s"), "--duration", "2", *args]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not (tmp_path / "s").exists()
+
+
+def test_help_shows_every_default(capsys) -> None:
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    from bsp_ros.cli import build_parser
+
+    sub = build_parser()._subparsers._group_actions[0].choices["simulate"]  # type: ignore[union-attr]
+    for action in sub._actions:
+        if action.help and action.dest != "help":
+            assert "default" in " ".join(action.help.split()) or action.required, action.option_strings
+    assert "(default: on)" in text and "--speed-scale X" in text

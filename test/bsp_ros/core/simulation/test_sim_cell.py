@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import json
 import math
 from collections.abc import Callable
 from typing import Any
@@ -20,7 +19,6 @@ from bsp_ros.core.simulation import (
     MarkerSpec,
     PassiveTruth,
     SensorSpec,
-    SessionTruth,
     SubjectTruth,
     TrajectorySpec,
     human_arm_cell,
@@ -421,33 +419,6 @@ def test_streaming_in_chunks_equals_sampling_all_at_once() -> None:
         np.testing.assert_array_equal(np.concatenate([p[name].position_m for p in parts_m]), series.position_m)
 
 
-def test_truth_round_trips_through_json() -> None:
-    truth = simulate_cell(_rich_passive_human()).truth
-    text = json.dumps(truth.to_dict())
-    back = SessionTruth.from_dict(json.loads(text))
-    assert back == truth
-    d = json.loads(text)
-    assert d["schema"] == "bsp_ros/truth/1"
-    assert set(d["joints"]["elbow"]) == {
-        "coulomb_nm",
-        "viscous_nms",
-        "stiffness_nm_per_rad",
-        "neutral_rad",
-        "offset_nm",
-    }
-    assert d["simulation"]["wrench_hz"] == 100.0 and d["simulation"]["marker_hz"] == 50.0
-    assert d["simulation"]["seed"] == 0 and d["simulation"]["force_noise_n"] == 0.05
-
-
-def test_truth_from_dict_rejects_a_foreign_schema_and_missing_keys() -> None:
-    d = simulate_cell(paper_mechanical_arm_cell(duration_s=1.0)).truth.to_dict()
-    with pytest.raises(InputError, match="bsp_ros/core/estimate/1"):
-        SessionTruth.from_dict({**d, "schema": "bsp_ros/core/estimate/1"})
-    del d["segments"]["forearm"]["mass_kg"]
-    with pytest.raises(InputError, match="mass_kg"):
-        SessionTruth.from_dict(d)
-
-
 # ---- nuisances (issue 10) -------------------------------------------------------------------------------
 
 
@@ -546,93 +517,6 @@ def test_lost_tf_static_leaves_the_session_without_its_rotation() -> None:
     np.testing.assert_array_equal(simulated.session.rotation_world_from_sensor, np.eye(3))
     assert simulated.truth.simulation["tf_static"] is False
     assert simulated.truth.simulation["sensor_roll_pitch_yaw_deg"] == [180.0, 0.0, 30.0]
-
-
-def test_truth_records_every_nuisance_and_reads_back() -> None:
-    spec = human_arm_cell(
-        passive=PassiveTruth(
-            coulomb_nm=(0.5, 0.28, 0.06),
-            offset_nm=(0.05, -0.2, 0.0),
-            friction_transition_rad_s=0.002,
-            stribeck_ratio=1.3,
-            stribeck_speed_rad_s=0.02,
-        ),
-        sensor=SensorSpec(force_drift_n_per_s=(0.0, 0.001, 0.0), handle_mass_kg=0.3, handle_com_m=(0.0, 0.0, 0.04)),
-        markers=MarkerSpec(skin_offset_m=((0.0, 0.01),) * 4),
-        duration_s=5.0,
-    )
-    data = json.loads(json.dumps(simulate_cell(spec).truth.to_dict()))
-    assert data["friction"] == {"transition_rad_s": 0.002, "stribeck_ratio": 1.3, "stribeck_speed_rad_s": 0.02}
-    assert data["joints"]["elbow"]["offset_nm"] == -0.2
-    sim = data["simulation"]
-    assert (sim["handle_mass_kg"], sim["handle_com_m"]) == (0.3, [0.0, 0.0, 0.04])
-    assert sim["force_drift_n_per_s"] == [0.0, 0.001, 0.0]
-    assert sim["skin_offset_m"] == [[0.0, 0.01]] * 4
-    back = SessionTruth.from_dict(data)
-    assert back.passive == spec.passive
-
-
-def test_truth_without_a_friction_block_reads_as_plain_coulomb() -> None:
-    data = simulate_cell(human_arm_cell(duration_s=2.0)).truth.to_dict()
-    del data["friction"]
-    passive = SessionTruth.from_dict(data).passive
-    assert (passive.friction_transition_rad_s, passive.stribeck_ratio) == (0.0, 1.0)
-
-
-def test_tare_at_rest_measures_offset_plus_the_handle_load() -> None:
-    from bsp_ros.core.simulation import TareSpec, simulate_tare
-
-    sensor = SensorSpec(
-        roll_pitch_yaw_deg=(180.0, 0.0, 0.0),
-        force_bias_n=(1.0, 2.0, 3.0),
-        torque_bias_nm=(0.1, 0.0, 0.0),
-        force_drift_n_per_s=(0.001, 0.0, 0.0),
-        handle_mass_kg=0.3,
-        handle_com_m=(0.1, 0.0, 0.0),
-        force_noise_n=0.0,
-        torque_noise_nm=0.0,
-    )
-    tare = simulate_tare(human_arm_cell(sensor=sensor), TareSpec(duration_s=10.0, start_offset_s=-100.0))
-    t_s = (tare.wrench.t_ns - DEFAULT_START_NS) * 1e-9  # about -100 .. -90 s
-    assert tare.tf_t_ns.size == 0
-    np.testing.assert_allclose(tare.wrench.force_n[:, 0], 1.0 + 0.001 * t_s, atol=1e-9)
-    np.testing.assert_allclose(tare.wrench.force_n[:, 1:], np.tile([2.0, 3.0 + 0.3 * G], (t_s.size, 1)), atol=1e-9)
-    np.testing.assert_allclose(tare.wrench.torque_nm, np.tile([0.1, -0.1 * 0.3 * G, 0.0], (t_s.size, 1)), atol=1e-9)
-    assert tare.truth["force_offset_n"] == pytest.approx([1.0 - 0.001 * 95.0, 2.0, 3.0])
-
-
-def test_swinging_tare_publishes_the_orientation_the_wrench_follows() -> None:
-    from bsp_ros.core.simulation import TareSpec, simulate_tare
-
-    sensor = SensorSpec(handle_mass_kg=0.3, force_noise_n=0.0, torque_noise_nm=0.0, stamp_jitter_s=0.0)
-    spec = human_arm_cell(sensor=sensor)
-    tare = simulate_tare(spec, TareSpec(duration_s=10.0, swing_rpy_deg=(20.0, 30.0, 0.0), swing_period_s=5.0))
-    assert tare.tf_t_ns.size == 500
-    # At t = 0 of the tare the swing is (0, 30 sin(2 pi / 3), 0) deg about the mounting orientation.
-    expected = spec.sensor.rotation_world_from_sensor @ rotation_from_rpy_deg(
-        0.0, 30.0 * math.sin(2 * math.pi / 3), 0.0
-    )
-    np.testing.assert_allclose(tare.rotations_world_from_sensor[0], expected, atol=1e-12)
-    # A tf sample that coincides with a wrench stamp: the force is R^T (0, 0, -m g).
-    k = int(np.searchsorted(tare.wrench.t_ns, tare.tf_t_ns[100]))
-    assert tare.wrench.t_ns[k] - tare.tf_t_ns[100] == pytest.approx(1_300_000, abs=1)  # the 1.3 ms wrench phase
-    rotation = tare.rotations_world_from_sensor[100]
-    force_world = rotation @ tare.wrench.force_n[k]
-    np.testing.assert_allclose(force_world, [0.0, 0.0, -0.3 * G], atol=0.02)  # 1.3 ms of swing apart
-
-
-def test_streamed_tare_wrench_matches_the_whole_recording_physics() -> None:
-    from bsp_ros.core.simulation import TareSpec, simulate_tare
-
-    sensor = SensorSpec(handle_mass_kg=0.3, handle_com_m=(0.0, 0.0, 0.05), force_noise_n=0.0, torque_noise_nm=0.0)
-    spec = human_arm_cell(sensor=sensor)
-    tare = TareSpec(duration_s=10.0, swing_rpy_deg=(10.0, 15.0, 0.0))
-    whole = simulate_tare(spec, tare)
-    streamed, rotations = CellSimulator(spec).sample_tare_wrench(whole.wrench.t_ns[:300], tare)
-    np.testing.assert_allclose(streamed.force_n, whole.wrench.force_n[:300], atol=1e-12)
-    np.testing.assert_allclose(streamed.torque_nm, whole.wrench.torque_nm[:300], atol=1e-12)
-    weight = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -0.3 * G])  # R^T (0, 0, -m g)
-    np.testing.assert_allclose(streamed.force_n, weight, atol=1e-12)
 
 
 def test_spikes_hit_the_configured_fraction_with_the_configured_size_and_nothing_else() -> None:

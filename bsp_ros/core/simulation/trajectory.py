@@ -1,0 +1,116 @@
+"""Joint motions the simulated robot imposes: slow sines (TrajectorySpec) or any JointTrajectory."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from bsp_ros.core.simulation.checks import check_n_segments, float_tuple
+from bsp_ros.validation import check_positive
+
+# Step of the central difference that gives the acceleration of a trajectory without an analytic one, s.
+_ACCELERATION_STEP_S = 1e-4
+
+
+@dataclass(frozen=True)
+class TrajectorySpec:
+    """Slow sinusoidal joint motion ``q_j(t) = center_j + amp_j sin(2 pi t / period_j + phase_j)``.
+
+    Attributes
+    ----------
+    center_deg : (n,) operating point, deg (q1 absolute from +y, q2 and q3 relative).
+    amplitude_deg : (n,) amplitude >= 0, deg (0 holds the joint still: qdot = 0 exactly).
+    period_s : (n,) period > 0, s.
+    phase_rad : (n,) phase at t = 0 (the session start), rad.
+    """
+
+    center_deg: tuple[float, ...]
+    amplitude_deg: tuple[float, ...]
+    period_s: tuple[float, ...]
+    phase_rad: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        centre = float_tuple("center_deg", self.center_deg, None, -180.0, 180.0)
+        n = check_n_segments(len(centre), "the number of joints (entries of center_deg)")
+        object.__setattr__(self, "center_deg", centre)
+        object.__setattr__(self, "amplitude_deg", float_tuple("amplitude_deg", self.amplitude_deg, n, 0.0, 90.0))
+        object.__setattr__(self, "period_s", float_tuple("period_s", self.period_s, n, positive=True, hi=1e5))
+        object.__setattr__(self, "phase_rad", float_tuple("phase_rad", self.phase_rad, n, -100.0, 100.0))
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints (2 or 3)."""
+        return len(self.center_deg)
+
+    @property
+    def peak_speed_rad_s(self) -> tuple[float, ...]:
+        """(n,) peak joint speeds ``amp * 2 pi / period``, rad/s."""
+        return tuple(
+            math.radians(a) * 2.0 * math.pi / p for a, p in zip(self.amplitude_deg, self.period_s, strict=True)
+        )
+
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint angles at ``t_s`` (s since the session start): (N,) -> (N, n) rad."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))[:, None]
+        centre, amp, omega, phase = self._arrays()
+        return centre + amp * np.sin(omega * t + phase)
+
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Analytic joint velocities at ``t_s``: (N,) -> (N, n) rad/s (exactly 0 where the amplitude is 0)."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))[:, None]
+        _, amp, omega, phase = self._arrays()
+        return amp * omega * np.cos(omega * t + phase)
+
+    def accelerations_rad_s2(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Analytic joint accelerations at ``t_s``: (N,) -> (N, n) rad/s^2."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))[:, None]
+        _, amp, omega, phase = self._arrays()
+        return -amp * omega * omega * np.sin(omega * t + phase)
+
+    def speed_scaled(self, factor: float) -> TrajectorySpec:
+        """The same sines ``factor`` times faster: periods divided by ``factor`` (> 0)."""
+        scale = check_positive("speed scale", factor, 1e3)
+        return TrajectorySpec(
+            self.center_deg, self.amplitude_deg, tuple(p / scale for p in self.period_s), self.phase_rad
+        )
+
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        return (
+            np.radians(np.asarray(self.center_deg)),
+            np.radians(np.asarray(self.amplitude_deg)),
+            2.0 * np.pi / np.asarray(self.period_s),
+            np.asarray(self.phase_rad),
+        )
+
+
+@runtime_checkable
+class JointTrajectory(Protocol):
+    """Any joint motion the simulator can follow: ``TrajectorySpec`` or ``bsp_ros.core.planning.PlannedTrajectory``."""
+
+    @property
+    def n_joints(self) -> int: ...
+
+    @property
+    def peak_speed_rad_s(self) -> tuple[float, ...]: ...
+
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+
+
+def joint_accelerations_rad_s2(trajectory: TrajectorySpec | JointTrajectory, t_s: npt.ArrayLike) -> np.ndarray:
+    """Joint accelerations of any trajectory: (N,) s -> (N, n) rad/s^2.
+
+    The trajectory's own ``accelerations_rad_s2`` where it has one (``TrajectorySpec``, a planned
+    trajectory), else a central difference of its velocities over +-0.1 ms.
+    """
+    own = getattr(trajectory, "accelerations_rad_s2", None)
+    if callable(own):
+        return np.asarray(own(t_s), dtype=np.float64)
+    t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
+    h = _ACCELERATION_STEP_S
+    return (trajectory.velocities_rad_s(t + h) - trajectory.velocities_rad_s(t - h)) / (2.0 * h)
