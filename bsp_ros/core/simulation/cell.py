@@ -41,9 +41,9 @@ class CellSpec:
     start_ns : ROS time of the session start (trajectory t = 0), int ns > 0.
     seed : seed of every random draw (stamps jitter, noise, dropouts), int >= 0.
     inertia : True: the wrench solves the full rigid-body equation ``M(q) q'' + C(q, q') q' + tau_G(q)
-        + tau_p = -J^T F_end`` with the trajectory's velocities and accelerations. False (the default):
-        quasi-static, ``tau_G(q) + tau_p = -J^T F_end``, as the method paper models it (inertial terms are
-        ~1e-4 of gravity at 0.03 rad/s; ``bsp simulate`` and ``cell_simulator`` turn them on).
+        + tau_p = -J^T F_end`` with the trajectory's velocities and accelerations (the default: a real arm
+        has inertia). False: quasi-static, ``tau_G(q) + tau_p = -J^T F_end``, as the method paper models it
+        (inertial terms are ~1e-4 of gravity at 0.03 rad/s).
 
     Raises
     ------
@@ -60,7 +60,7 @@ class CellSpec:
     duration_s: float = 120.0
     start_ns: int = DEFAULT_START_NS
     seed: int = 0
-    inertia: bool = False
+    inertia: bool = True
 
     def __post_init__(self) -> None:
         for name, kind in (
