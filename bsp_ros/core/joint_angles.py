@@ -367,6 +367,11 @@ def _motion_runs(
         smooth = _zero_phase_lowpass(run, cutoff_hz, rate_hz, order=4)
         velocity[begin:end] = np.gradient(smooth, 1.0 / rate_hz, axis=0)
         acceleration[begin:end] = np.gradient(velocity[begin:end], 1.0 / rate_hz, axis=0)
+        # Within half a period of the cutoff of a run's ends the padding, not the arm, shapes the derivatives.
+        edge = min(int(0.5 * rate_hz / cutoff_hz), (end - begin) // 4)
+        for series in (velocity, acceleration):
+            series[begin : begin + edge] = np.nan
+            series[end - edge : end] = np.nan
     return velocity, acceleration
 
 
@@ -510,7 +515,8 @@ def resample_kinematics(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tu
 
 
 def resample_motion(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Velocities and accelerations (N, n) of :class:`MarkerKinematics` at other stamps (zeros if absent)."""
+    """Velocities and accelerations (N, n) of :class:`MarkerKinematics` at other stamps (zeros if absent; NaN
+    near gaps and the ends of runs)."""
     target = np.asarray(t_ns, dtype=np.int64)
     n = kinematics.q_rad.shape[1]
     if kinematics.velocity_rad_s is None or kinematics.acceleration_rad_s2 is None:
@@ -519,6 +525,7 @@ def resample_motion(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tuple[
     where = (target - kinematics.t_ns[0]).astype(np.float64)
     out = []
     for values in (kinematics.velocity_rad_s, kinematics.acceleration_rad_s2):
-        column = [np.interp(where, grid, np.nan_to_num(values[:, j])) for j in range(n)]
+        # NaN (a gap or a run's edge) spreads to the samples beside it: those have no usable derivative.
+        column = [np.interp(where, grid, values[:, j]) for j in range(n)]
         out.append(np.column_stack(column))
     return out[0], out[1]

@@ -169,6 +169,9 @@ def identification_data_from_session(
     )
     wrench_yzx = wrench_world_yzx(wrench, rotation)
     q_rad, velocity, valid = resample_kinematics(kinematics, wrench.t_ns)
+    qd_all, qdd_all = resample_motion(kinematics, wrench.t_ns)
+    # Joint velocities and accelerations for the inertial torques are lost near gaps and run edges too.
+    valid &= np.isfinite(qd_all).all(axis=1) & np.isfinite(qdd_all).all(axis=1)
     if not valid.any():
         raise DataError("no wrench sample falls where the markers give joint angles (streams do not overlap)")
     # Samples before the first and after the last angle are the session's edges (filter run-in): expected,
@@ -178,7 +181,7 @@ def identification_data_from_session(
     if dropped:
         notes.append(f"{dropped} of {keep.size} wrench samples inside the session have no joint angles (marker gaps)")
     tau = contact_torques_nm(q_rad[valid], kinematics.lengths_m, wrench_yzx[valid])
-    qd, qdd = resample_motion(kinematics, wrench.t_ns[valid])
+    qd, qdd = qd_all[valid], qdd_all[valid]
     return IdentificationData(
         wrench.t_ns[valid],
         q_rad[valid],

@@ -222,7 +222,7 @@ class WindowedIdentifier:
         if valid.sum() < 2:
             return "no wrench sample in the window has joint angles"
         tau = contact_torques_nm(q[valid], lengths, wrench[valid])
-        qd, qdd = resample_motion(kinematics, t_w[valid])
+        qd, qdd = (np.nan_to_num(v) for v in resample_motion(kinematics, t_w[valid]))
         data = IdentificationData(
             t_w[valid],
             q[valid],

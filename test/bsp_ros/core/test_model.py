@@ -28,7 +28,9 @@ def test_jacobian_matches_finite_differences_of_the_contact_point() -> None:
 
 def test_contact_torques_balance_the_simulated_gravity() -> None:
     # The simulator computes gravity from masses and COM lever arms, not from this model's regressor.
-    spec = dataclasses.replace(sim.human_arm_cell(seed=1), passive=sim.PassiveTruth(coulomb_nm=(0.0, 0.0, 0.0)))
+    spec = dataclasses.replace(
+        sim.human_arm_cell(seed=1, inertia=False), passive=sim.PassiveTruth(coulomb_nm=(0.0, 0.0, 0.0))
+    )
     simulator = sim.CellSimulator(spec)
     t_s = np.linspace(0.0, 30.0, 50)
     q = simulator.joint_angles_rad(t_s)
