@@ -133,14 +133,15 @@ def test_commands_refuse_each_conformance_file_with_its_documented_code(
         assert "Traceback" not in err
 
 
-def test_identify_tells_a_lost_topic_from_a_missing_one(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_identify_and_tare_tell_a_lost_topic_from_a_missing_one(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """Each file's only chunk damaged. With every channel repeated in the summary, the wrench topic is known
     to be absent: missing (13). Otherwise the lost chunk held channels unknown, the topic may have been
     among them: corrupt (15), naming the CRC failure. Never empty (12)."""
-    for variant in CHUNKED:
+    for variant, command in [(v, c) for v in CHUNKED for c in ("identify", "tare")]:
         path = _write(variant, tmp_path)
         _corrupt_chunk(path)
-        code, err = _exit_code(["identify", str(path)], capsys)
+        args = [command, str(path)] + (["--out", str(tmp_path / "tare.yaml")] if command == "tare" else [])
+        code, err = _exit_code(args, capsys)
         if "rch" in variant.features:
             assert code == 13 and "example" in err, (variant.name, err)
         else:
