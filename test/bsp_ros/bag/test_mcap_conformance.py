@@ -133,7 +133,9 @@ def test_commands_refuse_each_conformance_file_with_its_documented_code(
         assert "Traceback" not in err
 
 
-def test_identify_and_tare_tell_a_lost_topic_from_a_missing_one(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_identify_and_tare_tell_a_lost_topic_from_a_missing_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """Each file's only chunk damaged. With every channel repeated in the summary, the wrench topic is known
     to be absent: missing (13). Otherwise the lost chunk held channels unknown, the topic may have been
     among them: corrupt (15), naming the CRC failure. Never empty (12)."""
