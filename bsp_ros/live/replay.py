@@ -185,6 +185,14 @@ def bag_files(path: str | Path) -> tuple[list[Path], Path | None]:
     return layout.files, layout.metadata_path
 
 
+def _transient_local(durability: object) -> bool:
+    """A recorded durability policy: a name (metadata version 9) or rmw's enum value (older rosbag2 writes
+    ``durability: 1``, RMW_QOS_POLICY_DURABILITY_TRANSIENT_LOCAL)."""
+    if isinstance(durability, int) and not isinstance(durability, bool):
+        return durability == 1
+    return str(durability or "").lower().startswith("transient_local")
+
+
 def _latched_from_metadata(meta: Path) -> set[str]:
     """Topics whose offered QoS in ``metadata.yaml`` is transient-local."""
     try:
@@ -195,7 +203,7 @@ def _latched_from_metadata(meta: Path) -> set[str]:
             profiles = topic.get("offered_qos_profiles") or []
             if isinstance(profiles, str):  # rosbag2 before version 9 stores a YAML string
                 profiles = yaml.safe_load(profiles) or []
-            if profiles and all(str(p.get("durability", "")).startswith("transient_local") for p in profiles):
+            if profiles and all(_transient_local(p.get("durability")) for p in profiles):
                 latched.add(str(topic["name"]))
         return latched
     except (yaml.YAMLError, KeyError, TypeError, AttributeError):

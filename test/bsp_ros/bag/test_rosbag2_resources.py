@@ -40,6 +40,9 @@ def test_rosbag2s_mcap_is_read_as_mcap_reads_it() -> None:
     files, meta = bag_files(CDR_TEST)
     plans = _plan(files, meta, None, PlayReport(path=str(CDR_TEST)))
     assert {p.topic: p.expected for p in plans} == listed
+    # Metadata version 7 writes the QoS enums as numbers: durability 1 is transient-local (latched).
+    assert "durability: 1" in (CDR_TEST / "metadata.yaml").read_text()
+    assert {p.topic for p in plans if p.latched} == set(listed)
 
 
 def test_rosbag2s_mcap_without_session_topics_names_what_it_holds(capsys: pytest.CaptureFixture[str]) -> None:
