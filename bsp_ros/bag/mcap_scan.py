@@ -17,6 +17,7 @@ from mcap.opcode import Opcode
 from mcap.reader import make_reader
 from mcap.records import Chunk, Message, MessageIndex, Metadata, Statistics
 
+from bsp_ros.bag.compression import decompress_cdr_messages, sniff_compressed_file
 from bsp_ros.bag.errors import NotABagError, UnsupportedBagError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -63,9 +64,19 @@ class ScanResult:
     Attributes
     ----------
     channels : channel id -> channel (from the summary and the data section).
-    summary_counts : topic -> message count from the MCAP Statistics record, None if unavailable.
+    summary_counts : topic -> message count from the MCAP Statistics record (its channels resolved with
+        every Channel record of the file, so a summary without repeated channels counts too), None if the
+        file has no intact Statistics record or it gives no per-channel counts.
     rosbag2_metadata : the ``serialized_metadata`` YAML rosbag2 embeds, if found.
     lost_in_bad_chunks : topic -> messages listed in the message indexes of CRC-failed chunks.
+    uncounted_loss : topics that lost messages in damaged chunks without message indexes (how many is
+        unknown; the summary's chunk index names the channels).
+    uncounted_loss_any : a damaged chunk without message indexes or chunk index lost messages of channels
+        unknown (any topic may have lost some).
+    channels_complete : the summary repeats every Channel record of the file (a loss cannot hide a topic).
+    messages_seen : message records in the intact part of the file, on every channel.
+    messages_decompressed : messages stored compressed one by one (rosbag2 ``compression_mode: message``)
+        and expanded before being fed.
     orphans : messages on channel ids never defined (their Channel record was lost).
     chunks_read, chunks_without_crc, crc_errors : chunk counts.
     truncated : the file ended before its footer.
@@ -76,6 +87,11 @@ class ScanResult:
     summary_counts: dict[str, int] | None = None
     rosbag2_metadata: str | None = None
     lost_in_bad_chunks: dict[str, int] = field(default_factory=dict)
+    uncounted_loss: set[str] = field(default_factory=set)
+    uncounted_loss_any: bool = False
+    channels_complete: bool = False
+    messages_seen: int = 0
+    messages_decompressed: int = 0
     orphans: int = 0
     chunks_read: int = 0
     chunks_without_crc: int = 0
@@ -129,11 +145,38 @@ class _Scanner:
         self.schemas: dict[int, str] = {}
         self.schema_of: dict[int, int] = {}
         self.bad_chunk_open = False
+        self.bad_chunk_at = -1  # offset of the damaged chunk whose message indexes are being read
+        self.bad_chunk_indexed = False
+        self.lost_channel_counts: dict[int, int] = {}
+        self.uncounted_channels: set[int] = set()
+        self.chunk_channels: dict[int, set[int]] = {}  # chunk offset -> channel ids (summary chunk indexes)
+        self.summary_channel_counts: dict[int, int] | None = None
         self.pending: list[tuple[bytes, np.ndarray]] = []
         self.pending_bytes = 0
 
     def add_schema(self, schema_id: int, name: str) -> None:
         self.schemas[schema_id] = name
+
+    def open_bad_chunk(self, where: int) -> None:
+        """Start counting the loss of the damaged chunk at byte ``where`` from the message indexes after it."""
+        self.close_bad_chunk()
+        self.bad_chunk_open = True
+        self.bad_chunk_at = where
+        self.bad_chunk_indexed = False
+
+    def close_bad_chunk(self) -> None:
+        """End of a damaged chunk's message indexes: without any, its loss is uncounted."""
+        if self.bad_chunk_open and not self.bad_chunk_indexed:
+            self.note_uncounted(self.bad_chunk_at)
+        self.bad_chunk_open = False
+
+    def note_uncounted(self, where: int) -> None:
+        """The chunk at byte ``where`` lost an unknown number of messages (its channels, if indexed)."""
+        channels = self.chunk_channels.get(where)
+        if channels is None:
+            self.result.uncounted_loss_any = True
+        else:
+            self.uncounted_channels |= channels
 
     def add_channel(self, channel_id: int, schema_id: int, topic: str, encoding: str) -> None:
         msgtype = self.schemas.get(schema_id, "")
@@ -163,6 +206,7 @@ class _Scanner:
                 raise ValueError(f"last record runs {pos - end} bytes past the chunk end")
         except (ValueError, struct.error, UnicodeDecodeError) as error:
             self.result.damage.append(f"{self.path.name}: chunk at byte {where}: malformed record ({error})")
+            self.note_uncounted(where)
             if messages and messages[-1] + 9 + 22 > end:
                 messages.pop()
         if messages:
@@ -194,13 +238,30 @@ class _Scanner:
         log_ns = head[:, 15:23].copy().view("<i8")[:, 0]
         offsets = starts + 9 + 22
         inside = (length >= 0) & (offsets + length <= buf.size)
+        self.result.messages_seen += int(inside.sum())
         for cid in np.unique(channel).tolist():
             info = self.result.channels.get(cid)
             mask = (channel == cid) & inside
             if info is None:
                 self.result.orphans += int(mask.sum())
             elif self.sink.wants(info):
-                self.sink.feed(info, buf, offsets[mask], length[mask], log_ns[mask])
+                self.deliver(info, buf, offsets[mask], length[mask], log_ns[mask])
+
+    def deliver(
+        self, info: ChannelInfo, buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray, log_ns: np.ndarray
+    ) -> None:
+        """Feed a wanted channel's messages, first expanding any compressed one by one (rosbag2 message mode)."""
+        if info.encoding == "cdr":
+            plain = decompress_cdr_messages(buf, offsets, lengths, log_ns)
+            self.result.messages_decompressed += plain.decompressed
+            if plain.failed:
+                self.result.damage.append(
+                    f"{self.path.name}: {plain.failed} compressed messages on {info.topic} do not decompress "
+                    f"({plain.first_error}); they are dropped"
+                )
+            buf, offsets, lengths, log_ns = plain.buf, plain.offsets, plain.lengths, plain.log_ns
+        if offsets.size:
+            self.sink.feed(info, buf, offsets, lengths, log_ns)
 
 
 def _summary_crc_ok(path: Path, result: ScanResult) -> bool:
@@ -241,16 +302,27 @@ def _preload_summary(path: Path, scanner: _Scanner) -> None:
         scanner.add_schema(schema.id, schema.name)
     for channel in summary.channels.values():
         scanner.add_channel(channel.id, channel.schema_id, channel.topic, channel.message_encoding)
+    stats = summary.statistics
+    scanner.result.channels_complete = bool(summary.channels) and (
+        stats is None or stats.channel_count == len(summary.channels)
+    )
+    for index in summary.chunk_indexes:
+        if index.message_index_offsets:  # empty when the chunk has no message indexes: no channel list then
+            scanner.chunk_channels[index.chunk_start_offset] = set(index.message_index_offsets)
     if summary.statistics is not None:
-        scanner.result.summary_counts = _topic_counts(summary.statistics.channel_message_counts, scanner.result)
+        scanner.summary_channel_counts = _channel_counts(summary.statistics)
 
 
 def check_mcap_magic(path: Path) -> None:
     """Raise NotABagError unless ``path`` starts with the MCAP magic."""
     with path.open("rb") as stream:
-        head = stream.read(len(MCAP_MAGIC))
-    if head != MCAP_MAGIC:
-        raise NotABagError(f"{path} is not an MCAP file (it does not start with the MCAP magic)")
+        head = stream.read(16)
+    if head.startswith(MCAP_MAGIC):
+        return
+    kind = sniff_compressed_file(head)
+    if kind is not None:
+        raise UnsupportedBagError(f"{path} is {kind}")
+    raise NotABagError(f"{path} is not an MCAP file (it does not start with the MCAP magic)")
 
 
 class _FramingError(Exception):
@@ -307,7 +379,6 @@ def scan_mcap(
     scanner = _Scanner(path, sink, result)
     _preload_summary(path, scanner)
     size = path.stat().st_size
-    lost_channel_counts: dict[int, int] = {}
     with path.open("rb") as stream:
         stream.seek(len(MCAP_MAGIC))
         data_crc = zlib.crc32(MCAP_MAGIC)
@@ -322,35 +393,61 @@ def scan_mcap(
                     continue  # the summary was read (CRC-checked) up front; only its framing is followed here
                 if opcode == _OP_MESSAGE_INDEX:
                     if scanner.bad_chunk_open:
-                        try:
-                            index = MessageIndex.read(ReadDataStream(BytesIO(body)))
-                        except (McapError, ValueError, struct.error):
-                            continue
-                        cid = index.channel_id
-                        lost_channel_counts[cid] = lost_channel_counts.get(cid, 0) + len(index.records)
+                        _count_bad_chunk_index(scanner, body)
                     continue
-                scanner.bad_chunk_open = False
+                scanner.close_bad_chunk()
                 try:
                     _read_record(scanner, opcode, body, offset)
                 except UnsupportedBagError:
                     raise
                 except (McapError, ValueError, struct.error, UnicodeDecodeError) as error:
-                    scanner.bad_chunk_open = opcode == _OP_CHUNK
-                    result.crc_errors += int(opcode == _OP_CHUNK)
+                    if opcode == _OP_CHUNK:
+                        scanner.open_bad_chunk(offset)
+                        result.crc_errors += 1
                     result.damage.append(f"{path.name}: record at byte {offset} is malformed ({error}); skipped")
                 if opcode == _OP_CHUNK and progress is not None:
                     progress(stream.tell())
         except _FramingError as error:
             result.truncated = True
             result.damage.append(f"{path.name}: {error}; nothing after it is read")
+        scanner.close_bad_chunk()
         scanner.flush()
         if progress is not None:
             progress(size)
-    for cid, count in lost_channel_counts.items():
-        info = result.channels.get(cid)
-        topic = info.topic if info is not None else f"<channel {cid}>"
-        result.lost_in_bad_chunks[topic] = result.lost_in_bad_chunks.get(topic, 0) + count
+    _resolve_counts(scanner)
     return result
+
+
+def _count_bad_chunk_index(scanner: _Scanner, body: bytes) -> None:
+    """Add the entries of a message index following a damaged chunk to that channel's loss."""
+    try:
+        index = MessageIndex.read(ReadDataStream(BytesIO(body)))
+    except (McapError, ValueError, struct.error):
+        return  # a damaged index: if no other one counts this chunk, its loss stays uncounted
+    scanner.bad_chunk_indexed = True
+    cid = index.channel_id
+    scanner.lost_channel_counts[cid] = scanner.lost_channel_counts.get(cid, 0) + len(index.records)
+
+
+def _topic_of(result: ScanResult, cid: int) -> str:
+    info = result.channels.get(cid)
+    return info.topic if info is not None else f"<channel {cid}>"
+
+
+def _resolve_counts(scanner: _Scanner) -> None:
+    """Name per topic the per-channel counts (statistics, losses), now that every Channel record was seen.
+
+    A summary need not repeat the Channel records (rosbag2 ``noRepeatedChannels``, mcap
+    ``repeat_channels=False``): its Statistics counts by channel id then resolve only with the channels
+    defined in the data section.
+    """
+    result = scanner.result
+    for cid, count in scanner.lost_channel_counts.items():
+        topic = _topic_of(result, cid)
+        result.lost_in_bad_chunks[topic] = result.lost_in_bad_chunks.get(topic, 0) + count
+    result.uncounted_loss |= {_topic_of(result, cid) for cid in scanner.uncounted_channels}
+    if scanner.summary_channel_counts is not None:
+        result.summary_counts = _topic_counts(scanner.summary_channel_counts, result)
 
 
 def _check_data_crc(result: ScanResult, path: Path, body: bytes, computed: int) -> None:
@@ -375,21 +472,28 @@ def _read_record(scanner: _Scanner, opcode: int, body: bytes, offset: int) -> No
         scanner.add_channel(*_parse_channel(body, 0))
     elif opcode == _OP_MESSAGE:
         _read_loose_message(scanner, Message.read(ReadDataStream(BytesIO(body)), len(body)))
-    elif opcode == _OP_STATISTICS and result.summary_counts is None:
-        statistics = Statistics.read(ReadDataStream(BytesIO(body)))
-        result.summary_counts = _topic_counts(statistics.channel_message_counts, result)
+    elif opcode == _OP_STATISTICS and scanner.summary_channel_counts is None:
+        scanner.summary_channel_counts = _channel_counts(Statistics.read(ReadDataStream(BytesIO(body))))
     elif opcode == _OP_METADATA:
         metadata = Metadata.read(ReadDataStream(BytesIO(body)))
         if metadata.name == "rosbag2":
             result.rosbag2_metadata = metadata.metadata.get("serialized_metadata")
 
 
+def _channel_counts(statistics: Statistics) -> dict[int, int] | None:
+    """Per-channel message counts of a Statistics record; None if it has messages but no per-channel counts
+    (the field is optional: an empty map then means unknown, not zero)."""
+    counts = {int(cid): int(n) for cid, n in statistics.channel_message_counts.items()}
+    if statistics.message_count and sum(counts.values()) != statistics.message_count:
+        return None
+    return counts
+
+
 def _topic_counts(channel_counts: dict[int, int], result: ScanResult) -> dict[str, int]:
     counts: dict[str, int] = {}
     for cid, count in channel_counts.items():
-        info = result.channels.get(cid)
-        if info is not None:
-            counts[info.topic] = counts.get(info.topic, 0) + int(count)
+        topic = _topic_of(result, cid)
+        counts[topic] = counts.get(topic, 0) + count
     return counts
 
 
@@ -401,14 +505,14 @@ def _read_chunk(scanner: _Scanner, chunk: Chunk, where: int) -> None:
         raise
     except Exception as error:  # any decompressor failure is damage
         result.crc_errors += 1
-        scanner.bad_chunk_open = True
+        scanner.open_bad_chunk(where)
         result.damage.append(f"{scanner.path.name}: chunk at byte {where} does not decompress ({error})")
         return
     if chunk.uncompressed_crc == 0:
         result.chunks_without_crc += 1
     elif zlib.crc32(data) != chunk.uncompressed_crc:
         result.crc_errors += 1
-        scanner.bad_chunk_open = True
+        scanner.open_bad_chunk(where)
         result.damage.append(
             f"{scanner.path.name}: chunk at byte {where} fails its CRC "
             f"(stored {chunk.uncompressed_crc:#010x}, computed {zlib.crc32(data):#010x}); its messages are dropped"
@@ -421,13 +525,14 @@ def _read_chunk(scanner: _Scanner, chunk: Chunk, where: int) -> None:
 
 
 def _read_loose_message(scanner: _Scanner, message: Message) -> None:
+    scanner.result.messages_seen += 1
     info = scanner.result.channels.get(message.channel_id)
     if info is None:
         scanner.result.orphans += 1
         return
     if scanner.sink.wants(info):
         data = bytes(message.data)
-        scanner.sink.feed(
+        scanner.deliver(
             info,
             np.frombuffer(data, dtype=np.uint8),
             np.zeros(1, dtype=np.int64),

@@ -35,6 +35,7 @@ class BagMetadata:
     message_count: int
     topics: dict[str, TopicEntry] = field(default_factory=dict)
     compression_mode: str = ""
+    compression_format: str = ""
 
 
 def _loader() -> type[yaml.SafeLoader]:
@@ -68,6 +69,7 @@ def read_metadata(path: Path) -> BagMetadata:
             message_count=int(info.get("message_count", 0)),
             topics=topics,
             compression_mode=str(info.get("compression_mode") or ""),
+            compression_format=str(info.get("compression_format") or ""),
         )
     except (yaml.YAMLError, KeyError, TypeError, ValueError, UnicodeDecodeError) as error:
         raise NotABagError(f"{path} is not a rosbag2 metadata file ({error.__class__.__name__}: {error})") from None

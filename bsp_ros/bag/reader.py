@@ -13,15 +13,14 @@ from rosbags.typesys import Stores, get_typestore
 from bsp_ros.bag.cdr import FIXED_LAYOUT_FLOATS, decode_fixed
 from bsp_ros.bag.errors import (
     BagCorruptError,
-    BagNotFoundError,
     EmptyBagError,
     MessageTypeError,
     MissingTopicError,
-    NotABagError,
     UnsupportedBagError,
 )
-from bsp_ros.bag.mcap_scan import ChannelInfo, ProgressCallback, ScanResult, check_mcap_magic, scan_mcap
-from bsp_ros.bag.metadata import METADATA_FILE, BagMetadata, read_metadata
+from bsp_ros.bag.layout import resolve_bag
+from bsp_ros.bag.mcap_scan import ChannelInfo, ProgressCallback, ScanResult, scan_mcap
+from bsp_ros.bag.metadata import BagMetadata
 from bsp_ros.bag.report import ReadReport, TopicReport
 from bsp_ros.bag.topics import TF_TYPE, WORLD_FRAME, TopicMap
 from bsp_ros.core.streams import MarkerSeries, Session, WrenchSeries
@@ -172,38 +171,11 @@ def _collect(stream: _Stream | None, n_floats: int) -> tuple[np.ndarray, np.ndar
 
 
 def _resolve_files(path: Path, report: ReadReport) -> tuple[list[Path], BagMetadata | None]:
-    if not path.exists():
-        raise BagNotFoundError(str(path))
-    if path.is_file():
-        if path.name == METADATA_FILE:
-            return _resolve_files(path.parent, report)
-        check_mcap_magic(path)
-        return [path], None
-    meta_path = path / METADATA_FILE
-    if not meta_path.is_file():
-        files = sorted(path.glob("*.mcap"))
-        if not files:
-            raise NotABagError(f"{path} is not a bag: it has neither {METADATA_FILE} nor an .mcap file")
-        report.warnings.append(f"{path} has no {METADATA_FILE}: expected counts come from the MCAP summary")
-        return files, None
-    metadata = read_metadata(meta_path)
-    if metadata.storage_identifier != "mcap":
-        raise UnsupportedBagError(
-            f"{path} uses storage {metadata.storage_identifier!r}; only mcap is read "
-            "(convert it with `ros2 bag convert` or `rosbags-convert`)"
-        )
-    if metadata.compression_mode == "file":
-        raise UnsupportedBagError(f"{path} is file-compressed; decompress it first (`ros2 bag decompress`)")
-    files = []
-    for name in metadata.relative_file_paths:
-        file = path / name
-        if file.is_file():
-            files.append(file)
-        else:
-            report.damage.append(f"{name}: listed in {METADATA_FILE} but missing")
-    if not files and metadata.relative_file_paths:
-        raise BagCorruptError(f"{path}: none of its files {list(metadata.relative_file_paths)} exists")
-    return files, metadata
+    """The bag's MCAP files and metadata (:func:`bsp_ros.bag.layout.resolve_bag`), noting its findings."""
+    layout = resolve_bag(path)
+    report.warnings.extend(layout.warnings)
+    report.damage.extend(layout.damage)
+    return layout.files, layout.metadata
 
 
 def _topic_report(stream: _Stream | None, topic: str, msgtype: str, expected: int | None) -> TopicReport:
@@ -213,15 +185,47 @@ def _topic_report(stream: _Stream | None, topic: str, msgtype: str, expected: in
     return report
 
 
-def _finish_counts(report: TopicReport, read: int, bad_chunk_loss: int, warnings: list[str]) -> None:
+@dataclass
+class _Losses:
+    """What the scans know of the messages lost to damage, for topics whose expected count is unknown.
+
+    Attributes
+    ----------
+    counted : topic -> messages listed in the message indexes of damaged chunks.
+    uncounted : topics that lost an unknown number of messages (damaged chunks without message indexes).
+    unknown : some loss cannot be attributed to a topic (truncation, damaged chunks of unknown channels,
+        channels defined only in lost parts): any topic may have lost messages.
+    """
+
+    counted: dict[str, int] = field(default_factory=dict)
+    uncounted: set[str] = field(default_factory=set)
+    unknown: bool = False
+
+    def add(self, scan: ScanResult) -> None:
+        for topic, count in scan.lost_in_bad_chunks.items():
+            self.counted[topic] = self.counted.get(topic, 0) + count
+        self.uncounted |= scan.uncounted_loss
+        self.unknown = self.unknown or scan.truncated or scan.uncounted_loss_any
+        self.unknown = self.unknown or any(t.startswith("<channel ") for t in scan.lost_in_bad_chunks)
+
+    def of(self, topic: str, damaged: bool) -> int | None:
+        """Messages of ``topic`` lost, None if unknown (never 0 where messages may have been lost)."""
+        if topic in self.uncounted or (damaged and self.unknown):
+            return None
+        if topic in self.counted:
+            return self.counted[topic]
+        return 0 if damaged else None
+
+
+def _finish_counts(report: TopicReport, read: int, lost_to_damage: int | None, warnings: list[str]) -> None:
     report.read = read
     if report.expected is not None:
         missing = report.expected - read - report.undecodable
         if missing < 0:
             warnings.append(f"{report.topic}: {read} messages read but the bag lists only {report.expected}")
         report.lost = max(0, missing)
-    elif bad_chunk_loss:
-        report.lost = bad_chunk_loss
+    else:
+        report.lost = lost_to_damage
     if report.lost:
         warnings.append(f"{report.topic}: {report.lost} of {report.expected or '?'} messages lost")
     if report.undecodable:
@@ -350,14 +354,19 @@ def read_session(
         raise UnsupportedBagError("; ".join(sorted(set(sink.unsupported))))
 
     expected_counts = _expected_counts(metadata, scans)
-    bad_chunk_loss: dict[str, int] = {}
+    losses = _Losses()
     for scan in scans:
-        for topic, count in scan.lost_in_bad_chunks.items():
-            bad_chunk_loss[topic] = bad_chunk_loss.get(topic, 0) + count
+        losses.add(scan)
 
-    total_expected = sum(expected_counts.values()) if expected_counts is not None else None
-    nothing_read = not any(s.t_ns or s.transforms for s in sink.streams.values())
-    if not report.present or (total_expected == 0 and nothing_read):
+    total_expected = sum(expected_counts.values()) if expected_counts is not None else 0
+    seen = sum(scan.messages_seen for scan in scans)
+    orphans = sum(scan.orphans for scan in scans)
+    nothing_lost = not (losses.counted or losses.uncounted or losses.unknown)
+    if not report.present or (seen == 0 and total_expected == 0 and nothing_lost):
+        if report.damaged:
+            raise BagCorruptError(
+                f"{root}: no intact message survives ({'; '.join(report.damage)})", report.crc_errors, None
+            )
         raise EmptyBagError(f"{root} holds no messages")
 
     # Streams.
@@ -372,7 +381,7 @@ def read_session(
         expected = None if expected_counts is None else expected_counts.get(topic, 0)
         stream = sink.streams.get(topic)
         rep = _topic_report(stream, topic, report.present.get(topic, expected_types[topic]), expected)
-        _finish_counts(rep, read, bad_chunk_loss.get(topic, 0), report.warnings)
+        _finish_counts(rep, read, losses.of(topic, report.damaged), report.warnings)
         report.topics[topic] = rep
         return rep
 
@@ -422,10 +431,10 @@ def read_session(
         )
     for line in report.damage:
         report.warnings.append(f"damage: {line}")
-    if report.damaged and expected_counts is None:
+    if report.damaged and report.lost_messages is None:
         report.warnings.append(
-            "the bag is damaged and neither metadata.yaml nor an MCAP summary gives message counts: "
-            "the number of lost messages is unknown" + (" (CRC-failed chunks are counted)" if bad_chunk_loss else "")
+            "the bag is damaged and neither metadata.yaml, an MCAP summary nor the message indexes of the damaged "
+            "chunks give the message counts: the number of lost messages is unknown"
         )
 
     # Required streams.
@@ -433,16 +442,18 @@ def read_session(
         (m, topic_map.markers[m], marker_data[m][0].size if m in marker_data else 0) for m in REQUIRED_MARKERS
     ]:
         if topic not in report.present and (name == "wrench" or name not in marker_data):
-            raise MissingTopicError(topic, report.present)
-        if count == 0:
-            if report.damaged:
+            if metadata is None and not all(scan.channels_complete for scan in scans) and (losses.unknown or orphans):
+                # Without metadata.yaml the topic list comes from the Channel records that survived, and some
+                # loss belongs to a channel unknown: the topic may have been lost, not missing.
                 raise BagCorruptError(
-                    f"{topic}: no intact message survives ({report.crc_errors} CRC errors; "
-                    f"{'truncated; ' if report.truncated else ''}{'; '.join(report.damage)})",
+                    f"required topic {topic} is not among the topics that survive the damage "
+                    f"({', '.join(sorted(report.present)) or 'none'}; {'; '.join(report.damage)})",
                     report.crc_errors,
                     report.lost_messages,
                 )
-            raise MissingTopicError(topic, report.present, detail="has no messages")
+            raise MissingTopicError(topic, report.present)
+        if count == 0:
+            _refuse_empty_stream(topic, report, sink.streams.get(topic))
     if len(frames_w) > 1:
         raise UnsupportedBagError(f"{wrench_topic} carries several frame ids {frames_w}: one is expected")
 
@@ -477,6 +488,23 @@ def read_session(
     receive = {"wrench": log_w}
     receive.update({name: data[4] for name, data in marker_data.items() if data[0].size})
     return BagRead(session, report, receive)
+
+
+def _refuse_empty_stream(topic: str, report: ReadReport, stream: _Stream | None) -> None:
+    """Raise the error that says why a required topic returned no message."""
+    rep = report.topics.get(topic)
+    if report.damaged or (rep is not None and (rep.lost or rep.undecodable)):
+        causes = [f"{report.crc_errors} CRC errors"] + (["truncated"] if report.truncated else [])
+        if rep is not None and rep.lost:
+            causes.append(f"{rep.lost} of the {rep.expected} messages the bag lists are not in its files")
+        if rep is not None and rep.undecodable and stream is not None:
+            causes.append(f"{rep.undecodable} messages do not decode ({stream.first_error})")
+        raise BagCorruptError(
+            f"{topic}: no intact message survives ({'; '.join(causes + report.damage)})",
+            report.crc_errors,
+            report.lost_messages,
+        )
+    raise MissingTopicError(topic, report.present, detail="has no messages")
 
 
 def _usable_transform(sample: TransformSample) -> bool:

@@ -8,10 +8,16 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from bsp_ros.bag.errors import EmptyBagError, MessageTypeError, MissingTopicError, UnsupportedBagError
+from bsp_ros.bag.errors import (
+    BagCorruptError,
+    EmptyBagError,
+    MessageTypeError,
+    MissingTopicError,
+    UnsupportedBagError,
+)
+from bsp_ros.bag.layout import resolve_bag
 from bsp_ros.bag.mcap_scan import scan_mcap
-from bsp_ros.bag.reader import _collect, _resolve_files, _SessionSink, _usable_transform
-from bsp_ros.bag.report import ReadReport
+from bsp_ros.bag.reader import _collect, _SessionSink, _usable_transform
 from bsp_ros.bag.topics import WORLD_FRAME, TopicMap
 from msg_adapters import TransformSample, rotation_between
 
@@ -70,13 +76,18 @@ def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame:
     topic_map = topics or TopicMap()
     wanted = TopicMap(topic_map.wrench, {}, topic_map.tf_static, topic_map.tf)
     root = Path(path)
-    report = ReadReport(path=str(root))
-    files, _ = _resolve_files(root, report)
+    layout = resolve_bag(root)
     sink = _SessionSink(wanted)
     present: dict[str, str] = {}
-    warnings = list(report.warnings) + [f"damage: {d}" for d in report.damage]
-    for file in files:
+    warnings = list(layout.warnings) + [f"damage: {d}" for d in layout.damage]
+    seen = 0
+    damage = list(layout.damage)
+    complete = True
+    for file in layout.files:
         scan = scan_mcap(file, sink)
+        seen += scan.messages_seen
+        complete = complete and scan.channels_complete
+        damage += scan.damage
         present.update({c.topic: c.msgtype for c in scan.channels.values()})
         if scan.crc_errors or scan.truncated:
             warnings.append(f"{file.name}: {scan.crc_errors} CRC errors, truncated={scan.truncated}")
@@ -85,12 +96,16 @@ def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame:
         raise MessageTypeError(topic, wanted.expected_types()[topic], found)
     if sink.unsupported:
         raise UnsupportedBagError("; ".join(sorted(set(sink.unsupported))))
-    if not present:
+    if (not present or seen == 0) and not damage:
         raise EmptyBagError(f"{root} holds no messages")
     t_ns, values, _, frames, _ = _collect(sink.streams.get(wanted.wrench), 6)
     if wanted.wrench not in present:
+        if damage and not complete and layout.metadata is None:  # its channel may have been in the damaged part
+            raise BagCorruptError(f"{wanted.wrench} is not among the topics that survive ({'; '.join(damage)})")
         raise MissingTopicError(wanted.wrench, present)
     if t_ns.size == 0:
+        if damage:
+            raise BagCorruptError(f"{wanted.wrench}: no intact message survives ({'; '.join(damage)})")
         raise MissingTopicError(wanted.wrench, present, detail="has no messages")
     if len(frames) > 1:
         raise UnsupportedBagError(f"{wanted.wrench} carries several frame ids {frames}: one is expected")

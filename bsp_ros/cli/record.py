@@ -19,8 +19,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "Subscribe to ROS 2 topics (rclpy, serialized messages) and write a rosbag2 bag (metadata.yaml "
             "version 9 and one .mcap with small CRC-checked chunks, flushed every 0.25 s, so a killed recorder "
             "loses well under a second). Types come from the publishers or from TOPIC:TYPE (a type whose message "
-            "package is not installed is refused). Stop with Ctrl-C/SIGTERM or --duration. "
-            "Never name the bag after a person."
+            "package is not installed is refused). Each topic's metadata lists the QoS its publishers offered, as "
+            "rosbag2 records it. Stop with Ctrl-C/SIGTERM or --duration. Exit codes: 0 recorded, 2 bad argument "
+            "(topic or type name, a type not installed), 3 nothing recorded (no message arrived: no bag is left), "
+            "4 the bag exists, 6 no rclpy. Never name the bag after a person."
         ),
     )
     parser.add_argument("topics", nargs="+", metavar="TOPIC", help="topic, or TOPIC:pkg/msg/Type")
@@ -45,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     def subscribed(topic: str, msgtype: str) -> None:
         print(f"subscribed {topic} [{msgtype}]", flush=True)
 
-    print(f"recording {len(specs)} topics into {args.out}", flush=True)
+    print(f"recording {len(specs)} topic{'' if len(specs) == 1 else 's'} into {args.out}", flush=True)
     with stop_on_signals() as stop:
         report = record(
             specs,

@@ -14,10 +14,10 @@ from typing import Any
 
 from bsp_ros import __version__
 from bsp_ros.bag.errors import BagWriteError
-from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, dump_metadata, dump_qos, qos_profile
-from bsp_ros.errors import InputError
+from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, dump_metadata, dump_qos
+from bsp_ros.errors import DataError, InputError, RuntimeBackendError
 
-__all__ = ["RecordReport", "TopicSpec", "parse_topic_specs", "record", "subscription_qos"]
+__all__ = ["RecordReport", "TopicSpec", "offered_profile", "parse_topic_specs", "record", "subscription_qos"]
 
 _LOG = logging.getLogger("bsp_ros.live.recorder")
 
@@ -90,6 +90,39 @@ def subscription_qos(topic: str, offered: Sequence[tuple[bool, bool]]) -> tuple[
     return reliable, durable
 
 
+def _duration(value: Any) -> dict[str, int]:
+    """An rclpy Duration as rosbag2 writes it: ``{sec, nsec}`` (RMW_DURATION_INFINITE: 9223372036 s 854775807 ns)."""
+    ns = int(value.nanoseconds)
+    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+
+
+def offered_profile(qos: Any) -> dict[str, Any]:
+    """A publisher's QoS (rclpy ``QoSProfile`` from the graph) as rosbag2 (metadata version 9) records it in
+    ``offered_qos_profiles``: policies as lower-case names (the graph reports ``history: unknown``, depth 0)."""
+    return {
+        "history": qos.history.name.lower(),
+        "depth": int(qos.depth),
+        "reliability": qos.reliability.name.lower(),
+        "durability": qos.durability.name.lower(),
+        "deadline": _duration(qos.deadline),
+        "lifespan": _duration(qos.lifespan),
+        "liveliness": qos.liveliness.name.lower(),
+        "liveliness_lease_duration": _duration(qos.liveliness_lease_duration),
+        "avoid_ros_namespace_conventions": bool(qos.avoid_ros_namespace_conventions),
+    }
+
+
+@dataclass
+class _Publisher:
+    """A publisher found in the ROS graph: its type, its offered QoS as rosbag2 records it, and the two
+    policies the subscription adapts to."""
+
+    msgtype: str
+    profile: dict[str, Any]
+    reliable: bool
+    transient_local: bool
+
+
 @dataclass
 class RecordReport:
     """What a recording wrote.
@@ -127,7 +160,7 @@ class _Sub:
     msgtype: str
     subscription: Any
     channel_id: int
-    qos: dict[str, Any]
+    offered: dict[bytes, dict[str, Any]]  # publisher gid -> its offered QoS, every publisher seen
     inbox: list[tuple[int, bytes]] = field(default_factory=list)
     count: int = 0
 
@@ -161,25 +194,33 @@ class _Recorder:
         self.end_ns = 0
         self.unflushed = 0
 
-    def discovered(self, topics: Sequence[str]) -> dict[str, tuple[set[str], list[tuple[bool, bool]]]]:
-        """ROS topic -> (ROS types, [(reliable, transient_local)]) of the publishers of ``topics`` in the graph."""
+    def discovered(self, topics: Sequence[str]) -> dict[str, dict[bytes, _Publisher]]:
+        """ROS topic -> {publisher gid: publisher} of ``topics`` (rclpy ``get_publishers_info_by_topic``)."""
         from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
-        found: dict[str, tuple[set[str], list[tuple[bool, bool]]]] = {}
+        found: dict[str, dict[bytes, _Publisher]] = {}
         for topic in topics:
             for info in self.client.node.get_publishers_info_by_topic(topic):
-                types, offered = found.setdefault(topic, (set(), []))
-                types.add(info.topic_type)
                 qos = info.qos_profile
-                offered.append(
-                    (
-                        qos.reliability == ReliabilityPolicy.RELIABLE,
-                        qos.durability == DurabilityPolicy.TRANSIENT_LOCAL,
-                    )
+                found.setdefault(topic, {})[bytes(info.endpoint_gid)] = _Publisher(
+                    info.topic_type,
+                    offered_profile(qos),
+                    qos.reliability == ReliabilityPolicy.RELIABLE,
+                    qos.durability == DurabilityPolicy.TRANSIENT_LOCAL,
                 )
         return found
 
-    def subscribe(self, topic: str, msgtype: str, reliable: bool, durable: bool) -> _Sub:
+    def note_publishers(self) -> None:
+        """Add the publishers now in the graph to each topic's offered profiles (late joiners too)."""
+        for topic, publishers in self.discovered(list(self.subs)).items():
+            sub = self.subs[topic]
+            for gid, publisher in publishers.items():
+                if publisher.msgtype == sub.msgtype:
+                    sub.offered.setdefault(gid, publisher.profile)
+
+    def subscribe(
+        self, topic: str, msgtype: str, reliable: bool, durable: bool, offered: dict[bytes, dict[str, Any]]
+    ) -> _Sub:
         """Create the raw subscription and register the MCAP channel of a topic."""
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -192,16 +233,18 @@ class _Recorder:
             except Exception as exc:  # rosbags: a type outside its Jazzy store
                 raise InputError(f"{topic}: no message definition of {msgtype} to store in the bag: {exc}") from exc
             self.schemas[msgtype] = self.writer.register_schema(msgtype, "ros2msg", msgdef.encode("utf-8"))
-        profile = qos_profile(transient_local=durable, depth=1 if durable else 10)
-        if not reliable:
-            profile["reliability"] = "best_effort"
+        # As rosbag2: the channel carries the offered QoS of the publishers known when it is subscribed (the
+        # metadata.yaml written at the end lists every publisher seen during the recording).
         channel_id = self.writer.register_channel(
             topic,
             "cdr",
             self.schemas[msgtype],
-            {"offered_qos_profiles": dump_qos([profile]), "topic_type_hash": self.typestore.hash_rihs01(msgtype)},
+            {
+                "offered_qos_profiles": dump_qos(list(offered.values())),
+                "topic_type_hash": self.typestore.hash_rihs01(msgtype),
+            },
         )
-        sub = _Sub(topic, msgtype, None, channel_id, profile)
+        sub = _Sub(topic, msgtype, None, channel_id, dict(offered))
         qos = QoSProfile(
             history=HistoryPolicy.KEEP_ALL,
             reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
@@ -229,8 +272,10 @@ class _Recorder:
                 self.writer.add_message(sub.channel_id, log_time=now, data=data, publish_time=now, sequence=sub.count)
                 sub.count += 1
             if inbox:
-                self.start_ns = self.start_ns or inbox[0][0]
-                self.end_ns = inbox[-1][0]
+                # The recording spans every topic: earliest and latest receive time over all of them.
+                first = min(now for now, _ in inbox)
+                self.start_ns = min(self.start_ns, first) if self.start_ns else first
+                self.end_ns = max(self.end_ns, max(now for now, _ in inbox))
             total += len(inbox)
         self.unflushed += total
         return total
@@ -244,7 +289,7 @@ class _Recorder:
     def finish(self) -> list[TopicRecord]:
         """Write the summary, footer and the rosbag2 metadata record; returns the topics."""
         records = [
-            TopicRecord(s.topic, s.msgtype, self.typestore.hash_rihs01(s.msgtype), (s.qos,), s.count)
+            TopicRecord(s.topic, s.msgtype, self.typestore.hash_rihs01(s.msgtype), tuple(s.offered.values()), s.count)
             for s in self.subs.values()
         ]
         meta = build_metadata(self.mcap_name, records, self.start_ns, self.end_ns, self._custom())
@@ -316,11 +361,15 @@ def record(
     out = Path(out_dir)
     if out.exists():
         raise BagWriteError(f"{out} exists already: refusing to overwrite a bag")
-    from bsp_ros.live.runtime.ros import message_class
+    from bsp_ros.live.runtime.ros import message_class, require_rclpy
 
+    require_rclpy()  # no middleware: 6; past this, a type that cannot be loaded is a bad argument
     for spec in specs:
         if spec.msgtype is not None:
-            message_class(spec.msgtype)  # a type not installed fails now, naming it and its package
+            try:
+                message_class(spec.msgtype)  # a type not installed fails now, naming it and its package
+            except RuntimeBackendError as error:
+                raise InputError(f"{spec.topic}:{spec.msgtype}: {error}") from None
     stop = stop or threading.Event()
     out.mkdir(parents=True)
     report = RecordReport(path=str(out))
@@ -348,6 +397,8 @@ def record(
                 last_flush = time.monotonic()
         rec.spin(0.05)  # what arrived meanwhile
         rec.take_all()
+        if rec.subs:
+            rec.note_publishers()
         records = rec.finish()
         report.counts = {r.name: r.message_count for r in records}
         report.types = {r.name: r.msgtype for r in records}
@@ -362,7 +413,25 @@ def record(
         rec.close()
     for topic in report.missing:
         report.warnings.append(f"{topic}: no publisher with a known type appeared; not recorded")
+    if not any(report.counts.values()):
+        _remove_empty_bag(out, rec.mcap_name)
+        heard = ", ".join(f"{t} [{m}]" for t, m in report.types.items()) or "none"
+        raise DataError(
+            f"nothing was recorded in {report.wall_s:.1f} s: no message arrived (topics subscribed: {heard}; "
+            f"no publisher found: {', '.join(report.missing) or 'none'}); no bag was left at {out}"
+            + "".join(f"; {w}" for w in report.warnings if "cannot subscribe" in w)
+        )
     return report
+
+
+def _remove_empty_bag(out: Path, mcap_name: str) -> None:
+    """Delete the bag directory this recording created, holding no message (only its own two files)."""
+    for name in (mcap_name, METADATA_FILE, METADATA_FILE + ".tmp"):
+        (out / name).unlink(missing_ok=True)
+    try:
+        out.rmdir()
+    except OSError:  # something else was put there meanwhile: leave it
+        _LOG.warning("%s is not empty; left in place", out)
 
 
 def _subscribe_pending(
@@ -373,7 +442,8 @@ def _subscribe_pending(
 ) -> None:
     found = rec.discovered(list(pending))
     for topic, spec in list(pending.items()):
-        types, offered = found.get(topic, (set(), []))
+        publishers = found.get(topic, {})
+        types = {p.msgtype for p in publishers.values()}
         msgtype = spec.msgtype
         if msgtype is None:
             if not types:
@@ -386,8 +456,9 @@ def _subscribe_pending(
         from bsp_ros.errors import BspError
 
         try:
-            reliable, durable = subscription_qos(topic, offered)
-            rec.subscribe(topic, msgtype, reliable, durable)
+            matching = {gid: p for gid, p in publishers.items() if p.msgtype == msgtype}
+            reliable, durable = subscription_qos(topic, [(p.reliable, p.transient_local) for p in matching.values()])
+            rec.subscribe(topic, msgtype, reliable, durable, {gid: p.profile for gid, p in matching.items()})
         except BspError as error:
             report.warnings.append(f"{topic}: cannot subscribe ({error})")
             _LOG.warning("%s: cannot subscribe (%s)", topic, error)

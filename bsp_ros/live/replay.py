@@ -14,8 +14,9 @@ from typing import Any
 import numpy as np
 import yaml
 
-from bsp_ros.bag.errors import BagNotFoundError, NotABagError, UnsupportedBagError
-from bsp_ros.bag.mcap_scan import ChannelInfo, ScanResult, check_mcap_magic, scan_mcap
+from bsp_ros.bag.errors import NotABagError
+from bsp_ros.bag.layout import resolve_bag
+from bsp_ros.bag.mcap_scan import ChannelInfo, ScanResult, scan_mcap
 from bsp_ros.bag.metadata import METADATA_FILE, read_metadata
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.runtime.qos import QosSpec
@@ -172,30 +173,24 @@ def bag_files(path: str | Path) -> tuple[list[Path], Path | None]:
     Returns
     -------
     (files, metadata_path)
+
+    Raises
+    ------
+    BagError subclasses
+        As :func:`bsp_ros.bag.layout.resolve_bag` (other storage or file compression: unsupported).
     """
-    root = Path(path)
-    if not root.exists():
-        raise BagNotFoundError(str(root))
-    if root.is_file() and root.name == METADATA_FILE:
-        root = root.parent
-    if root.is_file():
-        check_mcap_magic(root)
-        return [root], None
-    meta = root / METADATA_FILE
-    if meta.is_file():
-        metadata = read_metadata(meta)
-        if metadata.storage_identifier != "mcap":
-            raise UnsupportedBagError(f"{root} uses storage {metadata.storage_identifier!r}; only mcap is played")
-        if metadata.compression_mode == "file":
-            raise UnsupportedBagError(f"{root} is file-compressed; decompress it first (`ros2 bag decompress`)")
-        files = [root / name for name in metadata.relative_file_paths if (root / name).is_file()]
-        if not files:
-            raise NotABagError(f"{root}: none of the files listed in {METADATA_FILE} exists")
-        return files, meta
-    files = sorted(root.glob("*.mcap"))
-    if not files:
-        raise NotABagError(f"{root} is not a bag: it has neither {METADATA_FILE} nor an .mcap file")
-    return files, None
+    layout = resolve_bag(path)
+    if not layout.files:
+        raise NotABagError(f"{path}: {METADATA_FILE} lists no file")
+    return layout.files, layout.metadata_path
+
+
+def _transient_local(durability: object) -> bool:
+    """A recorded durability policy: a name (metadata version 9) or rmw's enum value (older rosbag2 writes
+    ``durability: 1``, RMW_QOS_POLICY_DURABILITY_TRANSIENT_LOCAL)."""
+    if isinstance(durability, int) and not isinstance(durability, bool):
+        return durability == 1
+    return str(durability or "").lower().startswith("transient_local")
 
 
 def _latched_from_metadata(meta: Path) -> set[str]:
@@ -208,7 +203,7 @@ def _latched_from_metadata(meta: Path) -> set[str]:
             profiles = topic.get("offered_qos_profiles") or []
             if isinstance(profiles, str):  # rosbag2 before version 9 stores a YAML string
                 profiles = yaml.safe_load(profiles) or []
-            if profiles and all(str(p.get("durability", "")).startswith("transient_local") for p in profiles):
+            if profiles and all(_transient_local(p.get("durability")) for p in profiles):
                 latched.add(str(topic["name"]))
         return latched
     except (yaml.YAMLError, KeyError, TypeError, AttributeError):

@@ -296,9 +296,83 @@ def test_tf_static_without_tf2_msgs_is_skipped_by_name_and_clock_runs(
         assert "/tf_static" in stdout + stderr and "tf2_msgs/msg/TFMessage" in stdout + stderr
 
 
-def test_record_refuses_a_type_that_is_not_installed(tmp_path: Path) -> None:
-    recorder = _bsp("record", "/x:no_such_msgs/msg/Nothing", "--out", tmp_path / "bag", "--domain", _domain(5))
+@pytest.mark.parametrize("spec", ["/x:no_such_msgs/msg/Nothing", "/foo:geometry_msgs/msg/Nope"])
+def test_record_refuses_a_type_that_is_not_installed_as_a_bad_argument(spec: str, tmp_path: Path) -> None:
+    recorder = _bsp("record", spec, "--out", tmp_path / "bag", "--domain", _domain(5))
     _, err = recorder.communicate(timeout=30)
-    assert recorder.returncode != 0
-    assert "no_such_msgs/msg/Nothing" in err and "no_such_msgs" in err and "Traceback" not in err
+    assert recorder.returncode == 2, err  # README: 2 bad argument (6 is for a middleware that cannot start)
+    msgtype = spec.partition(":")[2]
+    assert msgtype in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "bag").exists()
+
+
+def test_record_of_a_topic_nobody_publishes_leaves_no_bag_and_says_so(tmp_path: Path) -> None:
+    out = tmp_path / "rec1"
+    recorder = _bsp("record", "--out", out, "/nonexistent_topic", "--duration", 2, "--domain", _domain(6))
+    stdout, err = recorder.communicate(timeout=30)
+    assert recorder.returncode == 3, (stdout, err)  # README: 3 the data cannot be used (nothing recorded)
+    assert "recording 1 topic into" in stdout
+    assert "nothing was recorded" in err and "/nonexistent_topic" in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_record_lists_the_publishers_offered_qos_and_spans_every_topic(
+    tmp_path: Path, procs: list[subprocess.Popen[str]]
+) -> None:
+    """A reliable publisher on a sensor topic (the recorder subscribes best effort) is recorded as reliable,
+    as rosbag2 records the offered profiles; the duration and files[] span the earliest to the latest
+    receive time over all topics."""
+    from bsp_ros.live.runtime.qos import QosSpec
+    from bsp_ros.live.runtime.ros import Client, message_class
+
+    domain = _domain(7)
+    out = tmp_path / "qos"
+    wrench_cls = message_class("geometry_msgs/msg/WrenchStamped")
+    pose_cls = message_class("geometry_msgs/msg/PoseStamped")
+    with Client("qos_publisher", domain) as client:
+        reliable = client.publisher("geometry_msgs/msg/WrenchStamped", "/ft_sensor/wrench", QosSpec(True, 10))
+        durable = client.publisher("geometry_msgs/msg/PoseStamped", "/mocap/hand", QosSpec(True, 1, True))
+        recorder = _bsp("record", "/ft_sensor/wrench", "/mocap/hand", "--out", out, "--domain", domain)
+        procs.append(recorder)
+        _wait_line(recorder, "recording")
+        deadline = time.monotonic() + 20
+        sent = 0
+        while time.monotonic() < deadline and sent < 300:
+            if recorder.poll() is not None:
+                break
+            reliable.publish(wrench_cls())
+            if sent % 3 == 0:
+                durable.publish(pose_cls())
+            sent += 1
+            client.spin(0.01)
+        time.sleep(0.5)
+        recorder.send_signal(signal.SIGINT)
+        _, err = recorder.communicate(timeout=20)
+    assert recorder.returncode == 0, err
+    meta = yaml.safe_load((out / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    topics = [t["topic_metadata"] for t in meta["topics_with_message_count"]]
+    offered = {t["name"]: t["offered_qos_profiles"] for t in topics}
+    assert [p["reliability"] for p in offered["/ft_sensor/wrench"]] == ["reliable"]
+    assert [p["durability"] for p in offered["/ft_sensor/wrench"]] == ["volatile"]
+    assert [(p["reliability"], p["durability"]) for p in offered["/mocap/hand"]] == [("reliable", "transient_local")]
+    for profiles in offered.values():
+        assert set(profiles[0]) == {
+            "history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
+            "liveliness_lease_duration", "avoid_ros_namespace_conventions",
+        }  # fmt: skip
+        assert profiles[0]["deadline"] == {"sec": 9223372036, "nsec": 854775807}  # rclpy's default: infinite
+    (file,) = out.glob("*.mcap")
+    from mcap.reader import make_reader
+
+    with file.open("rb") as stream:
+        reader = make_reader(stream)
+        logs = [m.log_time for _, _, m in reader.iter_messages(log_time_order=False)]
+        summary = reader.get_summary()
+    assert summary is not None
+    channel_qos = {c.topic: yaml.safe_load(c.metadata["offered_qos_profiles"]) for c in summary.channels.values()}
+    assert channel_qos == offered  # the MCAP channels say the same
+    assert len(logs) == meta["message_count"] > 100
+    start, duration = meta["starting_time"]["nanoseconds_since_epoch"], meta["duration"]["nanoseconds"]
+    assert (start, duration) == (min(logs), max(logs) - min(logs))
+    (entry,) = meta["files"]
+    assert entry["starting_time"]["nanoseconds_since_epoch"] == start and entry["duration"]["nanoseconds"] == duration
