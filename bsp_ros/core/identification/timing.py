@@ -75,7 +75,8 @@ class WrenchDelay:
         """``quality.timing`` of the estimate document."""
         out: dict[str, Any] = {
             "wrench_delay_s": float(self.delay_s),
-            "wrench_delay_std_s": float(self.std_s),
+            # JSON holds no NaN: a delay that was neither given nor estimated has no std (0, source "none").
+            "wrench_delay_std_s": float(self.std_s) if math.isfinite(self.std_s) else 0.0,
             "source": self.source,
         }
         if math.isfinite(self.estimate_s):
