@@ -115,6 +115,7 @@ class _Link:
     stamps: list[int] | None = None
     quaternions: list[np.ndarray] | None = None
     _arrays: tuple[np.ndarray, np.ndarray] | None = None
+    _turning: bool | None = None
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """Sorted unique stamps (K,) and quaternions (K, 4) (the last one given wins for a repeated stamp)."""
@@ -133,11 +134,18 @@ class _Link:
         return bool(self.stamps)
 
     def turning(self) -> bool:
-        if not self.dynamic:
-            return False
-        quats = self.arrays()[1]
-        cos = np.clip(np.abs(quats @ quats[0]), 0.0, 1.0)
-        return bool((2.0 * np.arccos(cos) > SAME_ROTATION_RAD).any())
+        if self._turning is None:
+            if not self.dynamic:
+                self._turning = False
+            else:
+                quats = self.arrays()[1]
+                # Rotation angle from the chord between aligned quaternions (arccos of a dot product near 1
+                # loses half the digits): |q - q0| = 2 sin(alpha / 2), rotation angle = 2 alpha.
+                aligned = quats * np.where(quats @ quats[0] < 0.0, -1.0, 1.0)[:, None]
+                chord = np.linalg.norm(aligned - quats[0], axis=1)
+                angle = 4.0 * np.arcsin(np.clip(chord / 2.0, 0.0, 1.0))
+                self._turning = bool((angle > SAME_ROTATION_RAD).any())
+        return self._turning
 
     def at(self, t_ns: np.ndarray) -> np.ndarray:
         """(N, 3, 3) ``R_parent_from_child`` at ``t_ns``."""
@@ -169,6 +177,7 @@ class TransformBuffer:
         for sample in samples:
             link = self._link(sample)
             link.static = np.asarray(sample.rotation_xyzw, dtype=np.float64)
+            link._turning = None
 
     def add(self, samples: Iterable[TransformSample]) -> None:
         """Add /tf transforms (each keeps its stamp)."""
@@ -178,7 +187,7 @@ class TransformBuffer:
                 link.stamps, link.quaternions = [], []
             link.stamps.append(int(sample.t_ns))
             link.quaternions.append(np.asarray(sample.rotation_xyzw, dtype=np.float64))
-            link._arrays = None
+            link._arrays, link._turning = None, None
             if self.max_age_ns is not None and len(link.stamps) > 2:
                 newest = max(link.stamps)
                 keep = [k for k, s in enumerate(link.stamps) if newest - s <= self.max_age_ns]

@@ -424,7 +424,7 @@ def read_session(
                 rep.nonpositive_stamps = int((stamps <= 0).sum())
                 if stamps.size:
                     rep.first_stamp_ns, rep.last_stamp_ns = int(stamps.min()), int(stamps.max())
-                for log, batch in sorted(stream.transforms, key=lambda item: item[0]):
+                for _receive_ns, batch in sorted(stream.transforms, key=lambda item: item[0]):
                     usable = [s for s in batch if _usable_transform(s)]
                     rep.non_finite += len(batch) - len(usable)
                     (transforms.add_static if topic == topic_map.tf_static else transforms.add)(usable)

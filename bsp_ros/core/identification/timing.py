@@ -28,6 +28,7 @@ __all__ = [
     "delay_problem",
     "estimate_wrench_delay",
     "linear_rss",
+    "parameter_timing",
     "shifted_session",
 ]
 
@@ -324,7 +325,9 @@ def estimate_wrench_delay(
         if math.isfinite(refined) and abs(refined - vertex) <= step_s:
             vertex, curvature = refined, refined_curvature
     if not (math.isfinite(vertex) and curvature > 0):
-        return WrenchDelay(0.0, math.nan, "none", n_fits=n_fits, warnings=["the wrench-marker delay is not identifiable"])
+        return WrenchDelay(
+            0.0, math.nan, "none", n_fits=n_fits, warnings=["the wrench-marker delay is not identifiable"]
+        )
     inflation = _autocorrelation_inflation(problem, keep, vertex, passive)
     std = math.sqrt(2.0 / curvature) * inflation
     n_fits += 4
@@ -369,5 +372,14 @@ def compensate_wrench_delay(
         delay = estimate_wrench_delay(session, fit_rss, passive=passive, kinematics_config=kinematics_config)
     except (DataError, InputError, np.linalg.LinAlgError) as error:
         # The identification itself reports what is wrong with such a session; timing just stays uncompensated.
-        return session, WrenchDelay(0.0, math.nan, "none", warnings=[f"the wrench-marker delay was not estimated: {error}"])
+        return session, WrenchDelay(
+            0.0, math.nan, "none", warnings=[f"the wrench-marker delay was not estimated: {error}"]
+        )
     return shifted_session(session, delay.delay_s), delay
+
+
+def parameter_timing(wrench_delay_s: float | None) -> dict[str, Any]:
+    """``quality.timing`` where the delay is not estimated (live): the parameter's, ``"none"`` when 0 or unset."""
+    if not wrench_delay_s:
+        return WrenchDelay(0.0, 0.0, "none").quality()
+    return WrenchDelay(float(wrench_delay_s), 0.0, "parameter").quality()

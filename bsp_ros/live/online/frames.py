@@ -7,7 +7,8 @@ from collections.abc import Iterable
 import numpy as np
 
 from msg_adapters.rotation import matrix_from_quaternion
-from msg_adapters.tf import TransformSample, rotation_between
+from msg_adapters.rotation_track import TransformBuffer
+from msg_adapters.tf import TransformSample
 
 __all__ = ["WrenchFrames", "rotation_from_quaternion_xyzw"]
 
@@ -30,11 +31,16 @@ def rotation_from_quaternion_xyzw(quaternion_xyzw: Iterable[float]) -> np.ndarra
 
 
 class WrenchFrames:
-    """Which rotation takes a wrench frame's vectors into world axes, and where it came from.
+    """Which rotation takes a wrench frame's vectors into world axes at a wrench's stamp, and where it came from.
 
-    With TF (``use_tf``), the newest transforms of ``/tf_static`` and ``/tf`` decide; a frame without a
-    transform after ``tf_wait_s`` is taken as world (CONTRACT.md). Without TF (no tf2_msgs installed) the
-    fixed ``parameter_rotation`` applies to every frame other than world.
+    With TF (``use_tf``), the /tf_static and /tf transforms go into one
+    :class:`msg_adapters.rotation_track.TransformBuffer`, as `bsp identify` reads a bag: a chain whose /tf
+    links turn (a sensor on the robot's flange turning with the handle) is slerped at each wrench stamp
+    between its /tf samples; a wrench newer than the newest /tf sample holds that one (live, the next
+    transform has not come yet: the error is the turn rate times the /tf period, e.g. 0.02 deg at 2 deg/s
+    and 100 Hz). A fixed chain (/tf_static) gives one rotation. A frame without a transform after
+    ``tf_wait_s`` is taken as world (CONTRACT.md). Without TF (no tf2_msgs installed) the fixed
+    ``parameter_rotation`` applies to every frame other than world.
 
     Parameters
     ----------
@@ -46,33 +52,62 @@ class WrenchFrames:
         ``R_world_from_sensor`` to use without TF.
     tf_wait_s : float
         How long to wait for a transform before taking the frame as world, s.
+    history_s : float
+        /tf samples kept per link, s.
     """
 
-    def __init__(self, world_frame: str, use_tf: bool, parameter_rotation: np.ndarray, tf_wait_s: float) -> None:
+    def __init__(
+        self,
+        world_frame: str,
+        use_tf: bool,
+        parameter_rotation: np.ndarray,
+        tf_wait_s: float,
+        history_s: float = 10.0,
+    ) -> None:
         self.world_frame = world_frame
         self.use_tf = use_tf
         self.parameter_rotation = np.asarray(parameter_rotation, dtype=np.float64)
         self.tf_wait_s = tf_wait_s
-        self.transforms: dict[str, TransformSample] = {}
-        self.rotations: dict[str, np.ndarray] = {}
+        self.buffer = TransformBuffer(max_age_ns=int(history_s * 1e9))
+        self.rotations: dict[str, np.ndarray] = {}  # fixed rotations, per frame
+        self.turning: set[str] = set()  # frames whose rotation is evaluated per wrench stamp
         self.sources: dict[str, str] = {}
         self._first_ns: int | None = None
 
-    def on_transforms(self, transforms: Iterable[TransformSample]) -> list[str]:
-        """Keep the newest transform per child frame; return the frames whose rotation changed (restart)."""
-        for transform in transforms:
-            self.transforms[transform.child_frame] = transform
+    def on_transforms(self, transforms: Iterable[TransformSample], static: bool = False) -> list[str]:
+        """Add transforms (``static``: from /tf_static); return the frames whose fixed rotation changed.
+
+        A fixed rotation that changes (a sensor re-mounted, a /tf_static republished) restarts the estimate:
+        the samples buffered before were rotated the old way. A frame whose /tf chain turns changes nothing
+        already buffered (each wrench had its rotation at its stamp) and is never reported.
+        """
+        samples = list(transforms)
+        (self.buffer.add_static if static else self.buffer.add)(samples)
         changed = []
         for frame_id, old in list(self.rotations.items()):
-            new = rotation_between(self.transforms.values(), self.world_frame, frame_id)
-            if new is not None and not np.allclose(new, old, atol=1e-9):
-                self.rotations[frame_id] = new
+            if self.sources.get(frame_id) not in ("tf", "world (no transform)"):
+                continue
+            track = self.buffer.track(self.world_frame, frame_id, [0])
+            if track is None:
+                continue
+            if track.turning:
+                del self.rotations[frame_id]
+                self.turning.add(frame_id)
+                self.sources[frame_id] = "tf (per sample)"
+            elif not np.allclose(track.rotations[0], old, atol=1e-9):
+                self.rotations[frame_id] = track.rotations[0]
                 self.sources[frame_id] = "tf"
                 changed.append(frame_id)
         return changed
 
-    def rotation_for(self, frame_id: str, now_ns: int) -> np.ndarray | None:
-        """``R_world_from_frame``, or None while waiting for a transform (TF only)."""
+    def rotation_for(self, frame_id: str, now_ns: int, t_ns: int | None = None) -> np.ndarray | None:
+        """``R_world_from_frame`` at the wrench stamp ``t_ns`` (None: the newest), or None while waiting for a
+        transform (TF only)."""
+        if frame_id in self.turning:
+            stamp = now_ns if t_ns is None else t_ns
+            track = self.buffer.track(self.world_frame, frame_id, [stamp])
+            if track is not None:
+                return np.asarray(track.rotations[0])
         if frame_id in self.rotations:
             return self.rotations[frame_id]
         if frame_id == self.world_frame:
@@ -80,14 +115,18 @@ class WrenchFrames:
         elif not self.use_tf:
             rotation, source = self.parameter_rotation, "parameter"
         else:
-            found = rotation_between(self.transforms.values(), self.world_frame, frame_id)
-            if found is None:
+            track = self.buffer.track(self.world_frame, frame_id, [now_ns if t_ns is None else t_ns])
+            if track is None:
                 self._first_ns = self._first_ns if self._first_ns is not None else now_ns
                 if now_ns - self._first_ns < self.tf_wait_s * 1e9:
                     return None
                 rotation, source = np.eye(3), "world (no transform)"
+            elif track.turning:
+                self.turning.add(frame_id)
+                self.sources[frame_id] = "tf (per sample)"
+                return np.asarray(track.rotations[0])
             else:
-                rotation, source = found, "tf"
+                rotation, source = track.rotations[0], "tf"
         self.rotations[frame_id] = rotation
         self.sources[frame_id] = source
         return rotation
