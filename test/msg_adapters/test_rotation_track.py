@@ -1,4 +1,4 @@
-"""The rotation track shared by `bsp identify`, `bsp tare` and the live identifier, against scipy and rotation_between."""
+"""The rotation track of `bsp identify`, `bsp tare` and the live identifier, against scipy and rotation_between."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def test_a_chain_of_static_and_turning_links_composes_like_rotation_between_at_e
     track = buffer.track("world", "ft_sensor", stamps)
     assert track is not None and track.turning and track.source == "tf"
     assert track.span_ns == (int(stamps[0]), int(stamps[-1])) and not track.held.any()
-    for k, t in enumerate(stamps):
+    for k in range(stamps.size):
         want = rotation_between([*statics, dynamic[k]], "world", "ft_sensor")
         assert want is not None
         np.testing.assert_allclose(track.rotations[k], want, atol=1e-12)

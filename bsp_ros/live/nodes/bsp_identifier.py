@@ -21,7 +21,7 @@ from bsp_ros.core.tare import Tare, read_tare_file
 from bsp_ros.core.weight_support import live_support
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.nodes import estimate_jobs as jobs
-from bsp_ros.live.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
+from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue, rotation_from_quaternion_xyzw
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
 from bsp_ros.live.online.windowed import (
     MODEL_CHECK_PENDING,
@@ -141,6 +141,7 @@ class BspIdentifierNode(RosNode):
             )
         use_tf = source == "tf" or (source == "auto" and tf_installed)
         self.frames = WrenchFrames(self.world_frame, use_tf, parameter_rotation, p["tf_wait_s"])
+        self.wrench_queue = WrenchQueue(self.frames)  # a turning sensor's wrench waits for the /tf after it
         self.frame_source = "tf (/tf_static, /tf)" if use_tf else "parameter wrench_frame_rotation_xyzw"
         self.get_logger().info(
             f"wrench frame rotation from {self.frame_source}"
@@ -242,8 +243,11 @@ class BspIdentifierNode(RosNode):
         self._restart_on(self.frames.on_transforms(read_tf_message(msg), static=True))
 
     def on_tf(self, msg: Any) -> None:
-        """Stamped transforms (/tf): a turning sensor's rotation is taken at each wrench's stamp."""
+        """Stamped transforms (/tf): a turning sensor's rotation is taken at each wrench's stamp; the wrenches
+        that waited for this transform go in now."""
         self._restart_on(self.frames.on_transforms(read_tf_message(msg)))
+        for sample, rotation in self.wrench_queue.release(self.now_ns()):
+            self._add_wrench(sample, rotation)
 
     def _restart_on(self, changed: list[str]) -> None:
         """A fixed wrench rotation that changed restarts the estimate."""
@@ -286,7 +290,11 @@ class BspIdentifierNode(RosNode):
         """One wrench: into world axes, then into the window or the recursive filter."""
         sample = read_wrench_stamped(msg)
         self.last_receive["wrench"] = self.now_ns()
-        rotation = self.frames.rotation_for(sample.frame_id, self.now_ns(), sample.t_ns)
+        for ready, rotation in self.wrench_queue.push(sample.frame_id, sample.t_ns, sample, self.now_ns()):
+            self._add_wrench(ready, rotation)
+
+    def _add_wrench(self, sample: WrenchSample, rotation: np.ndarray | None) -> None:
+        """A wrench with its rotation at its stamp (None: waiting for a first transform)."""
         if rotation is None:
             self.counts["waiting_for_tf"] = self.counts.get("waiting_for_tf", 0) + 1
             return
@@ -434,6 +442,8 @@ class BspIdentifierNode(RosNode):
                 "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
             }
         frames = {f"wrench_frame.{f}": source for f, source in self.frames.sources.items()}
+        if self.wrench_queue.held:  # wrenches that waited longest for a /tf sample and held the newest one
+            frames["wrench_frame.held_without_tf"] = str(self.wrench_queue.held)
         values = {
             **counts,
             "published": self.published,

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
@@ -10,7 +12,7 @@ from msg_adapters.rotation import matrix_from_quaternion
 from msg_adapters.rotation_track import TransformBuffer
 from msg_adapters.tf import TransformSample
 
-__all__ = ["WrenchFrames", "rotation_from_quaternion_xyzw"]
+__all__ = ["WrenchFrames", "WrenchQueue", "rotation_from_quaternion_xyzw"]
 
 
 def rotation_from_quaternion_xyzw(quaternion_xyzw: Iterable[float]) -> np.ndarray:
@@ -36,10 +38,9 @@ class WrenchFrames:
     With TF (``use_tf``), the /tf_static and /tf transforms go into one
     :class:`msg_adapters.rotation_track.TransformBuffer`, as `bsp identify` reads a bag: a chain whose /tf
     links turn (a sensor on the robot's flange turning with the handle) is slerped at each wrench stamp
-    between its /tf samples; a wrench newer than the newest /tf sample holds that one (live, the next
-    transform has not come yet: the error is the turn rate times the /tf period, e.g. 0.02 deg at 2 deg/s
-    and 100 Hz). A fixed chain (/tf_static) gives one rotation. A frame without a transform after
-    ``tf_wait_s`` is taken as world (CONTRACT.md). Without TF (no tf2_msgs installed) the fixed
+    between its /tf samples; a wrench newer than the newest /tf sample holds that one (the next transform
+    has not come yet: :class:`WrenchQueue` makes it wait instead). A fixed chain (/tf_static) gives one
+    rotation. A frame without a transform after ``tf_wait_s`` is taken as world (CONTRACT.md). Without TF (no tf2_msgs installed) the fixed
     ``parameter_rotation`` applies to every frame other than world.
 
     Parameters
@@ -130,3 +131,51 @@ class WrenchFrames:
         self.rotations[frame_id] = rotation
         self.sources[frame_id] = source
         return rotation
+
+    def waits(self, frame_id: str, t_ns: int) -> bool:
+        """Whether a wrench of ``frame_id`` at ``t_ns`` is newer than the newest /tf sample of its turning chain."""
+        if frame_id not in self.turning:
+            return False
+        track = self.buffer.track(self.world_frame, frame_id, [t_ns])
+        return track is not None and track.span_ns is not None and t_ns > track.span_ns[1]
+
+
+class WrenchQueue:
+    """Wrench samples of a turning sensor wait for the /tf sample after their stamp, then are rotated in order.
+
+    A wrench newer than the newest /tf sample would otherwise hold that orientation: an error of the turn
+    rate times the /tf period that follows the direction of motion, so it biases the friction estimate
+    (seen: 7 std at the shoulder with /tf at 20 Hz). Waiting (as tf2's message filter does) slerps each
+    wrench between the transforms around it, as `bsp identify` does offline. A wrench waits at most
+    ``max_wait_s`` of wrench stamps (a /tf publisher that stopped): then it holds the newest orientation.
+
+    Parameters
+    ----------
+    frames : the wrench frames.
+    max_wait_s : longest wait, s of stamps.
+    """
+
+    def __init__(self, frames: WrenchFrames, max_wait_s: float = 0.5) -> None:
+        self.frames = frames
+        self.max_wait_ns = int(max_wait_s * 1e9)
+        self.pending: deque[tuple[str, int, Any]] = deque()
+        self.held = 0  # released after the longest wait, holding the newest orientation
+
+    def push(self, frame_id: str, t_ns: int, item: Any, now_ns: int) -> list[tuple[Any, np.ndarray | None]]:
+        """Queue one wrench (``item``: what the caller needs back); return those ready, oldest first, with their
+        rotation (None while waiting for a first transform, see :meth:`WrenchFrames.rotation_for`)."""
+        self.pending.append((frame_id, t_ns, item))
+        return self.release(now_ns, newest_ns=t_ns)
+
+    def release(self, now_ns: int, newest_ns: int | None = None) -> list[tuple[Any, np.ndarray | None]]:
+        """The queued wrenches the transforms now cover (call after new transforms), oldest first."""
+        out = []
+        while self.pending:
+            frame_id, t_ns, item = self.pending[0]
+            expired = newest_ns is not None and newest_ns - t_ns > self.max_wait_ns
+            if self.frames.waits(frame_id, t_ns) and not expired:
+                break
+            self.held += int(expired and self.frames.waits(frame_id, t_ns))
+            self.pending.popleft()
+            out.append((item, self.frames.rotation_for(frame_id, now_ns, t_ns)))
+        return out

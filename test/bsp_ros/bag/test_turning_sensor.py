@@ -1,4 +1,4 @@
-"""A sensor that turns with the handle: its orientation on /tf per sample, applied per wrench sample by `bsp identify`."""
+"""A sensor that turns with the handle: its orientation on /tf, applied per wrench sample by `bsp identify`."""
 
 from __future__ import annotations
 
@@ -29,7 +29,9 @@ def _within_3_std(document: dict, turning: TurningSession) -> None:
 
 
 @pytest.mark.parametrize("tf_hz", [100.0, 20.0])
-def test_a_turning_sensor_on_tf_is_identified_within_3_std(tmp_path: Path, turning: TurningSession, tf_hz: float) -> None:
+def test_a_turning_sensor_on_tf_is_identified_within_3_std(
+    tmp_path: Path, turning: TurningSession, tf_hz: float
+) -> None:
     # 100 Hz: a /tf sample per wrench sample (on another phase); 20 Hz: five wrench samples per /tf sample.
     samples = turning.tf_samples[:: round(100.0 / tf_hz)]
     bag = write_session_bag(tmp_path / "turning", turning.session, tf_static=False, tf_samples=samples)
@@ -45,7 +47,9 @@ def test_a_turning_sensor_on_tf_is_identified_within_3_std(tmp_path: Path, turni
     assert 9.0 < turning.range_deg < 13.0
 
 
-def test_the_same_turning_sensor_with_one_fixed_rotation_is_a_fit_failure(tmp_path: Path, turning: TurningSession) -> None:
+def test_the_same_turning_sensor_with_one_fixed_rotation_is_a_fit_failure(
+    tmp_path: Path, turning: TurningSession
+) -> None:
     # /tf_static only (the mount orientation): nothing says the sensor turns, so the model cannot fit.
     bag = write_session_bag(tmp_path / "fixed", turning.session, tf_static=True)
     document = identify_bag(bag)

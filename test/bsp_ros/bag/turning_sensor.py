@@ -50,7 +50,10 @@ def turning_session(duration_s: float, seed: int, tf_hz: float, frame: str = "ft
     torque = np.einsum("nji,nj->ni", r, torque_w) + spec.sensor.torque_noise_nm * rng.standard_normal((t_ns.size, 3))
     tf_ns = spec.start_ns - 3_300_000 + np.arange(int((duration_s + 0.2) * tf_hz), dtype=np.int64) * round(1e9 / tf_hz)
     tf_r = rotation(sim.seconds_since_start(tf_ns))
-    samples = [TransformSample(int(t), "world", frame, np.zeros(3), quaternion_from_matrix(m)) for t, m in zip(tf_ns, tf_r)]
+    samples = [
+        TransformSample(int(t), "world", frame, np.zeros(3), quaternion_from_matrix(m))
+        for t, m in zip(tf_ns, tf_r, strict=True)
+    ]
     angles = Rotation.from_matrix(np.einsum("nij,kj->nik", r, mount)).as_rotvec()[:, 0]
     session = Session(
         wrench=WrenchSeries(t_ns, force, torque, frame),

@@ -26,14 +26,16 @@ FILTER_S = 0.0015  # a moving average over 1.5 ms: a group delay of half of it
 TRUE_DELAY_S = TRANSPORT_S + FILTER_S / 2
 
 
-def delayed_session(seed: int, delay_s: float, filter_s: float, duration_s: float = 60.0) -> tuple[Session, SessionTruth]:
+def delayed_session(
+    seed: int, delay_s: float, filter_s: float, duration_s: float = 60.0
+) -> tuple[Session, SessionTruth]:
     """A simulated session whose wrench stamped ``t`` is the sensor's moving average of the true wrench over
     ``[t - delay_s - filter_s, t - delay_s]`` (sampled every 0.25 ms), with the simulator's noise."""
     sim = CellSimulator(human_arm_cell(duration_s=duration_s, seed=seed))
     t_ns = sim.wrench_stamps_ns()
     noisy = sim.sample_wrench(t_ns)  # noise at the stamps; its noise-free part is replaced below
     t_s = sim.seconds_since_start(t_ns)
-    offsets = np.linspace(0.0, filter_s, max(int(round(filter_s / 0.00025)) + 1, 1))
+    offsets = np.linspace(0.0, filter_s, round(filter_s / 0.00025) + 1)
     late = np.mean([sim.wrench_world(t_s - delay_s - o) for o in offsets], axis=0) - sim.wrench_world(t_s)
     r = sim.rotation_world_from_sensor
     force = np.column_stack((np.zeros(t_ns.size), late[:, 0], late[:, 1])) @ r  # row form of R^T v
@@ -58,7 +60,9 @@ def _z_scores(document: dict, truth: SessionTruth) -> list[float]:
     return out
 
 
-def test_the_delay_of_a_late_filtered_wrench_is_found_within_its_std_cheaply(late: tuple[Session, SessionTruth]) -> None:
+def test_the_delay_of_a_late_filtered_wrench_is_found_within_its_std_cheaply(
+    late: tuple[Session, SessionTruth],
+) -> None:
     problem = delay_problem(late[0])
     started = time.perf_counter()
     delay = estimate_wrench_delay(problem)
@@ -75,7 +79,10 @@ def test_compensated_the_static_moments_and_coulomb_amplitudes_return_within_3_s
     session, truth = late
     document = identify_session(session)
     timing = document["quality"]["timing"]
-    assert timing["source"] == "estimated" and abs(timing["wrench_delay_s"] - TRUE_DELAY_S) < 3 * timing["wrench_delay_std_s"]
+    assert (
+        timing["source"] == "estimated"
+        and abs(timing["wrench_delay_s"] - TRUE_DELAY_S) < 3 * timing["wrench_delay_std_s"]
+    )
     assert document["quality"]["valid"], document["quality"]["message"]
     assert max(abs(z) for z in _z_scores(document, truth)) <= 3.0
     # Left uncompensated (the cell says 0), the late wrench biases the shoulder's friction far beyond its std.
