@@ -39,6 +39,8 @@ def identify_bag(
         )
     warnings[1:1] = [w for w in report.warnings if w not in warnings]
     quality = document["quality"]
+    if "rotation" in quality:  # where the bag's sensor orientation came from (the pipeline knows only its shape)
+        quality["rotation"]["source"] = report.rotation_source
     if report.rotation_source == "assumed" and not quality["valid"]:
         frame = read.session.wrench.frame_id
         quality["message"] = (

@@ -29,11 +29,10 @@ from msg_adapters import (
     read_pose_stamped,
     read_tf_message,
     read_wrench_stamped,
-    rotation_between,
 )
+from msg_adapters.rotation_track import RotationTrack, TransformBuffer
 
 REQUIRED_MARKERS = ("shoulder", "elbow", "hand")
-_ROTATION_TOLERANCE = 1e-9
 
 
 class BagRead(NamedTuple):
@@ -233,27 +232,32 @@ def _finish_counts(report: TopicReport, read: int, lost_to_damage: int | None, w
 
 
 def _rotation(
-    transforms: list[tuple[int, list[TransformSample]]],
+    transforms: TransformBuffer,
+    t_ns: np.ndarray,
     wrench_frame: str,
     world_frame: str,
     frame_aliases: Mapping[str, str],
     report: ReadReport,
 ) -> np.ndarray:
-    """R_world_from_wrench from the TF samples (static first, then /tf in receive order)."""
-    ordered = [sample for _, samples in transforms for sample in samples]
+    """R_world_from_wrench: (3, 3) for a fixed chain, (N, 3, 3) at each wrench stamp when a /tf link turns.
+
+    A turning chain is slerped between its /tf samples (:class:`msg_adapters.rotation_track.TransformBuffer`);
+    wrench samples before its first or after its last /tf sample hold the nearest orientation (see
+    :func:`held_warning`).
+    """
     if wrench_frame == world_frame:
         report.rotation_source = "tf"
         return np.eye(3)
     source = wrench_frame
-    rotation = rotation_between(ordered, world_frame, source)
-    if rotation is None and wrench_frame in frame_aliases:
+    track = transforms.track(world_frame, source, t_ns)
+    if track is None and wrench_frame in frame_aliases:
         source = frame_aliases[wrench_frame]
-        rotation = np.eye(3) if source == world_frame else rotation_between(ordered, world_frame, source)
-        if rotation is not None:
+        track = transforms.track(world_frame, source, t_ns) if source != world_frame else None
+        if source == world_frame or track is not None:
             report.rotation_source = "alias"
             report.warnings.append(f"wrench frame {wrench_frame} taken as {source} (frame mapping option)")
-            return rotation
-    if rotation is None:
+            return np.eye(3) if track is None else track.session_rotation
+    if track is None:
         report.rotation_source = "assumed"
         report.warnings.append(
             f"no transform connects the wrench frame {wrench_frame} to {world_frame}: "
@@ -261,14 +265,32 @@ def _rotation(
         )
         return np.eye(3)
     report.rotation_source = "tf"
-    first = rotation_between(list(reversed(ordered)), world_frame, source)
-    if first is not None and not np.allclose(first, rotation, atol=_ROTATION_TOLERANCE, rtol=0.0):
-        cos = np.clip((np.trace(first.T @ rotation) - 1.0) / 2.0, -1.0, 1.0)
-        report.warnings.append(
-            f"the rotation {wrench_frame} -> {world_frame} changes during the session "
-            f"(by {np.degrees(np.arccos(cos)):.3g} deg); the latest transforms are used"
-        )
-    return rotation
+    warning = held_warning(track, t_ns, f"{wrench_frame} -> {world_frame}")
+    if warning:
+        report.warnings.append(warning)
+    return track.session_rotation
+
+
+# Wrench samples at most this far outside the /tf track hold its nearest orientation without a warning: the
+# streams of a recording start and stop a fraction of a second apart.
+HOLD_QUIET_S = 0.5
+
+
+def held_warning(track: RotationTrack, t_ns: np.ndarray, what: str) -> str:
+    """A warning when wrench samples lie more than :data:`HOLD_QUIET_S` outside a turning /tf track ('' if not).
+
+    They are held at the track's nearest orientation, not dropped: the reader returns the streams as
+    recorded, and at the ends of a recording the turning handle (moved at the arm's ~2 deg/s) errs by
+    less than the sensor noise over the fraction of a second the streams start and stop apart. A longer
+    hold (a /tf publisher that started late or died) is named so the user can judge the estimate.
+    """
+    count, longest_s = track.held_summary(t_ns)
+    if count == 0 or longest_s <= HOLD_QUIET_S:
+        return ""
+    return (
+        f"the rotation {what} turns (from /tf) but {count} of {np.asarray(t_ns).size} wrench samples lie outside "
+        f"its /tf samples (up to {longest_s:.3g} s): the nearest orientation is held there"
+    )
 
 
 def read_session(
@@ -399,7 +421,7 @@ def read_session(
         if foreign:
             report.warnings.append(f"{rep.topic}: positions stamped in {foreign}, expected {world_frame}")
 
-    transforms: list[tuple[int, list[TransformSample]]] = []
+    transforms = TransformBuffer()
     for topic in (topic_map.tf_static, topic_map.tf):
         stream = sink.streams.get(topic)
         if topic in report.present:
@@ -411,10 +433,10 @@ def read_session(
                 rep.nonpositive_stamps = int((stamps <= 0).sum())
                 if stamps.size:
                     rep.first_stamp_ns, rep.last_stamp_ns = int(stamps.min()), int(stamps.max())
-                for log, batch in sorted(stream.transforms, key=lambda item: item[0]):
+                for _receive_ns, batch in sorted(stream.transforms, key=lambda item: item[0]):
                     usable = [s for s in batch if _usable_transform(s)]
                     rep.non_finite += len(batch) - len(usable)
-                    transforms.append((log, usable))
+                    (transforms.add_static if topic == topic_map.tf_static else transforms.add)(usable)
 
     for rep in report.topics.values():
         for label, count in (
@@ -466,7 +488,7 @@ def read_session(
         )
 
     wrench_frame = frames_w[0] if frames_w else world_frame
-    rotation = _rotation(transforms, wrench_frame, world_frame, aliases, report)
+    rotation = _rotation(transforms, t_w, wrench_frame, world_frame, aliases, report)
     markers = {
         name: MarkerSeries(t_ns=data[0], position_m=np.ascontiguousarray(data[1][:, :3]))
         for name, data in marker_data.items()

@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
 from bsp_ros.bag.errors import (
     BagCorruptError,
@@ -17,9 +16,10 @@ from bsp_ros.bag.errors import (
 )
 from bsp_ros.bag.layout import resolve_bag
 from bsp_ros.bag.mcap_scan import scan_mcap
-from bsp_ros.bag.reader import _collect, _SessionSink, _usable_transform
+from bsp_ros.bag.reader import _collect, _SessionSink, _usable_transform, held_warning
 from bsp_ros.bag.topics import WORLD_FRAME, TopicMap
-from msg_adapters import TransformSample, rotation_between
+from msg_adapters import TransformSample
+from msg_adapters.rotation_track import TransformBuffer
 
 
 @dataclass
@@ -47,26 +47,12 @@ class TareRead:
     warnings: list[str] = field(default_factory=list)
 
 
-def _orientation_track(
-    static: list[TransformSample], dynamic: list[TransformSample], frame: str, world: str
-) -> tuple[np.ndarray, np.ndarray]:
-    """Stamps (K,) and rotations (K, 3, 3) of ``frame`` in ``world`` at every /tf sample that connects them."""
-    latest: dict[str, TransformSample] = {}
-    stamps, rotations = [], []
-    for sample in sorted(dynamic, key=lambda s: s.t_ns):
-        latest[sample.child_frame] = sample
-        rotation = rotation_between([*static, *latest.values()], world, frame)
-        if rotation is not None:
-            stamps.append(sample.t_ns)
-            rotations.append(rotation)
-    return np.asarray(stamps, dtype=np.int64), np.asarray(rotations).reshape(-1, 3, 3)
-
-
 def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame: str = WORLD_FRAME) -> TareRead:
     """Read the wrench and the sensor's orientation of a tare recording (markers are not needed).
 
-    The orientation at each wrench stamp is the /tf_static + /tf chain ``world -> wrench frame``,
-    interpolated (slerp) between /tf stamps and held beyond them; fixed if only /tf_static connects it.
+    The orientation at each wrench stamp is the /tf_static + /tf chain ``world -> wrench frame``
+    (:class:`msg_adapters.rotation_track.TransformBuffer`, as `bsp identify` reads it): slerped between
+    /tf stamps and held beyond them; fixed if no /tf link of the chain turns.
 
     Raises
     ------
@@ -117,34 +103,28 @@ def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame:
             return []
         return [s for _, batch in sorted(stream.transforms, key=lambda x: x[0]) for s in batch if _usable_transform(s)]
 
-    static, dynamic = samples(wanted.tf_static), samples(wanted.tf)
+    transforms = TransformBuffer()
+    transforms.add_static(samples(wanted.tf_static))
+    transforms.add(samples(wanted.tf))
     n = t_ns.size
+    rotations: np.ndarray | None
     if frame == world_frame:
-        rotations: np.ndarray | None = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        rotations = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
         source = "world"
     else:
-        track_t, track_r = _orientation_track(static, dynamic, frame, world_frame)
-        if track_t.size >= 2:
-            order = np.unique(track_t, return_index=True)[1]
-            track_t, track_r = track_t[order], track_r[order]
-        if track_t.size >= 2:
-            clamped = np.clip(t_ns, track_t[0], track_t[-1])
-            slerp = Slerp((track_t - track_t[0]).astype(np.float64), Rotation.from_matrix(track_r))
-            rotations = slerp((clamped - track_t[0]).astype(np.float64)).as_matrix()
-            source = "tf"
-            outside = int(((t_ns < track_t[0]) | (t_ns > track_t[-1])).sum())
-            if outside > 0.05 * n:
-                warnings.append(f"/tf covers the sensor orientation for only {n - outside} of {n} wrench samples")
+        track = transforms.track(world_frame, frame, t_ns)
+        if track is None:
+            rotations, source = None, "unknown"
+            warnings.append(
+                f"no transform connects the wrench frame {frame} to {world_frame}: the sensor's orientation "
+                "is unknown, so only the constant load can be estimated"
+            )
         else:
-            fixed = rotation_between([*static, *dynamic], world_frame, frame)
-            if fixed is None:
-                rotations, source = None, "unknown"
-                warnings.append(
-                    f"no transform connects the wrench frame {frame} to {world_frame}: the sensor's orientation "
-                    "is unknown, so only the constant load can be estimated"
-                )
-            else:
-                rotations, source = np.broadcast_to(fixed, (n, 3, 3)).copy(), "tf_static"
+            rotations = track.rotations
+            source = "tf" if track.turning else "tf_static"
+            warning = held_warning(track, t_ns, f"{frame} -> {world_frame}")
+            if warning:
+                warnings.append(warning)
     return TareRead(
         t_ns=t_ns,
         force_n=np.ascontiguousarray(values[:, :3]),

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from bsp_ros.cli.argtypes import float_within
 from bsp_ros.errors import BspError, InputError
 
 # bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy (a test keeps the two equal).
@@ -55,6 +56,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         type=Path,
         metavar="FILE",
         help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
+    )
+    parser.add_argument(
+        "--wrench-delay-s",
+        type=float_within(-10.0, 10.0),
+        metavar="S",
+        help="delay of the wrench stamps behind the marker stamps the cell knows (s; a wrench stamped t was "
+        "measured at t - S): compensated as given (default: estimated from the data, compensated when resolved)",
     )
     parser.add_argument(
         "--format",
@@ -160,6 +168,7 @@ def run(args: argparse.Namespace) -> int:
         passive=PassiveModel.parse(args.passive),
         subject=SubjectInfo(args.body_mass, args.height, args.sex),
         tare=_read_tare(args.tare),
+        wrench_delay_s=args.wrench_delay_s,
     )
     try:
         document = identify_bag(args.bag, options, _topics(args), _progress_bar())

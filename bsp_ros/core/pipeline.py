@@ -22,7 +22,9 @@ from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.priors import base_prior_for_subject
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
+from bsp_ros.core.identification.timing import compensate_wrench_delay
 from bsp_ros.core.joint_angles import KinematicsConfig
+from bsp_ros.core.sensor_rotation import rotation_quality
 from bsp_ros.core.streams import Session
 from bsp_ros.core.tare import Tare, corrected_session
 from bsp_ros.errors import BspError
@@ -40,6 +42,8 @@ class IdentifyOptions:
     kinematics: KinematicsConfig = field(default_factory=KinematicsConfig)
     tare: Tare | None = None
     marker_placement_sd_m: float = 0.002
+    # Stream timing (timing.py): a wrench delay the cell knows (s), or None to estimate it from the data.
+    wrench_delay_s: float | None = None
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -112,6 +116,9 @@ def identify_session(
     """
     options = options or IdentifyOptions()
     session = corrected_session(session, options.tare)
+    # --- stream timing (bsp_ros/core/identification/timing.py): the wrench stamps' delay, compensated ---
+    session, timing = compensate_wrench_delay(session, options.wrench_delay_s, options.kinematics, options.passive)
+    # --- end stream timing ---
     data = identification_data_from_session(session, options.kinematics)
     result = identify_data(data, options)
     offsets = account_for_tare(
@@ -134,6 +141,11 @@ def identify_session(
     }
     document = estimate_document(result, data, posterior, options.subject, info)
     document["quality"].update(offsets)
+    # --- stream timing and sensor rotation (timing.py, sensor_rotation.py) ---
+    document["quality"]["timing"] = timing.quality()
+    document["quality"]["warnings"].extend(w for w in timing.warnings if w not in document["quality"]["warnings"])
+    document["quality"]["rotation"] = rotation_quality(session.rotation_world_from_sensor, "session")
+    # --- end stream timing and sensor rotation ---
     return document
 
 

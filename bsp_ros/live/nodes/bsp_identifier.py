@@ -21,7 +21,7 @@ from bsp_ros.core.tare import Tare, read_tare_file
 from bsp_ros.core.weight_support import live_support
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.nodes import estimate_jobs as jobs
-from bsp_ros.live.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
+from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue, rotation_from_quaternion_xyzw
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
 from bsp_ros.live.online.windowed import (
     MODEL_CHECK_PENDING,
@@ -94,6 +94,15 @@ PARAMETERS = (
         hi=1.0,
     ),
     Param(
+        "wrench_delay_s",
+        0.0,
+        "delay of the wrench stamps behind the joint-state (marker) stamps the cell knows: a wrench stamped t was "
+        "measured at t - wrench_delay_s; its stamps are shifted back by it (`bsp identify --wrench-delay-s`)",
+        "s",
+        lo=-10.0,
+        hi=10.0,
+    ),
+    Param(
         "tf_wait_s",
         2.0,
         "wait this long for the wrench frame's transform before taking it as world",
@@ -132,6 +141,7 @@ class BspIdentifierNode(RosNode):
             )
         use_tf = source == "tf" or (source == "auto" and tf_installed)
         self.frames = WrenchFrames(self.world_frame, use_tf, parameter_rotation, p["tf_wait_s"])
+        self.wrench_queue = WrenchQueue(self.frames)  # a turning sensor's wrench waits for the /tf after it
         self.frame_source = "tf (/tf_static, /tf)" if use_tf else "parameter wrench_frame_rotation_xyzw"
         self.get_logger().info(
             f"wrench frame rotation from {self.frame_source}"
@@ -150,7 +160,10 @@ class BspIdentifierNode(RosNode):
                 raise InputError(f"{NAME}: parameter tare_file {p['tare_file']}: {exc}") from exc
             self.get_logger().info(f"tare {p['tare_file']} of frame {self.tare.frame_id!r} applied to every wrench")
         self.wrench_rotation: tuple[str, np.ndarray] | None = None  # the latest wrench's frame and rotation
-        self.options = IdentifyOptions(method=p["method"], passive=passive, subject=subject, tare=self.tare)
+        self.wrench_delay_ns = round(p["wrench_delay_s"] * 1e9)
+        self.options = IdentifyOptions(
+            method=p["method"], passive=passive, subject=subject, tare=self.tare, wrench_delay_s=p["wrench_delay_s"]
+        )
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
         self.recursive = RecursiveFeed(self.n, self.options.passive)
         self.lengths: np.ndarray | None = None
@@ -207,7 +220,7 @@ class BspIdentifierNode(RosNode):
         self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
         if use_tf:
             tf = message_class(TF_TYPE)
-            self.create_subscription(tf, "/tf_static", self.on_tf, rclpy_qos("tf_static_listener"))
+            self.create_subscription(tf, "/tf_static", self.on_tf_static, rclpy_qos("tf_static_listener"))
             self.create_subscription(tf, "/tf", self.on_tf, rclpy_qos("tf"))
         self.create_timer(1.0 / p["update_hz"], self.on_update)
 
@@ -225,9 +238,20 @@ class BspIdentifierNode(RosNode):
         super().destroy_node()
 
     # -- inputs ---------------------------------------------------------------------------------------
+    def on_tf_static(self, msg: Any) -> None:
+        """Fixed transforms (/tf_static)."""
+        self._restart_on(self.frames.on_transforms(read_tf_message(msg), static=True))
+
     def on_tf(self, msg: Any) -> None:
-        """New transforms; a changed wrench rotation restarts the estimate."""
-        for frame_id in self.frames.on_transforms(read_tf_message(msg)):
+        """Stamped transforms (/tf): a turning sensor's rotation is taken at each wrench's stamp; the wrenches
+        that waited for this transform go in now."""
+        self._restart_on(self.frames.on_transforms(read_tf_message(msg)))
+        for sample, rotation in self.wrench_queue.release(self.now_ns()):
+            self._add_wrench(sample, rotation)
+
+    def _restart_on(self, changed: list[str]) -> None:
+        """A fixed wrench rotation that changed restarts the estimate."""
+        for frame_id in changed:
             # Samples already buffered were rotated the old way: they must not mix with new ones.
             self.get_logger().warning(f"transform of {frame_id} changed: estimate restarted")
             self.windowed.reset()
@@ -266,7 +290,11 @@ class BspIdentifierNode(RosNode):
         """One wrench: into world axes, then into the window or the recursive filter."""
         sample = read_wrench_stamped(msg)
         self.last_receive["wrench"] = self.now_ns()
-        rotation = self.frames.rotation_for(sample.frame_id, self.now_ns())
+        for ready, rotation in self.wrench_queue.push(sample.frame_id, sample.t_ns, sample, self.now_ns()):
+            self._add_wrench(ready, rotation)
+
+    def _add_wrench(self, sample: WrenchSample, rotation: np.ndarray | None) -> None:
+        """A wrench with its rotation at its stamp (None: waiting for a first transform)."""
         if rotation is None:
             self.counts["waiting_for_tf"] = self.counts.get("waiting_for_tf", 0) + 1
             return
@@ -280,10 +308,11 @@ class BspIdentifierNode(RosNode):
         self.wrench_rotation = (sample.frame_id, rotation)
         force, torque = rotation @ force_n, rotation @ torque_nm
         wrench_yzx = np.array([force[1], force[2], torque[0]])
+        t_ns = sample.t_ns - self.wrench_delay_ns  # when it was measured, on the joint states' clock
         if self.mode == "windowed":
-            accepted = self.windowed.add_wrench(sample.t_ns, wrench_yzx)
+            accepted = self.windowed.add_wrench(t_ns, wrench_yzx)
         else:
-            accepted, coulomb_nm = self.recursive.add_wrench(sample.t_ns, wrench_yzx, self.lengths)
+            accepted, coulomb_nm = self.recursive.add_wrench(t_ns, wrench_yzx, self.lengths)
             joints = self.recursive.passive_joints
             if coulomb_nm is not None and len(joints) == coulomb_nm.size:
                 passive = JointStateSample(sample.t_ns, "", joints, np.zeros(0), np.zeros(0), coulomb_nm)
@@ -413,6 +442,8 @@ class BspIdentifierNode(RosNode):
                 "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
             }
         frames = {f"wrench_frame.{f}": source for f, source in self.frames.sources.items()}
+        if self.wrench_queue.held:  # wrenches that waited longest for a /tf sample and held the newest one
+            frames["wrench_frame.held_without_tf"] = str(self.wrench_queue.held)
         values = {
             **counts,
             "published": self.published,

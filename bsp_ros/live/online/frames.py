@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
 from msg_adapters.rotation import matrix_from_quaternion
-from msg_adapters.tf import TransformSample, rotation_between
+from msg_adapters.rotation_track import TransformBuffer
+from msg_adapters.tf import TransformSample
 
-__all__ = ["WrenchFrames", "rotation_from_quaternion_xyzw"]
+__all__ = ["WrenchFrames", "WrenchQueue", "rotation_from_quaternion_xyzw"]
 
 
 def rotation_from_quaternion_xyzw(quaternion_xyzw: Iterable[float]) -> np.ndarray:
@@ -30,11 +33,15 @@ def rotation_from_quaternion_xyzw(quaternion_xyzw: Iterable[float]) -> np.ndarra
 
 
 class WrenchFrames:
-    """Which rotation takes a wrench frame's vectors into world axes, and where it came from.
+    """Which rotation takes a wrench frame's vectors into world axes at a wrench's stamp, and where it came from.
 
-    With TF (``use_tf``), the newest transforms of ``/tf_static`` and ``/tf`` decide; a frame without a
-    transform after ``tf_wait_s`` is taken as world (CONTRACT.md). Without TF (no tf2_msgs installed) the
-    fixed ``parameter_rotation`` applies to every frame other than world.
+    With TF (``use_tf``), the /tf_static and /tf transforms go into one
+    :class:`msg_adapters.rotation_track.TransformBuffer`, as `bsp identify` reads a bag: a chain whose /tf
+    links turn (a sensor on the robot's flange turning with the handle) is slerped at each wrench stamp
+    between its /tf samples; a wrench newer than the newest /tf sample holds that one (the next transform
+    has not come yet: :class:`WrenchQueue` makes it wait instead). A fixed chain (/tf_static) gives one
+    rotation. A frame without a transform after ``tf_wait_s`` is taken as world (CONTRACT.md). Without TF
+    (no tf2_msgs installed) the fixed ``parameter_rotation`` applies to every frame other than world.
 
     Parameters
     ----------
@@ -46,33 +53,62 @@ class WrenchFrames:
         ``R_world_from_sensor`` to use without TF.
     tf_wait_s : float
         How long to wait for a transform before taking the frame as world, s.
+    history_s : float
+        /tf samples kept per link, s.
     """
 
-    def __init__(self, world_frame: str, use_tf: bool, parameter_rotation: np.ndarray, tf_wait_s: float) -> None:
+    def __init__(
+        self,
+        world_frame: str,
+        use_tf: bool,
+        parameter_rotation: np.ndarray,
+        tf_wait_s: float,
+        history_s: float = 10.0,
+    ) -> None:
         self.world_frame = world_frame
         self.use_tf = use_tf
         self.parameter_rotation = np.asarray(parameter_rotation, dtype=np.float64)
         self.tf_wait_s = tf_wait_s
-        self.transforms: dict[str, TransformSample] = {}
-        self.rotations: dict[str, np.ndarray] = {}
+        self.buffer = TransformBuffer(max_age_ns=int(history_s * 1e9))
+        self.rotations: dict[str, np.ndarray] = {}  # fixed rotations, per frame
+        self.turning: set[str] = set()  # frames whose rotation is evaluated per wrench stamp
         self.sources: dict[str, str] = {}
         self._first_ns: int | None = None
 
-    def on_transforms(self, transforms: Iterable[TransformSample]) -> list[str]:
-        """Keep the newest transform per child frame; return the frames whose rotation changed (restart)."""
-        for transform in transforms:
-            self.transforms[transform.child_frame] = transform
+    def on_transforms(self, transforms: Iterable[TransformSample], static: bool = False) -> list[str]:
+        """Add transforms (``static``: from /tf_static); return the frames whose fixed rotation changed.
+
+        A fixed rotation that changes (a sensor re-mounted, a /tf_static republished) restarts the estimate:
+        the samples buffered before were rotated the old way. A frame whose /tf chain turns changes nothing
+        already buffered (each wrench had its rotation at its stamp) and is never reported.
+        """
+        samples = list(transforms)
+        (self.buffer.add_static if static else self.buffer.add)(samples)
         changed = []
         for frame_id, old in list(self.rotations.items()):
-            new = rotation_between(self.transforms.values(), self.world_frame, frame_id)
-            if new is not None and not np.allclose(new, old, atol=1e-9):
-                self.rotations[frame_id] = new
+            if self.sources.get(frame_id) not in ("tf", "world (no transform)"):
+                continue
+            track = self.buffer.track(self.world_frame, frame_id, [0])
+            if track is None:
+                continue
+            if track.turning:
+                del self.rotations[frame_id]
+                self.turning.add(frame_id)
+                self.sources[frame_id] = "tf (per sample)"
+            elif not np.allclose(track.rotations[0], old, atol=1e-9):
+                self.rotations[frame_id] = track.rotations[0]
                 self.sources[frame_id] = "tf"
                 changed.append(frame_id)
         return changed
 
-    def rotation_for(self, frame_id: str, now_ns: int) -> np.ndarray | None:
-        """``R_world_from_frame``, or None while waiting for a transform (TF only)."""
+    def rotation_for(self, frame_id: str, now_ns: int, t_ns: int | None = None) -> np.ndarray | None:
+        """``R_world_from_frame`` at the wrench stamp ``t_ns`` (None: the newest), or None while waiting for a
+        transform (TF only)."""
+        if frame_id in self.turning:
+            stamp = now_ns if t_ns is None else t_ns
+            track = self.buffer.track(self.world_frame, frame_id, [stamp])
+            if track is not None:
+                return np.asarray(track.rotations[0])
         if frame_id in self.rotations:
             return self.rotations[frame_id]
         if frame_id == self.world_frame:
@@ -80,14 +116,66 @@ class WrenchFrames:
         elif not self.use_tf:
             rotation, source = self.parameter_rotation, "parameter"
         else:
-            found = rotation_between(self.transforms.values(), self.world_frame, frame_id)
-            if found is None:
+            track = self.buffer.track(self.world_frame, frame_id, [now_ns if t_ns is None else t_ns])
+            if track is None:
                 self._first_ns = self._first_ns if self._first_ns is not None else now_ns
                 if now_ns - self._first_ns < self.tf_wait_s * 1e9:
                     return None
                 rotation, source = np.eye(3), "world (no transform)"
+            elif track.turning:
+                self.turning.add(frame_id)
+                self.sources[frame_id] = "tf (per sample)"
+                return np.asarray(track.rotations[0])
             else:
-                rotation, source = found, "tf"
+                rotation, source = track.rotations[0], "tf"
         self.rotations[frame_id] = rotation
         self.sources[frame_id] = source
         return rotation
+
+    def waits(self, frame_id: str, t_ns: int) -> bool:
+        """Whether a wrench of ``frame_id`` at ``t_ns`` is newer than the newest /tf sample of its turning chain."""
+        if frame_id not in self.turning:
+            return False
+        track = self.buffer.track(self.world_frame, frame_id, [t_ns])
+        return track is not None and track.span_ns is not None and t_ns > track.span_ns[1]
+
+
+class WrenchQueue:
+    """Wrench samples of a turning sensor wait for the /tf sample after their stamp, then are rotated in order.
+
+    A wrench newer than the newest /tf sample would otherwise hold that orientation: an error of the turn
+    rate times the /tf period that follows the direction of motion, so it biases the friction estimate
+    (seen: 7 std at the shoulder with /tf at 20 Hz). Waiting (as tf2's message filter does) slerps each
+    wrench between the transforms around it, as `bsp identify` does offline. A wrench waits at most
+    ``max_wait_s`` of wrench stamps (a /tf publisher that stopped): then it holds the newest orientation.
+
+    Parameters
+    ----------
+    frames : the wrench frames.
+    max_wait_s : longest wait, s of stamps.
+    """
+
+    def __init__(self, frames: WrenchFrames, max_wait_s: float = 0.5) -> None:
+        self.frames = frames
+        self.max_wait_ns = int(max_wait_s * 1e9)
+        self.pending: deque[tuple[str, int, Any]] = deque()
+        self.held = 0  # released after the longest wait, holding the newest orientation
+
+    def push(self, frame_id: str, t_ns: int, item: Any, now_ns: int) -> list[tuple[Any, np.ndarray | None]]:
+        """Queue one wrench (``item``: what the caller needs back); return those ready, oldest first, with their
+        rotation (None while waiting for a first transform, see :meth:`WrenchFrames.rotation_for`)."""
+        self.pending.append((frame_id, t_ns, item))
+        return self.release(now_ns, newest_ns=t_ns)
+
+    def release(self, now_ns: int, newest_ns: int | None = None) -> list[tuple[Any, np.ndarray | None]]:
+        """The queued wrenches the transforms now cover (call after new transforms), oldest first."""
+        out = []
+        while self.pending:
+            frame_id, t_ns, item = self.pending[0]
+            expired = newest_ns is not None and newest_ns - t_ns > self.max_wait_ns
+            if self.frames.waits(frame_id, t_ns) and not expired:
+                break
+            self.held += int(expired and self.frames.waits(frame_id, t_ns))
+            self.pending.popleft()
+            out.append((item, self.frames.rotation_for(frame_id, now_ns, t_ns)))
+        return out

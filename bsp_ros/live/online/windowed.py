@@ -10,6 +10,7 @@ import numpy as np
 from bsp_ros.core.estimate import estimate_document, invalid_document
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.sensitivity import account_for_tare
+from bsp_ros.core.identification.timing import parameter_timing
 from bsp_ros.core.joint_angles import kinematics_from_angles, resample_kinematics, resample_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data
@@ -308,6 +309,7 @@ class WindowedIdentifier:
             "config": self.config.options.config(),
         }
         document = estimate_document(result, data, posterior, self.config.options.subject, info)
+        document["quality"]["timing"] = parameter_timing(self.config.options.wrench_delay_s)  # the node shifts stamps
         if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
             document["quality"].update(quality)
         return WindowEstimate(document, result.valid, last_wrench)

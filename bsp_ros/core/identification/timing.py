@@ -1,0 +1,386 @@
+"""Stream timing: the delay of the wrench stream behind the marker stream, estimated from the data and compensated."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.identification.covariance import hac_covariance
+from bsp_ros.core.identification.data import IdentificationData, _clean_wrench, wrench_world_yzx
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_markers, resample_kinematics
+from bsp_ros.core.model import contact_torques_nm, gravity_regressor
+from bsp_ros.core.streams import Session, WrenchSeries
+from bsp_ros.errors import DataError, InputError
+from bsp_ros.validation import check_finite_scalar
+
+__all__ = [
+    "MAX_DELAY_S",
+    "DelayProblem",
+    "FitRss",
+    "WrenchDelay",
+    "compensate_wrench_delay",
+    "delay_problem",
+    "estimate_wrench_delay",
+    "linear_rss",
+    "parameter_timing",
+    "shifted_session",
+]
+
+# The profile searches delays in [-MAX_DELAY_S, MAX_DELAY_S] on a grid of GRID_STEP_S: two computers'
+# clocks (NTP/PTP-synchronised) and a sensor's low-pass filter stay well inside 0.1 s.
+MAX_DELAY_S = 0.1
+GRID_STEP_S = 0.02
+# A delay is compensated only when it differs from 0 by more than this many standard deviations: at 2 a
+# session without any delay would have a spurious one compensated once in 20 (seen on a simulated one).
+RESOLVED_SD = 3.0
+# The score's finite difference (s): small against the delays, large against float rounding.
+_DERIVATIVE_STEP_S = 0.001
+
+# ``fit_rss(data) -> float``: a chi-square-like misfit of one candidate delay's samples: the residual sum of
+# squares weighted by the inverse noise variance of each joint, with weights and rows fixed across delays
+# (a -2 log-likelihood up to a constant), so that its curvature gives the delay's variance.
+FitRss = Callable[[IdentificationData], float]
+
+
+@dataclass(frozen=True)
+class WrenchDelay:
+    """How late the wrench stamps are against the marker stamps, and what was done about it.
+
+    A positive delay means a wrench stamped ``t`` was measured at ``t - delay`` (transport, another
+    computer's clock, a sensor's filter); compensating it shifts the wrench stamps by ``-delay``.
+
+    Attributes
+    ----------
+    delay_s : the delay applied to the wrench stamps, s (0 when not resolved).
+    std_s : its standard deviation, s (0 for a parameter).
+    source : ``"estimated"`` (from the data, resolved), ``"parameter"`` (given) or ``"none"`` (not applied).
+    estimate_s, estimate_std_s : the profile's minimum and its std, s (NaN when not estimated).
+    n_fits : linear fits the profile took.
+    warnings : what the caller should report.
+    """
+
+    delay_s: float
+    std_s: float
+    source: str
+    estimate_s: float = math.nan
+    estimate_std_s: float = math.nan
+    n_fits: int = 0
+    warnings: list[str] = field(default_factory=list)
+
+    def quality(self) -> dict[str, Any]:
+        """``quality.timing`` of the estimate document."""
+        out: dict[str, Any] = {
+            "wrench_delay_s": float(self.delay_s),
+            # JSON holds no NaN: a delay that was neither given nor estimated has no std (0, source "none").
+            "wrench_delay_std_s": float(self.std_s) if math.isfinite(self.std_s) else 0.0,
+            "source": self.source,
+        }
+        if math.isfinite(self.estimate_s):
+            out["estimated_delay_s"] = float(self.estimate_s)
+            out["estimated_delay_std_s"] = float(self.estimate_std_s)
+        return out
+
+
+@dataclass(frozen=True)
+class DelayProblem:
+    """What every candidate delay shares, computed once: the angles on the marker grid and the wrench in world.
+
+    Attributes
+    ----------
+    kinematics : marker angles and direction velocities (zero-phase filtered: no delay of their own).
+    t_ns : (N,) wrench stamps, cleaned and in order, ns.
+    wrench_yzx : (N, 3) ``[F_y, F_z, M_x]`` in ``world``.
+    """
+
+    kinematics: MarkerKinematics
+    t_ns: np.ndarray
+    wrench_yzx: np.ndarray
+
+    def data(self, delay_s: float, keep: np.ndarray | None = None) -> tuple[IdentificationData, np.ndarray]:
+        """The identification samples with the wrench stamps shifted by ``-delay_s``.
+
+        Parameters
+        ----------
+        delay_s : candidate delay, s.
+        keep : (N,) bool, the wrench samples to use (None: every one with angles).
+
+        Returns
+        -------
+        data : samples at the shifted stamps; valid : (N,) which wrench samples have angles there.
+        """
+        t = self.t_ns - np.int64(round(delay_s * 1e9))
+        q, velocity, valid = resample_kinematics(self.kinematics, t)
+        use = valid if keep is None else keep & valid
+        k = self.kinematics
+        tau = contact_torques_nm(q[use], k.lengths_m, self.wrench_yzx[use])
+        data = IdentificationData(
+            t[use], q[use], velocity[use], tau, k.lengths_m, k.lengths_std_m, k.direction_velocity_noise_rad_s
+        )
+        return data, valid
+
+
+def delay_problem(session: Session, kinematics_config: KinematicsConfig | None = None) -> DelayProblem:
+    """Prepare a session for :func:`estimate_wrench_delay` (marker angles once, the wrench in ``world``)."""
+    keep, _, _ = _clean_wrench(session.wrench)
+    rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
+    if rotation.ndim == 3:
+        rotation = rotation[keep]
+    wrench = WrenchSeries(
+        session.wrench.t_ns[keep], session.wrench.force_n[keep], session.wrench.torque_nm[keep], session.wrench.frame_id
+    )
+    kinematics = kinematics_from_markers(session.markers, session.n_segments, kinematics_config)
+    return DelayProblem(kinematics, np.asarray(wrench.t_ns, dtype=np.int64), wrench_world_yzx(wrench, rotation))
+
+
+def _regressor(data: IdentificationData, passive: PassiveModel) -> np.ndarray:
+    """(N, n, p) gravity then passive columns (sign steps), as :mod:`identification.joint` stacks them."""
+    n = data.n_joints
+    columns = [gravity_regressor(data.q_rad)]
+    for j in range(n):
+        block = np.zeros((data.t_ns.size, n, len(passive.terms)))
+        block[:, j, :] = passive.columns(data.q_rad, data.velocity_rad_s, j)
+        columns.append(block)
+    return np.concatenate(columns, axis=2)
+
+
+@dataclass(frozen=True)
+class _LinearFit:
+    """The weighted linear model of the default profile, with its rows and weights fixed at a reference."""
+
+    passive: PassiveModel
+    rows: np.ndarray  # (N, n) rows used (direction of motion clear at the reference)
+    weights: np.ndarray  # (n,) 1 / sigma^2 per joint
+
+    def solve(self, data: IdentificationData) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Regressor (N, n, p), parameters (p,) and residuals (N, n) (0 off the rows) of one candidate."""
+        regressor = _regressor(data, self.passive)
+        root = np.sqrt(np.where(self.rows, self.weights[None, :], 0.0))
+        a = (regressor * root[..., None]).reshape(-1, regressor.shape[2])
+        b = (data.tau_nm * root).reshape(-1)
+        # Normal equations: a p x p solve (the columns are few and well scaled); lstsq's SVD of the tall
+        # matrix would cost 10 times more for each candidate delay.
+        values = np.linalg.lstsq(a.T @ a, a.T @ b, rcond=None)[0]
+        residual = np.where(self.rows, data.tau_nm - np.einsum("tip,p->ti", regressor, values), 0.0)
+        return regressor, values, residual
+
+    def rss(self, data: IdentificationData) -> float:
+        _, _, residual = self.solve(data)
+        return float((self.weights[None, :] * residual**2).sum())
+
+
+def _linear_fit(reference: IdentificationData, passive: PassiveModel) -> _LinearFit:
+    speed = np.abs(reference.velocity_rad_s)
+    rows = np.ones_like(speed, dtype=bool)
+    if "coulomb" in passive.terms:
+        # Rows near a reversal would switch their friction sign as the delay moves: left out, as the
+        # identification's dead band leaves them out.
+        noise = np.nan_to_num(reference.velocity_noise_rad_s, nan=0.0)
+        deadband = np.maximum(0.1 * np.percentile(speed, 95, axis=0), 4.0 * noise)
+        rows = speed > deadband[None, :]
+    fit = _LinearFit(passive, rows, np.ones(reference.n_joints))
+    _, _, residual = fit.solve(reference)
+    sigma = np.sqrt((residual**2).sum(axis=0) / np.maximum(rows.sum(axis=0), 1))
+    sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(reference.tau_nm).max()), 1e-9))
+    return dataclasses.replace(fit, weights=1.0 / sigma**2)
+
+
+def linear_rss(reference: IdentificationData, passive: PassiveModel | None = None) -> FitRss:
+    """The default ``fit_rss``: the stacked linear model of ``identify_joint`` (static moments and the passive
+    terms as sign steps), weighted per joint by its residual variance at ``reference``, rows fixed there.
+
+    Parameters
+    ----------
+    reference : the samples at the starting delay (0); every candidate must hold the same samples.
+    passive : the passive model (Coulomb by default).
+    """
+    return _linear_fit(reference, passive or PassiveModel()).rss
+
+
+def _parabola(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Vertex and second derivative of the parabola through three points."""
+    a, b, _ = np.polyfit(x, y, 2)
+    if a <= 0:
+        return math.nan, 2.0 * float(a)
+    return float(-b / (2.0 * a)), 2.0 * float(a)
+
+
+def _autocorrelation_inflation(problem: DelayProblem, keep: np.ndarray, delay_s: float, passive: PassiveModel) -> float:
+    """How much correlated errors widen the delay's std beyond the curvature's (>= 1).
+
+    The delay's score per sample (summed over the joints), with the model's parameters partialled out,
+    goes through the same Newey-West sandwich as the parameters' (``identify_joint``); its std over the
+    curvature's ``1 / sqrt(information)`` is the inflation.
+    """
+    h = _DERIVATIVE_STEP_S
+    centre, _ = problem.data(delay_s, keep)
+    fit = _linear_fit(centre, passive)
+    regressor, values, residual = fit.solve(centre)
+    plus = problem.data(delay_s + h, keep)[0]
+    minus = problem.data(delay_s - h, keep)[0]
+    if plus.t_ns.size != centre.t_ns.size or minus.t_ns.size != centre.t_ns.size:
+        return 1.0
+    predicted = lambda d: d.tau_nm - np.einsum("tip,p->ti", _regressor(d, passive), values)  # noqa: E731
+    slope = (predicted(plus) - predicted(minus)) / (2.0 * h)  # d(residual)/d(delay), (N, n)
+    w = np.where(fit.rows, fit.weights[None, :], 0.0)
+    # Partial the parameters out: the part of the slope the model's columns cannot take up.
+    design = np.einsum("tip,ti,tiq->pq", regressor, w, regressor)
+    cross = np.einsum("tip,ti,ti->p", regressor, w, slope)
+    slope = slope - np.einsum("tip,p->ti", regressor, np.linalg.lstsq(design, cross, rcond=None)[0])
+    information = float((w * slope**2).sum())
+    scores = (w * slope * residual).sum(axis=1)[:, None]
+    if information <= 0:
+        return 1.0
+    hac, _ = hac_covariance(np.array([[information]]), scores)
+    # The curvature's variance is 1 / information (independent errors, at every joint alike); the sandwich's
+    # also holds the correlation of one sample's errors across the joints (one wrench error reaches all of
+    # them through J^T) and along time.
+    return max(1.0, float(np.sqrt(hac[0, 0] * information)))
+
+
+def estimate_wrench_delay(
+    session_or_problem: Session | DelayProblem,
+    fit_rss: Callable[[IdentificationData], float] | None = None,
+    *,
+    passive: PassiveModel | None = None,
+    kinematics_config: KinematicsConfig | None = None,
+    max_delay_s: float = MAX_DELAY_S,
+    step_s: float = GRID_STEP_S,
+    resolved_sd: float = RESOLVED_SD,
+) -> WrenchDelay:
+    """Estimate the delay of the wrench stamps behind the marker stamps by a profile over candidate delays.
+
+    For each candidate ``d`` on a grid over ``[-max_delay_s, max_delay_s]``, the wrench stamps are shifted
+    by ``-d``, the angles resampled onto them and the model fitted; ``fit_rss`` gives the misfit. A
+    parabola through the grid's minimum and its neighbours, refined once around its vertex, gives the
+    delay and, from its curvature, the std (widened by the residuals' autocorrelation, judged on the
+    linear model). The same wrench samples enter every candidate (those with angles at every shift).
+
+    Parameters
+    ----------
+    session_or_problem : a session, or its :func:`delay_problem` (to share the marker angles).
+    fit_rss : ``fit_rss(data) -> float``, a chi-square-like misfit (see :data:`FitRss`); None: the linear
+        model of ``identify_joint`` (:func:`linear_rss`) with rows and weights fixed at delay 0.
+    passive : the passive model of the default fit.
+    kinematics_config : marker filtering, when a session is given.
+    max_delay_s, step_s : the grid, s.
+    resolved_sd : the delay is applied (``source`` ``"estimated"``) only when ``|d| > resolved_sd * std``.
+
+    Returns
+    -------
+    WrenchDelay
+        ``delay_s`` the delay to apply (0 when not resolved, ``source`` ``"none"``) and the estimate itself.
+
+    Raises
+    ------
+    DataError
+        Too few wrench samples have angles at every candidate delay.
+    """
+    check_finite_scalar("max_delay_s", max_delay_s, 1e-3, 10.0)
+    check_finite_scalar("step_s", step_s, 1e-4, max_delay_s)
+    passive = passive or PassiveModel()
+    problem = (
+        session_or_problem
+        if isinstance(session_or_problem, DelayProblem)
+        else delay_problem(session_or_problem, kinematics_config)
+    )
+    # The samples that have angles at every shift the search may try (the refinement stays inside the grid).
+    reach = max_delay_s + step_s
+    keep = problem.data(-reach)[1] & problem.data(reach)[1] & problem.data(0.0)[1]
+    if keep.sum() < 50:
+        raise DataError(f"only {int(keep.sum())} wrench samples have joint angles at every delay within +-{reach:g} s")
+    rss = fit_rss or linear_rss(problem.data(0.0, keep)[0], passive)
+    n_fits = 0
+
+    def profile(delay_s: float) -> float:
+        nonlocal n_fits
+        n_fits += 1
+        return float(rss(problem.data(delay_s, keep)[0]))
+
+    grid = np.arange(-max_delay_s, max_delay_s + 0.5 * step_s, step_s)
+    values = np.array([profile(d) for d in grid])
+    best = int(np.argmin(values))
+    if best in (0, grid.size - 1):
+        return WrenchDelay(
+            0.0,
+            math.nan,
+            "none",
+            n_fits=n_fits,
+            warnings=[
+                f"the wrench-marker delay lies at or beyond the searched +-{max_delay_s:g} s (the misfit falls toward "
+                f"{grid[best]:+.3g} s): not compensated; give it with --wrench-delay-s if the cell knows it"
+            ],
+        )
+    vertex, curvature = _parabola(grid[best - 1 : best + 2], values[best - 1 : best + 2])
+    if math.isfinite(vertex):
+        # Refine on a narrower parabola around the first vertex: the misfit is quadratic only near its minimum.
+        h = 0.25 * step_s
+        x = np.array([vertex - h, vertex, vertex + h])
+        y = np.array([profile(float(d)) for d in x])
+        refined, refined_curvature = _parabola(x, y)
+        if math.isfinite(refined) and abs(refined - vertex) <= step_s:
+            vertex, curvature = refined, refined_curvature
+    if not (math.isfinite(vertex) and curvature > 0):
+        return WrenchDelay(
+            0.0, math.nan, "none", n_fits=n_fits, warnings=["the wrench-marker delay is not identifiable"]
+        )
+    inflation = _autocorrelation_inflation(problem, keep, vertex, passive)
+    std = math.sqrt(2.0 / curvature) * inflation
+    n_fits += 4
+    if abs(vertex) > resolved_sd * std:
+        return WrenchDelay(vertex, std, "estimated", vertex, std, n_fits)
+    return WrenchDelay(0.0, std, "none", vertex, std, n_fits)
+
+
+def shifted_session(session: Session, delay_s: float) -> Session:
+    """``session`` with its wrench stamps shifted by ``-delay_s`` (a wrench stamped ``t`` was measured at ``t - d``)."""
+    if delay_s == 0.0:
+        return session
+    wrench = dataclasses.replace(session.wrench, t_ns=session.wrench.t_ns - np.int64(round(delay_s * 1e9)))
+    return dataclasses.replace(session, wrench=wrench)
+
+
+def compensate_wrench_delay(
+    session: Session,
+    wrench_delay_s: float | None,
+    kinematics_config: KinematicsConfig | None = None,
+    passive: PassiveModel | None = None,
+    fit_rss: Callable[[IdentificationData], float] | None = None,
+) -> tuple[Session, WrenchDelay]:
+    """The session with its wrench delay compensated, and what was done.
+
+    Parameters
+    ----------
+    session : the streams.
+    wrench_delay_s : a delay the cell knows (s, ``source`` ``"parameter"``), or None to estimate it
+        (:func:`estimate_wrench_delay`), applied only when resolved.
+    kinematics_config, passive, fit_rss : as for :func:`estimate_wrench_delay`.
+
+    Raises
+    ------
+    InputError
+        ``wrench_delay_s`` is not finite or beyond 10 s.
+    """
+    if wrench_delay_s is not None:
+        check_finite_scalar("wrench_delay_s", wrench_delay_s, -10.0, 10.0)
+        return shifted_session(session, wrench_delay_s), WrenchDelay(float(wrench_delay_s), 0.0, "parameter")
+    try:
+        delay = estimate_wrench_delay(session, fit_rss, passive=passive, kinematics_config=kinematics_config)
+    except (DataError, InputError, np.linalg.LinAlgError) as error:
+        # The identification itself reports what is wrong with such a session; timing just stays uncompensated.
+        return session, WrenchDelay(
+            0.0, math.nan, "none", warnings=[f"the wrench-marker delay was not estimated: {error}"]
+        )
+    return shifted_session(session, delay.delay_s), delay
+
+
+def parameter_timing(wrench_delay_s: float | None) -> dict[str, Any]:
+    """``quality.timing`` where the delay is not estimated (live): the parameter's, ``"none"`` when 0 or unset."""
+    if not wrench_delay_s:
+        return WrenchDelay(0.0, 0.0, "none").quality()
+    return WrenchDelay(float(wrench_delay_s), 0.0, "parameter").quality()

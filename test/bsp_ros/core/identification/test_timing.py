@@ -1,0 +1,138 @@
+"""Stream timing: a wrench stream 20 ms late and filtered (1.5 ms moving average) is found and compensated."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from bsp_ros.core.identification.timing import (
+    DelayProblem,
+    compensate_wrench_delay,
+    delay_problem,
+    estimate_wrench_delay,
+    linear_rss,
+    parameter_timing,
+)
+from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+from bsp_ros.core.simulation import CellSimulator, SessionTruth, human_arm_cell
+from bsp_ros.core.streams import Session, WrenchSeries
+from bsp_ros.errors import InputError
+
+TRANSPORT_S = 0.020
+FILTER_S = 0.0015  # a moving average over 1.5 ms: a group delay of half of it
+TRUE_DELAY_S = TRANSPORT_S + FILTER_S / 2
+
+
+def delayed_session(
+    seed: int, delay_s: float, filter_s: float, duration_s: float = 60.0
+) -> tuple[Session, SessionTruth]:
+    """A simulated session whose wrench stamped ``t`` is the sensor's moving average of the true wrench over
+    ``[t - delay_s - filter_s, t - delay_s]`` (sampled every 0.25 ms), with the simulator's noise."""
+    sim = CellSimulator(human_arm_cell(duration_s=duration_s, seed=seed))
+    t_ns = sim.wrench_stamps_ns()
+    noisy = sim.sample_wrench(t_ns)  # noise at the stamps; its noise-free part is replaced below
+    t_s = sim.seconds_since_start(t_ns)
+    offsets = np.linspace(0.0, filter_s, round(filter_s / 0.00025) + 1)
+    late = np.mean([sim.wrench_world(t_s - delay_s - o) for o in offsets], axis=0) - sim.wrench_world(t_s)
+    r = sim.rotation_world_from_sensor
+    force = np.column_stack((np.zeros(t_ns.size), late[:, 0], late[:, 1])) @ r  # row form of R^T v
+    torque = np.column_stack((late[:, 2], np.zeros(t_ns.size), np.zeros(t_ns.size))) @ r
+    wrench = WrenchSeries(t_ns, noisy.force_n + force, noisy.torque_nm + torque, noisy.frame_id)
+    return Session(wrench, sim.sample_markers(sim.marker_stamps_ns()), np.array(r)), sim.truth
+
+
+@pytest.fixture(scope="module")
+def late() -> tuple[Session, SessionTruth]:
+    return delayed_session(seed=3, delay_s=TRANSPORT_S, filter_s=FILTER_S)
+
+
+def _z_scores(document: dict, truth: SessionTruth) -> list[float]:
+    out = []
+    for segment, beta in zip(("upper_arm", "forearm", "hand"), truth.static_moments_kgm, strict=True):
+        q = document["segments"][segment]["static_moment_kgm"]
+        out.append((q["value"] - beta) / q["std"])
+    for joint, c in zip(("shoulder", "elbow", "wrist"), truth.passive.coulomb_nm, strict=True):
+        q = document["joints"][joint]["coulomb_nm"]
+        out.append((q["value"] - c) / q["std"])
+    return out
+
+
+def test_the_delay_of_a_late_filtered_wrench_is_found_within_its_std_cheaply(
+    late: tuple[Session, SessionTruth],
+) -> None:
+    problem = delay_problem(late[0])
+    started = time.perf_counter()
+    delay = estimate_wrench_delay(problem)
+    elapsed_s = time.perf_counter() - started
+    assert delay.source == "estimated" and delay.delay_s == delay.estimate_s
+    assert abs(delay.delay_s - TRUE_DELAY_S) <= 2.0 * delay.std_s, (delay.delay_s, delay.std_s)
+    assert 0.0003 < delay.std_s < 0.003  # resolved to about a millisecond from 60 s
+    assert delay.n_fits <= 20 and elapsed_s < 2.0  # a grid of 11 linear fits, 3 to refine, 4 for the std
+
+
+def test_compensated_the_static_moments_and_coulomb_amplitudes_return_within_3_std(
+    late: tuple[Session, SessionTruth],
+) -> None:
+    session, truth = late
+    document = identify_session(session)
+    timing = document["quality"]["timing"]
+    assert (
+        timing["source"] == "estimated"
+        and abs(timing["wrench_delay_s"] - TRUE_DELAY_S) < 3 * timing["wrench_delay_std_s"]
+    )
+    assert document["quality"]["valid"], document["quality"]["message"]
+    assert max(abs(z) for z in _z_scores(document, truth)) <= 3.0
+    # Left uncompensated (the cell says 0), the late wrench biases the shoulder's friction far beyond its std.
+    ignored = identify_session(session, IdentifyOptions(wrench_delay_s=0.0))
+    assert ignored["quality"]["timing"] == {"wrench_delay_s": 0.0, "wrench_delay_std_s": 0.0, "source": "parameter"}
+    assert max(abs(z) for z in _z_scores(ignored, truth)) > 5.0
+
+
+def test_a_known_delay_is_applied_as_given(late: tuple[Session, SessionTruth]) -> None:
+    session, truth = late
+    shifted, timing = compensate_wrench_delay(session, TRUE_DELAY_S)
+    assert timing.quality() == {"wrench_delay_s": TRUE_DELAY_S, "wrench_delay_std_s": 0.0, "source": "parameter"}
+    np.testing.assert_array_equal(shifted.wrench.t_ns, session.wrench.t_ns - round(TRUE_DELAY_S * 1e9))
+    document = identify_session(session, IdentifyOptions(wrench_delay_s=TRUE_DELAY_S))
+    assert document["quality"]["valid"] and max(abs(z) for z in _z_scores(document, truth)) <= 3.0
+    with pytest.raises(InputError, match="wrench_delay_s"):
+        compensate_wrench_delay(session, math.inf)
+
+
+def test_without_a_delay_nothing_is_compensated() -> None:
+    session, _ = delayed_session(seed=4, delay_s=0.0, filter_s=0.0)
+    delay = estimate_wrench_delay(session)
+    assert abs(delay.estimate_s) <= 3.0 * delay.estimate_std_s
+    assert delay.source == "none" and delay.delay_s == 0.0
+    assert delay.quality()["source"] == "none" and delay.quality()["estimated_delay_s"] == delay.estimate_s
+    assert parameter_timing(None)["source"] == "none" and parameter_timing(0.01)["source"] == "parameter"
+
+
+def test_the_fit_is_pluggable(late: tuple[Session, SessionTruth]) -> None:
+    problem = delay_problem(late[0])
+    calls: list[int] = []
+
+    def counting(reference: DelayProblem):  # the caller's model: here the default one, counted
+        keep = reference.data(-0.12)[1] & reference.data(0.12)[1] & reference.data(0.0)[1]
+        inner = linear_rss(reference.data(0.0, keep)[0])
+
+        def fit_rss(data) -> float:
+            calls.append(data.t_ns.size)
+            return inner(data)
+
+        return fit_rss
+
+    plugged = estimate_wrench_delay(problem, counting(problem))
+    default = estimate_wrench_delay(problem)
+    assert len(calls) == plugged.n_fits - 4 and len(set(calls)) == 1  # the same samples at every delay
+    assert plugged.delay_s == pytest.approx(default.delay_s, abs=1e-9)
+
+
+def test_a_delay_beyond_the_search_is_not_compensated() -> None:
+    session, _ = delayed_session(seed=5, delay_s=0.3, filter_s=0.0, duration_s=40.0)
+    delay = estimate_wrench_delay(session)
+    assert delay.source == "none" and delay.delay_s == 0.0
+    assert "beyond the searched" in delay.warnings[0]
