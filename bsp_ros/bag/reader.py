@@ -436,9 +436,11 @@ def read_session(
             raise MissingTopicError(topic, report.present)
         if count == 0:
             if report.damaged:
+                # The count and the first damaged place: one line a person can read, however many there are.
+                first = f"; {len(report.damage)} damaged places, the first: {report.damage[0]}" if report.damage else ""
                 raise BagCorruptError(
-                    f"{topic}: no intact message survives ({report.crc_errors} CRC errors; "
-                    f"{'truncated; ' if report.truncated else ''}{'; '.join(report.damage)})",
+                    f"{topic}: no intact message survives ({report.crc_errors} CRC errors"
+                    f"{'; truncated' if report.truncated else ''}{first})",
                     report.crc_errors,
                     report.lost_messages,
                 )
