@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from bsp_ros.cli.argtypes import positive_float
 from bsp_ros.errors import BspError, DataError, InputError
 
 # bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy (a test keeps the two equal).
@@ -37,8 +38,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
     parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
     parser.add_argument("--passive", default="coulomb", help="passive model, e.g. coulomb+viscous (default coulomb)")
-    parser.add_argument("--body-mass", type=float, metavar="KG", help="body mass for the anthropometric prior")
-    parser.add_argument("--height", type=float, metavar="M", help="body height (m)")
+    parser.add_argument(
+        "--body-mass", type=positive_float, metavar="KG", help="body mass for the anthropometric prior, kg"
+    )
+    parser.add_argument("--height", type=positive_float, metavar="M", help="body height for the prior, m")
     parser.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table")
     parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
     parser.add_argument(
@@ -217,9 +220,13 @@ def run(args: argparse.Namespace) -> int:
 
     # Before the identification: a result that cannot be written is not worth computing.
     json_path = None if args.json is None else check_output_file("--json", args.json)
+    try:
+        passive = PassiveModel.parse(args.passive)
+    except InputError as error:
+        raise InputError(f"--passive {args.passive}: {error}") from None
     options = IdentifyOptions(
         method=args.method,
-        passive=PassiveModel.parse(args.passive),
+        passive=passive,
         subject=SubjectInfo(args.body_mass, args.height, args.sex),
         tare=read_tare(args.tare),
     )
