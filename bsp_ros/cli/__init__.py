@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
 from bsp_ros import __version__
 from bsp_ros.errors import BspError
+
+# What a shell reports for a Unix tool killed by SIGPIPE (128 + 13): `bsp ... | head -1` stops quietly with it.
+EXIT_BROKEN_PIPE = 141
+EXIT_INTERRUPTED = 130
 
 # One line per subcommand: the module `bsp_ros.cli.<name>`. A subcommand module imports only light modules at
 # import time (its parser is built on every `bsp` start); numpy, scipy, matplotlib, rosbags and rclpy are
@@ -41,16 +47,61 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run `bsp`; return the process exit code (a BspError's `exit_code` on a handled failure)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not hasattr(args, "_run"):
-        parser.print_help()
-        return 2
+    """Run `bsp`; return the process exit code (a BspError's `exit_code` on a handled failure).
+
+    One place for what every command shares: a BspError is one `bsp <command>: error: ...` line; Ctrl-C is
+    `bsp <command>: interrupted` and 130; a reader that stopped reading (`bsp ... | head -1`) ends the command
+    quietly with 141, as SIGPIPE ends a Unix tool (the signal itself stays ignored, as Python sets it, so the
+    store's and the middleware's sockets keep their EPIPE errors).
+    """
+    words = list(sys.argv[1:] if argv is None else argv)
+    # Named before the parser is built, so a Ctrl-C during start-up still says which command stopped.
+    command = next((f"bsp {word}" for word in words if not word.startswith("-")), "bsp")
     try:
-        return int(args._run(args) or 0)
-    except BspError as error:
-        print(f"bsp {args.command}: error: {error}", file=sys.stderr)
-        return error.exit_code
+        parser = build_parser()
+        args = parser.parse_args(words)
+        if not hasattr(args, "_run"):
+            parser.print_help()
+            sys.stdout.flush()
+            return 2
+        try:
+            code = int(args._run(args) or 0)
+        except BspError as error:
+            print(f"{command}: error: {error}", file=sys.stderr)
+            code = error.exit_code
+        # Flushed here, not at interpreter exit, so a reader that went away is seen by the handler below.
+        sys.stdout.flush()
+        return code
     except KeyboardInterrupt:
-        return 130
+        _say(f"{command}: interrupted")
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
+    except OSError as error:
+        if error.errno != errno.EPIPE:
+            raise
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
+
+
+def _say(line: str) -> None:
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except OSError:  # stderr closed as well: the exit code says it
+        pass
+
+
+def _silence_stdout() -> None:
+    """Send what is left of stdout to /dev/null, so the interpreter's final flush does not fail again."""
+    stream = sys.stdout
+    try:
+        fd = stream.fileno()
+    except (AttributeError, OSError, ValueError):  # a replaced stream (a test's capture): drop its buffer only
+        fd = -1
+    if fd == 1 and stream is sys.__stdout__:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)
+    else:
+        sys.stdout = open(os.devnull, "w")  # lives until the process ends

@@ -8,35 +8,75 @@ import os
 import signal
 import subprocess
 import sys
+import textwrap
 import time
 from typing import Any
 
 from bsp_ros.cli.argtypes import float_within, positive_float
 
 NODES = ("cell_simulator", "joint_angle_estimator", "bsp_identifier")
+# bsp_identifier's default window (its `window_s` parameter), simulated seconds: until it has filled, or the
+# first valid estimate, an invalid estimate is the expected warm-up, and the table says so.
+WINDOW_S = 30.0
+# The verdict: a valid final estimate whose static moments are within this of the simulated truth (%).
+VERDICT_STATIC_PERCENT = 2.0
+WIDTH = 110
+
+DESCRIPTION = (
+    "Run a simulated rehabilitation cell live: a robot slowly moving a relaxed arm (simulated, with a known "
+    "truth), and the bsp_ros node suite identifying it, each a separate process talking ROS 2 (rclpy and its "
+    "middleware, Fast DDS by default) on a private domain. A table shows each estimate beside the simulated "
+    "truth as it converges, and the weight support the robot would apply; at the end a verdict says whether "
+    "the estimate came out valid and close to the truth. Exit code 0 if it did, 1 if not, 6 if the "
+    "middleware cannot start."
+)
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register `bsp demo`."""
-    parser = subparsers.add_parser("demo", help="run the simulated cell and the nodes live, estimates vs truth")
-    parser.add_argument("--duration", type=positive_float, default=60.0, help="wall-clock seconds to run (default 60)")
+    parser = subparsers.add_parser(
+        "demo", help="run the simulated cell and the nodes live, estimates vs truth", description=DESCRIPTION
+    )
+    parser.add_argument(
+        "--duration", type=positive_float, default=60.0, metavar="S", help="wall-clock seconds to run (default 60)"
+    )
     parser.add_argument(
         "--speed",
         type=float_within(0.01, 100.0),  # the cell_simulator's `speed` parameter range
         default=2.0,
+        metavar="X",
         help="simulated seconds per wall second, 0.01-100 (default 2)",
     )
-    parser.add_argument("--subject", choices=("human", "paper-arm"), default="human")
-    parser.add_argument("--mode", choices=("windowed", "recursive"), default="windowed")
+    parser.add_argument(
+        "--subject",
+        choices=("human", "paper-arm"),
+        default="human",
+        help="human: a 3-segment arm (upper arm, forearm, hand) with de Leva table values; paper-arm: the method "
+        "paper's 2-segment mechanical arm (default human)",
+    )
+    parser.add_argument(
+        "--mode",
+        choices=("windowed", "recursive"),
+        default="windowed",
+        help="windowed: the batch estimator over a sliding 30 s window, 5 updates/s; recursive: recursive least "
+        "squares on every joint state (default windowed)",
+    )
     parser.add_argument(
         "--support-fraction",
         type=float_within(0.0, 1.0),
         default=0.5,
+        metavar="S",
         help="share of the arm's gravity torques bsp/weight_support asks the robot to carry, 0-1 (default 0.5)",
     )
-    parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
-        "--domain", type=int, default=None, help="ROS domain id (default: derived from the pid, 2..101)"
+        "--seed",
+        type=int,
+        default=0,
+        metavar="N",
+        help="seed of the simulated noise; the same seed gives the same session",
+    )
+    parser.add_argument(
+        "--domain", type=int, default=None, metavar="ID", help="ROS domain id (default: derived from the pid, 2..101)"
     )
     return parser
 
@@ -53,13 +93,25 @@ def _rows(
     return rows
 
 
-def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: float) -> str:
+def state_line(document: dict[str, Any], warming_up: bool) -> str:
+    """VALID, a warm-up that is expected, or INVALID (a real problem), with the estimator's message."""
+    quality = document["quality"]
+    if quality["valid"]:
+        return f"VALID: {quality.get('message', '')}"
+    if warming_up:
+        return (
+            "warming up (expected: the window is still filling, and every joint must have moved both ways): "
+            f"{quality.get('message', '')}"
+        )
+    return f"INVALID: {quality.get('message', '')}"
+
+
+def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: float, warming_up: bool = False) -> str:
     """The live table: each identifiable parameter, its estimate +- std, the truth and the error."""
     if document is None:
-        return f"t={elapsed_s:5.1f} s  waiting for the first estimate..."
-    quality = document["quality"]
+        return f"t={elapsed_s:5.1f} s  waiting for the first estimate (the nodes are starting)..."
     lines = [
-        f"t={elapsed_s:5.1f} s  {'VALID' if quality['valid'] else 'invalid'}: {quality.get('message', '')}",
+        f"t={elapsed_s:5.1f} s  {state_line(document, warming_up)}",
         f"{'parameter':28s} {'estimate':>10s} {'+- std':>9s} {'truth':>9s} {'error %':>8s}",
     ]
     for name, value, std, true in _rows(document, truth):
@@ -79,7 +131,76 @@ def render_support(msg: Any, support_fraction: float) -> str:
     force, torque = msg.wrench.force, msg.wrench.torque
     return (
         f"weight support ({support_fraction:g} of the arm's gravity torques), on the hand in world: "
-        f"F_y {force.y:+.2f} N, F_z {force.z:+.2f} N, M_x {torque.x:+.3f} Nm"
+        f"F_y {force.y:+.2f} N, F_z {force.z:+.2f} N, M_x {torque.x:+.3f} Nm (follows the arm's posture)"
+    )
+
+
+def introduction(args: argparse.Namespace, middleware: str, domain: int) -> str:
+    """What runs, said once before the table."""
+    arm = (
+        "a relaxed 3-segment human arm (de Leva table, 75 kg, 1.78 m)"
+        if args.subject == "human"
+        else "the method paper's 2-segment mechanical arm (Table 1)"
+    )
+    share = 100 * args.support_fraction
+    mode = f"over a sliding {WINDOW_S:g} s window, 5 times/s" if args.mode == "windowed" else "recursively"
+    head = (
+        f"bsp demo: a simulated rehabilitation cell, live for {args.duration:g} s at {args.speed:g}x real time, on "
+        f"ROS 2 (rclpy, {middleware}, private domain {domain}). Three node processes run:"
+    )
+    tail = (
+        "This console compares each estimate with the simulated truth. The first estimates are invalid while the "
+        "window fills and every joint has yet to move both ways: that warm-up is expected. The weight support "
+        "changes as the robot moves the arm: it is a share of gravity at the current posture."
+    )
+    return "\n".join(
+        [
+            textwrap.fill(head, WIDTH),
+            f"  cell_simulator         a robot moving {arm} slowly;",
+            f"{'':25s}publishes the handle's force/torque wrench, four motion-capture markers, the truth",
+            "  joint_angle_estimator  the joint angles from the markers",
+            f"  bsp_identifier         the static moments and passive joint moments, {mode};",
+            f"{'':25s}and the weight support: what the robot would apply to carry {share:g} % of the arm's weight",
+            textwrap.fill(tail, WIDTH),
+            "",
+        ]
+    )
+
+
+def verdict(document: dict[str, Any] | None, truth: dict[str, Any]) -> tuple[bool, str]:
+    """Whether the demo worked (a valid final estimate, static moments near the truth), and what it showed."""
+    if document is None:
+        return False, (
+            "verdict: FAILED - no estimate arrived. The nodes did not reach each other over the middleware; "
+            "see the messages above (a firewall or a ROS_LOCALHOST_ONLY setting can block discovery)."
+        )
+    if not document["quality"]["valid"]:
+        return False, (
+            f"verdict: FAILED - the last estimate is invalid: {document['quality'].get('message', '')}. "
+            "Run longer (--duration) if it was still warming up."
+        )
+    errors = [(name, 100 * (value - true) / true) for name, value, _, true in _rows(document, truth) if value and true]
+    static = [(name.split()[0], error) for name, error in errors if "static_moment" in name]
+    friction = [(name.split()[0], error) for name, error in errors if "coulomb" in name]
+    worst_name, worst = max(static, key=lambda item: abs(item[1])) if static else ("", 0.0)
+    meaning = (
+        "What the numbers mean: a static moment (kg m) is the mass times the distance of its centre of mass from "
+        "the joint, summed over the segments beyond it: how hard gravity pulls the arm about that joint, what a "
+        "robot must carry. Coulomb (Nm) is the joint's dry friction, the passive moment that resists motion. "
+        "std is the estimator's own uncertainty; error % is against the simulated truth."
+    )
+    if not static:
+        return False, "verdict: FAILED - no simulated truth arrived (sim/truth) to compare the estimate with."
+    if abs(worst) > VERDICT_STATIC_PERCENT:
+        return False, (
+            f"verdict: FAILED - the estimate is valid but the {worst_name}'s static moment is {worst:+.2f} % "
+            f"off the truth (more than {VERDICT_STATIC_PERCENT:g} %).\n" + meaning
+        )
+    friction_text = f", every Coulomb friction within {max(abs(e) for _, e in friction):.2g} %" if friction else ""
+    return True, (
+        f"verdict: OK - the final estimate is valid; every static moment is within {abs(worst):.2g} % of the "
+        f"simulated truth (largest: {worst_name}){friction_text}. On a real cell the same nodes take the sensor's "
+        "and the motion capture's topics instead of the simulator's (docs/cell-guide.md).\n" + meaning
     )
 
 
@@ -107,6 +228,7 @@ def run(args: argparse.Namespace) -> int:
         "bsp_identifier": identifier,
     }
     client = Client("bsp_demo_console", domain)
+    print(introduction(args, _middleware(), domain), flush=True)
     latest: dict[str, Any] = {}
     truth: dict[str, Any] = {}
     client.subscribe(
@@ -129,6 +251,8 @@ def run(args: argparse.Namespace) -> int:
         for name in NODES
     ]
     interactive = sys.stdout.isatty()
+    seen_valid = False
+    first_estimate_s: float | None = None
     start = time.monotonic()
     try:
         while time.monotonic() - start < args.duration:
@@ -137,7 +261,15 @@ def run(args: argparse.Namespace) -> int:
                 failed = [n for n, p in zip(NODES, processes, strict=True) if p.poll() is not None]
                 print(f"bsp demo: node(s) {failed} stopped", file=sys.stderr)
                 break
-            table = render(latest.get("doc"), truth, time.monotonic() - start)
+            elapsed_s = time.monotonic() - start
+            document = latest.get("doc")
+            if document is not None and first_estimate_s is None:
+                first_estimate_s = elapsed_s  # the nodes take seconds to start and to discover each other
+            if document is not None and document["quality"]["valid"]:
+                seen_valid = True
+            since_first_s = 0.0 if first_estimate_s is None else elapsed_s - first_estimate_s
+            warming_up = not seen_valid and since_first_s * args.speed < WINDOW_S + 10.0
+            table = render(document, truth, elapsed_s, warming_up)
             table += "\n" + render_support(latest.get("support"), args.support_fraction)
             print(("\033[2J\033[H" if interactive else "") + table + ("" if interactive else "\n"), flush=True)
     finally:
@@ -154,4 +286,16 @@ def run(args: argparse.Namespace) -> int:
     print("\nfinal estimate (truth beside it):")
     print(render(document, truth, time.monotonic() - start))
     print(render_support(latest.get("support"), args.support_fraction))
-    return 0 if document is not None and document["quality"]["valid"] else 1
+    worked, text = verdict(document, truth)
+    print("\n" + "\n\n".join(textwrap.fill(part, WIDTH) for part in text.split("\n")))
+    return 0 if worked else 1
+
+
+def _middleware() -> str:
+    """The rmw implementation rclpy runs on (Fast DDS as `rmw_fastrtps_cpp` by default on Jazzy)."""
+    try:
+        from rclpy.utilities import get_rmw_implementation_identifier
+
+        return str(get_rmw_implementation_identifier())
+    except Exception:  # an rclpy without it: the environment's choice, or Jazzy's default
+        return os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")

@@ -8,8 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.cli.argtypes import float_within
-from bsp_ros.errors import BspError, InputError
+from bsp_ros.cli.argtypes import float_within, positive_float
+from bsp_ros.errors import BspError, DataError, InputError
 
 # bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy (a test keeps the two equal).
 METHODS = ("joint", "paper")
@@ -38,8 +38,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
     parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
     parser.add_argument("--passive", default="coulomb", help="passive model, e.g. coulomb+viscous (default coulomb)")
-    parser.add_argument("--body-mass", type=float, metavar="KG", help="body mass for the anthropometric prior")
-    parser.add_argument("--height", type=float, metavar="M", help="body height (m)")
+    parser.add_argument(
+        "--body-mass", type=positive_float, metavar="KG", help="body mass for the anthropometric prior, kg"
+    )
+    parser.add_argument("--height", type=positive_float, metavar="M", help="body height for the prior, m")
     parser.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table")
     parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
     parser.add_argument(
@@ -89,12 +91,32 @@ def _topics(args: argparse.Namespace) -> Any:
     return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
 
 
-def _read_tare(path: Path | None) -> Any:
+def looks_like_bag(path: Path) -> bool:
+    """Whether ``path`` is a recording (a rosbag2 directory or an .mcap file) rather than a tare file."""
+    if path.is_dir():
+        return (path / "metadata.yaml").is_file() or any(path.glob("*.mcap"))
+    return path.suffix == ".mcap"
+
+
+def read_tare(path: Path | None) -> Any:
+    """The tare file given as ``--tare``, or an InputError naming the file and, for a recording, how to make one."""
     if path is None:
         return None
     from bsp_ros.core.tare import read_tare_file
 
-    return read_tare_file(path)
+    if looks_like_bag(path):
+        raise InputError(
+            f"--tare {path} is a recording (a bag), not a tare file: make the file with "
+            f"`bsp tare {path} --out FILE`, then give --tare FILE"
+        )
+    if path.is_dir():
+        raise InputError(f"--tare {path} is a directory, not a tare file (`bsp tare TARE_BAG --out FILE` makes one)")
+    if not path.exists():
+        raise InputError(f"--tare {path}: no such file (`bsp tare TARE_BAG --out FILE` makes one)")
+    try:
+        return read_tare_file(path)
+    except InputError as error:
+        raise InputError(f"--tare {path}: {error}") from None
 
 
 def _progress_bar() -> Any:
@@ -132,6 +154,48 @@ def tare_line(quality: dict[str, Any]) -> str:
     return f"tare: none applied{worst} (bsp tare, then --tare FILE)"
 
 
+# Problems that mean the recording cannot be used at all (exit 3), as opposed to an estimate of doubtful quality.
+_DATA_PROBLEMS = ("too few samples", "too few usable samples", "no motion at the ")
+
+
+def data_problems(document: dict[str, Any]) -> list[str]:
+    """The parts of an invalid estimate's message that say the data are too few or do not move (exit 3)."""
+    quality = document["quality"]
+    if quality["valid"]:
+        return []
+    parts = [part.strip() for part in str(quality.get("message", "")).split(";")]
+    return [part for part in parts if part.startswith(_DATA_PROBLEMS)]
+
+
+def _cell(value: Any) -> str:
+    """One TSV cell: empty for a missing value, JSON-style booleans, no tab or newline inside."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return str(value).lower()
+    return " ".join(str(value).split())
+
+
+TSV_HEADER = ("owner", "parameter", "value", "std", "source")
+
+
+def format_tsv(document: dict[str, Any]) -> str:
+    """Tab-separated values: a header, then five columns on every row (empty where there is nothing).
+
+    The first rows are the verdict (`quality valid`, `quality message`) and the tare note (`quality tare`),
+    then one row per quantity.
+    """
+    quality = document["quality"]
+    table: list[tuple[Any, ...]] = [
+        TSV_HEADER,
+        ("quality", "valid", quality["valid"], None, None),
+        ("quality", "message", quality.get("message"), None, None),
+        ("quality", "tare", tare_line(quality).removeprefix("tare: "), None, None),
+        *rows(document),
+    ]
+    return "\n".join("\t".join(_cell(value) for value in row) for row in table)
+
+
 def format_table(document: dict[str, Any]) -> str:
     """A human-readable table of an estimate document."""
     quality = document["quality"]
@@ -163,11 +227,15 @@ def run(args: argparse.Namespace) -> int:
 
     # Before the identification: a result that cannot be written is not worth computing.
     json_path = None if args.json is None else check_output_file("--json", args.json)
+    try:
+        passive = PassiveModel.parse(args.passive)
+    except InputError as error:
+        raise InputError(f"--passive {args.passive}: {error}") from None
     options = IdentifyOptions(
         method=args.method,
-        passive=PassiveModel.parse(args.passive),
+        passive=passive,
         subject=SubjectInfo(args.body_mass, args.height, args.sex),
-        tare=_read_tare(args.tare),
+        tare=read_tare(args.tare),
         wrench_delay_s=args.wrench_delay_s,
     )
     try:
@@ -177,6 +245,10 @@ def run(args: argparse.Namespace) -> int:
         return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)
     except BspError:
         raise
+    unusable = data_problems(document)
+    if unusable:
+        # One rule for too little data, however little (README "Exit codes": 3), whichever stage noticed it.
+        raise DataError(f"the data cannot be used: {'; '.join(unusable)}")
     if json_path is not None:
         text = json.dumps(document, indent=2, allow_nan=False) + "\n"
         try:
@@ -188,9 +260,12 @@ def run(args: argparse.Namespace) -> int:
     if output == "table":
         print(format_table(document))
     elif output == "tsv":
-        print(f"valid\t{str(document['quality']['valid']).lower()}")
-        for owner, key, value, std, source in rows(document):
-            print(f"{owner}\t{key}\t{value}\t{std}\t{source}")
-        for warning in document["quality"]["warnings"]:
-            print(f"warning\t{warning}", file=sys.stderr)
+        print(format_tsv(document))
+    if output != "table":
+        # The table says all of this on stdout; otherwise stdout is data, and the reasons go to stderr.
+        quality = document["quality"]
+        if not quality["valid"]:
+            print(f"bsp identify: estimate INVALID: {quality.get('message', '')}", file=sys.stderr)
+        for warning in quality["warnings"] if output == "tsv" else ():
+            print(f"warning: {warning}", file=sys.stderr)
     return 0 if document["quality"]["valid"] else EXIT_INVALID

@@ -3,11 +3,33 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 from typing import Any
 
+from bsp_ros.cli.argtypes import (
+    finite_float,
+    float_within,
+    int_within,
+    positive_at_most,
+    positive_float,
+)
 from bsp_ros.errors import InputError
+
+# The planner's own limits (bsp_ros.core.planning), spelled out so the parser needs no numpy (a test keeps them
+# equal): a value beyond them is refused by argparse naming the option.
+MAX_SPEED_RAD_S = 0.5
+MAX_DURATION_S = 86_400.0
+NOISE_LIMITS = {"--force-noise": 100.0, "--torque-noise": 10.0, "--marker-noise": 0.1}
+MAX_RATE_HZ = 5000.0
+
+# A static moment predicted less precise than this (relative std, %) makes a session of little use: the report
+# could not show a change of a few percent between sessions (its MDC95 is about 2.8 std).
+TARGET_STD_PERCENT = 1.0
+# `bsp plan` looks for a duration that reaches the target by doubling, up to this factor of the one asked for.
+LONGEST_SUGGESTION_FACTOR = 32
+LONGEST_SUGGESTION_S = 1800.0
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -26,7 +48,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     arm = parser.add_argument_group("the arm (segment lengths: measured, a previous estimate, or the table)")
     arm.add_argument(
         "--lengths",
-        type=float,
+        type=float_within(0.01, 1.0),
         nargs="+",
         metavar="M",
         help="segment lengths shoulder->elbow, elbow->wrist[, wrist->handle centre], m (default: de Leva table "
@@ -36,11 +58,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--segments", type=int, choices=(2, 3), default=3, help="segments when --lengths is not given (default 3)"
     )
     arm.add_argument(
-        "--height", type=float, default=1.78, metavar="M", help="stature for table lengths, m (default 1.78)"
+        "--height", type=positive_float, default=1.78, metavar="M", help="stature for table lengths, m (default 1.78)"
     )
     arm.add_argument(
         "--body-mass",
-        type=float,
+        type=positive_float,
         default=75.0,
         metavar="KG",
         help="body mass for the table inertia and static moments the prediction assumes (default 75)",
@@ -48,7 +70,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     arm.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table (default male)")
     arm.add_argument(
         "--shoulder",
-        type=float,
+        type=finite_float,
         nargs=2,
         required=True,
         metavar=("Y", "Z"),
@@ -57,7 +79,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     limits = parser.add_argument_group("the therapist's limits (required: never extrapolated)")
     limits.add_argument(
         "--shoulder-range",
-        type=float,
+        type=finite_float,
         nargs=2,
         required=True,
         metavar=("LOW", "HIGH"),
@@ -65,7 +87,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     limits.add_argument(
         "--elbow-range",
-        type=float,
+        type=finite_float,
         nargs=2,
         required=True,
         metavar=("LOW", "HIGH"),
@@ -73,20 +95,26 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     limits.add_argument(
         "--wrist-range",
-        type=float,
+        type=finite_float,
         nargs=2,
         metavar=("LOW", "HIGH"),
         help="q3, hand relative to the forearm, deg (required for 3 segments)",
     )
     limits.add_argument(
         "--max-speed",
-        type=float,
+        type=positive_at_most(MAX_SPEED_RAD_S),
         default=0.03,
         metavar="RAD_S",
         help="largest joint speed, rad/s (default 0.03: quasi-static)",
     )
     session = parser.add_argument_group("the session")
-    session.add_argument("--duration", type=float, default=120.0, metavar="S", help="session length, s (default 120)")
+    session.add_argument(
+        "--duration",
+        type=positive_at_most(MAX_DURATION_S),
+        default=120.0,
+        metavar="S",
+        help="session length, s (default 120)",
+    )
     session.add_argument(
         "--passive",
         default="coulomb+offset+stiffness",
@@ -95,11 +123,22 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "(default coulomb+offset+stiffness)",
     )
     session.add_argument(
-        "--operating-points", type=int, metavar="K", help="operating points (1-20; default: the best of 1, 2 and 3)"
+        "--target-std",
+        type=positive_float,
+        default=TARGET_STD_PERCENT,
+        metavar="PERCENT",
+        help="warn when a static moment's predicted relative std exceeds this, and say which duration reaches "
+        f"it (default {TARGET_STD_PERCENT:g} %%)",
+    )
+    session.add_argument(
+        "--operating-points",
+        type=int_within(1, 20),
+        metavar="K",
+        help="operating points (1-20; default: the best of 1, 2 and 3)",
     )
     session.add_argument(
         "--amplitude",
-        type=float,
+        type=positive_float,
         nargs="+",
         metavar="DEG",
         help="oscillation amplitude per joint about each operating point, deg (default optimised)",
@@ -113,23 +152,43 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     session.add_argument(
         "--max-evaluations",
-        type=int,
+        type=int_within(10, 100_000),
         default=400,
         metavar="N",
         help="optimiser budget per number of operating points (default 400)",
     )
     noise = parser.add_argument_group("sensor noise for the predicted stds")
     noise.add_argument(
-        "--force-noise", type=float, default=0.05, metavar="N", help="force noise per axis, N (default 0.05)"
+        "--force-noise",
+        type=float_within(0.0, NOISE_LIMITS["--force-noise"]),
+        default=0.05,
+        metavar="N",
+        help="force noise per axis, N (default 0.05)",
     )
     noise.add_argument(
-        "--torque-noise", type=float, default=0.005, metavar="NM", help="moment noise per axis, Nm (default 0.005)"
+        "--torque-noise",
+        type=float_within(0.0, NOISE_LIMITS["--torque-noise"]),
+        default=0.005,
+        metavar="NM",
+        help="moment noise per axis, Nm (default 0.005)",
     )
     noise.add_argument(
-        "--marker-noise", type=float, default=1e-4, metavar="M", help="marker noise per axis, m (default 1e-4)"
+        "--marker-noise",
+        type=float_within(0.0, NOISE_LIMITS["--marker-noise"]),
+        default=1e-4,
+        metavar="M",
+        help="marker noise per axis, m (default 1e-4)",
     )
-    noise.add_argument("--wrench-hz", type=float, default=100.0, metavar="HZ", help="wrench rate (default 100)")
-    noise.add_argument("--marker-hz", type=float, default=50.0, metavar="HZ", help="marker frame rate (default 50)")
+    noise.add_argument(
+        "--wrench-hz", type=positive_at_most(MAX_RATE_HZ), default=100.0, metavar="HZ", help="wrench rate (default 100)"
+    )
+    noise.add_argument(
+        "--marker-hz",
+        type=positive_at_most(MAX_RATE_HZ),
+        default=50.0,
+        metavar="HZ",
+        help="marker frame rate (default 50)",
+    )
     out = parser.add_argument_group("output")
     out.add_argument(
         "--json", type=Path, metavar="FILE", help="write the plan (knots, samples, predicted stds) as JSON"
@@ -137,7 +196,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     out.add_argument(
         "--csv", type=Path, metavar="FILE", help="write t, joint angles and velocities, handle y z pitch as CSV"
     )
-    out.add_argument("--rate", type=float, default=10.0, metavar="HZ", help="sample rate of the files, Hz (default 10)")
+    out.add_argument(
+        "--rate", type=positive_float, default=10.0, metavar="HZ", help="sample rate of the files, Hz (default 10)"
+    )
     out.add_argument(
         "--publish",
         action="store_true",
@@ -152,7 +213,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     out.add_argument("--frame-id", default="world", help="frame of the handle path (default world)")
     out.add_argument(
         "--plane-x",
-        type=float,
+        type=finite_float,
         default=0.0,
         metavar="M",
         help="x of the movement plane (the shoulder's x) for the published path, m (default 0)",
@@ -171,6 +232,18 @@ def _request(args: argparse.Namespace) -> Any:
     else:
         lengths = tuple(length_from_height_m(args.sex, name, args.height) for name in segments_for(args.segments))
     n = len(lengths)
+    if args.lengths and n not in (2, 3):
+        raise InputError(f"--lengths takes 2 or 3 segment lengths (m), got {n}")
+    for option, pair in (("--shoulder-range", args.shoulder_range), ("--elbow-range", args.elbow_range)):
+        _check_range(option, pair)
+    if args.wrist_range is not None:
+        _check_range("--wrist-range", args.wrist_range)
+    if args.amplitude and len(args.amplitude) != n:
+        raise InputError(f"--amplitude takes one value per joint ({n}, shoulder first), got {len(args.amplitude)}")
+    try:
+        passive = PassiveModel.parse(args.passive)
+    except InputError as error:
+        raise InputError(f"--passive {args.passive}: {error}") from None
     ranges = [tuple(args.shoulder_range), tuple(args.elbow_range)]
     if n == 3:
         if args.wrist_range is None:
@@ -183,13 +256,55 @@ def _request(args: argparse.Namespace) -> Any:
         shoulder_yz_m=tuple(args.shoulder),
         limits=JointLimits(tuple(ranges), args.max_speed),
         duration_s=args.duration,
-        passive=PassiveModel.parse(args.passive),
+        passive=passive,
         n_points=args.operating_points,
         amplitude_deg=tuple(args.amplitude) if args.amplitude else None,
         noise=NoiseSpec(args.force_noise, args.torque_noise, args.marker_noise, args.wrench_hz, args.marker_hz),
         objective=args.objective,
         max_evaluations=args.max_evaluations,
     )
+
+
+def _check_range(option: str, pair: list[float]) -> None:
+    if not pair[0] < pair[1]:
+        raise InputError(f"{option} takes LOW HIGH with LOW < HIGH (deg), got {pair[0]:g} {pair[1]:g}")
+
+
+def worst_static_std_percent(plan: Any) -> tuple[str, float]:
+    """The static moment with the largest predicted relative std, and that std in %."""
+    rows = [r for r in plan.prediction.table() if r["quantity"] == "static_moment_kgm" and r["relative_std"]]
+    worst = max(rows, key=lambda r: r["relative_std"])
+    return worst["owner"], 100.0 * float(worst["relative_std"])
+
+
+def precision_warning(plan: Any, target_percent: float, replan: Any) -> str | None:
+    """A warning when the plan's static moments fall short of ``target_percent``, naming a duration that does not.
+
+    ``replan(duration_s)`` plans the same request for another duration (an InputError if it cannot); the
+    durations tried double from the one asked for, so the duration named was planned and predicted, not guessed.
+    """
+    owner, worst = worst_static_std_percent(plan)
+    if worst <= target_percent:
+        return None
+    asked = plan.request.duration_s
+    head = (
+        f"this plan cannot reach useful precision: the {owner}'s static moment is predicted to +- {worst:.3g} % "
+        f"(1 std; target {target_percent:g} %)"
+    )
+    duration = asked
+    while duration < min(LONGEST_SUGGESTION_FACTOR * asked, LONGEST_SUGGESTION_S):
+        duration = min(2 * duration, LONGEST_SUGGESTION_S)
+        try:
+            longer = replan(duration)
+        except InputError:
+            continue
+        _, worst_then = worst_static_std_percent(longer)
+        if worst_then <= target_percent:
+            return (
+                f"{head}; a {duration:.0f} s session reaches {worst_then:.3g} % (planned with the same options: "
+                f"--duration {duration:.0f})"
+            )
+    return f"{head}; no session up to {duration:.0f} s reaches it: widen the ranges or reduce the sensor noise"
 
 
 def format_plan(plan: Any) -> str:
@@ -221,8 +336,15 @@ def run(args: argparse.Namespace) -> int:
     """Plan, write the files, print the predicted stds; publish on request."""
     from bsp_ros.core.planning import plan_protocol, write_plan_csv, write_plan_json
 
-    plan = plan_protocol(_request(args))
+    request = _request(args)
+    plan = plan_protocol(request)
     print(format_plan(plan))
+    warning = precision_warning(
+        plan, args.target_std, lambda duration_s: plan_protocol(dataclasses.replace(request, duration_s=duration_s))
+    )
+    if warning is not None:
+        sys.stdout.flush()  # the table first, then the warning, when both go to a terminal
+        print(f"warning: {warning}", file=sys.stderr)
     if args.json:
         write_plan_json(args.json, plan, args.rate)
         print(f"wrote {args.json}")

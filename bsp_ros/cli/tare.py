@@ -29,7 +29,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "handle free (no arm attached; at least 5 s). If the sensor's orientation (from /tf_static and /tf) "
             "varied enough, the handle's mass and centre of mass are separated from the offset; otherwise the "
             "constant load at the recorded orientation is estimated. Writes a YAML file (schema bsp_ros/core/tare/1) "
-            "for `bsp identify BAG --tare FILE`. Exit codes: 0 written, 2 bad option, 3 unusable recording, "
+            "for `bsp identify BAG --tare FILE`. A recording whose load changed (an arm attached, the handle held) is "
+            "refused unless --force. Exit codes: 0 written, 2 bad option, 3 unusable recording, "
             "6 no middleware (--live), 10-16 bag errors as for `bsp identify`."
         ),
     )
@@ -41,6 +42,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--world-frame", default="world")
     parser.add_argument("--live", action="store_true", help="record from the running wrench topic instead of a bag")
     parser.add_argument("--duration", type=float, metavar="S", help="--live: how long to record, s (>= 5)")
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="write the tare even if the load changed during the recording (an arm attached, the handle held)",
+    )
     return parser
 
 
@@ -126,7 +132,13 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bsp_ros.bag.errors import BagError
-    from bsp_ros.core.tare import MIN_TARE_DURATION_S, estimate_tare, recording_warnings, write_tare_file
+    from bsp_ros.core.tare import (
+        MAX_UNSTEADINESS,
+        MIN_TARE_DURATION_S,
+        estimate_tare,
+        recording_warnings,
+        write_tare_file,
+    )
 
     out: Path = args.out
     if out.exists():
@@ -135,8 +147,10 @@ def run(args: argparse.Namespace) -> int:
     if args.live:
         if args.bag is not None:
             raise InputError("give either a TARE recording or --live, not both")
-        if args.duration is None or not np.isfinite(args.duration) or args.duration < MIN_TARE_DURATION_S:
-            raise InputError(f"--live needs --duration S with S >= {MIN_TARE_DURATION_S:g} s, got {args.duration}")
+        if args.duration is None:
+            raise InputError(f"--live needs --duration S: how long to record, at least {MIN_TARE_DURATION_S:g} s")
+        if not np.isfinite(args.duration) or args.duration < MIN_TARE_DURATION_S:
+            raise InputError(f"--duration must be at least {MIN_TARE_DURATION_S:g} s, got {args.duration:g}")
         t_ns, force, torque, frame = collect_live_wrench(args.wrench_topic, args.duration)
         rotations, source = None, f"live {args.wrench_topic}"
         warnings.append("live tare: the sensor's orientation is not recorded, so the constant load is estimated")
@@ -158,6 +172,14 @@ def run(args: argparse.Namespace) -> int:
         rotations, source = read.rotations_world_from_sensor, Path(args.bag).name
         warnings += read.warnings
     tare = estimate_tare(t_ns, force, torque, frame, rotations, source=source)
+    if tare.unsteadiness > MAX_UNSTEADINESS and not args.force:
+        # A tare taken with the arm attached would remove part of the arm's weight from every session it is
+        # applied to, and the estimate would stay valid: refused here, before a file exists to be applied.
+        raise DataError(
+            f"the load changed during the recording (residual {tare.unsteadiness:.3g} x the sample-to-sample "
+            f"noise, at most {MAX_UNSTEADINESS:g}): was an arm attached or the handle held? Record the tare again "
+            "with the handle free (or --force to write it anyway)"
+        )
     warnings += recording_warnings(tare)
     write_tare_file(out, tare)
     print(format_tare(tare))

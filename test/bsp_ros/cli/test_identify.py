@@ -81,9 +81,15 @@ def test_a_truncated_bag_is_identified_from_its_intact_part_and_says_so(human_ba
     assert estimate["quality"]["warnings"][0].startswith("bag damaged")
 
 
-def test_silly_subject_data_is_refused_with_the_value_named(human_bag, capsys) -> None:
-    assert main(["identify", str(human_bag), "--body-mass", "-70"]) == 2
-    assert "-70" in capsys.readouterr().err
+@pytest.mark.parametrize(("option", "value"), [("--body-mass", "-70"), ("--height", "nan"), ("--passive", "foo")])
+def test_silly_subject_data_is_refused_naming_the_option_and_value(human_bag, capsys, option, value) -> None:
+    try:
+        code = main(["identify", str(human_bag), option, value])
+    except SystemExit as stop:  # argparse's own refusal of a value its type rejects
+        code = stop.code
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert code == 2
+    assert err.startswith("bsp identify: error: ") and option in err and value in err
 
 
 def _write_modified(tmp_path: Path, name: str, change) -> Path:

@@ -62,9 +62,78 @@ def test_missing_wrist_range_is_refused_with_exit_code_2(capsys) -> None:
     assert "--wrist-range" in capsys.readouterr().err
 
 
-def test_speed_limit_out_of_range_is_refused(capsys) -> None:
-    assert main(["plan", *LIMITS, "--wrist-range", "-5", "5", "--max-speed", "3"]) == 2
-    assert "max joint speed" in capsys.readouterr().err
+def _code(argv: list[str]) -> int:
+    try:
+        return main(argv)
+    except SystemExit as stop:  # argparse's refusal of a value its type rejects
+        return int(stop.code or 0)
+
+
+@pytest.mark.parametrize(
+    ("option", "values"),
+    [
+        ("--max-speed", ["3"]),
+        ("--max-speed", ["0"]),
+        ("--duration", ["-5"]),
+        ("--duration", ["100000"]),
+        ("--height", ["0"]),
+        ("--body-mass", ["inf"]),
+        ("--force-noise", ["-1"]),
+        ("--marker-noise", ["1"]),
+        ("--operating-points", ["0"]),
+        ("--max-evaluations", ["0"]),
+        ("--rate", ["0"]),
+        ("--shoulder", ["nan", "1"]),
+        ("--lengths", ["0.3", "-0.2", "0.1"]),
+        ("--lengths", ["0.3"]),
+        ("--amplitude", ["5"]),
+        ("--passive", ["foo"]),
+        ("--shoulder-range", ["10", "-10"]),
+    ],
+)
+def test_a_value_out_of_range_is_refused_naming_the_option(option: str, values: list[str], capsys) -> None:
+    argv = ["plan", *LIMITS, "--wrist-range", "-5", "5", option, *values]
+    if option == "--shoulder-range":
+        argv = ["plan", "--shoulder", "0", "1.2", "--elbow-range", "10", "100", "--wrist-range", "-5", "5"]
+        argv += [option, *values]
+    assert _code(argv) == 2
+    err = capsys.readouterr().err.splitlines()[-1]
+    assert err.startswith("bsp plan: error: ") and option in err
+    assert "None" not in err and "(rad/s) must" not in err  # the option, not the planner's internal label
+
+
+def test_the_cli_limits_are_the_planners(capsys) -> None:
+    from bsp_ros.cli import plan
+    from bsp_ros.core.planning import NoiseSpec, safety
+
+    assert plan.MAX_SPEED_RAD_S == safety.MAX_SPEED_LIMIT_RAD_S
+    noise = {"--force-noise": "force_noise_n", "--torque-noise": "torque_noise_nm", "--marker-noise": "marker_noise_m"}
+    for option, field in noise.items():
+        NoiseSpec(**{field: plan.NOISE_LIMITS[option]})  # the limit itself is accepted by the planner...
+        with pytest.raises(ValueError):
+            NoiseSpec(**{field: 1.001 * plan.NOISE_LIMITS[option]})  # ...and beyond it refused
+    with pytest.raises(ValueError):
+        NoiseSpec(wrench_hz=1.001 * plan.MAX_RATE_HZ)
+
+
+def _worst_static_percent(printed: str) -> float:
+    rows = [line.split() for line in printed.splitlines() if line.startswith("static_moment_kgm/")]
+    return max(float(row[-1].rstrip("%")) for row in rows)
+
+
+def test_a_plan_too_short_for_useful_precision_warns_and_names_a_duration_that_is_not(capsys) -> None:
+    two_segments = ["plan", *LIMITS, "--segments", "2"]
+    assert main([*two_segments, "--duration", "10"]) == 0
+    captured = capsys.readouterr()
+    assert _worst_static_percent(captured.out) > 1.0
+    warning = captured.err.strip()
+    assert warning.startswith("warning: this plan cannot reach useful precision") and "target 1 %" in warning
+    suggested = warning.rsplit("--duration ", 1)[1].rstrip(")")
+    # The duration named does reach the target when planned with the same options: no warning then.
+    assert main([*two_segments, "--duration", suggested]) == 0
+    captured = capsys.readouterr()
+    assert _worst_static_percent(captured.out) <= 1.0
+    assert captured.err == ""
 
 
 def test_offline_plan_does_not_import_rclpy(tmp_path: Path) -> None:

@@ -91,7 +91,7 @@ def test_tare_of_another_sensor_frame_is_refused(bags, tmp_path, capsys) -> None
         (["SESSION", "--wrench-topic", "/other/wrench"], 13, "/other/wrench"),
         (["SHORT"], 3, "at least 5 s"),
         (["--live"], 2, "--duration"),
-        (["--live", "--duration", "2"], 2, ">= 5"),
+        (["--live", "--duration", "2"], 2, "at least 5 s, got 2"),
         ([], 2, "give a TARE recording"),
         (["SESSION", "--duration", "9"], 2, "--live only"),
     ],
@@ -189,3 +189,23 @@ def test_tare_bag_without_any_transform_gives_a_constant_load_and_says_why(tmp_p
     doc = yaml.safe_load((tmp_path / "t.yaml").read_text())
     assert doc["load"] == "constant" and doc["recording"]["rotation_world_from_sensor"] is None
     assert "no transform connects the wrench frame ft_sensor to world" in capsys.readouterr().err
+
+
+def test_a_recording_with_the_arm_attached_is_refused_unless_forced(bags, tmp_path, capsys) -> None:
+    out = tmp_path / "arm.tare.yaml"
+    assert main(["tare", str(bags["session"]), "--out", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert err.startswith("bsp tare: error: the load changed during the recording") and "--force" in err
+    assert err.count("\n") == 1
+    assert not out.exists()  # nothing a session could be identified with
+    assert main(["tare", str(bags["session"]), "--out", str(out), "--force"]) == 0
+    assert "warning: tare: the load changed during the recording" in capsys.readouterr().err
+    assert yaml.safe_load(out.read_text())["recording"]["unsteadiness"] > 5
+
+
+def test_live_without_a_duration_names_the_option_not_none(tmp_path, capsys) -> None:
+    assert main(["tare", "--live", "--out", str(tmp_path / "t.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "--live needs --duration S" in err and "None" not in err
+    assert main(["tare", "--live", "--duration", "2", "--out", str(tmp_path / "t.yaml")]) == 2
+    assert "--duration must be at least 5 s, got 2" in capsys.readouterr().err

@@ -1,0 +1,99 @@
+"""`bsp demo` tells a newcomer what runs, that the warm-up is expected, and whether it worked."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bsp_ros.cli import build_parser
+from bsp_ros.cli.demo import VERDICT_STATIC_PERCENT, introduction, render, state_line, verdict
+from bsp_ros.core import simulation as sim
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def _demo_parser() -> argparse.ArgumentParser:
+    subparsers = next(a for a in build_parser()._actions if a.dest == "command")
+    return subparsers.choices["demo"]  # type: ignore[index]
+
+
+def test_help_describes_the_demo_and_every_option() -> None:
+    parser = _demo_parser()
+    assert parser.description and "simulated" in parser.description and "verdict" in parser.description
+    for action in parser._actions:
+        if action.option_strings and action.dest != "help":
+            assert action.help, action.option_strings
+
+
+def _truth() -> dict:
+    return sim.simulate_cell(sim.human_arm_cell(seed=0, duration_s=5.0)).truth.to_dict()
+
+
+def _estimate(truth: dict, valid: bool = True, scale: float = 1.0, message: str = "identified") -> dict:
+    """An estimate document of the shape bsp/estimate_json carries, off the truth by ``scale``."""
+    segments = {
+        name: {"static_moment_kgm": {"value": scale * q["static_moment_kgm"], "std": 1e-4, "source": "data"}}
+        for name, q in truth["segments"].items()
+    }
+    joints = {
+        name: {"coulomb_nm": {"value": q["coulomb_nm"], "std": 1e-3, "source": "data"}}
+        for name, q in truth["joints"].items()
+    }
+    return {"segments": segments, "joints": joints, "quality": {"valid": valid, "message": message}}
+
+
+def test_the_verdict_is_ok_for_a_valid_estimate_near_the_truth_and_says_what_the_numbers_mean() -> None:
+    truth = _truth()
+    worked, text = verdict(_estimate(truth, scale=1.001), truth)
+    assert worked
+    assert text.startswith("verdict: OK") and "within 0.1 % of the simulated truth" in text
+    assert "static moment (kg m)" in text and "Coulomb (Nm)" in text
+
+
+def test_the_verdict_fails_when_the_estimate_is_far_off_invalid_or_missing() -> None:
+    truth = _truth()
+    off = 1 + 1.5 * VERDICT_STATIC_PERCENT / 100
+    worked, text = verdict(_estimate(truth, scale=off), truth)
+    assert not worked and text.startswith("verdict: FAILED") and f"+{100 * (off - 1):.2f} %" in text
+    worked, text = verdict(_estimate(truth, valid=False, message="the shoulder moved in one direction"), truth)
+    assert not worked and "the shoulder moved in one direction" in text
+    worked, text = verdict(None, truth)
+    assert not worked and "no estimate arrived" in text
+
+
+def test_an_invalid_estimate_during_the_warm_up_is_called_expected_and_later_invalid() -> None:
+    truth = _truth()
+    document = _estimate(truth, valid=False, message="the wrist moved in one direction only")
+    assert state_line(document, warming_up=True).startswith("warming up (expected")
+    assert state_line(document, warming_up=False).startswith("INVALID: the wrist moved")
+    assert "warming up (expected" in render(document, truth, 10.0, warming_up=True)
+
+
+def test_the_introduction_names_the_processes_and_the_middleware() -> None:
+    args = _demo_parser().parse_args(["--duration", "30"])
+    text = introduction(args, "rmw_fastrtps_cpp", 42)
+    for word in ("simulated", "cell_simulator", "joint_angle_estimator", "bsp_identifier", "rclpy"):
+        assert word in text
+    assert "rmw_fastrtps_cpp" in text and "domain 42" in text and "50 % of the arm's weight" in text
+    assert max(len(line) for line in text.splitlines()) <= 110
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+def test_a_short_demo_run_ends_with_a_verdict(tmp_path: Path) -> None:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run(
+        [sys.executable, "-m", "bsp_ros.cli", "demo", "--duration", "30", "--speed", "3"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.stdout.startswith("bsp demo: a simulated rehabilitation cell")
+    assert "verdict: OK" in done.stdout, done.stdout[-2000:] + done.stderr[-2000:]
+    assert done.returncode == 0
