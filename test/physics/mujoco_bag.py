@@ -9,8 +9,12 @@ from typing import Any
 import mujoco
 import numpy as np
 from mujoco_cell import (
+    FRICTION_SOLIMP,
+    FRICTION_SOLREF,
     JOINTS,
     MARKERS,
+    WELD_SOLIMP,
+    WELD_SOLREF,
     ArmParams,
     CellOptions,
     EngineRun,
@@ -162,6 +166,12 @@ def _simulation(arm: ArmParams, options: CellOptions, run: EngineRun) -> dict[st
         "start_ns": options.start_ns,
         "gravity_m_s2": GRAVITY_M_S2,
         "timestep_s": options.timestep_s,
+        "solver": {
+            "weld_solref": WELD_SOLREF,
+            "weld_solimp": WELD_SOLIMP,
+            "friction_solref": FRICTION_SOLREF,
+            "friction_solimp": FRICTION_SOLIMP,
+        },
         "wrench_hz": options.wrench_hz,
         "sensor": options.sensor,
         "sensor_frame_id": options.frame_id,

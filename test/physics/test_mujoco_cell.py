@@ -15,6 +15,7 @@ from mujoco_cell import CellOptions, draw_arm, paper_sine, run_engine
 
 from bsp_ros.cli import main
 from bsp_ros.core import model
+from bsp_ros.core.planning import handle_poses_world, trajectory_from_points
 from bsp_ros.core.simulation import GRAVITY_M_S2, SessionTruth, TrajectorySpec
 
 STILL = TrajectorySpec((-43.3, 29.5, 0.2), (0.0, 0.0, 0.0), (10.0, 10.0, 10.0), (0.0, 0.0, 0.0))
@@ -148,3 +149,17 @@ def test_a_paper_session_from_the_engine_is_identified_near_the_truth(tmp_path) 
         assert quantities["length_m"]["value"] == pytest.approx(truth["segments"][segment]["length_m"], abs=2e-4)
     for joint, quantities in estimate["joints"].items():
         assert quantities["coulomb_nm"]["value"] == pytest.approx(truth["joints"][joint]["coulomb_nm"], rel=0.02)
+
+
+def test_the_engine_follows_a_planned_trajectory_and_its_handle_is_the_planner_s_handle_pose() -> None:
+    centres = np.radians([[-50.0, 40.0, -5.0], [-35.0, 60.0, 5.0]])
+    planned = trajectory_from_points(centres, np.radians([5.0, 5.0, 3.0]), 25.0, 0.1)
+    arm = draw_arm(8)
+    options = CellOptions(trajectory=planned, duration_s=25.0, lead_in_s=0.2)
+    run = run_engine(arm, options)
+    handle = handle_poses_world(run.q_command_rad, arm.lengths_m, options.shoulder_m[1:])
+    contact = run.markers_m[:, 3]  # the hand marker site sits at the contact point (no skin offset)
+    assert np.abs(contact[:, 1:] - handle[:, :2]).max() < 5e-4  # the hand follows the handle (weld lag only)
+    assert np.abs(run.q_rad - run.q_command_rad).max() < 1e-3
+    assert np.ptp(run.q_rad[:, 1]) > np.radians(20.0)  # it visits both operating points
+    assert 0.05 < np.abs(run.qdot_rad_s).max() < 0.1
