@@ -45,8 +45,11 @@ setup(
         # Real Jazzy rclpy with Fast DDS and the message packages, from PyPI wheels (Linux x86_64, CPython
         # 3.10-3.13). A cell with apt's ROS 2 Jazzy needs no extra: colcon and rosdep provide them.
         "live": LIVE,
-        # pin: pinocchio, the independent rigid-body dynamics the simulator's is tested against.
-        "test": ["pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1", "colcon-core", "colcon-ros", "pin>=3"],
+        # pin: pinocchio, the independent rigid-body dynamics the simulator and the regressor are tested against;
+        # mujoco: an independent physics-engine cell (test/physics).
+        "test": [
+            "pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1", "colcon-core", "colcon-ros", "pin>=3", "mujoco",
+        ],
         "postgres": ["psycopg[binary]>=3.1"],
     },
     zip_safe=True,

@@ -1,0 +1,229 @@
+"""Issue 19: `bsp identify` on a MuJoCo arm it did not write; counts valid-and-wrong and invalid-and-right.
+
+Usage: ``python bench/physics_engine.py [--seeds 10] [--duration 120] [--wrench-hz 1000] [--quick] [--plan FILE]
+[--only SUBSTRING] [--json OUT]`` (with the worktree first on PYTHONPATH).
+
+Each scenario is a paper-protocol session (the sines of ``human_arm_cell()``, shoulder peak 0.03 rad/s, or the
+same sines with periods / 4: 0.12 rad/s; ``--plan FILE`` adds a ``bsp plan`` trajectory) of a MuJoCo arm
+(``test/physics/mujoco_cell.py``) with or without joint springs (0.30/0.50/0.15 Nm/rad x U(0.8, 1.2)), the
+sensor fixed in world (``/tf_static``) or turning with the handle (per-sample ``/tf``). A seed draws the subject
+(de Leva prior), its inertias, its friction and the sensor and marker noise. The bag goes through
+``bsp identify BAG --json OUT`` (the CLI's own ``main``, in process) with the default model and again with
+every ``--passive MODEL`` its warnings suggest. Every data-sourced parameter (``source`` "data" or
+"data+prior") is scored against truth.json: |z| = |value - truth| / std. Per scenario and model: runs, valid,
+valid-and-wrong (valid, some |z| > 3), invalid-and-right (invalid, every |z| <= 3), the worst |z| and its
+parameter, the most common reason for invalid, and the engine's RMS inertial / gravity torque per joint.
+
+Run for the issue-19 report (2 shared cores): ``python bench/physics_engine.py --seeds 3`` (duration 120 s,
+wrench 1 kHz, markers 100 Hz); ``--quick`` is 2 seeds of 40 s at 250 Hz on the 0.03 rad/s fixed-sensor rows.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import contextlib
+import io
+import json
+import math
+import re
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
+
+from mujoco_bag import record, write_bag
+from mujoco_cell import CellOptions, draw_arm, paper_sine
+
+from bsp_ros.cli import main as bsp_main
+from bsp_ros.core.planning import planned_trajectory_from_file
+
+_SUGGESTION = re.compile(r"--passive ([a-z]+(?:\+[a-z]+)*)")
+_DATA_SOURCES = ("data", "data+prior")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One row group: trajectory, springs, sensor."""
+
+    motion: str  # "0.03", "0.12" (paper sine peak rad/s) or "plan"
+    springs: bool
+    sensor: str
+
+    @property
+    def name(self) -> str:
+        return f"{self.motion:>4} {'springs' if self.springs else 'none':7} {self.sensor:7}"
+
+
+@dataclass
+class Tally:
+    """Counts over the runs of one scenario and passive model."""
+
+    runs: int = 0
+    valid: int = 0
+    valid_wrong: int = 0
+    invalid_right: int = 0
+    worst_z: float = 0.0
+    worst_param: str = ""
+    messages: collections.Counter[str] = field(default_factory=collections.Counter)
+    failures: collections.Counter[str] = field(default_factory=collections.Counter)
+
+
+def scores(estimate: dict[str, Any], truth: dict[str, Any]) -> dict[str, float]:
+    """|z| of every data-sourced quantity that truth.json has a value for: ``"segment/key"`` -> |z|."""
+    out: dict[str, float] = {}
+    for group in ("segments", "joints"):
+        for owner, quantities in estimate.get(group, {}).items():
+            for key, q in quantities.items():
+                if not isinstance(q, dict) or q.get("source") not in _DATA_SOURCES or q.get("value") is None:
+                    continue
+                true = truth.get(group, {}).get(owner, {}).get(key)
+                if not isinstance(true, int | float):
+                    continue
+                error = abs(float(q["value"]) - float(true))
+                std = q.get("std")
+                out[f"{owner}/{key}"] = error / std if std else (0.0 if error == 0.0 else math.inf)
+    return out
+
+
+def _identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
+    sink = io.StringIO()
+    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+        code = bsp_main(["identify", str(bag), "--json", str(out), "--format", "none", *extra])
+    return code, (json.loads(out.read_text()) if out.exists() else {})
+
+
+def _reason(estimate: dict[str, Any]) -> str:
+    """The first clause of ``quality.message``, numbers blanked, so alike messages count together."""
+    message = str(estimate.get("quality", {}).get("message") or "(no message)")
+    first = message.split(";")[0].split(":")[0]
+    return re.sub(r"[-+]?\d[\d.e+-]*", "#", first).strip()[:90]
+
+
+def _trajectory(motion: str, plan: Path | None) -> Any:
+    if motion == "plan":
+        assert plan is not None
+        return planned_trajectory_from_file(plan)
+    return paper_sine(float(motion))
+
+
+def run_scenario(
+    scenario: Scenario, seeds: list[int], args: argparse.Namespace, workdir: Path, tallies: dict[str, Tally]
+) -> dict[str, list[float]]:
+    """Simulate and identify ``scenario`` for each seed; add to ``tallies`` (keyed by scenario and model)."""
+    ratios: dict[str, list[float]] = collections.defaultdict(list)
+    for seed in seeds:
+        arm = draw_arm(seed, springs=scenario.springs)
+        options = CellOptions(
+            trajectory=_trajectory(scenario.motion, args.plan),
+            duration_s=args.duration,
+            wrench_hz=args.wrench_hz,
+            sensor=scenario.sensor,
+            seed=seed,
+        )
+        cell = record(arm, options)
+        for joint, ratio in cell.truth["simulation"]["inertial_to_gravity_rms"].items():
+            ratios[joint].append(ratio)
+        ratios["weld_drift_m"].append(cell.truth["simulation"]["weld_drift_max_m"])
+        stem = f"{scenario.motion}_{int(scenario.springs)}_{scenario.sensor}_{seed}"
+        bag = write_bag(workdir / stem, cell)
+        code, estimate = _identify(bag, workdir / f"{stem}_default.json")
+        models = [("default", code, estimate)]
+        warnings = estimate.get("quality", {}).get("warnings", [])
+        for model in sorted({m for w in warnings for m in _SUGGESTION.findall(str(w))}):
+            code_m, estimate_m = _identify(bag, workdir / f"{stem}_{model}.json", "--passive", model)
+            models.append((model, code_m, estimate_m))
+        for model, code_m, estimate_m in models:
+            tally = tallies.setdefault(f"{scenario.name} {model}", Tally())
+            tally.runs += 1
+            if not estimate_m:
+                tally.failures[f"exit {code_m}"] += 1
+                continue
+            z = scores(estimate_m, cell.truth)
+            valid = bool(estimate_m["quality"]["valid"])
+            wrong = any(v > 3.0 for v in z.values())
+            tally.valid += valid
+            tally.valid_wrong += valid and wrong
+            tally.invalid_right += (not valid) and not wrong
+            if z:
+                param = max(z, key=lambda k: z[k])
+                if z[param] > tally.worst_z:
+                    tally.worst_z, tally.worst_param = z[param], param
+            if not valid:
+                tally.messages[_reason(estimate_m)] += 1
+            if args.verbose:
+                top = sorted(z.items(), key=lambda kv: -kv[1])[:3]
+                print(f"  seed {seed} {model}: valid={valid} " + ", ".join(f"{k} {v:.1f}" for k, v in top), flush=True)
+    return ratios
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--duration", type=float, default=120.0)
+    parser.add_argument("--wrench-hz", type=float, default=1000.0)
+    parser.add_argument("--plan", type=Path, help="a `bsp plan --json` file: adds the planned-trajectory rows")
+    parser.add_argument("--only", default="", help="run only scenarios whose name contains this")
+    parser.add_argument("--quick", action="store_true", help="2 seeds of 40 s at 250 Hz, 0.03 rad/s fixed sensor")
+    parser.add_argument("--json", type=Path, help="write the table as JSON here")
+    parser.add_argument("--verbose", action="store_true", help="the worst three |z| of every run")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.seeds, args.duration, args.wrench_hz = min(args.seeds, 2), 40.0, 250.0
+    motions = ["0.03"] if args.quick else ["0.03", "0.12"]
+    if args.plan is not None:
+        motions.append("plan")
+    sensors = ["fixed"] if args.quick else ["fixed", "turning"]
+    scenarios = [Scenario(m, s, sensor) for m in motions for s in (False, True) for sensor in sensors]
+    scenarios = [s for s in scenarios if args.only in s.name]
+    tallies: dict[str, Tally] = {}
+    engine: dict[str, dict[str, float]] = {}
+    start = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="physics_engine_") as tmp:
+        for scenario in scenarios:
+            print(f"{scenario.name} ...", flush=True)
+            ratios = run_scenario(scenario, list(range(args.seeds)), args, Path(tmp), tallies)
+            engine[scenario.name] = {k: max(v) for k, v in ratios.items()}
+    print(f"\n{args.seeds} seeds, {args.duration:g} s, wrench {args.wrench_hz:g} Hz, {time.monotonic() - start:.0f} s")
+    header = (
+        f"{'motion sens sensor  model':52} runs valid v&wrong inv&right  worst|z| (parameter)   most common invalid"
+    )
+    print(header)
+    for name, t in tallies.items():
+        common = t.messages.most_common(1)
+        reason = f"{common[0][1]}x {common[0][0]}" if common else "-"
+        fail = f" failed {dict(t.failures)}" if t.failures else ""
+        print(
+            f"{name:52} {t.runs:4} {t.valid:5} {t.valid_wrong:7} {t.invalid_right:9}  {t.worst_z:8.3g} "
+            f"({t.worst_param})  {reason}{fail}"
+        )
+    print("\nengine, largest over seeds: RMS inertial / gravity torque per joint, weld drift (m)")
+    for name, values in engine.items():
+        print(f"{name}  " + "  ".join(f"{k} {v:.3g}" for k, v in values.items()))
+    if args.json:
+        args.json.write_text(
+            json.dumps(
+                {
+                    "tallies": {
+                        k: {
+                            **{f: getattr(t, f) for f in ("runs", "valid", "valid_wrong", "invalid_right")},
+                            "worst_z": t.worst_z,
+                            "worst_param": t.worst_param,
+                            "messages": dict(t.messages),
+                        }
+                        for k, t in tallies.items()
+                    },
+                    "engine": engine,
+                },
+                indent=1,
+            )
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
