@@ -45,7 +45,16 @@ setup(
         # Real Jazzy rclpy with Fast DDS and the message packages, from PyPI wheels (Linux x86_64, CPython
         # 3.10-3.13). A cell with apt's ROS 2 Jazzy needs no extra: colcon and rosdep provide them.
         "live": LIVE,
-        "test": ["pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1", "colcon-core", "colcon-ros"],
+        "test": [
+            "pytest>=7",
+            "ruff",
+            "mypy",
+            "psycopg[binary]>=3.1",
+            "colcon-core",
+            "colcon-ros",
+            # test/physics/opensim_cell.py: OpenSim's arm26 (PyPI wheels for CPython 3.11 only; skipped elsewhere)
+            'opensim>=4.6; python_version == "3.11"',
+        ],
         "postgres": ["psycopg[binary]>=3.1"],
     },
     zip_safe=True,
