@@ -46,9 +46,10 @@ setup(
         # 3.10-3.13). A cell with apt's ROS 2 Jazzy needs no extra: colcon and rosdep provide them.
         "live": LIVE,
         # pin: pinocchio, the independent rigid-body dynamics the simulator and the regressor are tested against;
-        # mujoco: an independent physics-engine cell (test/physics).
+        # mujoco: an independent physics-engine cell; opensim (cp311 wheel only): a musculoskeletal arm (test/physics).
         "test": [
             "pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1", "colcon-core", "colcon-ros", "pin>=3", "mujoco",
+            'opensim; python_version == "3.11"',
         ],
         "postgres": ["psycopg[binary]>=3.1"],
     },

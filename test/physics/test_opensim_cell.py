@@ -1,0 +1,136 @@
+"""OpenSim's arm26 as an independent cell: its statics against our model, two-joint coupling, `bsp identify` on it."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+opensim = pytest.importorskip("opensim", reason="opensim has wheels for CPython 3.11 only (pip install opensim)")
+
+import opensim_cell as cell  # noqa: E402  (after the skip: it imports opensim)
+
+from bsp_ros.cli import main as bsp_main  # noqa: E402
+from bsp_ros.core.model import contact_torques_nm, gravity_regressor  # noqa: E402
+from bsp_ros.core.simulation import SessionTruth  # noqa: E402
+
+
+def _angles_and_lengths(run: cell.CellRun) -> tuple[np.ndarray, np.ndarray]:
+    """CONTRACT angles and in-plane lengths of the noise-free joint centres (x projected away)."""
+    steps = np.diff(run.points_m[:, :, 1:], axis=1)  # (K, 2 segments, [y, z])
+    phi = np.arctan2(steps[..., 1], steps[..., 0])
+    return np.column_stack((phi[:, 0], phi[:, 1] - phi[:, 0])), np.linalg.norm(steps, axis=2).mean(axis=0)
+
+
+def _model_gravity_nm(truth: dict, q_rad: np.ndarray) -> np.ndarray:
+    """Our planar model's gravity torques from the truth's grouped static and perpendicular moments."""
+    segments = [truth["segments"][name] for name in cell.SEGMENTS]
+    beta = np.array([s["static_moment_kgm"] for s in segments])
+    gamma = np.array([s["perpendicular_moment_kgm"] for s in segments])
+    # A COM offset normal to the axis adds -g gamma sin(phi) = g gamma cos(phi + 90 deg).
+    return gravity_regressor(q_rad) @ beta + gravity_regressor(q_rad + np.array([math.pi / 2, 0.0])) @ gamma
+
+
+def test_planar_arm26_statics_match_our_model() -> None:
+    arm = cell.Arm26(cell.CellOptions(muscles=False, planar=True, inertia=False))
+    run = cell.run_cell(arm, cell.PAPER_PROTOCOL, cell.SessionOptions(duration_s=25.0, physics_hz=2.0))
+    q, lengths = _angles_and_lengths(run)
+    model = _model_gravity_nm(run.truth, q)
+    scale = np.abs(model).max(axis=0)
+    # OpenSim's own inverse dynamics, and the torques of the wrench the cell writes (-J^T F with our Jacobian).
+    assert np.abs(run.torque_nm - model).max(axis=0) / scale == pytest.approx([0, 0], abs=1e-5)
+    assert np.abs(contact_torques_nm(q, lengths, run.wrench_world) - model).max(axis=0) / scale == pytest.approx(
+        [0, 0], abs=1e-5
+    )
+    assert np.abs(q - run.q_rad).max() < 1e-9  # the prescribed angles are the markers' angles
+
+
+def test_oblique_arm26_departs_from_the_plane_by_under_one_percent() -> None:
+    arm = cell.Arm26(cell.CellOptions(muscles=False, inertia=False))
+    assert arm.axis_tilt_deg == pytest.approx([3.38, 3.52], abs=0.01)  # arm26's axes, not ours
+    run = cell.run_cell(arm, cell.PAPER_PROTOCOL, cell.SessionOptions(duration_s=25.0, physics_hz=2.0))
+    q, lengths = _angles_and_lengths(run)
+    model = _model_gravity_nm(run.truth, q)
+    error = np.abs(contact_torques_nm(q, lengths, run.wrench_world) - model).max(axis=0) / np.abs(model).max(axis=0)
+    # Measured 0.13 % (shoulder) and 0.77 % (elbow): the planar model's error on this arm, not zero.
+    assert 1e-4 < error.max() < 0.01
+    assert np.ptp(run.points_m[:, 2, 0]) > 1e-3  # the hand leaves the plane by millimetres
+
+
+def test_sensor_stream_is_the_world_wrench_in_sensor_axes() -> None:
+    arm = cell.Arm26(cell.CellOptions(force_scale=0.2))
+    options = cell.SessionOptions(duration_s=12.0, force_noise_n=0.0, torque_noise_nm=0.0, wrench_jitter_s=0.0)
+    run = cell.run_cell(arm, cell.PAPER_PROTOCOL, options)
+    w = run.session.wrench
+    rotation = run.session.rotation_world_from_sensor
+    force_world, torque_world = w.force_n @ rotation.T, w.torque_nm @ rotation.T
+    assert np.abs(force_world[:, 0]).max() < 1e-12 and np.abs(torque_world).max() < 1e-12  # F_x = 0, bearing
+    # The spline through the 20 Hz OpenSim evaluations against OpenSim itself at stamps between them.
+    picks = np.array([37, 311, 777, 1013])
+    t_s = (w.t_ns[picks] - options.start_ns) * 1e-9
+    traj = cell.PAPER_PROTOCOL
+    torque, _, jac = arm.dynamics(
+        traj.angles_rad(t_s), traj.velocities_rad_s(t_s), cell.accelerations_rad_s2(traj, t_s)
+    )
+    direct = cell.wrench_from_torques(torque, jac)
+    assert np.abs(force_world[picks, 1:] - direct[:, :2]).max() < 1e-4  # N; the sensor noise is 0.05 N
+
+
+def test_passive_share_scales_with_muscle_force() -> None:
+    scale = cell.force_scale_for_share(0.1)
+    assert 0.05 < scale < 0.2  # arm26 relaxed: ~0.8-1.2 x gravity
+    assert cell.passive_share(cell.Arm26(cell.CellOptions(force_scale=scale))) == pytest.approx(0.1, rel=1e-6)
+
+
+def test_relaxed_muscles_couple_the_joints_and_store_energy() -> None:
+    arm = cell.Arm26()
+    q0 = np.radians([-36.6, 35.8])
+    step = math.radians(2.0)
+    around = q0 + step * np.array([[-1, 0], [1, 0], [0, -1], [0, 1]])
+    tau = arm.passive_moment_nm(around)
+    d_elbow_d_shoulder = (tau[1, 1] - tau[0, 1]) / (2 * step)
+    d_shoulder_d_elbow = (tau[3, 0] - tau[2, 0]) / (2 * step)
+    # TRIlong and BIClong cross both joints: the elbow's passive moment moves with the shoulder angle...
+    assert abs(d_elbow_d_shoulder) * step * 5 > 0.05 * abs(tau[:, 1]).mean()  # > 5 % over +-10 deg
+    # ...and elastic muscles (force a function of length alone) derive from a potential: a symmetric stiffness.
+    assert d_elbow_d_shoulder == pytest.approx(d_shoulder_d_elbow, rel=0.02)
+
+
+def test_wrong_wrap_region_is_refused() -> None:
+    arm = cell.Arm26()
+    with pytest.raises(ValueError, match="BIClong"):
+        arm.passive_moment_nm([[math.radians(29.65) + arm.offsets_rad[0], 0.6]])
+
+
+@pytest.fixture(scope="module")
+def muscle_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """60 s of the paper's protocol, passive moments 10 % of gravity, the cell's noise (seeded), as a bag."""
+    arm = cell.Arm26(cell.CellOptions(force_scale=cell.force_scale_for_share(0.1)))
+    run = cell.run_cell(arm, cell.PAPER_PROTOCOL, cell.SessionOptions(duration_s=60.0, seed=3))
+    return cell.write_bag(tmp_path_factory.mktemp("arm26") / "session", run, seed=3)
+
+
+@pytest.mark.parametrize("passive", [None, "coulomb+offset+stiffness"])
+def test_bsp_identify_reads_the_arm26_bag(muscle_bag: Path, tmp_path: Path, passive: str | None) -> None:
+    out = tmp_path / "estimate.json"
+    argv = ["identify", str(muscle_bag), "--json", str(out), "--format", "none"]
+    code = bsp_main(argv + ([] if passive is None else ["--passive", passive]))
+    truth = json.loads((muscle_bag / "truth.json").read_text())
+    assert SessionTruth.from_dict(truth).static_moments_kgm == pytest.approx(
+        [truth["segments"][s]["static_moment_kgm"] for s in cell.SEGMENTS]
+    )
+    estimate = json.loads(out.read_text())
+    assert code == (0 if estimate["quality"]["valid"] else 1)
+    for name in cell.SEGMENTS:
+        low, high = truth["segments"][name]["length_range_m"]
+        assert low - 1e-3 < estimate["segments"][name]["length_m"]["value"] < high + 1e-3
+        moment = estimate["segments"][name]["static_moment_kgm"]
+        z = abs(moment["value"] - truth["segments"][name]["static_moment_kgm"]) / moment["std"]
+        # What holds today (measured, bench/musculoskeletal.py): a valid estimate is within 3 std, and the
+        # elastic model is within 3 std here; Coulomb alone is biased by the muscles (|z| ~15-20) but says invalid.
+        assert not estimate["quality"]["valid"] or z < 3.0
+        if passive is not None:
+            assert z < 3.0
