@@ -21,20 +21,21 @@ NON_NEGATIVE = ("coulomb_nm", "stiffness_nm_per_rad", "viscous_nms")
 
 
 def is_judged(key: ParamKey) -> bool:
-    """Whether changes of ``key`` are judged: passive joint moments and static moments (what is measured).
+    """Whether changes of ``key`` are judged (flagged when beyond the MDC95): the passive joint moments.
 
-    Masses, centres of mass and lengths are derived from the static moments and tables or from the markers;
-    they are shown in the detail, never flagged.
+    They are what therapy changes and what therapists watch. The static moments (the arm's weight) are shown
+    with their MDC95 in the detail but not flagged: weeks of therapy do not change an arm's weight, so a
+    difference there points at the setup, and flagging every measured quantity multiplies false alarms (each
+    comparison at the 95 % level errs one time in twenty). Masses, centres of mass and lengths are derived or
+    geometric; the elastic offset trades off against gravity.
     """
     group, _, quantity = key
-    if group == "joints":
-        return quantity not in NOT_JUDGED
-    return quantity == "static_moment_kgm"
+    return group == "joints" and quantity not in NOT_JUDGED
 
 
 def is_passive(key: ParamKey) -> bool:
     """A judged passive joint-moment parameter (what the first page shows)."""
-    return key[0] == "joints" and is_judged(key)
+    return is_judged(key)
 
 
 @dataclass(frozen=True)

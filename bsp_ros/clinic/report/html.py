@@ -102,13 +102,12 @@ def _change_cell(change: Change | None, unit: str) -> str:
 
 
 def _error_cell(series: Series) -> str:
-    if not series.judged:
-        return "not judged (derived)"
     error = series.error
     if error.mdc95 is None:
-        return "unknown (too few retests)"
+        return "unknown (too few retests)" if series.judged else "not judged"
     whose = "this patient" if error.source == "subject" else "cell"
-    return f"{escape(with_unit(error.mdc95, series.unit))} ({error.n_pairs} retests, {whose})"
+    text = f"{escape(with_unit(error.mdc95, series.unit))} ({error.n_pairs} retests, {whose})"
+    return text if series.judged else text + ", for reference: not judged"
 
 
 def _changes_table(analysis: Analysis) -> str:

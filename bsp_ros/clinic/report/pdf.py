@@ -161,12 +161,10 @@ def _detail(flow: _Flow, analysis: Analysis) -> None:
         name = plain_name(series.key)
         arm = f" ({series.arm} arm)" if series.arm and len(analysis.arms) > 1 else ""
         error = (
-            "not judged (derived)"
-            if not series.judged
-            else "measurement error unknown"
+            "measurement error unknown"
             if series.error.mdc95 is None
             else f"measurement error {with_unit(series.error.mdc95, series.unit)} ({series.error.n_pairs} retests)"
-        )
+        ) + ("" if series.judged else ", not judged")
         flagged = any(c is not None and c.beyond_mdc for c in (series.since_previous, series.since_first))
         flow.paragraph(
             f"{name[0].upper()}{name[1:]}{arm}: latest {with_unit(latest.value, series.unit)}; since previous "
