@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 
 import pytest
 from clinic_history import FRICTION, INVALID_VALUE_NM, STIFFNESS, UNCHANGED, History, patient
@@ -33,7 +34,7 @@ def test_planted_steps_are_flagged_exactly_where_beyond_the_mdc(history: History
     usable = [p for p in series.points if p.usable]
     assert len(usable) == len(plan), "every planned visit must be usable for this test to map steps"
     assert series.error.known and series.error.n_pairs >= 5
-    planted = [b - a for a, b in zip(plan, plan[1:], strict=False)]
+    planted = [b - a for a, b in itertools.pairwise(plan)]
     assert any(abs(d) > 2 * series.error.mdc95 for d in planted)  # the history plants steps well beyond the MDC
     flagged = [step.beyond_mdc for step in series.steps]
     assert flagged == [abs(d) > series.error.mdc95 for d in planted]
