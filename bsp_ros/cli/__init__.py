@@ -28,6 +28,7 @@ COMMANDS: tuple[str, ...] = (
     "report",
     "sessions",
     "simulate",
+    "subjects",
     "tare",
 )
 

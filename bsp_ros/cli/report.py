@@ -13,28 +13,19 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "report",
         help="write a subject's report (HTML page, PDF, PNG plots, CSV)",
-        description="A plain-language summary first (per joint: passive moment trend and changes beyond the "
-        "minimal detectable change), then the arm weight and the support it implies, trends with uncertainty "
-        "and anthropometric reference bands, session quality and detail.",
+        description="A first page that stands alone: who, when, what changed beyond the measurement error "
+        "(from same-day retests: `bsp sessions add ... --retest`), the passive-moment trends and the sessions "
+        "that need attention; then the detail (static moments, masses, weight support, quality). The PDF is A4; "
+        "the HTML prints the same way.",
     )
     parser.add_argument("subject", metavar="SUBJECT", help="pseudonymous subject id")
     parser.add_argument("--out", metavar="FILE", help="self-contained HTML report to write")
     parser.add_argument("--pdf", metavar="FILE", help="PDF report to write (for the patient file)")
     parser.add_argument("--png", metavar="DIR", help="also write one PNG plot per parameter into DIR")
-    parser.add_argument(
-        "--baseline",
-        type=int,
-        default=0,
-        metavar="N",
-        help="the first N (>= 2) valid sessions are test-retest baseline sessions: their spread also sets the "
-        "standard error of measurement (default 0: within-session cycles only)",
-    )
     parser.add_argument("--csv", metavar="FILE", help="also write the plotted numbers as CSV")
-    parser.add_argument(
-        "--store",
-        metavar="LOCATION",
-        help="SQLite file or postgresql:// URL (default: $BSP_STORE, else ~/.local/share/bsp_ros/sessions.sqlite)",
-    )
+    from bsp_ros.cli.sessions import add_store_option
+
+    add_store_option(parser, sub=False)
     return parser
 
 
@@ -53,8 +44,13 @@ def run(args: argparse.Namespace) -> int:
             check_output_file(option, path)
     if args.png:
         check_output_dir("--png", args.png)
-    with open_store(args.store) as store:
-        analysis = analyse(args.subject, store.sessions(args.subject), baseline_sessions=args.baseline)
+    with open_store(args.store, create=False) as store:
+        analysis = analyse(
+            args.subject,
+            store.sessions(args.subject),
+            pool=store.sessions(),
+            subject_record=store.subject_record(args.subject),
+        )
     if args.out:
         print(f"wrote {write_html(analysis, args.out)}")
     if args.pdf:
@@ -63,9 +59,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {len(write_pngs(analysis, args.png))} plots to {args.png}")
     if args.csv:
         print(f"wrote {write_csv(analysis, args.csv)}")
-    changes = analysis.latest_changes
-    print(
-        f"{len(analysis.sessions)} session(s); the latest valid session changed beyond the MDC95 in "
-        f"{len(changes)} comparison(s) (since the previous and since the first session)"
-    )
+    from bsp_ros.clinic.report.summary import headline
+
+    for arm in analysis.arms:
+        for sentence in headline(analysis, arm):
+            print(sentence)
     return 0

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import importlib
+import hashlib
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -17,50 +18,87 @@ from bsp_ros.clinic.store import (
     load_estimate_file,
     open_store,
     parse_time_ns,
-    write_sessions_csv,
 )
+from bsp_ros.clinic.store.estimate import check_future
 from bsp_ros.clinic.store.subject import check_pseudonymous_id
 from bsp_ros.errors import InputError, StoreError
 
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
 
 
+STORE_HELP = "SQLite file or postgresql:// URL (default: $BSP_STORE, else ~/.local/share/bsp_ros/sessions.sqlite)"
+
+
+def add_store_option(parser: argparse.ArgumentParser, *, sub: bool) -> None:
+    """``--store`` on a command (``sub`` False) and on each of its actions: accepted before or after the action."""
+    if sub:
+        parser.add_argument("--store", metavar="LOCATION", default=argparse.SUPPRESS, help=STORE_HELP)
+    else:
+        parser.add_argument("--store", metavar="LOCATION", default=None, help=STORE_HELP)
+
+
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register `bsp sessions` and its actions."""
+    from bsp_ros.cli.identify_options import add_identify_arguments
+
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument(
-        "--store",
-        metavar="LOCATION",
-        help="SQLite file or postgresql:// URL (default: $BSP_STORE, else ~/.local/share/bsp_ros/sessions.sqlite)",
-    )
+    add_store_option(common, sub=True)
     parser = subparsers.add_parser(
         "sessions",
         help="keep identified sessions per pseudonymous subject",
-        description="Keep identified sessions per pseudonymous subject id (never a name).",
+        description="Keep identified sessions per pseudonymous subject id (never a name). Sessions are numbered "
+        "per subject, 1 = the first in time.",
     )
+    add_store_option(parser, sub=False)
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
-    add = actions.add_parser("add", parents=[common], help="store a result JSON or identify and store a bag")
+    add = actions.add_parser(
+        "add",
+        parents=[common],
+        help="identify a bag (with every `bsp identify` option) or take a result JSON, and store it",
+        description="Store a session: a bag is identified here with the options of `bsp identify` (body data "
+        "default to the subject record, see `bsp subjects set`), and its within-session repeatability is kept; "
+        "a result JSON keeps the options it was made with. The same recording is stored once; a session time in "
+        "the future is refused.",
+    )
     add.add_argument("input", metavar="RESULT.json|BAG", help="a `bsp identify --json` result or a bag")
     add.add_argument("--subject", required=True, metavar="ID", help="pseudonymous subject id [A-Za-z0-9_-]{1,64}")
     add.add_argument(
         "--time",
         metavar="TIME",
         help="session start: a date (2024-03-01), ISO 8601 (2024-03-01T09:30Z, naive = UTC) or epoch seconds; "
-        "needed when the recording is not stamped by a wall clock",
+        "default: the recording's own stamps",
     )
     add.add_argument("--source", metavar="NAME", help="recording name, if the input lacks it (default: file name)")
+    add.add_argument("--arm", choices=("left", "right"), help="the measured arm (default: the subject record's)")
+    add.add_argument(
+        "--retest",
+        action="store_true",
+        help="a retest: the same arm measured again on the same day after taking it out of the robot and "
+        "re-attaching it; retests set the measurement error that changes are judged by",
+    )
+    add.add_argument(
+        "--cell", default="", metavar="NAME", help="the robot cell (site) recorded in (retests pool per cell)"
+    )
     add.add_argument(
         "--allow-identifying-id",
         action="store_true",
         help="store a subject id even though it looks like a person's name or a birth date",
     )
+    add_identify_arguments(add.add_argument_group("identification of a bag (as `bsp identify`)"))
     actions.add_parser("list", parents=[common], help="list subjects and their session counts")
     show = actions.add_parser("show", parents=[common], help="show a subject's sessions and parameters")
     show.add_argument("subject", metavar="SUBJECT")
     show.add_argument("--json", action="store_true", help="print the sessions as JSON")
-    erase = actions.add_parser("erase", parents=[common], help="erase every session of a subject, leaving no bytes")
+    remove = actions.add_parser("remove", parents=[common], help="remove one session of a subject (by its number)")
+    remove.add_argument("subject", metavar="SUBJECT")
+    remove.add_argument("number", type=int, metavar="N", help="the session's number within the subject (1 = first)")
+    remove.add_argument("--yes", action="store_true", help="do not ask for confirmation")
+    erase = actions.add_parser(
+        "erase", parents=[common], help="erase every session and the record of a subject, leaving no bytes"
+    )
     erase.add_argument("subject", metavar="SUBJECT")
-    export = actions.add_parser("export", parents=[common], help="export sessions")
+    erase.add_argument("--yes", action="store_true", help="do not ask for confirmation (needed when not interactive)")
+    export = actions.add_parser("export", parents=[common], help="export sessions with their changes as CSV")
     export.add_argument("--csv", required=True, metavar="FILE", help="CSV file to write ('-' for stdout)")
     export.add_argument("--subject", metavar="ID", help="only this subject")
     actions.add_parser("compact", parents=[common], help="rewrite the store so deleted rows leave no bytes")
@@ -69,17 +107,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Run one `bsp sessions` action; return the exit code."""
-    with open_store(args.store) as store:
-        if args.action == "add":
+    if args.action == "add":
+        with open_store(args.store) as store:
             return _add(store, args)
+    with open_store(args.store, create=False) as store:
         if args.action == "list":
             return _list(store)
         if args.action == "show":
             return _show(store, args.subject, as_json=args.json)
+        if args.action == "remove":
+            return _remove(store, args.subject, args.number, args.yes)
         if args.action == "erase":
-            count = store.erase(args.subject)
-            print(f"erased {count} session(s) of {args.subject} from {store.location}")
-            return 0
+            return _erase(store, args.subject, args.yes)
         if args.action == "export":
             return _export(store, args.csv, args.subject)
         store.compact()
@@ -87,53 +126,82 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
 
+def confirm(question: str, yes: bool, what: str) -> None:
+    """Ask ``question`` on the terminal unless ``yes``; refuse (InputError) when not answered yes."""
+    if yes:
+        return
+    if not sys.stdin.isatty():
+        raise InputError(f"{what} cannot be undone: confirm with --yes (not asked: no terminal)")
+    answer = input(f"{question} This cannot be undone. Type yes to go on: ").strip().lower()
+    if answer != "yes":
+        raise InputError(f"{what}: not confirmed, nothing was changed")
+
+
+def _remove(store: Store, subject: str, number: int, yes: bool) -> int:
+    records = store.sessions(subject)
+    if 1 <= number <= len(records):
+        target = records[number - 1]
+        confirm(
+            f"Remove session {number} of {subject} ({format_time(target.session_time_ns)}, {target.source})?",
+            yes,
+            f"removing session {number} of {subject}",
+        )
+    removed = store.remove(subject, number)
+    print(
+        f"removed session {number} of {subject} ({format_time(removed.session_time_ns)}, {removed.source}); "
+        "later sessions are renumbered"
+    )
+    return 0
+
+
+def _erase(store: Store, subject: str, yes: bool) -> int:
+    try:
+        count = len(store.sessions(subject))
+    except StoreError:
+        count = 0
+        if store.subject_record(subject) is None:
+            raise
+    confirm(f"Erase all {count} session(s) and the subject record of {subject}?", yes, f"erasing {subject}")
+    erased = store.erase(subject)
+    print(f"erased {erased} session(s) of {subject} from {store.location}")
+    return 0
+
+
 def is_bag(path: Path) -> bool:
     """Whether ``path`` looks like a recording (a rosbag2 directory or a bag file) rather than a result."""
     return path.is_dir() or path.suffix.lower() in BAG_SUFFIXES
 
 
-def _identify_bag(path: Path) -> dict[str, Any]:
-    try:
-        identify_bag = getattr(importlib.import_module("bsp_ros.bag.offline"), "identify_bag", None)
-        problem = "bsp_ros.bag.offline has no identify_bag"
-    except ImportError as error:
-        identify_bag, problem = None, f"bsp_ros.bag.offline cannot be imported: {error}"
-    if identify_bag is None:
-        raise StoreError(
-            f"cannot identify bag {path} here ({problem}); "
-            "run `bsp identify BAG --json RESULT.json` and add RESULT.json"
-        )
-    estimate = identify_bag(path)
-    if not isinstance(estimate, dict):
-        raise StoreError(f"identify_bag({path}) returned a {type(estimate).__name__}, not an estimate dict")
-    if "repeatability" not in estimate:
-        estimate["repeatability"] = bag_repeatability(path)
-    return estimate
+def content_sha256(path: Path) -> str:
+    """SHA-256 of a recording's content: the file's bytes, or a directory's data files in name order."""
+    digest = hashlib.sha256()
+    files = sorted(f for f in path.iterdir() if f.suffix.lower() in BAG_SUFFIXES) if path.is_dir() else [path]
+    for file in files:
+        with file.open("rb") as stream:
+            for block in iter(lambda: stream.read(1 << 20), b""):
+                digest.update(block)
+    return digest.hexdigest()
 
 
-def bag_repeatability(path: Path) -> dict[str, Any] | None:
-    """The ``repeatability`` block (SEM and MDC95 per parameter, :mod:`bsp_ros.clinic.mdc`) of a bag, or None.
-
-    Each full cycle of motion is identified on its own with the default settings of `bsp identify`;
-    a bag that cannot be read for this gives None (and a note), not an error: the estimate is stored anyway.
-    """
+def identify_bag_for_store(path: Path, args: argparse.Namespace, body: dict[str, Any]) -> dict[str, Any]:
+    """The estimate of a bag identified with the `bsp identify` options of ``args`` (body data default to
+    ``body``), with its within-session repeatability, the options and the recording's content hash."""
     from bsp_ros.bag import read_session
-    from bsp_ros.clinic.mdc import repeatability
-    from bsp_ros.core.identification.data import identification_data_from_session
-    from bsp_ros.core.identification.joint import JointConfig
-    from bsp_ros.core.pipeline import IdentifyOptions
-    from bsp_ros.errors import BspError
+    from bsp_ros.bag.offline import identify_bag
+    from bsp_ros.cli.identify_options import options_from_args, options_record, topics_from_args
+    from bsp_ros.clinic.cycles import cycle_repeatability
 
-    options = IdentifyOptions()
-    try:
-        data = identification_data_from_session(read_session(path).session, options.kinematics)
-        found = repeatability(data, JointConfig(passive=options.passive))
-    except BspError as error:
-        print(f"note: no repeatability (MDC) for {path.name}: {error}")
-        return None
+    options = options_from_args(args, body)
+    topics = topics_from_args(args)
+    estimate = identify_bag(path, options, topics)
+    found = cycle_repeatability(read_session(path, topics=topics).session, options)
     if found.message:
-        print(f"note: no repeatability (MDC) for {path.name}: {found.message}")
-    return found.to_json()
+        print(f"note: no within-session repeatability for {path.name}: {found.message}")
+    estimate["repeatability"] = found.to_json()
+    session = estimate.setdefault("session", {})
+    session["config"] = options_record(args, options)
+    session["content_sha256"] = content_sha256(path)
+    return estimate
 
 
 def recorded_start_ns(path: Path) -> int | None:
@@ -159,9 +227,8 @@ def recorded_start_ns(path: Path) -> int | None:
 
 
 def _session_time_ns(args: argparse.Namespace, path: Path, estimate: dict[str, Any]) -> int | None:
-    """The session time to store: ``--time``, else the estimate's if wall-clock, else the bag's recorded start."""
-    if args.time is not None:
-        return parse_time_ns(args.time)
+    """The session time to store when ``--time`` is not given: None for the estimate's own (wall-clock) time,
+    else the bag's recorded start."""
     block = estimate.get("session")
     stamped = block.get("start_time_ns") if isinstance(block, dict) else None
     if not isinstance(stamped, int) or isinstance(stamped, bool) or stamped >= WALL_CLOCK_START_NS:
@@ -170,7 +237,7 @@ def _session_time_ns(args: argparse.Namespace, path: Path, estimate: dict[str, A
     if recorded is not None and recorded >= WALL_CLOCK_START_NS:
         print(
             f"note: the data are stamped from {stamped / 1e9:.6g} s (boot or simulated time, not a wall clock); "
-            f"using the bag's recorded start {format_time(recorded)}"
+            f"using the bag's recorded start {format_time(recorded)} as the session time (give --time to set another)"
         )
         return recorded
     where = "its recorded start is not wall-clock either" if is_bag(path) else "a result JSON has no other clock"
@@ -187,18 +254,36 @@ def _add(store: Store, args: argparse.Namespace) -> int:
     path = Path(args.input)
     if not path.exists():
         raise InputError(f"{path} does not exist")
-    estimate = _identify_bag(path) if is_bag(path) else load_estimate_file(path)
+    time_ns = None if args.time is None else parse_time_ns(args.time)
+    if time_ns is not None:
+        check_future(time_ns, time.time_ns(), "--time")
+    known = store.subject_record(subject)
+    if is_bag(path):
+        estimate = identify_bag_for_store(path, args, known.body() if known is not None else {})
+    else:
+        estimate = load_estimate_file(path)
     session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}
     source = args.source or (None if session and session.get("source") else path.name)
+    stored_time = time_ns if time_ns is not None else _session_time_ns(args, path, estimate)
     record = store.add_estimate(
         estimate,
         subject,
-        session_time_ns=_session_time_ns(args, path, estimate),
+        session_time_ns=stored_time,
         source=source,
+        arm=args.arm,
+        retest=True if args.retest else None,
+        cell=args.cell or None,
     )
+    if time_ns is None and stored_time is None:
+        print(
+            f"session time {format_time(record.session_time_ns)} taken from the recording's own stamps "
+            "(give --time to set another)"
+        )
     # Printed only after the commit returned: the session is durable.
+    kind = "retest" if record.retest else "session"
+    arm = f", {record.arm} arm" if record.arm else ""
     print(
-        f"added session {record.id} of {record.subject} at {format_time(record.session_time_ns)} "
+        f"added {kind} {record.number} of {record.subject}{arm} at {format_time(record.session_time_ns)} "
         f"from {record.source} ({'valid' if record.quality.valid else 'NOT VALID'}, "
         f"{len(record.parameters)} parameters)"
     )
@@ -227,9 +312,11 @@ def _show(store: Store, subject: str, *, as_json: bool) -> int:
         return 0
     for record in records:
         quality = record.quality
+        marks = [record.arm or "", "retest" if record.retest else ""]
         print(
-            f"session {record.id}  {format_time(record.session_time_ns)}  {record.source}  "
-            f"method={record.method or '-'}  {'valid' if quality.valid else 'NOT VALID'}"
+            f"session {record.number}  {format_time(record.session_time_ns)}  {record.source}  "
+            f"method={record.method or '-'}  {'valid' if quality.valid else 'NOT VALID'}  "
+            + " ".join(m for m in marks if m)
         )
         for warning in quality.warnings:
             print(f"  warning: {warning}")
@@ -241,16 +328,21 @@ def _show(store: Store, subject: str, *, as_json: bool) -> int:
 
 
 def _export(store: Store, target: str, subject: str | None) -> int:
-    records = store.sessions(subject)
+    from bsp_ros.clinic.report.analysis import analyse
+    from bsp_ros.clinic.report.export import write_analysis_csv
+
+    everyone = store.sessions()
+    subjects = [subject] if subject is not None else sorted({r.subject for r in everyone})
+    analyses = [analyse(s, store.sessions(s), pool=everyone, subject_record=store.subject_record(s)) for s in subjects]
     if target == "-":
-        rows = write_sessions_csv(records, sys.stdout)
+        rows = write_analysis_csv(analyses, sys.stdout)
     else:
         try:
             with open(target, "w", newline="", encoding="utf-8") as stream:
-                rows = write_sessions_csv(records, stream)
+                rows = write_analysis_csv(analyses, stream)
         except OSError as error:
             raise InputError(f"cannot write {target}: {error}") from None
-        print(f"wrote {rows} rows ({len(records)} sessions) to {target}")
+        print(f"wrote {rows} rows ({sum(len(a.sessions) for a in analyses)} sessions) to {target}")
     return 0
 
 
@@ -267,18 +359,29 @@ def record_to_json(record: SessionRecord) -> dict[str, Any]:
             "residual_rms_nm": record.quality.residual_rms_nm,
             "warnings": list(record.quality.warnings),
             "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
+            "message": record.quality.message,
         },
         "session": {
             "subject": record.subject,
+            "number": record.number,
             "start_time_ns": record.session_time_ns,
             "source": record.source,
             "method": record.method,
             "config": record.config,
+            "arm": record.arm,
+            "retest": record.retest,
+            "cell": record.cell,
         },
         "subject": record.subject_info,
     }
     if record.repeatability:
         body["repeatability"] = record.repeatability
+    from bsp_ros.clinic.store.curves import CURVE_KEY, angle_of
+
     for (group, part, quantity), q in record.parameters.items():
+        if group == "joints" and part in record.passive_curves and angle_of(quantity) is not None:
+            continue  # sampled from the curve, which is given whole
         body[group].setdefault(part, {})[quantity] = {"value": q.value, "std": q.std, "source": q.source}
+    for joint, curve in record.passive_curves.items():
+        body["joints"].setdefault(joint, {})[CURVE_KEY] = curve
     return body

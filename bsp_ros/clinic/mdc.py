@@ -1,48 +1,37 @@
-"""Minimal detectable change: the standard error of measurement from repeated cycles (and baseline sessions)."""
+"""Minimal detectable change from test-retest pairs: same subject, same day, the arm re-attached in between."""
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from bsp_ros.core.identification.data import IdentificationData
-from bsp_ros.core.identification.joint import JointConfig, identify_joint
-from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.streams import segments_for
+from bsp_ros.clinic.store.records import ParamKey, SessionRecord
 
 Z95 = 1.96
 """The two-sided 95 % normal quantile of MDC95 = 1.96 x sqrt(2) x SEM."""
+MIN_PAIRS = 5
+"""Fewer retest pairs give no MDC: the SD of fewer differences is too uncertain to judge changes by."""
+DAY_NS = 86_400 * 10**9
 
-CYCLE_METHOD = (
-    "SEM from the within-session cycle-to-cycle spread: the session is cut into full cycles of motion "
-    "(between alternate direction reversals of the joint that reverses least often), each cycle is identified "
-    "on its own with the session's method, and SEM = sqrt(sum (x[k+1] - x[k])^2 / (2 (K - 1))) over the K "
-    "valid cycles (successive differences: SD of the differences / sqrt(2), insensitive to slow drift). "
-    "It is the SEM of a one-cycle measurement, larger than that of the whole-session estimate, so the "
-    "MDC95 = 1.96 x sqrt(2) x SEM built on it is conservative."
+RETEST_METHOD = (
+    "The minimal detectable change (MDC95) comes from test-retest pairs: the same subject measured twice on "
+    "the same day, the arm taken out and re-attached (markers re-placed, strap re-fastened, sensor re-zeroed) in "
+    "between. SEM = SD of the retest differences / √2 (the SD taken about zero, so a systematic shift between "
+    "test and retest counts as error too); MDC95 = 1.96 × √2 × SEM, where 1.96 is replaced by Student's t "
+    "quantile for n degrees of freedom while there are few pairs (n pairs), so a small sample "
+    "does not claim changes its own uncertainty could explain. A subject's own pairs are used once there are "
+    f"at least {MIN_PAIRS}; until then the pairs of every subject measured in the same cell. The spread of "
+    "cycles within one session leaves out everything that differs between days and never judges a change."
 )
-BASELINE_METHOD = (
-    "SEM from the subject's baseline sessions (test-retest): the same successive-difference formula over "
-    "the baseline sessions' estimates; where both are known the larger SEM is used."
-)
-MIN_CYCLES = 3
-"""Fewer valid cycles give no SEM (two cycles give one difference: too few to trust)."""
 
 
 def mdc95_from_sem(sem: float) -> float:
     """MDC95 = 1.96 x sqrt(2) x SEM: the smallest change between two measurements beyond their 95 % noise."""
     return Z95 * math.sqrt(2.0) * sem
-
-
-def pair_mdc95(sem_a: float, sem_b: float) -> float:
-    """MDC95 between measurements of SEM ``sem_a`` and ``sem_b``: 1.96 sqrt(a^2 + b^2) (= the above if equal)."""
-    return Z95 * math.hypot(sem_a, sem_b)
 
 
 def successive_difference_sem(values: npt.ArrayLike) -> float:
@@ -58,176 +47,128 @@ def successive_difference_sem(values: npt.ArrayLike) -> float:
     return float(np.sqrt(np.sum(np.diff(x) ** 2) / (2.0 * (x.size - 1))))
 
 
-def direction_reversals(velocity_rad_s: npt.ArrayLike, hysteresis: float = 0.2) -> np.ndarray:
-    """Sample indices where a joint's direction of motion reverses.
+def t95(dof: int) -> float:
+    """The two-sided 95 % Student t quantile for ``dof`` degrees of freedom (1.96 as dof grows)."""
+    from scipy.stats import t
 
-    Parameters
-    ----------
-    velocity_rad_s : (N,) direction-of-motion velocity of one joint (rad/s), already low-pass filtered.
-    hysteresis : a new direction counts once the speed exceeds this fraction of the 95th-percentile speed,
-        so noise around a turning point is not taken for several reversals.
-
-    Returns
-    -------
-    (R,) int indices: the middle of the zero crossings before each confirmed change of direction.
-    """
-    v = np.asarray(velocity_rad_s, dtype=np.float64)
-    finite = np.isfinite(v)
-    if finite.sum() < 3:
-        return np.zeros(0, dtype=np.int64)
-    threshold = hysteresis * float(np.percentile(np.abs(v[finite]), 95))
-    if threshold <= 0:
-        return np.zeros(0, dtype=np.int64)
-    state = 0
-    first_zero = last_zero = -1  # sign changes since the last confirmed direction
-    reversals = []
-    for i, value in enumerate(v):
-        if not math.isfinite(value):
-            continue
-        if i > 0 and math.isfinite(v[i - 1]) and (v[i - 1] > 0) != (value > 0):
-            first_zero = i if first_zero < 0 else first_zero
-            last_zero = i
-        direction = 1 if value > threshold else -1 if value < -threshold else 0
-        if direction and direction != state:
-            if state and first_zero >= 0:
-                reversals.append((first_zero + last_zero) // 2)  # noise crosses zero several times: the middle
-            state = direction
-        if direction:
-            first_zero = last_zero = -1
-    return np.asarray(reversals, dtype=np.int64)
-
-
-def cycle_bounds(velocity_rad_s: npt.ArrayLike) -> list[tuple[int, int]]:
-    """Full cycles of motion as ``(start, stop)`` row ranges.
-
-    The reference joint is the one that reverses least often (at least three times), so every joint
-    moves both ways within each of its cycles; a cycle runs from one of its reversals to the next but one.
-
-    Parameters
-    ----------
-    velocity_rad_s : (N, n) direction-of-motion velocities (rad/s).
-
-    Returns
-    -------
-    list of (start, stop) consecutive, non-overlapping ranges; empty if no joint reverses three times.
-    """
-    v = np.atleast_2d(np.asarray(velocity_rad_s, dtype=np.float64))
-    per_joint = [direction_reversals(v[:, j]) for j in range(v.shape[1])]
-    usable = [r for r in per_joint if r.size >= 3]
-    if not usable:
-        return []
-    reversals = min(usable, key=lambda r: r.size)
-    edges = reversals[::2]
-    return [(int(a), int(b)) for a, b in itertools.pairwise(edges.tolist())]
-
-
-def parameter_key(name: tuple[str, str], n_segments: int) -> str:
-    """``("static_moment_kgm", "forearm")`` -> ``segments.forearm.static_moment_kgm`` (estimate JSON path)."""
-    quantity, owner = name
-    group = "segments" if owner in segments_for(n_segments) else "joints"
-    return f"{group}.{owner}.{quantity}"
+    return float(t.ppf(0.975, dof))
 
 
 @dataclass(frozen=True)
-class Repeatability:
-    """Per-parameter SEM and MDC95 of one session.
+class RetestPair:
+    """A session and its same-day retest (both valid)."""
+
+    test: SessionRecord
+    retest: SessionRecord
+
+
+def retest_pairs(records: Iterable[SessionRecord]) -> list[RetestPair]:
+    """Every valid retest with the latest valid non-retest session of the same subject, arm and UTC day before it."""
+    ordered = sorted(records, key=lambda r: (r.session_time_ns, r.id or 0))
+    pairs = []
+    for k, retest in enumerate(ordered):
+        if not retest.retest or not retest.quality.valid:
+            continue
+        day = retest.session_time_ns // DAY_NS
+        test = next(
+            (
+                r
+                for r in reversed(ordered[:k])
+                if not r.retest
+                and r.quality.valid
+                and r.subject == retest.subject
+                and r.arm == retest.arm
+                and r.session_time_ns // DAY_NS == day
+            ),
+            None,
+        )
+        if test is not None:
+            pairs.append(RetestPair(test, retest))
+    return pairs
+
+
+@dataclass(frozen=True)
+class DayToDayError:
+    """The measurement error of one parameter between days, from retest pairs.
 
     Attributes
     ----------
-    method : how the SEM was obtained (plain words and the formula).
-    n_cycles : cycles found; n_valid_cycles of them identified as valid.
-    sem : estimate-JSON path (``joints.elbow.coulomb_nm``) -> SEM (units of the parameter).
-    cycle_values : the same keys -> (K,) per-cycle estimates of the valid cycles.
-    message : why there is no SEM, if there is none.
+    sem : standard error of measurement (units of the parameter); None with too few pairs.
+    mdc95 : the change beyond which a difference between two sessions is more than measurement error.
+    n_pairs : retest pairs used; n_subjects : how many subjects they come from.
+    icc : ICC(2,1) (absolute agreement) of the pairs where defined (pairs of at least two subjects), else None.
+    source : ``subject`` (the subject's own pairs), ``cell`` (every subject of the cell) or ``none``.
     """
 
-    method: str
-    n_cycles: int
-    n_valid_cycles: int
-    sem: dict[str, float]
-    cycle_values: dict[str, list[float]]
-    message: str = ""
+    sem: float | None
+    mdc95: float | None
+    n_pairs: int
+    n_subjects: int
+    icc: float | None
+    source: str
 
     @property
-    def mdc95(self) -> dict[str, float]:
-        """MDC95 = 1.96 x sqrt(2) x SEM per parameter."""
-        return {key: mdc95_from_sem(sem) for key, sem in self.sem.items()}
-
-    def to_json(self) -> dict[str, Any]:
-        """The ``repeatability`` block of an estimate JSON (and of a stored session)."""
-        return {
-            "method": self.method,
-            "n_cycles": self.n_cycles,
-            "n_valid_cycles": self.n_valid_cycles,
-            "message": self.message,
-            "parameters": {
-                key: {"sem": sem, "mdc95": mdc95_from_sem(sem), "n": len(self.cycle_values[key])}
-                for key, sem in self.sem.items()
-            },
-        }
+    def known(self) -> bool:
+        """Whether changes can be judged against this error."""
+        return self.mdc95 is not None
 
 
-def repeatability(
-    data: IdentificationData, config: JointConfig | None = None, min_cycles: int = MIN_CYCLES
-) -> Repeatability:
-    """SEM and MDC95 of every identified parameter from the session's cycle-to-cycle spread.
+NO_ERROR = DayToDayError(None, None, 0, 0, None, "none")
 
-    Parameters
-    ----------
-    data : the session's identification samples.
-    config : the identification settings (the elastic check is skipped per cycle: it is a second fit).
-    min_cycles : fewer valid cycles give no SEM (the result says why).
 
-    Returns
-    -------
-    Repeatability
-        Empty ``sem`` with a ``message`` when the session holds too few valid cycles.
+def pooled_error(values: Sequence[tuple[float, float, str]], source: str, min_pairs: int = MIN_PAIRS) -> DayToDayError:
+    """The day-to-day error from ``(test, retest, subject)`` value pairs of one parameter.
+
+    SEM = SD of the retest differences / sqrt(2), the SD taken about zero (sqrt(mean d^2)): a test and its
+    retest measure the same arm, so a systematic shift between them is measurement error too, and counting
+    it keeps a few pairs that happen to agree from shrinking the MDC. MDC95 = t(0.975, n) x sqrt(2) x SEM
+    (1.96 x sqrt(2) x SEM for many pairs). Fewer than ``min_pairs`` pairs give ``sem`` and ``mdc95`` None.
     """
-    base = config or JointConfig()
-    per_cycle = JointConfig(
-        passive=base.passive,
-        deadband_fraction=base.deadband_fraction,
-        deadband_noise_sd=base.deadband_noise_sd,
-        min_samples=base.min_samples,
-        min_range_deg=base.min_range_deg,
-        min_direction_share=base.min_direction_share,
-        max_condition=base.max_condition,
-        check_elastic=False,
-    )
-    bounds = cycle_bounds(data.velocity_rad_s)
-    results: list[IdentificationResult] = []
-    for start, stop in bounds:
-        result = identify_joint(data.window(start, stop), per_cycle)
-        if result.valid:
-            results.append(result)
-    if len(results) < min_cycles:
-        return Repeatability(
-            CYCLE_METHOD,
-            len(bounds),
-            len(results),
-            {},
-            {},
-            f"only {len(results)} valid cycle(s) of {len(bounds)} found (need {min_cycles}): no SEM for this session",
-        )
-    n = data.n_joints
-    values: dict[str, list[float]] = {}
-    for i, name in enumerate(results[0].names):
-        values[parameter_key(name, n)] = [float(r.values[i]) for r in results]
-    sem = {key: successive_difference_sem(v) for key, v in values.items()}
-    return Repeatability(CYCLE_METHOD, len(bounds), len(results), sem, values)
+    pairs = [(a, b, s) for a, b, s in values if math.isfinite(a) and math.isfinite(b)]
+    n = len(pairs)
+    subjects = len({s for _, _, s in pairs})
+    if n < max(min_pairs, 2):
+        return DayToDayError(None, None, n, subjects, None, source if n else "none")
+    x = np.array([[a, b] for a, b, _ in pairs])
+    sd_diff = float(np.sqrt(np.mean((x[:, 1] - x[:, 0]) ** 2)))
+    sem = sd_diff / math.sqrt(2.0)
+    return DayToDayError(sem, t95(n) * sd_diff, n, subjects, icc_agreement(x) if subjects >= 2 else None, source)
 
 
-def baseline_sem(values: Sequence[float | None]) -> float:
-    """SEM from baseline sessions' estimates of one parameter (successive differences); NaN if < 2 values."""
-    return successive_difference_sem([math.nan if v is None else v for v in values])
-
-
-def sem_of(block: Mapping[str, Any] | None, key: str) -> float | None:
-    """The SEM of parameter ``key`` in a stored ``repeatability`` block, or None."""
-    if not block:
+def icc_agreement(x: npt.ArrayLike) -> float | None:
+    """ICC(2,1), two-way random, absolute agreement, of an (n, k) table (rows: pairs, columns: test, retest)."""
+    table = np.asarray(x, dtype=np.float64)
+    n, k = table.shape
+    if n < 2 or k < 2:
         return None
-    entry = block.get("parameters", {}).get(key)
-    if not isinstance(entry, Mapping):
+    grand = table.mean()
+    ssr = k * float(np.sum((table.mean(axis=1) - grand) ** 2))
+    ssc = n * float(np.sum((table.mean(axis=0) - grand) ** 2))
+    sse = float(np.sum((table - grand) ** 2)) - ssr - ssc
+    msr, msc, mse = ssr / (n - 1), ssc / (k - 1), sse / ((n - 1) * (k - 1))
+    denominator = msr + (k - 1) * mse + k * (msc - mse) / n
+    if not denominator > 0:
         return None
-    sem = entry.get("sem")
-    return float(sem) if isinstance(sem, int | float) and math.isfinite(sem) and sem >= 0 else None
+    return (msr - mse) / denominator
+
+
+def day_to_day_error(
+    key: ParamKey, subject: str, cell: str, pairs: Sequence[RetestPair], min_pairs: int = MIN_PAIRS
+) -> DayToDayError:
+    """The error to judge ``subject``'s changes of ``key`` by: its own pairs if enough, else its cell's."""
+
+    def values(chosen: Iterable[RetestPair]) -> list[tuple[float, float, str]]:
+        found = []
+        for pair in chosen:
+            a, b = pair.test.parameters.get(key), pair.retest.parameters.get(key)
+            if a is not None and b is not None and a.value is not None and b.value is not None:
+                found.append((a.value, b.value, pair.test.subject))
+        return found
+
+    own = pooled_error(values(p for p in pairs if p.test.subject == subject), "subject", min_pairs)
+    if own.known:
+        return own
+    cell_error = pooled_error(values(p for p in pairs if p.test.cell == cell), "cell", min_pairs)
+    if cell_error.known or cell_error.n_pairs >= own.n_pairs:
+        return cell_error
+    return own

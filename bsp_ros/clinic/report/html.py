@@ -1,237 +1,241 @@
-"""The report as one self-contained HTML page: summary first, then arm weight, plots, quality and detail."""
+"""The report as one self-contained HTML page; printed, its first page stands alone on A4, the detail follows."""
 
 from __future__ import annotations
 
 import base64
 import datetime as dt
-from collections.abc import Mapping
+from collections.abc import Sequence
 from html import escape
 
 from bsp_ros import __version__
+from bsp_ros.clinic.mdc import RETEST_METHOD
 from bsp_ros.clinic.report.analysis import Analysis, Change, Series
-from bsp_ros.clinic.report.labels import GROUP_TITLES
+from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
 from bsp_ros.clinic.report.summary import (
+    arm_title,
     day,
+    error_source,
     headline,
-    joint_summaries,
-    number,
-    segment_summaries,
-    session_notes,
+    percent,
+    period_line,
+    quality_notes,
+    session_rows,
+    subject_line,
     support_table,
 )
-from bsp_ros.clinic.store.records import ParamKey
+
+FIRST_PAGE_ROWS = 12
+"""The first page lists the latest sessions; the full list is in the detail."""
 
 _CSS = """
-body { font-family: 'DejaVu Sans', Arial, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
-h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { border-bottom: 2px solid #1f5fa6; padding-bottom: 0.2em; }
-h3 { margin: 0.8em 0 0.2em; }
-table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.92em; }
-th, td { border: 1px solid #ccc; padding: 0.3em 0.6em; text-align: left; vertical-align: top; }
-th { background: #eef3f9; } .bad { color: #b71c1c; font-weight: bold; } .ok { color: #1b5e20; }
-.flag { background: #fdecea; border-left: 5px solid #c62828; padding: 0.5em 0.8em; margin: 0.4em 0; }
-.note { background: #f4f4f4; padding: 0.6em 0.9em; } figure { margin: 1em 0 1.8em; }
-figcaption { font-size: 0.9em; color: #555; } img { max-width: 100%; } ul.flags { list-style: none; padding: 0; }
+body { font-family: 'DejaVu Sans', Arial, sans-serif; margin: 1.5em auto; max-width: 900px; color: #222;
+  font-size: 15px; line-height: 1.35; }
+h1 { font-size: 1.5em; margin: 0 0 0.1em; } h2 { font-size: 1.15em; margin: 0.9em 0 0.3em; color: #1f5fa6; }
+h3 { font-size: 1em; margin: 0.8em 0 0.2em; }
+.who { margin: 0 0 0.6em; color: #444; }
+.headline { border-left: 5px solid #1f5fa6; background: #f3f6fa; padding: 0.5em 0.8em; margin: 0.4em 0; }
+.headline p { margin: 0.25em 0; } .headline .arm { font-weight: bold; }
+.changed { color: #b71c1c; font-weight: bold; }
+.source { font-size: 0.85em; color: #555; margin: 0.3em 0; }
+figure { margin: 0.4em 0; } figure img { width: 100%; height: auto; display: block; }
+figcaption { font-size: 0.8em; color: #555; }
+table { border-collapse: collapse; margin: 0.3em 0 0.8em; font-size: 0.85em; width: 100%; }
+th, td { border-bottom: 1px solid #ddd; padding: 0.2em 0.5em; text-align: left; vertical-align: top; }
+th { background: #eef3f9; } td.num { white-space: nowrap; }
+tr.attention td { color: #b71c1c; font-weight: bold; }
+.note { font-size: 0.85em; color: #555; }
+.tech { font-size: 0.75em; color: #666; }
+footer { font-size: 0.75em; color: #777; margin-top: 1.5em; }
+@media print {
+  body { max-width: none; margin: 0; font-size: 9.5pt; }
+  #first-page { break-after: page; }
+  figure, table, tr, .headline { break-inside: avoid; }
+  h2, h3 { break-after: avoid; }
+  footer { display: none; }
+}
 """
 
 
-def change_sentence(change: Change, label: str, unit: str, since: str = "") -> str:
-    """One plain-language sentence describing a change beyond the MDC95."""
-    direction = "rose" if change.delta > 0 else "fell"
-    ratio = change.mdc_ratio
+def _png(data: bytes, alt: str) -> str:
+    encoded = base64.b64encode(data).decode("ascii")
+    return f"<img alt='{escape(alt, quote=True)}' src='data:image/png;base64,{encoded}'>"
+
+
+def _headline(analysis: Analysis) -> list[str]:
+    parts = ["<div class='headline' id='headline'>"]
+    for arm in analysis.arms:
+        if len(analysis.arms) > 1:
+            parts.append(f"<p class='arm'>{escape(arm_title(analysis, arm))}</p>")
+        flagged = {id(s): s for s in analysis.arm_series(arm) if s.flagged_latest}
+        for sentence in headline(analysis, arm):
+            changed = any(plain_name(s.key).lower() in sentence.lower() for s in flagged.values())
+            parts.append(f"<p{' class=' + chr(39) + 'changed' + chr(39) if changed else ''}>{escape(sentence)}</p>")
+    parts.append("</div>")
+    parts.append(f"<p class='source' id='error-source'>{escape(error_source(analysis))}</p>")
+    return parts
+
+
+def _session_table(analysis: Analysis, rows_limit: int | None, table_id: str) -> str:
+    rows = session_rows(analysis)
+    shown = rows if rows_limit is None else rows[-rows_limit:]
+    out = [f"<table id='{table_id}'><tr><th>No.</th><th>Date</th><th>Arm</th><th>Status</th></tr>"]
+    for row in shown:
+        cls = " class='attention'" if row.attention else ""
+        out.append(
+            f"<tr{cls}><td class='num'>{row.number}</td><td class='num'>{row.date}</td><td>{escape(row.arm)}</td>"
+            f"<td>{escape(row.status)}</td></tr>"
+        )
+    out.append("</table>")
+    if len(shown) < len(rows):
+        out.append(
+            f"<p class='note'>The latest {len(shown)} of {len(rows)} sessions; all are listed in the detail.</p>"
+        )
+    return "\n".join(out)
+
+
+def _change_cell(change: Change | None, unit: str) -> str:
+    if change is None:
+        return "–"
+    sign = "+" if change.delta > 0 else "−"
+    text = escape(f"{sign}{with_unit(abs(change.delta), unit)} ({sign}{percent(change.percent)})")
+    return f"<span class='changed'>{text}</span>" if change.beyond_mdc else text
+
+
+def _error_cell(series: Series) -> str:
+    error = series.error
+    if error.mdc95 is None:
+        return "unknown (too few retests)" if series.judged else "not judged"
+    whose = "this patient" if error.source == "subject" else "cell"
+    text = f"{escape(with_unit(error.mdc95, series.unit))} ({error.n_pairs} retests, {whose})"
+    return text if series.judged else text + ", for reference: not judged"
+
+
+def _changes_table(analysis: Analysis) -> str:
+    out = [
+        "<table id='changes'><tr><th>Parameter</th><th>Arm</th><th>Latest</th><th>Since previous</th>"
+        "<th>Since first</th><th>Measurement error (MDC95)</th></tr>"
+    ]
+    for series in analysis.series:
+        latest = series.latest
+        if latest is None or series.key[2] == "length_m":
+            continue
+        name = plain_name(series.key)
+        out.append(
+            f"<tr><td>{escape(name[0].upper() + name[1:])}</td><td>{escape((series.arm or '–').capitalize())}</td>"
+            f"<td class='num'>{escape(with_unit(latest.value, series.unit))}</td>"
+            f"<td class='num'>{_change_cell(series.since_previous, series.unit)}</td>"
+            f"<td class='num'>{_change_cell(series.since_first, series.unit)}</td><td>{_error_cell(series)}</td></tr>"
+        )
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def _lengths_table(analysis: Analysis) -> str:
+    out = ["<table id='lengths'><tr><th>Segment length</th><th>Arm</th><th>Latest</th></tr>"]
+    for series in analysis.series:
+        if series.key[2] == "length_m" and series.latest is not None:
+            name = plain_name(series.key)
+            value = f"{plain_number((series.latest.value or 0.0) * 100, 3)} cm"
+            out.append(
+                f"<tr><td>{escape(name[0].upper() + name[1:])}</td><td>{escape((series.arm or '–').capitalize())}</td>"
+                f"<td class='num'>{value}</td></tr>"
+            )
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def _support(analysis: Analysis) -> list[str]:
+    parts = ["<h2>Weight support</h2>"]
+    for arm in analysis.arms:
+        rows, note = support_table(analysis, arm)
+        if len(analysis.arms) > 1:
+            parts.append(f"<h3>{escape(arm_title(analysis, arm))}</h3>")
+        if rows:
+            parts.append(
+                "<table class='support'><tr><th>Share of arm weight carried</th><th>Forward force</th>"
+                "<th>Upward force</th><th>Moment at the handle</th></tr>"
+            )
+            for row in rows:
+                (fy, fz, mx), (sy, sz, sm) = row.wrench_yzx, row.std_yzx
+                parts.append(
+                    f"<tr><td>{row.fraction:.0%}</td><td class='num'>{plain_number(fy)} ± {plain_number(sy)} N</td>"
+                    f"<td class='num'>{plain_number(fz)} ± {plain_number(sz)} N</td>"
+                    f"<td class='num'>{plain_number(mx)} ± {plain_number(sm)} N·m</td></tr>"
+                )
+            parts.append("</table>")
+        parts.append(f"<p class='note'>{escape(note)}</p>")
+    return parts
+
+
+def _quality(analysis: Analysis) -> list[str]:
+    parts = ["<h2>All sessions</h2>", _session_table(analysis, None, "all-sessions"), "<h3>Session notes</h3><ul>"]
+    for record in analysis.sessions:
+        notes = quality_notes(record)
+        text = "; ".join(notes) if notes else "no notes"
+        parts.append(f"<li>Session {record.number} ({day(record.session_time_ns)}): {escape(text)}</li>")
+    parts.append("</ul><h3>Technical notes (for the engineer)</h3>")
+    for record in analysis.sessions:
+        lines = [record.quality.message] if not record.quality.valid and record.quality.message else []
+        lines += list(record.quality.warnings)
+        if lines:
+            parts.append(
+                f"<p class='tech'>Session {record.number}: " + " | ".join(escape(line) for line in lines) + "</p>"
+            )
+    return parts
+
+
+def _page_css(footer: str) -> str:
+    """A4 pages with the subject, date and page number in the bottom margin of every printed page."""
+    text = footer.replace("\\", "").replace('"', "'")
     return (
-        f"{label} {direction} from {number(change.before.value, unit)} ({day(change.before.time_ns)}) to "
-        f"{number(change.after.value, unit)} ({day(change.after.time_ns)}){since}: a change of "
-        f"{number(abs(change.delta), unit)}, {ratio:.1f} times the minimal detectable change "
-        f"(MDC95 {number(change.mdc95, unit)})."
+        "@page { size: A4; margin: 13mm 13mm 16mm 13mm;\n"
+        f'  @bottom-left {{ content: "{text}"; font-size: 8pt; color: #666; }}\n'
+        '  @bottom-right { content: "Page " counter(page) " of " counter(pages); font-size: 8pt; color: #666; } }\n'
     )
 
 
-def _since(series: Series, change: Change) -> str:
-    return "previous" if change is series.since_previous else "first"
-
-
-def render_html(analysis: Analysis, pngs: Mapping[ParamKey, bytes]) -> str:
+def render_html(
+    analysis: Analysis, first_png: bytes | None, detail_pngs: Sequence[tuple[str, bytes]], generated: dt.datetime
+) -> str:
     """The report page.
 
     Parameters
     ----------
-    analysis : Analysis
-        What to report.
-    pngs : Mapping
-        The trend plot of each parameter that has one, as PNG bytes.
-
-    Returns
-    -------
-    str
-        A complete HTML document with no external resources; the summary comes first.
+    analysis : what to report.
+    first_png : the passive-moment trend panels of the first page, None if there are none.
+    detail_pngs : ``(title, png)`` of the detail trend groups.
+    generated : when the report is made (printed on every page).
     """
-    by_key = {s.key: s for s in analysis.series}
+    stamp = generated.strftime("%Y-%m-%d %H:%M UTC")
+    footer = f"Subject {analysis.subject} · arm assessment · made {stamp}"
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
-        f"<title>Arm parameters of subject {escape(analysis.subject)}</title>",
-        f"<style>{_CSS}</style></head><body>",
-        f"<h1>Arm parameters of subject <span id='subject'>{escape(analysis.subject)}</span></h1>",
-        "<section id='summary'><h2>Summary</h2>",
-        f"<p id='headline'>{escape(headline(analysis))}</p>",
+        f"<title>Arm assessment of subject {escape(analysis.subject)}</title>",
+        f"<style>{_CSS}{_page_css(footer)}</style></head><body>",
+        "<section id='first-page'>",
+        f"<h1>Arm assessment · subject <span id='subject'>{escape(analysis.subject)}</span></h1>",
+        f"<p class='who'>{escape(subject_line(analysis))} · {escape(period_line(analysis))}</p>",
+        *_headline(analysis),
     ]
-    for joint in joint_summaries(analysis):
-        parts.append(f"<h3>{escape(joint.title)}</h3>")
-        parts.extend(f"<p>{escape(sentence)}</p>" for sentence in joint.sentences)
-        parts.append(_flags(joint.flagged, by_key))
-    notes = session_notes(analysis)
-    if notes:
-        parts.append("<p><b>Marked sessions</b> (kept in every plot and table):</p><ul id='session-notes'>")
-        parts.extend(f"<li class='bad'>{escape(n)}</li>" for n in notes)
-        parts.append("</ul>")
-    parts.append("</section>")
-    parts.append(_arm_weight(analysis, by_key))
-    parts.append("<section id='trends'><h2>Trends</h2>")
-    parts.append(
-        "<p class='note'>Each plot shows one parameter across sessions: dots are the estimates, the blue band "
-        "and bars are ±2 standard deviations of the estimate. A red line marks a change between consecutive "
-        "valid sessions larger than the minimal detectable change (MDC95, see Detail): more than repeated "
-        "measurement explains. A black cross marks a session whose estimate is not valid.</p>"
-    )
-    parts.append(f"<p class='note' id='prior-note'>{escape(analysis.prior_note)}</p>")
-    for group in ("joints", "segments"):
-        group_series = [s for s in analysis.series if s.key[0] == group]
-        if group_series:
-            parts.append(f"<h3>{escape(GROUP_TITLES.get(group, group))}</h3>")
-            parts.extend(_figure(s, pngs.get(s.key)) for s in group_series)
-    parts.append("</section>")
-    parts.append(_quality_table(analysis))
-    parts.append(_detail(analysis))
-    generated = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    parts.append(f"<p class='note'>Generated {generated} by bsp_ros {escape(__version__)}.</p></body></html>")
-    return "\n".join(parts)
-
-
-def _flags(changes: tuple[Change, ...], by_key: Mapping[ParamKey, Series]) -> str:
-    if not changes:
-        return ""
-    items = []
-    for change in changes:
-        series = by_key[change.key]
-        since = _since(series, change)
-        text = change_sentence(change, series.label, series.unit, f", since the {since} valid session")
-        items.append(
-            f"<li class='flag' data-param='{escape('.'.join(change.key))}' data-since='{since}'>{escape(text)}</li>"
-        )
-    return "<ul class='flags'>" + "".join(items) + "</ul>"
-
-
-def _arm_weight(analysis: Analysis, by_key: Mapping[ParamKey, Series]) -> str:
-    parts = ["<section id='arm-weight'><h2>Arm weight (static moments) and weight support</h2>"]
-    segments = segment_summaries(analysis)
-    if not segments:
-        parts.append("<p>No static moments in these sessions.</p>")
-    for segment in segments:
-        parts.append(f"<p><b>{escape(segment.title)}</b>: {escape(segment.sentences[0])}</p>")
-        parts.append(_flags(segment.flagged, by_key))
-    rows, note = support_table(analysis)
-    if rows:
+    if first_png is not None:
         parts.append(
-            "<table id='support'><tr><th>Support fraction</th><th>F_y forward (N)</th><th>F_z up (N)</th>"
-            "<th>M_x (N·m)</th></tr>"
+            "<figure id='passive-trends'>"
+            + _png(first_png, "Passive joint moments across sessions")
+            + "<figcaption>Dots: usable sessions (bars ±2 SD); shaded: measurement error around the first session; "
+            "red: a change beyond it; dotted line: a session that could not be used.</figcaption></figure>"
         )
-        for row in rows:
-            cells = "".join(
-                f"<td>{value:.2f} ± {std:.2f}</td>" for value, std in zip(row.wrench_yzx, row.std_yzx, strict=True)
-            )
-            parts.append(f"<tr><td>{row.fraction:.0%}</td>{cells}</tr>")
-        parts.append("</table>")
-    parts.append(f"<p class='note'>{escape(note)}</p></section>")
-    return "\n".join(parts)
-
-
-def _quality_table(analysis: Analysis) -> str:
-    rows = [
-        "<section id='quality'><h2>Session quality</h2>",
-        "<table id='sessions'><tr><th>Session</th><th>Date</th><th>Recording</th><th>Method</th>"
-        "<th>Valid</th><th>Tare</th><th>Samples</th><th>Condition number</th><th>Cycles for SEM</th>"
-        "<th>Warnings</th></tr>",
-    ]
-    for record in analysis.sessions:
-        quality = record.quality
-        valid = "<span class='ok'>yes</span>" if quality.valid else "<span class='bad'>NOT VALID</span>"
-        tare = (
-            f"<span class='ok'>applied ({escape(quality.tare_file or 'file not named')})</span>"
-            if quality.tare_applied
-            else "<span class='bad'>no tare</span>"
-        )
-        warnings = "<br>".join(escape(w) for w in quality.warnings) or "none"
-        cycles = record.repeatability.get("n_valid_cycles")
-        rows.append(
-            f"<tr><td>{record.id}</td><td>{day(record.session_time_ns)}</td><td>{escape(record.source)}</td>"
-            f"<td>{escape(record.method or 'not recorded')}</td><td>{valid}</td><td>{tare}</td>"
-            f"<td>{'–' if quality.n_samples is None else quality.n_samples}</td>"
-            f"<td>{number(quality.condition_number)}</td><td>{'–' if cycles is None else cycles}</td>"
-            f"<td>{warnings}</td></tr>"
-        )
-    rows.append("</table></section>")
-    return "\n".join(rows)
-
-
-def _detail(analysis: Analysis) -> str:
-    parts = ["<section id='detail'><h2>Detail</h2>", "<h3>Minimal detectable change: method</h3>"]
-    methods = analysis.methods
-    if methods:
-        parts.extend(f"<p class='note'>{escape(m)}</p>" for m in methods)
-    else:
-        parts.append("<p class='note'>No session carries a repeatability measurement: no MDC, no change claimed.</p>")
-    parts.append(
-        "<p>MDC95 = 1.96 × √2 × SEM; between two sessions of different SEM, 1.96 × √(SEM₁² + SEM₂²). A change is "
-        "flagged only when it exceeds this. Changes are compared between valid sessions only.</p>"
-    )
-    parts.append(
-        "<table id='mdc'><tr><th>Parameter</th><th>Latest valid</th><th>± std</th><th>SEM</th><th>MDC95</th>"
-        "<th>Since previous</th><th>Since first</th></tr>"
-    )
-    for s in analysis.series:
-        latest = s.latest
-        if latest is None:
-            continue
-        mdc = None if latest.sem is None else 1.96 * 2**0.5 * latest.sem
-        cells = [
-            escape(s.label),
-            number(latest.value, s.unit),
-            number(latest.std, s.unit),
-            number(latest.sem, s.unit),
-            number(mdc, s.unit),
-            _delta_cell(s.since_previous, s.unit),
-            _delta_cell(s.since_first, s.unit),
-        ]
-        parts.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
-    parts.append("</table>")
-    changes = analysis.changes
-    parts.append("<h3>All changes between consecutive valid sessions beyond the MDC95</h3>")
-    if changes:
-        by_key = {s.key: s for s in analysis.series}
-        parts.extend(f"<p>{escape(change_sentence(c, by_key[c.key].label, by_key[c.key].unit))}</p>" for c in changes)
-    else:
-        parts.append("<p>None.</p>")
+    parts.append(_session_table(analysis, FIRST_PAGE_ROWS, "sessions"))
     parts.append("</section>")
+    parts.append("<section id='detail'><h2>Detail: every parameter</h2>")
+    parts.append(_changes_table(analysis))
+    for title, png in detail_pngs:
+        parts.append(f"<h3>{escape(title)}</h3><figure>{_png(png, title)}</figure>")
+    parts.append(f"<p class='note' id='prior-note'>{escape(analysis.prior_note)}</p>")
+    parts.append("<h3>Segment lengths (from the markers)</h3>" + _lengths_table(analysis))
+    parts.extend(_support(analysis))
+    parts.extend(_quality(analysis))
+    parts.append(f"<h2>Method</h2><p class='note'>{escape(RETEST_METHOD)}</p>")
+    parts.append("</section>")
+    parts.append(f"<footer>{escape(footer)} by bsp_ros {escape(__version__)}.</footer></body></html>")
     return "\n".join(parts)
-
-
-def _delta_cell(change: Change | None, unit: str) -> str:
-    if change is None:
-        return "–"
-    text = escape(f"{change.delta:+.3g} {unit}".strip())
-    return f"<span class='bad'>{text}</span>" if change.beyond_mdc else text
-
-
-def _figure(series: Series, png: bytes | None) -> str:
-    latest = next((p for p in reversed(series.points) if p.value is not None), None)
-    caption = escape(series.label)
-    if latest is not None:
-        caption += f": latest {escape(number(latest.value, series.unit))} ± {escape(number(latest.std, series.unit))}"
-        caption += f" (from {escape(latest.source)})"
-    if series.changes:
-        caption += f" — <span class='bad'>{len(series.changes)} change(s) beyond the MDC95</span>"
-    if png is None:
-        return f"<figure><figcaption>{caption}: no finite estimate in any session.</figcaption></figure>"
-    data = base64.b64encode(png).decode("ascii")
-    alt = escape(f"Trend of {series.label} across sessions", quote=True)
-    return f"<figure><img alt='{alt}' src='data:image/png;base64,{data}'><figcaption>{caption}</figcaption></figure>"

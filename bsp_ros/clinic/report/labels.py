@@ -62,7 +62,12 @@ def unit(quantity: str) -> str:
 
 def label(key: ParamKey) -> str:
     """A plain-language label, e.g. ``Elbow friction (passive moment)`` or ``Forearm static moment (...)``."""
+    from bsp_ros.clinic.store.curves import angle_of
+
     _, part, quantity = key
+    angle = angle_of(quantity)
+    if angle is not None:
+        return f"{part_name(part)} passive moment at {angle}°"
     if quantity in QUANTITIES:
         text = QUANTITIES[quantity][0]
     else:
@@ -87,4 +92,82 @@ def sort_key(key: ParamKey) -> tuple[int, int, str, int, str]:
     group, part, quantity = key
     part_rank = _PART_ORDER.index(part) if part in _PART_ORDER else len(_PART_ORDER)
     q_rank = _QUANTITY_ORDER.index(quantity) if quantity in _QUANTITY_ORDER else len(_QUANTITY_ORDER)
+    from bsp_ros.clinic.store.curves import angle_of
+
+    angle = angle_of(quantity)
+    if angle is not None:  # curve points after the model's parameters, by angle
+        return (0 if group == "joints" else 1, part_rank, part, len(_QUANTITY_ORDER) + 1, f"{angle + 1000:05d}")
     return (0 if group == "joints" else 1, part_rank, part, q_rank, quantity)
+
+
+_PLAIN = {
+    "coulomb_nm": "resistance to passive {joint} movement (friction)",
+    "stiffness_nm_per_rad": "{joint} stiffness",
+    "viscous_nms": "{joint} damping (resistance growing with speed)",
+    "offset_nm": "{joint} passive moment offset",
+    "static_moment_kgm": "arm weight about the {joint} (static moment)",
+    "mass_kg": "{segment} mass",
+    "com_m": "{segment} centre of mass",
+    "first_moment_kgm": "{segment} mass × centre-of-mass distance",
+    "length_m": "{segment} length",
+}
+
+
+def plain_name(key: ParamKey) -> str:
+    """What a therapist calls a parameter, lower case: ``resistance to passive elbow movement (friction)``."""
+    from bsp_ros.clinic.store.curves import angle_of
+
+    _, part, quantity = key
+    joint = PROXIMAL_JOINT.get(part, part).replace("_", " ")
+    segment = part_name(part).lower()
+    angle = angle_of(quantity)
+    if angle is not None:
+        return f"passive {part.replace('_', ' ')} moment at {angle}°"
+    if quantity in _PLAIN:
+        return _PLAIN[quantity].format(
+            joint=joint if part in PROXIMAL_JOINT else part.replace("_", " "), segment=segment
+        )
+    return label(key).lower()
+
+
+def plain_number(value: float | None, significant: int = 2) -> str:
+    """``value`` rounded to ``significant`` digits, never in exponent notation: 0.38, 1.5, 12, 0.00007."""
+    import math
+
+    if value is None or not math.isfinite(value):
+        return "–"
+    if value == 0 or abs(value) < 5e-7:
+        return "0"
+    decimals = max(0, significant - 1 - math.floor(math.log10(abs(value))))
+    decimals = min(decimals, 6)
+    text = f"{round(value, decimals):.{decimals}f}"
+    return "−" + text[1:] if text.startswith("-") else text
+
+
+def with_unit(value: float | None, unit_text: str, significant: int = 2) -> str:
+    """``0.38 N·m``."""
+    return f"{plain_number(value, significant)} {unit_text}".strip()
+
+
+_SHORT = {
+    "coulomb_nm": "friction",
+    "stiffness_nm_per_rad": "stiffness",
+    "viscous_nms": "damping",
+    "offset_nm": "passive offset",
+    "static_moment_kgm": "static moment",
+    "mass_kg": "mass",
+    "com_m": "centre of mass",
+    "first_moment_kgm": "mass × COM",
+    "length_m": "length",
+}
+
+
+def short_label(key: ParamKey) -> str:
+    """A panel title: ``Elbow friction``, ``Forearm static moment``, ``Elbow at 30°``."""
+    from bsp_ros.clinic.store.curves import angle_of
+
+    _, part, quantity = key
+    angle = angle_of(quantity)
+    if angle is not None:
+        return f"{part_name(part)} moment at {angle}°"
+    return f"{part_name(part)} {_SHORT.get(quantity, label(key).split(' ', 1)[-1])}"

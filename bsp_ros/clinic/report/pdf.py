@@ -1,9 +1,10 @@
-"""The report as a PDF for the patient file (matplotlib PdfPages): summary, arm weight, plots, quality."""
+"""The report as an A4 PDF for the patient file: a first page that stands alone, the detail after it."""
 
 from __future__ import annotations
 
 import datetime as dt
 import textwrap
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib
@@ -12,65 +13,238 @@ matplotlib.use("Agg")
 
 from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
 from bsp_ros import __version__
-from bsp_ros.clinic.report.analysis import Analysis
-from bsp_ros.clinic.report.plots import trend_figure
+from bsp_ros.clinic.mdc import RETEST_METHOD
+from bsp_ros.clinic.report.analysis import Analysis, Change
+from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
+from bsp_ros.clinic.report.panels import arm_names, detail_groups, first_page_panels
+from bsp_ros.clinic.report.plots import Panel, draw_panels
 from bsp_ros.clinic.report.summary import (
+    arm_title,
     day,
+    error_source,
     headline,
-    joint_summaries,
-    segment_summaries,
-    session_marks,
-    session_notes,
+    percent,
+    period_line,
+    quality_notes,
+    session_rows,
+    subject_line,
     support_table,
 )
 from bsp_ros.errors import InputError
 
-_A4_IN = (8.27, 11.69)
-_WIDTH_CHARS = 95
-_LINE = 0.0155  # line height, fraction of the page
+A4_IN = (8.27, 11.69)
+LEFT, RIGHT, TOP, BOTTOM = 0.07, 0.93, 0.955, 0.06
+LINE = 0.0145  # height of a 9 pt line, fraction of the page
+BLUE, RED, GREY, INK = "#1f5fa6", "#b71c1c", "#666666", "#222222"
+FIRST_PAGE_ROWS = 12
 
 
-class _TextPages:
-    """Flow headed, wrapped paragraphs onto A4 pages."""
+class _Flow:
+    """Text and panels flowed onto A4 pages, top to bottom."""
 
-    def __init__(self, pdf: PdfPages) -> None:
-        self._pdf = pdf
-        self._figure: Figure | None = None
-        self._y = 0.0
+    def __init__(self) -> None:
+        self.pages: list[Figure] = []
+        self.y = 0.0
+        self.page = self.new_page()
 
-    def _page(self) -> Figure:
-        if self._figure is None or self._y < 0.06:
-            self.flush()
-            self._figure = Figure(figsize=_A4_IN)
-            self._y = 0.95
-        return self._figure
+    def new_page(self) -> Figure:
+        self.page = Figure(figsize=A4_IN)
+        self.pages.append(self.page)
+        self.y = TOP
+        return self.page
 
-    def line(self, text: str, *, size: float = 9.0, weight: str = "normal", colour: str = "#222222") -> None:
-        figure = self._page()
-        figure.text(0.07, self._y, text, fontsize=size, weight=weight, color=colour, va="top", family="DejaVu Sans")
-        self._y -= _LINE * size / 9.0
+    def room(self, height: float) -> None:
+        if self.y - height < BOTTOM + 0.01:
+            self.new_page()
 
-    def paragraph(self, text: str, *, colour: str = "#222222", indent: str = "") -> None:
-        for row in textwrap.wrap(text, _WIDTH_CHARS, initial_indent=indent, subsequent_indent=indent) or [""]:
-            self.line(row, colour=colour)
-        self._y -= _LINE * 0.4
+    def line(self, text: str, size: float = 9.0, colour: str = INK, weight: str = "normal", x: float = LEFT) -> None:
+        height = LINE * size / 9.0
+        self.room(height)
+        self.page.text(x, self.y, text, fontsize=size, color=colour, weight=weight, va="top", family="DejaVu Sans")
+        self.y -= height
 
-    def heading(self, text: str, size: float = 12.0) -> None:
-        if self._figure is not None and self._y < 0.15:
-            self._y = 0.0  # a heading does not start at the bottom of a page
-        self._y -= _LINE * 0.5
-        self.line(text, size=size, weight="bold", colour="#1f5fa6")
-        self._y -= _LINE * 0.3
+    def paragraph(
+        self, text: str, size: float = 9.0, colour: str = INK, weight: str = "normal", indent: float = 0.0
+    ) -> None:
+        width = int(100 * 9.0 / size * (RIGHT - LEFT - indent) / (RIGHT - LEFT))
+        for row in textwrap.wrap(text, width) or [""]:
+            self.line(row, size, colour, weight, LEFT + indent)
+        self.y -= LINE * 0.3
 
-    def flush(self) -> None:
-        if self._figure is not None:
-            self._pdf.savefig(self._figure)
-            self._figure = None
+    def heading(self, text: str, size: float = 11.0) -> None:
+        self.room(LINE * 4)
+        self.y -= LINE * 0.5
+        self.line(text, size, BLUE, "bold")
+        self.y -= LINE * 0.2
+
+    def panels(self, panels: Sequence[Panel], names: Sequence[str]) -> None:
+        rows = -(-len(panels) // 3)
+        height = 0.035 + 0.165 * rows
+        self.room(height)
+        draw_panels(
+            self.page, (LEFT + 0.02, self.y - height + 0.03, RIGHT - LEFT - 0.02, height - 0.055), panels, names
+        )
+        self.y -= height
 
 
-def write_report_pdf(analysis: Analysis, path: Path) -> Path:
+def _headline_box(flow: _Flow, analysis: Analysis) -> None:
+    top = flow.y
+    flow.y -= LINE * 0.4
+    for arm in analysis.arms:
+        if len(analysis.arms) > 1:
+            flow.line(arm_title(analysis, arm), 9.5, INK, "bold", LEFT + 0.015)
+        flagged = [plain_name(s.key).lower() for s in analysis.arm_series(arm) if s.flagged_latest]
+        for sentence in headline(analysis, arm):
+            changed = any(name in sentence.lower() for name in flagged)
+            flow.paragraph(sentence, 9.5, RED if changed else INK, "bold" if changed else "normal", indent=0.015)
+    flow.page.add_artist(
+        Rectangle(
+            (LEFT - 0.005, flow.y),
+            RIGHT - LEFT + 0.01,
+            top - flow.y,
+            transform=flow.page.transFigure,
+            facecolor="#f3f6fa",
+            edgecolor="none",
+            zorder=-1,
+        )
+    )
+    flow.page.add_artist(
+        Rectangle(
+            (LEFT - 0.005, flow.y),
+            0.006,
+            top - flow.y,
+            transform=flow.page.transFigure,
+            facecolor=BLUE,
+            edgecolor="none",
+        )
+    )
+    flow.y -= LINE * 0.5
+
+
+def _session_list(flow: _Flow, analysis: Analysis, limit: int | None) -> None:
+    rows = session_rows(analysis)
+    shown = rows if limit is None else rows[-limit:]
+    flow.line("No.   Date          Arm     Status", 8.0, GREY, "bold")
+    for row in shown:
+        colour, weight = (RED, "bold") if row.attention else (INK, "normal")
+        status = textwrap.wrap(row.status, 78) or [""]
+        flow.room(LINE * len(status))
+        flow.page.text(LEFT, flow.y, f"{row.number}", fontsize=8, color=colour, weight=weight, va="top")
+        flow.page.text(LEFT + 0.05, flow.y, row.date, fontsize=8, color=colour, weight=weight, va="top")
+        flow.page.text(LEFT + 0.165, flow.y, row.arm, fontsize=8, color=colour, weight=weight, va="top")
+        for part in status:
+            flow.page.text(LEFT + 0.24, flow.y, part, fontsize=8, color=colour, weight=weight, va="top")
+            flow.y -= LINE * 0.9
+    if len(shown) < len(rows):
+        flow.line(f"The latest {len(shown)} of {len(rows)} sessions; all are listed in the detail.", 7.5, GREY)
+
+
+def _change_text(change: Change | None, unit: str) -> str:
+    if change is None:
+        return "–"
+    sign = "+" if change.delta > 0 else "−"
+    return f"{sign}{with_unit(abs(change.delta), unit)} ({sign}{percent(change.percent)})" + (
+        " beyond error" if change.beyond_mdc else ""
+    )
+
+
+def _detail(flow: _Flow, analysis: Analysis) -> None:
+    flow.new_page()
+    flow.heading("Detail: every parameter", 13.0)
+    for series in analysis.series:
+        latest = series.latest
+        if latest is None or series.key[2] == "length_m":
+            continue
+        name = plain_name(series.key)
+        arm = f" ({series.arm} arm)" if series.arm and len(analysis.arms) > 1 else ""
+        error = (
+            "measurement error unknown"
+            if series.error.mdc95 is None
+            else f"measurement error {with_unit(series.error.mdc95, series.unit)} ({series.error.n_pairs} retests)"
+        ) + ("" if series.judged else ", not judged")
+        flagged = any(c is not None and c.beyond_mdc for c in (series.since_previous, series.since_first))
+        flow.paragraph(
+            f"{name[0].upper()}{name[1:]}{arm}: latest {with_unit(latest.value, series.unit)}; since previous "
+            f"{_change_text(series.since_previous, series.unit)}; "
+            f"since first {_change_text(series.since_first, series.unit)}; {error}.",
+            8.0,
+            RED if flagged and series.judged else INK,
+        )
+    names = arm_names(analysis)
+    for title, panels in detail_groups(analysis):
+        flow.heading(title)
+        for start in range(0, len(panels), 6):
+            flow.panels(panels[start : start + 6], names)
+    flow.paragraph(analysis.prior_note, 8.0, GREY)
+    flow.heading("Segment lengths (from the markers)")
+    for series in analysis.series:
+        if series.key[2] == "length_m" and series.latest is not None:
+            name = plain_name(series.key)
+            arm = f" ({series.arm} arm)" if series.arm and len(analysis.arms) > 1 else ""
+            flow.line(
+                f"{name[0].upper()}{name[1:]}{arm}: {plain_number((series.latest.value or 0.0) * 100, 3)} cm", 8.0
+            )
+    flow.heading("Weight support")
+    for side in analysis.arms:
+        rows, note = support_table(analysis, side)
+        if len(analysis.arms) > 1:
+            flow.line(arm_title(analysis, side), 9.0, INK, "bold")
+        for row in rows:
+            (fy, fz, mx), (sy, sz, sm) = row.wrench_yzx, row.std_yzx
+            flow.line(
+                f"{row.fraction:.0%} of the arm weight: forward {plain_number(fy)} ± {plain_number(sy)} N, upward "
+                f"{plain_number(fz)} ± {plain_number(sz)} N, moment {plain_number(mx)} ± {plain_number(sm)} N·m",
+                8.0,
+            )
+        flow.paragraph(note, 8.0, GREY)
+    flow.heading("All sessions")
+    _session_list(flow, analysis, None)
+    for record in analysis.sessions:
+        notes = quality_notes(record)
+        if notes:
+            flow.paragraph(f"Session {record.number} ({day(record.session_time_ns)}): {'; '.join(notes)}.", 8.0, GREY)
+    flow.heading("Technical notes (for the engineer)", 10.0)
+    for record in analysis.sessions:
+        lines = [record.quality.message] if not record.quality.valid and record.quality.message else []
+        lines += list(record.quality.warnings)
+        if lines:
+            flow.paragraph(f"Session {record.number}: " + " | ".join(lines), 7.0, GREY)
+    flow.heading("Method")
+    flow.paragraph(RETEST_METHOD, 8.0, GREY)
+
+
+def report_pages(analysis: Analysis, generated: dt.datetime) -> list[Figure]:
+    """The report's A4 pages: the first page alone, then the detail; each numbered and dated."""
+    flow = _Flow()
+    page = flow.page
+    page.text(LEFT, flow.y, f"Arm assessment · subject {analysis.subject}", fontsize=15, weight="bold", va="top")
+    flow.y -= LINE * 1.9
+    flow.line(f"{subject_line(analysis)} · {period_line(analysis)}", 9.0, GREY)
+    flow.y -= LINE * 0.4
+    _headline_box(flow, analysis)
+    flow.paragraph(error_source(analysis), 7.5, GREY)
+    panels = first_page_panels(analysis)
+    if panels:
+        flow.panels(panels, arm_names(analysis))
+    _session_list(flow, analysis, FIRST_PAGE_ROWS)
+    _detail(flow, analysis)
+    stamp = generated.strftime("%Y-%m-%d %H:%M UTC")
+    for number, figure in enumerate(flow.pages, start=1):
+        figure.text(
+            LEFT,
+            0.025,
+            f"Subject {analysis.subject} · arm assessment · made {stamp} · bsp_ros {__version__}",
+            fontsize=7,
+            color=GREY,
+        )
+        figure.text(RIGHT, 0.025, f"Page {number} of {len(flow.pages)}", fontsize=7, color=GREY, ha="right")
+    return flow.pages
+
+
+def write_report_pdf(analysis: Analysis, path: Path, generated: dt.datetime) -> Path:
     """Write the PDF report of ``analysis`` to ``path``; return the path.
 
     Raises
@@ -81,54 +255,10 @@ def write_report_pdf(analysis: Analysis, path: Path) -> Path:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with PdfPages(path) as pdf:
-            text = _TextPages(pdf)
-            text.heading(f"Arm parameters of subject {analysis.subject}", 15.0)
-            text.heading("Summary")
-            text.paragraph(headline(analysis))
-            for joint in joint_summaries(analysis):
-                text.line(joint.title, weight="bold")
-                for sentence in joint.sentences:
-                    text.paragraph(sentence, indent="  ")
-                for change in joint.flagged:
-                    text.paragraph(f"CHANGED: {'.'.join(change.key)}", colour="#c62828", indent="  ")
-            notes = session_notes(analysis)
-            if notes:
-                text.line("Marked sessions (kept in every plot and table):", weight="bold")
-                for note in notes:
-                    text.paragraph(note, colour="#b71c1c", indent="  ")
-            text.heading("Arm weight (static moments) and weight support")
-            for segment in segment_summaries(analysis):
-                text.paragraph(f"{segment.title}: {segment.sentences[0]}")
-            rows, note = support_table(analysis)
-            for row in rows:
-                (fy, fz, mx), (sy, sz, sm) = row.wrench_yzx, row.std_yzx
-                text.paragraph(
-                    f"Support {row.fraction:.0%}: F_y {fy:.2f} ± {sy:.2f} N, F_z {fz:.2f} ± {sz:.2f} N, "
-                    f"M_x {mx:.2f} ± {sm:.2f} N·m",
-                    indent="  ",
-                )
-            text.paragraph(note, colour="#555555")
-            text.flush()
-            for series in analysis.series:
-                if series.has_values:
-                    pdf.savefig(trend_figure(series))
-            text.heading("Session quality")
-            for record in analysis.sessions:
-                marks = ", ".join(session_marks(record)) or "valid, tare applied, no warnings"
-                text.paragraph(
-                    f"Session {record.id} ({day(record.session_time_ns)}, {record.source}): {marks}. "
-                    + " ".join(f"Warning: {w}" for w in record.quality.warnings),
-                    indent="  ",
-                )
-            text.heading("Minimal detectable change: method")
-            for method in analysis.methods or ["No session carries a repeatability measurement: no change claimed."]:
-                text.paragraph(method)
-            text.paragraph(analysis.prior_note, colour="#555555")
-            generated = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-            text.paragraph(f"Generated {generated} by bsp_ros {__version__}.", colour="#555555")
-            text.flush()
+            for figure in report_pages(analysis, generated):
+                pdf.savefig(figure)
             info = pdf.infodict()
-            info["Title"] = f"Arm parameters of subject {analysis.subject}"
+            info["Title"] = f"Arm assessment of subject {analysis.subject}"
             info["Creator"] = f"bsp_ros {__version__}"
     except OSError as error:
         raise InputError(f"cannot write {path}: {error}") from None

@@ -1,77 +1,31 @@
-"""Trend plots of one parameter across sessions, rendered to PNG with matplotlib's Agg backend."""
+"""Trend panels: one parameter per panel, every arm in it; invalid sessions as marked gaps, never as values."""
 
 from __future__ import annotations
 
 import io
+from collections.abc import Sequence
 
 import matplotlib
 
 matplotlib.use("Agg")
 
 import matplotlib.dates as mdates
+from matplotlib.artist import Artist
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
 from bsp_ros.clinic.report.analysis import Series
+from bsp_ros.clinic.report.labels import plain_number, short_label
 from bsp_ros.clinic.store.records import ns_to_datetime
 
-DATA_COLOUR = "#1f5fa6"
+ARM_COLOURS = ("#1f5fa6", "#e07b00")
 PRIOR_COLOUR = "#9a9a9a"
 FLAG_COLOUR = "#c62828"
+GAP_COLOUR = "#7a7a7a"
 
-
-def trend_figure(series: Series) -> Figure:
-    """A figure of ``series``: values with ±2 std bands, the prior band, flagged changes in red."""
-    figure = Figure(figsize=(7.5, 2.9), dpi=100)
-    # Fixed margins (legend on the right): a layout engine would cost a third of the rendering time.
-    figure.subplots_adjust(left=0.1, right=0.75, bottom=0.16, top=0.89)
-    axes = figure.add_subplot()
-    points = [p for p in series.points if p.value is not None]
-    times = [_day(p.time_ns) for p in points]
-    values = [p.value or 0.0 for p in points]
-    stds = [p.std or 0.0 for p in points]
-    priors = [(_day(p.time_ns), p.prior) for p in series.points if p.prior is not None]
-    if priors:
-        prior_times = [t for t, _ in priors]
-        lower = [prior.mean - 2 * prior.std for _, prior in priors]
-        upper = [prior.mean + 2 * prior.std for _, prior in priors]
-        if len(priors) == 1:
-            axes.axhspan(lower[0], upper[0], color=PRIOR_COLOUR, alpha=0.25, lw=0, label="table range (±2 SD)")
-        else:
-            axes.fill_between(
-                prior_times, lower, upper, color=PRIOR_COLOUR, alpha=0.25, lw=0, label="table range (±2 SD)"
-            )
-    if points:
-        axes.fill_between(
-            times,
-            [v - 2 * s for v, s in zip(values, stds, strict=True)],
-            [v + 2 * s for v, s in zip(values, stds, strict=True)],
-            color=DATA_COLOUR,
-            alpha=0.18,
-            lw=0,
-            label="uncertainty (±2 SD)",
-        )
-        axes.errorbar(
-            times, values, yerr=[2 * s for s in stds], color=DATA_COLOUR, marker="o", ms=5, capsize=3, label="estimate"
-        )
-        invalid = [(t, v) for t, v, p in zip(times, values, points, strict=True) if not p.valid]
-        if invalid:
-            axes.plot(*zip(*invalid, strict=True), ls="none", marker="x", ms=9, mew=2, color="black", label="not valid")
-    for change in series.changes:
-        xs = [_day(change.before.time_ns), _day(change.after.time_ns)]
-        ys = [change.before.value or 0.0, change.after.value or 0.0]
-        axes.plot(xs, ys, color=FLAG_COLOUR, lw=2.5, zorder=4)
-        axes.plot(xs[1:], ys[1:], "o", ms=12, mfc="none", mec=FLAG_COLOUR, mew=2, zorder=5)
-    if series.changes:
-        axes.plot([], [], color=FLAG_COLOUR, lw=2.5, label="unexplained change")
-    axes.set_title(series.label, loc="left", fontsize=11)
-    axes.set_ylabel(series.unit)
-    axes.grid(True, alpha=0.3)
-    axes.xaxis_date()
-    locator = mdates.AutoDateLocator(minticks=3, maxticks=8)
-    axes.xaxis.set_major_locator(locator)
-    axes.xaxis.set_major_formatter(mdates.ConciseDateFormatter(locator))
-    axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
-    return figure
+Panel = Sequence[Series]
+"""One parameter: its series of every arm (first arm first)."""
 
 
 def _day(time_ns: int) -> float:
@@ -79,13 +33,149 @@ def _day(time_ns: int) -> float:
     return float(mdates.date2num(ns_to_datetime(time_ns)))
 
 
+def _plain_axis(axes: Axes) -> None:
+    axes.yaxis.set_major_formatter(FuncFormatter(lambda v, _: plain_number(v, 3)))
+    axes.yaxis.set_major_locator(MaxNLocator(4))
+    locator = mdates.AutoDateLocator(minticks=2, maxticks=5)
+    axes.xaxis.set_major_locator(locator)
+    axes.xaxis.set_major_formatter(mdates.DateFormatter("%d %b"))
+    axes.tick_params(labelsize=7)
+    axes.grid(True, alpha=0.3)
+
+
+def draw_panel(axes: Axes, panel: Panel, arm_names: Sequence[str], *, compact: bool = False) -> None:
+    """Draw one parameter's trend of every arm into ``axes``.
+
+    Usable sessions are dots joined by a line with ±2 std bars; a band around the first usable value shows
+    the MDC95 (measurement error); a step beyond it is drawn in red. An invalid session is a dotted vertical
+    line marked "not usable": it takes no value, so it neither joins the line nor scales the axis.
+    """
+    for k, series in enumerate(panel):
+        colour = ARM_COLOURS[k % len(ARM_COLOURS)]
+        usable = [p for p in series.points if p.usable]
+        xs = [_day(p.time_ns) for p in usable]
+        ys = [p.value or 0.0 for p in usable]
+        name = arm_names[k] if k < len(arm_names) else ""
+        if series.has_prior:
+            priors = [(_day(p.time_ns), p.prior) for p in series.points if p.prior is not None]
+            axes.fill_between(
+                [t for t, _ in priors],
+                [q.mean - 2 * q.std for _, q in priors],
+                [q.mean + 2 * q.std for _, q in priors],
+                color=PRIOR_COLOUR,
+                alpha=0.2,
+                lw=0,
+                label="table range" if k == 0 else None,
+            )
+        if usable and series.judged and series.error.mdc95 is not None and len(xs) > 1:
+            mdc = series.error.mdc95
+            axes.fill_between(
+                [xs[0], xs[-1]],
+                [ys[0] - mdc] * 2,
+                [ys[0] + mdc] * 2,
+                color=colour,
+                alpha=0.08,
+                lw=0,
+                label="measurement error" if k == 0 else None,
+            )
+        if usable:
+            axes.errorbar(
+                xs,
+                ys,
+                yerr=[2 * (p.std or 0.0) for p in usable],
+                color=colour,
+                marker="o",
+                ms=3.5,
+                lw=1.3,
+                capsize=2,
+                elinewidth=0.8,
+                label=name or None,
+            )
+        for change in series.changes:
+            xx = [_day(change.before.time_ns), _day(change.after.time_ns)]
+            yy = [change.before.value or 0.0, change.after.value or 0.0]
+            axes.plot(xx, yy, color=FLAG_COLOUR, lw=2.2, zorder=4)
+            axes.plot(xx[1:], yy[1:], "o", ms=8, mfc="none", mec=FLAG_COLOUR, mew=1.6, zorder=5)
+        for p in series.points:
+            if not p.valid:
+                x = _day(p.time_ns)
+                axes.axvline(x, color=GAP_COLOUR, ls=":", lw=1.2, zorder=1)
+                axes.text(
+                    x,
+                    0.97,
+                    "not usable",
+                    transform=axes.get_xaxis_transform(),
+                    rotation=90,
+                    va="top",
+                    ha="right",
+                    fontsize=6,
+                    color=GAP_COLOUR,
+                )
+    series = panel[0]
+    title = short_label(series.key) + (f" [{series.unit}]" if series.unit else "")
+    axes.set_title(title, loc="left", fontsize=7.5 if compact else 8.5)
+    _plain_axis(axes)
+    times = [_day(p.time_ns) for s in panel for p in s.points]
+    if times:
+        pad = max(1.0, 0.04 * (max(times) - min(times)))
+        axes.set_xlim(min(times) - pad, max(times) + pad)
+
+
+def draw_panels(
+    figure: Figure,
+    rect: tuple[float, float, float, float],
+    panels: Sequence[Panel],
+    arm_names: Sequence[str],
+    ncols: int = 3,
+) -> None:
+    """Lay ``panels`` out in a grid inside ``rect`` (left, bottom, width, height, figure fractions)."""
+    if not panels:
+        return
+    ncols = min(ncols, len(panels))
+    nrows = -(-len(panels) // ncols)
+    left, bottom, width, height = rect
+    below = 0.5 / figure.get_figheight()  # tick labels and the legend under the grid, 0.5 in
+    grid = figure.add_gridspec(
+        nrows,
+        ncols,
+        left=left,
+        right=left + width,
+        bottom=bottom + below,
+        top=bottom + height,
+        wspace=0.32,
+        hspace=0.5,
+    )
+    legend: dict[str, Artist] = {}
+    for i, panel in enumerate(panels):
+        axes = figure.add_subplot(grid[i // ncols, i % ncols])
+        draw_panel(axes, panel, arm_names, compact=True)
+        handles, labels = axes.get_legend_handles_labels()
+        for handle, text in zip(handles, labels, strict=True):
+            legend.setdefault(text, handle)
+    if legend:
+        figure.legend(
+            list(legend.values()),
+            list(legend),
+            loc="upper right",
+            bbox_to_anchor=(left + width, bottom - 0.01),
+            ncol=4,
+            fontsize=7,
+            frameon=False,
+        )
+
+
+def panels_figure(panels: Sequence[Panel], arm_names: Sequence[str], ncols: int = 3, width_in: float = 7.2) -> Figure:
+    """A figure of ``panels`` alone (for the HTML page and PNG export)."""
+    nrows = max(1, -(-len(panels) // ncols))
+    height_in = 0.6 + 1.75 * nrows
+    figure = Figure(figsize=(width_in, height_in), dpi=110)
+    bottom = 0.05 / height_in
+    draw_panels(figure, (0.07, bottom, 0.9, 1.0 - bottom - 0.25 / height_in), panels, arm_names, ncols)
+    return figure
+
+
 def figure_png(figure: Figure) -> bytes:
     """``figure`` as PNG bytes."""
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png")
     return buffer.getvalue()
-
-
-def trend_png(series: Series) -> bytes:
-    """PNG bytes of :func:`trend_figure` of ``series``."""
-    return figure_png(trend_figure(series))

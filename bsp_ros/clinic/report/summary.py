@@ -1,23 +1,22 @@
-"""The plain-language summary a report opens with: per joint, per segment, and the support the weights imply."""
+"""What a report says, in plain words: who, when, what changed beyond measurement error, which sessions need care."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from bsp_ros.clinic.report.analysis import Analysis, Change, Series
-from bsp_ros.clinic.report.labels import PART_NAMES, QUANTITIES
-from bsp_ros.clinic.store.records import SessionRecord, format_time
+from bsp_ros.clinic.report.labels import PART_NAMES, plain_name, plain_number, with_unit
+from bsp_ros.clinic.store.records import SessionRecord, format_time, ns_to_datetime
 from bsp_ros.core.weight_support import support_wrench
 from bsp_ros.errors import InputError
 
-JOINT_ORDER = ("shoulder", "elbow", "wrist")
 SEGMENT_ORDER = ("upper_arm", "forearm", "hand")
 SUPPORT_FRACTIONS = (0.3, 0.5, 1.0)
 REFERENCE_POSE_DEG = (-45.0, 90.0, 0.0)
-"""Pose of the support table: upper arm 45 deg below horizontal forward, elbow at a right angle, wrist straight."""
+"""Pose of the support table: upper arm 45° below horizontal forward, elbow at a right angle, wrist straight."""
 
 
 def day(time_ns: int) -> str:
@@ -25,114 +24,232 @@ def day(time_ns: int) -> str:
     return format_time(time_ns)[:10]
 
 
-def number(value: float | None, unit: str = "") -> str:
-    """``0.28 N·m``; ``–`` for a missing value."""
+def long_day(time_ns: int) -> str:
+    """``1 June 2024``."""
+    moment = ns_to_datetime(time_ns)
+    return f"{moment.day} {moment.strftime('%B %Y')}"
+
+
+def percent(value: float | None) -> str:
+    """``21 %`` (absolute, rounded; ``<1 %`` below one)."""
     if value is None:
         return "–"
-    return f"{value:.3g} {unit}".strip()
+    return "<1 %" if abs(value) < 1 else f"{abs(value):.0f} %"
 
 
-def _signed(value: float, unit: str) -> str:
-    return f"{'+' if value >= 0 else '−'}{abs(value):.2g} {unit}".strip()
+def arm_title(analysis: Analysis, arm: str | None) -> str:
+    """``Left arm (affected)``, ``Arm`` when the side is not recorded."""
+    if arm is None:
+        return "Arm (side not recorded)"
+    status = analysis.record.arm_status(arm) if analysis.record is not None else None
+    return f"{arm.capitalize()} arm" + (f" ({status})" if status else "")
 
 
-def change_clause(change: Change | None, since: str, unit: str) -> str:
-    """``since the previous session: +0.12 N·m, beyond the MDC95 of 0.0015 N·m`` (or within, or not judged)."""
-    if change is None:
-        return f"no comparison since the {since} session (too few valid sessions)"
-    text = f"since the {since} session ({day(change.before.time_ns)}): {_signed(change.delta, unit)}"
-    if change.mdc95 is None:
-        return text + ", which cannot be judged (no repeatability measured for these sessions)"
-    if change.beyond_mdc:
-        return text + f", beyond the minimal detectable change (MDC95 {number(change.mdc95, unit)}): a real change"
-    return text + f", within the minimal detectable change (MDC95 {number(change.mdc95, unit)}): no detectable change"
+def subject_line(analysis: Analysis) -> str:
+    """``female, 68 kg, 1.65 m``, or a note that no body data are recorded."""
+    record = analysis.record
+    facts = []
+    if record is not None:
+        if record.sex:
+            facts.append(record.sex)
+        if record.body_mass_kg:
+            facts.append(f"{record.body_mass_kg:.0f} kg")
+        if record.height_m:
+            facts.append(f"{record.height_m:.2f} m")
+    return ", ".join(facts) if facts else "body data not recorded"
 
 
-def _quantity_name(series: Series) -> str:
-    quantity = series.key[2]
-    return QUANTITIES[quantity][0].split(" (")[0] if quantity in QUANTITIES else quantity.replace("_", " ")
-
-
-def series_sentence(series: Series, what: str) -> str:
-    """One sentence on one parameter: first and latest value, trend, and the two MDC comparisons."""
-    valid = [p for p in series.points if p.valid and p.value is not None]
-    if not valid:
-        return f"{what}: no valid estimate in any session."
-    first, latest = valid[0], valid[-1]
-    trend = ""
-    if series.since_first is not None and series.since_first.mdc95 is not None:
-        trend = (
-            (" rising" if series.since_first.delta > 0 else " falling") if series.since_first.beyond_mdc else " steady"
-        )
-        trend = f",{trend} over {len(valid)} valid sessions"
-    head = (
-        f"{what} {number(latest.value, series.unit)} in the latest valid session ({day(latest.time_ns)})"
-        if len(valid) == 1
-        else f"{what} {number(first.value, series.unit)} in the first valid session, "
-        f"{number(latest.value, series.unit)} in the latest ({day(latest.time_ns)}){trend}"
+def period_line(analysis: Analysis) -> str:
+    """``10 sessions, 1 June 2024 to 3 August 2024 (1 not usable; 5 retests)``."""
+    sessions = analysis.sessions
+    visits = [r for r in sessions if not r.retest]
+    retests = len(sessions) - len(visits)
+    bad = sum(not r.quality.valid for r in visits)
+    extra = [f"{bad} not usable" for _ in range(1) if bad] + [f"{retests} retest{'s' if retests != 1 else ''}"] * (
+        retests > 0
     )
-    clauses = [change_clause(series.since_previous, "previous", series.unit)]
-    if series.since_first is not None:
-        clauses.append(change_clause(series.since_first, "first", series.unit))
-    elif len(valid) == 2:
-        clauses[0] = clauses[0].replace("previous session", "previous (first) session")
-    if len(valid) < 2:
-        return head + "."
-    return f"{head}. Change {'; '.join(clauses)}."
+    span = (
+        long_day(sessions[0].session_time_ns)
+        if len(sessions) == 1
+        else f"{long_day(sessions[0].session_time_ns)} to {long_day(sessions[-1].session_time_ns)}"
+    )
+    n = len(visits)
+    return f"{n} session{'s' if n != 1 else ''}, {span}" + (f" ({'; '.join(extra)})" if extra else "")
+
+
+def _direction(change: Change) -> str:
+    return "rose" if change.delta > 0 else "fell"
+
+
+def _span(change: Change, unit: str) -> str:
+    return f"{plain_number(change.before.value)} to {with_unit(change.after.value, unit)}"
+
+
+def change_sentence(series: Series, changes: list[Change]) -> str:
+    """One sentence on a parameter's changes beyond the MDC95 (since previous and/or since first)."""
+    name = plain_name(series.key)
+    parts = []
+    for change in changes:
+        since = "since the previous session" if change is series.since_previous else "since the first session"
+        parts.append(f"{_direction(change)} {percent(change.percent)} {since} ({_span(change, series.unit)})")
+    mdc = changes[0]
+    explained = f"{with_unit(mdc.mdc95, series.unit)} ({percent(mdc.mdc_percent)})"
+    return f"{name[0].upper()}{name[1:]} {' and '.join(parts)}, beyond the {explained} that measurement error explains."
+
+
+def headline(analysis: Analysis, arm: str | None) -> list[str]:
+    """The headline sentences of one arm: what changed beyond the MDC95, or why nothing can be said."""
+    visits = [r for r in analysis.visits(arm) if r.quality.valid]
+    if not visits:
+        return ["No session of this arm could be evaluated yet."]
+    if len(visits) == 1:
+        return [f"One usable session ({long_day(visits[0].session_time_ns)}): the first measurement to compare with."]
+    if not analysis.judgeable:
+        return [cannot_judge(analysis)]
+    sentences = [change_sentence(s, s.flagged_latest) for s in analysis.arm_series(arm) if s.flagged_latest]
+    if not sentences:
+        first, last = visits[0], visits[-1]
+        since = (
+            "the previous session"
+            if len(visits) == 2
+            else f"the previous session or the first ({long_day(first.session_time_ns)})"
+        )
+        when = long_day(last.session_time_ns)
+        sentences.append(f"No change beyond measurement error in the latest session ({when}) since {since}.")
+    latest = analysis.visits(arm)[-1]
+    if not latest.quality.valid:
+        sentences.insert(
+            0,
+            f"The latest session ({long_day(latest.session_time_ns)}) could not be evaluated; the session before "
+            "it is compared instead.",
+        )
+    return sentences
+
+
+def cannot_judge(analysis: Analysis) -> str:
+    """Why changes cannot be judged yet, and how to record a retest."""
+    have = max(analysis.own_pairs, analysis.cell_pairs)
+    recorded = "no retest has" if have == 0 else f"only {have} retest{'s have' if have != 1 else ' has'}"
+    return (
+        f"Changes cannot be judged against measurement error yet: {recorded} been recorded, "
+        f"{analysis.min_pairs} are needed. To record a retest, measure the patient a second time "
+        "on the same day after taking the arm out of the robot and re-attaching it (markers re-placed), and add "
+        "it as a retest (bsp sessions add … --retest)."
+    )
+
+
+def error_source(analysis: Analysis) -> str:
+    """Where the measurement error comes from, in one sentence."""
+    judged = [s for s in analysis.series if s.judged and s.error.known]
+    if not judged:
+        return "No measurement error is known yet (no or too few retests): changes are not judged."
+    error = judged[0].error
+    whose = "this patient" if error.source == "subject" else f"{error.n_subjects} patient(s) measured in this cell"
+    icc = f"; agreement (ICC) {error.icc:.2f}" if error.icc is not None else ""
+    return (
+        f"Measurement error (MDC95) from {error.n_pairs} same-day retests of {whose}{icc}. A change is reported "
+        "only when it is larger."
+    )
+
+
+_CAUSES = (
+    (r"too few (usable )?samples", "the recording was too short or mostly unusable", "record a full session again"),
+    (r"no motion at the (\w+)", "the {0} did not move", "check that the robot runs the planned movement, then repeat"),
+    (
+        r"moved in one direction only",
+        "a joint moved in one direction only",
+        "repeat with the full back-and-forth movement",
+    ),
+    (
+        r"poor excitation",
+        "the movement did not separate the arm's weight from joint resistance",
+        "repeat with the planned movement",
+    ),
+    (
+        r"implausible (\w+) static moment",
+        "the measured weight of the arm is implausible",
+        "check the force sensor (zero it) and the markers, then repeat",
+    ),
+    (
+        r"does not fit",
+        "the measurement does not match the arm model",
+        "check the force sensor and the marker placement, then repeat",
+    ),
+    (r"drifts", "the force sensor drifted during the session", "let the sensor warm up, zero it and repeat"),
+    (
+        r"elastic|an effect the model lacks",
+        "the arm resisted in a way the chosen model does not describe",
+        "repeat; if it recurs, ask for the stiffness model",
+    ),
+    (r"bound", "a part of the arm could not be measured", "repeat the session"),
+    (r"marker|occlu", "markers were lost or misplaced", "check the markers and repeat"),
+    (r"transform|tf", "the force sensor's orientation was not recorded", "check the recording setup and repeat"),
+)
+
+
+def invalid_cause(record: SessionRecord) -> tuple[str, str]:
+    """Why a session could not be evaluated and what to do, in plain words."""
+    text = " ".join([record.quality.message, *record.quality.warnings]).lower()
+    for pattern, cause, action in _CAUSES:
+        found = re.search(pattern, text)
+        if found:
+            joint = found.group(1) if found.groups() and found.group(1) else ""
+            return cause.format(PART_NAMES.get(joint, joint).lower()), action
+    return "the measurement could not be evaluated", "repeat the session"
 
 
 @dataclass(frozen=True)
-class PartSummary:
-    """The summary of one joint (passive moments) or segment (static moment)."""
+class SessionRow:
+    """One line of the session list."""
 
-    part: str
-    title: str
-    sentences: tuple[str, ...]
-    flagged: tuple[Change, ...]
-
-
-def joint_summaries(analysis: Analysis) -> list[PartSummary]:
-    """Per joint: every passive-moment parameter's trend and whether the latest session changed beyond the MDC."""
-    found = []
-    joints = sorted({s.key[1] for s in analysis.series if s.key[0] == "joints"}, key=_order(JOINT_ORDER))
-    for joint in joints:
-        series = [s for s in analysis.series if s.key[:2] == ("joints", joint)]
-        sentences = tuple(series_sentence(s, f"Passive {_quantity_name(s)}") for s in series)
-        flagged = tuple(c for s in series for c in (s.since_previous, s.since_first) if c is not None and c.beyond_mdc)
-        found.append(PartSummary(joint, PART_NAMES.get(joint, joint), sentences, flagged))
-    return found
+    number: int
+    date: str
+    arm: str
+    status: str
+    attention: bool
 
 
-def segment_summaries(analysis: Analysis) -> list[PartSummary]:
-    """Per segment: the static moment (the arm's weight about the proximal joint) and its changes."""
-    found = []
-    for s in analysis.series:
-        if s.key[0] == "segments" and s.key[2] == "static_moment_kgm":
-            flagged = tuple(c for c in (s.since_previous, s.since_first) if c is not None and c.beyond_mdc)
-            sentence = series_sentence(s, "Static moment")
-            found.append(PartSummary(s.key[1], PART_NAMES.get(s.key[1], s.key[1]), (sentence,), flagged))
-    return sorted(found, key=lambda p: _order(SEGMENT_ORDER)(p.part))
+def session_rows(analysis: Analysis) -> list[SessionRow]:
+    """The session list: only invalid sessions and changes beyond measurement error need attention."""
+    flagged: dict[int | None, list[str]] = {}
+    for series in analysis.series:
+        for change in series.changes:
+            sign = "+" if change.delta > 0 else "−"
+            flagged.setdefault(change.after.session_id, []).append(
+                f"{plain_name(series.key)} {sign}{percent(change.percent)}"
+            )
+    rows = []
+    for record in analysis.sessions:
+        arm = (record.arm or "–").capitalize()
+        if not record.quality.valid:
+            cause, action = invalid_cause(record)
+            rows.append(
+                SessionRow(
+                    record.number or 0, day(record.session_time_ns), arm, f"Not usable: {cause}; {action}.", True
+                )
+            )
+        elif record.retest:
+            rows.append(
+                SessionRow(
+                    record.number or 0, day(record.session_time_ns), arm, "Retest (for measurement error)", False
+                )
+            )
+        elif record.id in flagged:
+            text = "Change beyond measurement error: " + "; ".join(flagged[record.id])
+            rows.append(SessionRow(record.number or 0, day(record.session_time_ns), arm, text, True))
+        else:
+            rows.append(SessionRow(record.number or 0, day(record.session_time_ns), arm, "Usable", False))
+    return rows
 
 
-def session_marks(record: SessionRecord) -> list[str]:
-    """What to mark a session with: ``NOT VALID``, ``no tare``, ``N warning(s)``."""
-    marks = []
-    if not record.quality.valid:
-        marks.append("NOT VALID")
+def quality_notes(record: SessionRecord) -> list[str]:
+    """Plain notes on a session's quality for the detail pages (not red: they need no action)."""
+    notes = []
     if not record.quality.tare_applied:
-        marks.append("no tare")
+        notes.append("no tare (sensor zero) recording applied")
     if record.quality.warnings:
-        marks.append(f"{len(record.quality.warnings)} warning(s)")
-    return marks
-
-
-def session_notes(analysis: Analysis) -> list[str]:
-    """One line per marked session: ``session 3 (2024-06-15): NOT VALID, no tare``."""
-    return [
-        f"Session {r.id} ({day(r.session_time_ns)}): {', '.join(marks)}"
-        for r in analysis.sessions
-        if (marks := session_marks(r))
-    ]
+        notes.append(f"{len(record.quality.warnings)} technical note(s) from the estimator")
+    return notes
 
 
 @dataclass(frozen=True)
@@ -144,22 +261,16 @@ class SupportRow:
     std_yzx: tuple[float, float, float]
 
 
-def support_table(analysis: Analysis) -> tuple[list[SupportRow], str]:
-    """Support wrenches implied by the latest valid session's static moments at :data:`REFERENCE_POSE_DEG`.
-
-    Returns
-    -------
-    rows, note
-        Rows for :data:`SUPPORT_FRACTIONS` (empty with the reason in ``note`` when they cannot be computed).
-    """
-    latest = next((r for r in reversed(analysis.sessions) if r.quality.valid), None)
+def support_table(analysis: Analysis, arm: str | None) -> tuple[list[SupportRow], str]:
+    """Support forces implied by the arm's latest usable static moments at :data:`REFERENCE_POSE_DEG`."""
+    latest = next((r for r in reversed(analysis.visits(arm)) if r.quality.valid), None)
     if latest is None:
-        return [], "No valid session: no support settings can be derived."
+        return [], "No usable session: no support settings can be derived."
     segments = [s for s in SEGMENT_ORDER if ("segments", s, "static_moment_kgm") in latest.parameters]
     beta = [latest.parameters[("segments", s, "static_moment_kgm")] for s in segments]
     lengths = [latest.parameters.get(("segments", s, "length_m")) for s in segments]
     if len(segments) < 2 or any(q.value is None for q in beta) or any(q is None or q.value is None for q in lengths):
-        return [], f"Session {latest.id} lacks static moments or segment lengths: no support settings derived."
+        return [], f"Session {latest.number} lacks static moments or segment lengths: no support settings derived."
     pose = np.radians(REFERENCE_POSE_DEG[: len(segments)])
     variances = np.diag([(q.std or 0.0) ** 2 for q in beta])
     rows = []
@@ -172,57 +283,20 @@ def support_table(analysis: Analysis) -> tuple[list[SupportRow], str]:
                 fraction,
                 variances,
             )
+            std = np.sqrt(np.clip(np.diag(wrench.covariance), 0.0, None))
             rows.append(
                 SupportRow(
                     fraction,
                     (float(wrench.wrench_yzx[0]), float(wrench.wrench_yzx[1]), float(wrench.wrench_yzx[2])),
-                    (float(wrench.std[0]), float(wrench.std[1]), float(wrench.std[2])),
+                    (float(std[0]), float(std[1]), float(std[2])),
                 )
             )
     except InputError as error:
         return [], f"No support settings derived: {error}"
-    pose_text = ", ".join(
-        f"{name} {deg:g}°" for name, deg in zip(JOINT_ORDER, REFERENCE_POSE_DEG[: len(segments)], strict=False)
-    )
     note = (
-        f"From session {latest.id} ({day(latest.session_time_ns)}) at a reference pose ({pose_text}; CONTRACT "
-        "angles): the wrench the robot applies to the hand, in world axes (y forward, z up) at the handle, so "
-        "that it carries the given share of the arm's weight about every joint. The uncertainty ignores the "
-        "correlation of the static moments (not stored). Live, `bsp/weight_support` gives it at the current pose."
+        f"From session {latest.number} ({long_day(latest.session_time_ns)}), with the upper arm 45° below "
+        "horizontal, the elbow at a right angle and the wrist straight: the force the robot applies at the handle "
+        "(forward, upward) and the moment about the handle axis, so that it carries the given share of the "
+        "arm's weight. Live, the robot computes it at the current pose."
     )
     return rows, note
-
-
-def _order(names: tuple[str, ...]) -> Callable[[str], tuple[int, str]]:
-    def key(name: str) -> tuple[int, str]:
-        return (names.index(name) if name in names else len(names), name)
-
-    return key
-
-
-def headline(analysis: Analysis) -> str:
-    """One line: how many sessions, and which parameters changed beyond the MDC in the latest session."""
-    changed = sorted({PART_NAMES.get(c.key[1], c.key[1]) + " " + c.key[2] for c in analysis.latest_changes})
-    if not any(s.since_previous is not None and s.since_previous.mdc95 is not None for s in analysis.series):
-        judged = " No change can be judged: the sessions carry no repeatability (SEM) measurement."
-    elif changed:
-        judged = f" The latest session changed beyond the MDC95 in: {', '.join(_plain(analysis, changed))}."
-    else:
-        judged = " The latest session shows no change beyond the minimal detectable change."
-    last = analysis.sessions[-1]
-    if not last.quality.valid:
-        valid = [r for r in analysis.sessions if r.quality.valid]
-        used = f"the latest valid one ({day(valid[-1].session_time_ns)})" if valid else "none (no session is valid)"
-        judged = f" The latest session ({day(last.session_time_ns)}) is NOT VALID; compared instead: {used}." + judged
-    return f"{len(analysis.sessions)} session(s) from {day(analysis.sessions[0].session_time_ns)} to " + (
-        f"{day(last.session_time_ns)}.{judged}"
-    )
-
-
-def _plain(analysis: Analysis, changed: list[str]) -> list[str]:
-    labels = {
-        PART_NAMES.get(s.key[1], s.key[1]) + " " + s.key[2]: s.label
-        for s in analysis.series
-        if s.key[0] in ("joints", "segments")
-    }
-    return [labels.get(c, c) for c in changed]

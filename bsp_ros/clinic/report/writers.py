@@ -1,49 +1,35 @@
-"""Write a subject's report: the HTML page, a PDF, one PNG per parameter, and a CSV of the plotted numbers."""
+"""Write a subject's report: the HTML page, the PDF, the trend plots as PNG, and the CSV of every number."""
 
 from __future__ import annotations
 
-import csv
-import itertools
+import datetime as dt
 from pathlib import Path
 
-from bsp_ros.clinic.report.analysis import Analysis, compare
+from bsp_ros.clinic.report.analysis import Analysis
+from bsp_ros.clinic.report.export import write_analysis_csv
 from bsp_ros.clinic.report.html import render_html
-from bsp_ros.clinic.store.records import ParamKey, format_time
 from bsp_ros.errors import InputError
 
-REPORT_CSV_COLUMNS = (
-    "subject",
-    "session_id",
-    "session_time_utc",
-    "session_valid",
-    "parameter",
-    "group",
-    "part",
-    "quantity",
-    "unit",
-    "value",
-    "std",
-    "lower_2std",
-    "upper_2std",
-    "value_source",
-    "prior_mean",
-    "prior_std",
-    "sem",
-    "mdc95_from_previous",
-    "change_from_previous_flagged",
-    "change_over_mdc95",
-)
+
+def _now() -> dt.datetime:
+    return dt.datetime.now(dt.timezone.utc)
 
 
-def _pngs(analysis: Analysis) -> dict[ParamKey, bytes]:
-    from bsp_ros.clinic.report.plots import trend_png  # matplotlib is imported only when plotting
+def _figures(analysis: Analysis) -> tuple[bytes | None, list[tuple[str, bytes]]]:
+    from bsp_ros.clinic.report.panels import arm_names, detail_groups, first_page_panels
+    from bsp_ros.clinic.report.plots import figure_png, panels_figure  # matplotlib only when plotting
 
-    return {s.key: trend_png(s) for s in analysis.series if s.has_values}
+    names = arm_names(analysis)
+    first = first_page_panels(analysis)
+    first_png = figure_png(panels_figure(first, names)) if first else None
+    detail = [(title, figure_png(panels_figure(panels, names))) for title, panels in detail_groups(analysis)]
+    return first_png, detail
 
 
-def render_report(analysis: Analysis) -> str:
+def render_report(analysis: Analysis, generated: dt.datetime | None = None) -> str:
     """The HTML page of ``analysis``, plots included."""
-    return render_html(analysis, _pngs(analysis))
+    first_png, detail = _figures(analysis)
+    return render_html(analysis, first_png, detail, generated or _now())
 
 
 def write_html(analysis: Analysis, path: str | Path) -> Path:
@@ -52,13 +38,17 @@ def write_html(analysis: Analysis, path: str | Path) -> Path:
 
 
 def write_pngs(analysis: Analysis, directory: str | Path) -> list[Path]:
-    """Write one PNG per parameter (``<group>_<part>_<quantity>.png``) into ``directory``."""
+    """Write the trend figures (``passive_moments.png`` and one per detail group) into ``directory``."""
     target = Path(directory)
+    first_png, detail = _figures(analysis)
+    named = ([("passive_moments", first_png)] if first_png is not None else []) + [
+        (title.split(" (")[0].lower().replace(" ", "_"), png) for title, png in detail
+    ]
     try:
         target.mkdir(parents=True, exist_ok=True)
         written = []
-        for (group, part, quantity), png in _pngs(analysis).items():
-            path = target / f"{group}_{part}_{quantity}.png"
+        for name, png in named:
+            path = target / f"{name}.png"
             path.write_bytes(png)
             written.append(path)
     except OSError as error:
@@ -67,62 +57,20 @@ def write_pngs(analysis: Analysis, directory: str | Path) -> list[Path]:
 
 
 def write_pdf(analysis: Analysis, path: str | Path) -> Path:
-    """Write the report as a PDF for the patient file (summary first, as in the HTML); return the path."""
+    """Write the A4 PDF report (first page alone, detail after, every page numbered and dated)."""
     from bsp_ros.clinic.report.pdf import write_report_pdf  # matplotlib is imported only when plotting
 
-    return write_report_pdf(analysis, Path(path))
+    return write_report_pdf(analysis, Path(path), _now())
 
 
 def write_csv(analysis: Analysis, path: str | Path) -> Path:
-    """Write every plotted number (values, ±2 std bounds, priors, change flags) as CSV."""
-    flagged = {(c.key, c.after.session_id): c for c in analysis.changes}
-    previous = {}
-    for series in analysis.series:
-        usable = [p for p in series.points if p.valid and p.value is not None]
-        for before, after in itertools.pairwise(usable):
-            previous[(series.key, after.session_id)] = compare(series.key, before, after)
+    """Write every session and parameter with its changes and the MDC95 used (:mod:`.export`)."""
     try:
         with open(path, "w", newline="", encoding="utf-8") as stream:
-            writer = csv.writer(stream, lineterminator="\n")
-            writer.writerow(REPORT_CSV_COLUMNS)
-            for series in analysis.series:
-                group, part, quantity = series.key
-                for p in series.points:
-                    change = flagged.get((series.key, p.session_id))
-                    step = previous.get((series.key, p.session_id))
-                    bounds = (
-                        ("", "") if p.value is None or p.std is None else (p.value - 2 * p.std, p.value + 2 * p.std)
-                    )
-                    writer.writerow(
-                        [
-                            analysis.subject,
-                            p.session_id,
-                            format_time(p.time_ns),
-                            int(p.valid),
-                            series.label,
-                            group,
-                            part,
-                            quantity,
-                            series.unit,
-                            _cell(p.value),
-                            _cell(p.std),
-                            *bounds,
-                            p.source,
-                            "" if p.prior is None else p.prior.mean,
-                            "" if p.prior is None else p.prior.std,
-                            _cell(p.sem),
-                            "" if step is None or step.mdc95 is None else step.mdc95,
-                            int(change is not None),
-                            "" if step is None or step.mdc_ratio is None else f"{step.mdc_ratio:.2f}",
-                        ]
-                    )
+            write_analysis_csv([analysis], stream)
     except OSError as error:
         raise InputError(f"cannot write {path}: {error}") from None
     return Path(path)
-
-
-def _cell(value: float | None) -> str | float:
-    return "" if value is None else value
 
 
 def _write(path: Path, text: str) -> Path:

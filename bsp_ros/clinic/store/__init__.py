@@ -9,7 +9,15 @@ from bsp_ros.clinic.store.estimate import (
     parse_time_ns,
 )
 from bsp_ros.clinic.store.location import default_location, is_database_url
-from bsp_ros.clinic.store.records import ParamKey, Quality, Quantity, SessionRecord, SubjectSummary, format_time
+from bsp_ros.clinic.store.records import (
+    ParamKey,
+    Quality,
+    Quantity,
+    SessionRecord,
+    SubjectRecord,
+    SubjectSummary,
+    format_time,
+)
 from bsp_ros.clinic.store.schema import SCHEMA_VERSION
 from bsp_ros.clinic.store.store import Store, open_store
 from bsp_ros.clinic.store.subject import check_subject_id
@@ -24,6 +32,7 @@ __all__ = [
     "Quantity",
     "SessionRecord",
     "Store",
+    "SubjectRecord",
     "SubjectSummary",
     "check_subject_id",
     "default_location",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import hashlib
 import json
 import math
 import re
@@ -11,7 +12,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.clinic.store.records import GROUPS, SOURCES, ParamKey, Quality, Quantity, SessionRecord
+from bsp_ros.clinic.store.curves import CURVE_KEY, passive_curves
+from bsp_ros.clinic.store.records import ARMS, GROUPS, SOURCES, ParamKey, Quality, Quantity, SessionRecord
 from bsp_ros.clinic.store.subject import check_subject_id
 from bsp_ros.errors import InputError, StoreError
 
@@ -104,6 +106,9 @@ def parse_estimate(
     *,
     session_time_ns: int | None = None,
     source: str | None = None,
+    arm: str | None = None,
+    retest: bool | None = None,
+    cell: str | None = None,
 ) -> SessionRecord:
     """Check an estimate against `bsp_ros/core/estimate/1` and turn it into a session record.
 
@@ -118,6 +123,13 @@ def parse_estimate(
         Session start (ns since the epoch); overrides ``session.start_time_ns``.
     source : str, optional
         Recording name; overrides ``session.source``. Only its last path component is kept.
+    arm, retest, cell : optional
+        The measured arm (``left``/``right``), whether the session is a same-day retest, the robot cell;
+        override ``session.arm``, ``session.retest``, ``session.cell``.
+
+    The recording's content hash is ``session.content_sha256`` when given (a bag's bytes), else the hash of
+    the estimate's own numbers, so the same result file is not stored twice. ``joints.<joint>.passive_curve``
+    is kept as a curve and compared at fixed angles (:mod:`bsp_ros.clinic.store.curves`).
 
     Returns
     -------
@@ -155,6 +167,18 @@ def parse_estimate(
     if not isinstance(config, dict):
         raise StoreError(f"session.config must be an object, got {type(config).__name__}")
     quality = _quality(data.get("quality"))
+    curves, curve_parameters = passive_curves(data.get("joints"))
+    parameters = _parameters(data, refuse_non_finite=quality.valid)
+    parameters.update(curve_parameters)
+    arm = arm if arm is not None else session.get("arm")
+    if arm is not None and arm not in ARMS:
+        raise InputError(f"arm must be one of {ARMS}, got {arm!r}")
+    retest = retest if retest is not None else session.get("retest", False)
+    if not isinstance(retest, bool):
+        raise StoreError(f"session.retest must be true or false, got {retest!r}")
+    cell = cell if cell is not None else session.get("cell", "")
+    if not isinstance(cell, str) or (cell and _NAME.fullmatch(cell) is None):
+        raise InputError(f"cell must be a short name from A-Z a-z 0-9 _ + . -, got {cell!r:.70}")
     return SessionRecord(
         subject=subject,
         session_time_ns=_check_time_ns(time_ns, "session.start_time_ns"),
@@ -164,9 +188,45 @@ def parse_estimate(
         subject_info=_subject_info(_optional_object(data, "subject"), config),
         estimate_schema=schema,
         quality=quality,
-        parameters=_parameters(data, refuse_non_finite=quality.valid),
+        parameters=parameters,
         repeatability=_repeatability(data.get("repeatability")),
+        arm=arm,
+        retest=retest,
+        cell=cell,
+        content_sha256=_content_sha256(data, session),
+        passive_curves=curves,
     )
+
+
+def _content_sha256(data: Mapping[str, Any], session: Mapping[str, Any]) -> str:
+    given = session.get("content_sha256")
+    if isinstance(given, str) and re.fullmatch(r"[0-9a-f]{64}", given):
+        return given
+    # No recording hash: the estimate's numbers stand for the recording (the same file added twice).
+    body = {k: data.get(k) for k in ("segments", "joints", "quality")}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def check_future(time_ns: int, now_ns: int, name: str = "session time") -> int:
+    """Return ``time_ns`` unless it lies after ``now_ns`` (plus 15 min of clock difference)."""
+    if time_ns > now_ns + FUTURE_TOLERANCE_NS:
+        raise InputError(
+            f"{name} {format_time_short(time_ns)} is in the future (now {format_time_short(now_ns)}); "
+            "a session cannot be stored before it happened: check the date (naive times are UTC; add the offset, "
+            "e.g. 2024-03-01T09:30+01:00)"
+        )
+    return time_ns
+
+
+FUTURE_TOLERANCE_NS = 15 * 60 * 10**9
+"""Clocks of recording PCs differ: a session time up to 15 min ahead of this machine's clock is accepted."""
+
+
+def format_time_short(time_ns: int) -> str:
+    """``2024-03-01 09:30 UTC``."""
+    moment = dt.datetime(1970, 1, 1, tzinfo=dt.timezone.utc) + dt.timedelta(microseconds=time_ns // 1000)
+    return moment.strftime("%Y-%m-%d %H:%M UTC")
 
 
 def _check_time_ns(time_ns: int, name: str) -> int:
@@ -237,6 +297,8 @@ def _parameters(data: Mapping[str, Any], *, refuse_non_finite: bool) -> dict[Par
             if _NAME.fullmatch(part) is None or not isinstance(quantities, dict):
                 raise StoreError(f"{group}.{part!s:.64} must be an object named by a short key")
             for quantity, q in quantities.items():
+                if group == "joints" and quantity == CURVE_KEY:
+                    continue  # a curve, not a quantity: see passive_curves
                 where = f"{group}.{part}.{quantity}"
                 if _NAME.fullmatch(quantity) is None:
                     raise StoreError(f"{group}.{part} has a malformed quantity key {quantity!r:.70}")
@@ -274,7 +336,9 @@ def _quality(block: Any) -> Quality:
     if not isinstance(tare, dict) or not isinstance(tare.get("applied", False), bool):
         raise StoreError(f"quality.tare must be an object with 'applied': true or false, got {tare!r:.80}")
     tare_file = tare.get("file")
+    message = block.get("message", "")
     return Quality(
+        message=message[:2000] if isinstance(message, str) else "",
         valid=valid,
         tare_applied=tare.get("applied") is True,
         tare_file=_basename(tare_file) if isinstance(tare_file, str) and tare_file.strip() else None,

@@ -8,6 +8,8 @@ from typing import Any
 
 SOURCES = ("data", "prior", "data+prior")
 GROUPS = ("segments", "joints")
+ARMS = ("left", "right")
+AFFECTED = ("left", "right", "both", "neither")
 
 _EPOCH = dt.datetime(1970, 1, 1, tzinfo=dt.timezone.utc)
 
@@ -44,6 +46,7 @@ class Quality:
     warnings : the estimator's warnings, in order.
     tare_applied : whether a tare (sensor offset and handle payload) was subtracted; False when not recorded.
     tare_file : the tare file's name, if one was applied.
+    message : the estimator's one-line verdict (why it is not valid, if it is not).
     """
 
     valid: bool
@@ -53,6 +56,7 @@ class Quality:
     warnings: tuple[str, ...] = ()
     tare_applied: bool = False
     tare_file: str | None = None
+    message: str = ""
 
 
 @dataclass(frozen=True)
@@ -72,8 +76,16 @@ class SessionRecord:
     parameters : every quantity, keyed by ``(group, part, quantity)``.
     id : row id once stored, else None.
     added_ns : when the session was stored, ns since the epoch; None before.
-    repeatability : the estimate's ``repeatability`` block (method, per-parameter SEM and MDC95, see
-        :mod:`bsp_ros.clinic.mdc`), keyed by estimate path ``group.part.quantity``; empty if none was computed.
+    repeatability : the estimate's ``repeatability`` block (within-session spread: method, per-parameter
+        SEM, see :mod:`bsp_ros.clinic.cycles`), keyed by ``group.part.quantity``; empty if none was computed.
+        It describes one session; it never judges a change between days (see :mod:`bsp_ros.clinic.mdc`).
+    arm : the measured arm, ``left`` or ``right``; None if not recorded.
+    retest : whether this session is a retest: the same subject and arm measured again on the same day after
+        re-attaching the arm (its pair feeds the day-to-day measurement error, not the trend).
+    cell : the robot cell (installation) the session was recorded in; ``""`` if not named.
+    content_sha256 : hash of the recording's content (or of the estimate's), so one recording is stored once.
+    passive_curves : joint -> ``{"angle_deg": [...], "moment_nm": [...], "std_nm": [...]}``, if estimated.
+    number : the session's number within its subject (1 = first in time), set when read from the store.
     """
 
     subject: str
@@ -88,11 +100,48 @@ class SessionRecord:
     id: int | None = None
     added_ns: int | None = None
     repeatability: dict[str, Any] = field(default_factory=dict)
+    arm: str | None = None
+    retest: bool = False
+    cell: str = ""
+    content_sha256: str | None = None
+    passive_curves: dict[str, Any] = field(default_factory=dict)
+    number: int | None = None
 
     @property
     def session_time(self) -> dt.datetime:
         """The session start as an aware UTC datetime."""
         return ns_to_datetime(self.session_time_ns)
+
+
+@dataclass(frozen=True)
+class SubjectRecord:
+    """What is known of a subject once, applied to every session: body data for priors and the arms.
+
+    Attributes
+    ----------
+    subject : pseudonymous subject id.
+    body_mass_kg, height_m, sex : anthropometric inputs of the priors (None: not given).
+    arm : the arm measured by default, ``left`` or ``right`` (None: not given).
+    affected : which arm is affected (``left``, ``right``, ``both``, ``neither``; None: not given).
+    """
+
+    subject: str
+    body_mass_kg: float | None = None
+    height_m: float | None = None
+    sex: str | None = None
+    arm: str | None = None
+    affected: str | None = None
+
+    def body(self) -> dict[str, Any]:
+        """The body data that are set, keyed as a session's ``subject_info``."""
+        found = {"body_mass_kg": self.body_mass_kg, "height_m": self.height_m, "sex": self.sex}
+        return {k: v for k, v in found.items() if v is not None}
+
+    def arm_status(self, arm: str | None) -> str | None:
+        """``affected`` / ``unaffected`` for ``arm``, None if unknown."""
+        if arm is None or self.affected is None:
+            return None
+        return "affected" if self.affected in (arm, "both") else "unaffected"
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 """The schema version this code writes; older stores are migrated up to it, newer ones refused."""
 
 APPLICATION = "bsp_ros.clinic.store"
@@ -53,6 +53,25 @@ MIGRATIONS: list[list[str]] = [
     # 3: per-session repeatability (SEM and MDC95 per parameter, and the method), see bsp_ros.clinic.mdc.
     [
         "ALTER TABLE sessions ADD COLUMN repeatability_json TEXT NOT NULL DEFAULT '{{}}'",
+    ],
+    # 4: the subject record (body data and arms, once per subject), the measured arm, retests (test-retest
+    # MDC), the cell, the recording's content hash (duplicates refused) and passive-moment curves.
+    [
+        """CREATE TABLE subjects (
+            subject TEXT PRIMARY KEY,
+            body_mass_kg {float},
+            height_m {float},
+            sex TEXT,
+            arm TEXT,
+            affected TEXT,
+            updated_ns BIGINT NOT NULL
+        )""",
+        "ALTER TABLE sessions ADD COLUMN arm TEXT",
+        "ALTER TABLE sessions ADD COLUMN retest INTEGER NOT NULL DEFAULT 0",
+        "ALTER TABLE sessions ADD COLUMN cell TEXT NOT NULL DEFAULT ''",
+        "ALTER TABLE sessions ADD COLUMN content_sha256 TEXT",
+        "ALTER TABLE sessions ADD COLUMN curves_json TEXT NOT NULL DEFAULT '{{}}'",
+        "CREATE UNIQUE INDEX sessions_by_content ON sessions (content_sha256)",
     ],
 ]
 

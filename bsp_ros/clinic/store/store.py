@@ -11,18 +11,30 @@ from types import TracebackType
 from typing import Any
 
 from bsp_ros.clinic.store.backends import Backend, connect
-from bsp_ros.clinic.store.estimate import parse_estimate
-from bsp_ros.clinic.store.location import default_location
-from bsp_ros.clinic.store.records import ParamKey, Quality, Quantity, SessionRecord, SubjectSummary, format_time
+from bsp_ros.clinic.store.estimate import check_future, parse_estimate
+from bsp_ros.clinic.store.location import default_location, is_database_url
+from bsp_ros.clinic.store.records import (
+    AFFECTED,
+    ARMS,
+    ParamKey,
+    Quality,
+    Quantity,
+    SessionRecord,
+    SubjectRecord,
+    SubjectSummary,
+    format_time,
+)
 from bsp_ros.clinic.store.schema import APPLICATION, SCHEMA_VERSION, migration_statements
 from bsp_ros.clinic.store.subject import check_subject_id
-from bsp_ros.errors import StoreError
+from bsp_ros.errors import InputError, StoreError
 
 _MIGRATION_LOCK = 0x6273_7073  # PostgreSQL advisory lock key ("bsps") serialising migrations
 _SESSION_COLUMNS = (
     "id, subject, session_time_ns, source, method, config_json, subject_info_json, estimate_schema, "
-    "valid, n_samples, condition_number, quality_json, added_ns, repeatability_json"
+    "valid, n_samples, condition_number, quality_json, added_ns, repeatability_json, arm, retest, cell, "
+    "content_sha256, curves_json"
 )
+_DAY_NS = 86_400 * 10**9
 
 
 class Store:
@@ -69,6 +81,9 @@ class Store:
         *,
         session_time_ns: int | None = None,
         source: str | None = None,
+        arm: str | None = None,
+        retest: bool | None = None,
+        cell: str | None = None,
     ) -> SessionRecord:
         """Check a `bsp_ros/core/estimate/1` dict and store it as a session of ``subject``.
 
@@ -82,29 +97,48 @@ class Store:
             Session start; overrides the estimate's ``session.start_time_ns``.
         source : str, optional
             Recording name; overrides the estimate's ``session.source``.
+        arm, retest, cell : optional
+            The measured arm (default: the subject record's), a same-day retest, the robot cell.
 
         Returns
         -------
         SessionRecord
             The stored session, with its ``id``; returned only after the commit.
         """
-        record = parse_estimate(estimate, subject, session_time_ns=session_time_ns, source=source)
+        record = parse_estimate(
+            estimate, subject, session_time_ns=session_time_ns, source=source, arm=arm, retest=retest, cell=cell
+        )
         return self.add(record)
 
     def add(self, record: SessionRecord) -> SessionRecord:
         """Store one session; return it with ``id`` and ``added_ns`` set, after the commit.
 
+        The arm defaults to the subject record's; its body data replace the session's (an estimate made without
+        them carries the population default).
+
         Raises
         ------
         StoreError
-            If the subject already has a session with the same time and source.
+            If the subject already has a session with the same time and source, or the same recording
+            (content hash) is stored already.
+        InputError
+            If the session lies in the future, or is a retest without the same day's session before it.
         """
         check_subject_id(record.subject)
         added_ns = time.time_ns()
+        check_future(record.session_time_ns, added_ns)
+        known = self.subject_record(record.subject)
+        if known is not None:
+            record = replace(
+                record,
+                arm=record.arm or known.arm,
+                subject_info={**record.subject_info, **known.body()},  # the record is the subject's truth
+            )
         quality: dict[str, Any] = {
             "residual_rms_nm": record.quality.residual_rms_nm,
             "warnings": list(record.quality.warnings),
             "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
+            "message": record.quality.message,
         }
         duplicate = StoreError(
             f"duplicate session: subject {record.subject} already has a session at "
@@ -117,10 +151,14 @@ class Store:
                     (record.subject, record.session_time_ns, record.source),
                 ):
                     raise duplicate
+                self._refuse_same_content(record)
+                if record.retest:
+                    self._check_retest(record)
                 rows = self._backend.query(
                     "INSERT INTO sessions (subject, session_time_ns, source, method, config_json, "
                     "subject_info_json, estimate_schema, valid, n_samples, condition_number, quality_json, "
-                    "added_ns, repeatability_json) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
+                    "added_ns, repeatability_json, arm, retest, cell, content_sha256, curves_json) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
                     (
                         record.subject,
                         record.session_time_ns,
@@ -135,6 +173,11 @@ class Store:
                         _dumps(quality),
                         added_ns,
                         _dumps(record.repeatability),
+                        record.arm,
+                        int(record.retest),
+                        record.cell,
+                        record.content_sha256,
+                        _dumps(record.passive_curves),
                     ),
                 )
                 session_id = int(rows[0][0])
@@ -148,7 +191,100 @@ class Store:
             if self._backend.is_integrity_error(error):
                 raise duplicate from None
             raise
-        return replace(record, id=session_id, added_ns=added_ns)
+        number = self._number_of(record.subject, session_id)
+        return replace(record, id=session_id, added_ns=added_ns, number=number)
+
+    def _refuse_same_content(self, record: SessionRecord) -> None:
+        if record.content_sha256 is None:
+            return
+        rows = self._backend.query(
+            "SELECT id, subject, session_time_ns FROM sessions WHERE content_sha256 = ?", (record.content_sha256,)
+        )
+        if rows:
+            sid, subject, time_ns = rows[0]
+            number = self._number_of(str(subject), int(sid))
+            raise StoreError(
+                f"duplicate recording: the same recording is already stored as session {number} of {subject} "
+                f"({format_time(int(time_ns))}); nothing was added"
+            )
+
+    def _check_retest(self, record: SessionRecord) -> None:
+        day = record.session_time_ns - record.session_time_ns % _DAY_NS
+        arm_sql, arm_params = ("arm IS NULL", ()) if record.arm is None else ("arm = ?", (record.arm,))
+        rows = self._backend.query(
+            f"SELECT COUNT(*) FROM sessions WHERE subject = ? AND retest = 0 AND {arm_sql} "
+            "AND session_time_ns >= ? AND session_time_ns <= ?",
+            (record.subject, *arm_params, day, record.session_time_ns),
+        )
+        if not int(rows[0][0]):
+            arm = f" of the {record.arm} arm" if record.arm else ""
+            raise InputError(
+                f"a retest is the second session of a day: {record.subject} has no session{arm} earlier on "
+                f"{format_time(record.session_time_ns)[:10]} to pair it with; add that session first (without "
+                "--retest), or drop --retest"
+            )
+
+    def _number_of(self, subject: str, session_id: int) -> int:
+        ids = [int(r[0]) for r in self._backend.query(_NUMBERING_SQL, (subject,))]
+        return ids.index(session_id) + 1
+
+    def set_subject(self, update: SubjectRecord) -> SubjectRecord:
+        """Store the subject record, keeping fields of an earlier record that ``update`` leaves None.
+
+        Returns
+        -------
+        SubjectRecord
+            The record as stored.
+        """
+        check_subject_id(update.subject)
+        if update.arm is not None and update.arm not in ARMS:
+            raise InputError(f"arm must be one of {ARMS}, got {update.arm!r}")
+        if update.affected is not None and update.affected not in AFFECTED:
+            raise InputError(f"affected arm must be one of {AFFECTED}, got {update.affected!r}")
+        old = self.subject_record(update.subject) or SubjectRecord(update.subject)
+        merged = SubjectRecord(
+            update.subject,
+            *(new if new is not None else was for new, was in zip(_fields(update), _fields(old), strict=True)),
+        )
+        with self._backend.transaction():
+            self._backend.query("DELETE FROM subjects WHERE subject = ?", (merged.subject,))
+            self._backend.query(
+                "INSERT INTO subjects (subject, body_mass_kg, height_m, sex, arm, affected, updated_ns) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?)",
+                (merged.subject, *_fields(merged), time.time_ns()),
+            )
+        return merged
+
+    def subject_record(self, subject: str) -> SubjectRecord | None:
+        """The subject record of ``subject``, or None if none was set."""
+        rows = self._backend.query(
+            "SELECT body_mass_kg, height_m, sex, arm, affected FROM subjects WHERE subject = ?",
+            (check_subject_id(subject),),
+        )
+        if not rows:
+            return None
+        mass, height, sex, arm, affected = rows[0]
+        return SubjectRecord(subject, _float(mass), _float(height), sex, arm, affected)
+
+    def remove(self, subject: str, number: int) -> SessionRecord:
+        """Delete session ``number`` (1 = the subject's first in time) of ``subject``; return what was removed.
+
+        Raises
+        ------
+        StoreError
+            If the subject has no such session.
+        """
+        records = self.sessions(subject)
+        if not 1 <= number <= len(records):
+            raise StoreError(
+                f"{subject} has sessions 1 to {len(records)}, not {number}: see `bsp sessions show {subject}`"
+            )
+        target = records[number - 1]
+        with self._backend.transaction():
+            self._backend.query("DELETE FROM parameters WHERE session_id = ?", (target.id,))
+            self._backend.query("DELETE FROM sessions WHERE id = ?", (target.id,))
+        self._backend.purge_freed_space()
+        return target
 
     def subjects(self) -> list[SubjectSummary]:
         """Every subject with stored sessions, sorted by id."""
@@ -173,6 +309,11 @@ class Store:
         if subject is not None and not rows:
             raise StoreError(f"unknown subject {subject}: the store {self.location} holds no sessions of it")
         inner = "SELECT id FROM sessions" + (f" {where}" if where else "")
+        numbers: dict[int, int] = {}
+        counters: dict[str, int] = {}
+        for row in rows:
+            counters[row[1]] = counters.get(row[1], 0) + 1
+            numbers[int(row[0])] = counters[row[1]]
         parameters: dict[int, dict[ParamKey, Quantity]] = {int(row[0]): {} for row in rows}
         for sid, group, part, quantity, value, std, source in self._backend.query(
             "SELECT session_id, grp, part, quantity, value, std, source FROM parameters "
@@ -180,7 +321,7 @@ class Store:
             params,
         ):
             parameters[int(sid)][(group, part, quantity)] = Quantity(_float(value), _float(std), source)
-        return [_record(row, parameters[int(row[0])]) for row in rows]
+        return [replace(_record(row, parameters[int(row[0])]), number=numbers[int(row[0])]) for row in rows]
 
     def erase(self, subject: str) -> int:
         """Delete every session of ``subject`` and rewrite storage so no bytes of it remain.
@@ -202,8 +343,10 @@ class Store:
         check_subject_id(subject)
         with self._backend.transaction():
             count = int(self._backend.query("SELECT COUNT(*) FROM sessions WHERE subject = ?", (subject,))[0][0])
-            if count == 0:
+            known = self._backend.query("SELECT COUNT(*) FROM subjects WHERE subject = ?", (subject,))[0][0]
+            if count == 0 and not int(known):
                 raise StoreError(f"unknown subject {subject}: the store {self.location} holds no sessions of it")
+            self._backend.query("DELETE FROM subjects WHERE subject = ?", (subject,))
             self._backend.query(
                 "DELETE FROM parameters WHERE session_id IN (SELECT id FROM sessions WHERE subject = ?)",
                 (subject,),
@@ -253,13 +396,16 @@ class Store:
         return SCHEMA_VERSION
 
 
-def open_store(location: str | os.PathLike[str] | None = None) -> Store:
+def open_store(location: str | os.PathLike[str] | None = None, *, create: bool = True) -> Store:
     """Open (creating or migrating if needed) the store at ``location``.
 
     Parameters
     ----------
     location : str or PathLike, optional
         A SQLite file path or a ``postgresql://`` URL; None means :func:`default_location`.
+    create : bool
+        False for reading: a SQLite file that does not exist is refused instead of created (a mistyped
+        path would otherwise show an empty store).
 
     Returns
     -------
@@ -271,7 +417,13 @@ def open_store(location: str | os.PathLike[str] | None = None) -> Store:
     StoreError
         If the location is not a bsp_ros store, cannot be opened, or has a newer schema.
     """
-    return Store(connect(default_location() if location is None else location))
+    target = default_location() if location is None else os.fspath(location)
+    if not create and not is_database_url(target) and not os.path.exists(os.path.expanduser(target)):
+        where = "--store" if location is not None else "the default store ($BSP_STORE or ~/.local/share/bsp_ros)"
+        raise StoreError(
+            f"no store at {target}: nothing has been stored there yet (check {where}; `bsp sessions add` creates it)"
+        )
+    return Store(connect(target))
 
 
 def _dumps(value: Any) -> str:
@@ -282,8 +434,16 @@ def _float(value: Any) -> float | None:
     return None if value is None else float(value)
 
 
+_NUMBERING_SQL = "SELECT id FROM sessions WHERE subject = ? ORDER BY session_time_ns, id"
+
+
+def _fields(record: SubjectRecord) -> tuple[Any, ...]:
+    return (record.body_mass_kg, record.height_m, record.sex, record.arm, record.affected)
+
+
 def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> SessionRecord:
-    sid, subject, time_ns, source, method, config, info, schema, valid, n, cond, quality, added, repeat = row
+    sid, subject, time_ns, source, method, config, info, schema, valid, n, cond, quality, added, repeat = row[:14]
+    arm, retest, cell, content, curves = row[14:]
     extra = json.loads(quality)
     tare = extra.get("tare") if isinstance(extra.get("tare"), dict) else {}
     return SessionRecord(
@@ -302,9 +462,15 @@ def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> Sessi
             warnings=tuple(extra.get("warnings", [])),
             tare_applied=tare.get("applied") is True,
             tare_file=tare.get("file") if isinstance(tare.get("file"), str) else None,
+            message=str(extra.get("message", "")),
         ),
         parameters=parameters,
         id=int(sid),
         added_ns=int(added),
         repeatability=json.loads(repeat),
+        arm=arm,
+        retest=bool(retest),
+        cell=cell or "",
+        content_sha256=content,
+        passive_curves=json.loads(curves),
     )

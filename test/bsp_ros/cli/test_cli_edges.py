@@ -114,7 +114,7 @@ def test_a_new_store_file_is_still_created(bag: Path, tmp_path: Path) -> None:
     result = _result_file(bag, tmp_path)
     store = tmp_path / "new" / "store.sqlite"
     assert main(["sessions", "add", str(result), "--subject", "S01", "--store", str(store)]) == 0
-    assert main(["sessions", "add", str(result), "--subject", "S02", "--store", str(store)]) == 0
+    assert main(["sessions", "list", "--store", str(store)]) == 0  # the same recording twice is refused now
     assert store.read_bytes()[:16] == b"SQLite format 3\x00"
 
 

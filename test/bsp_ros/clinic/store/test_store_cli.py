@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
-import types
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +29,7 @@ def test_add_list_show_export_erase(tmp_path: Path, capsys: pytest.CaptureFixtur
     first = _write(tmp_path / "a.json", sample_estimate(1))
     second = _write(tmp_path / "b.json", sample_estimate(2, start_time_ns=SAMPLE_START_NS + 10**12))
     code, out, _ = _bsp(capsys, "sessions", "add", str(first), "--subject", "P007", "--store", store)
-    assert code == 0 and out.startswith("added session 1 of P007 at 2024-06-01T07:00:00Z from session.mcap")
+    assert code == 0 and "added session 1 of P007 at 2024-06-01T07:00:00Z from session.mcap" in out
     assert _bsp(capsys, "sessions", "add", str(second), "--subject", "P007", "--store", store)[0] == 0
     code, out, _ = _bsp(capsys, "sessions", "list", "--store", store)
     assert code == 0 and "P007" in out and " 2 " in out
@@ -43,7 +41,7 @@ def test_add_list_show_export_erase(tmp_path: Path, capsys: pytest.CaptureFixtur
     csv_path = tmp_path / "out.csv"
     assert _bsp(capsys, "sessions", "export", "--csv", str(csv_path), "--store", store)[0] == 0
     assert len(csv_path.read_text().splitlines()) == 1 + 2 * 18
-    code, out, _ = _bsp(capsys, "sessions", "erase", "P007", "--store", store)
+    code, out, _ = _bsp(capsys, "sessions", "erase", "P007", "--yes", "--store", store)
     assert code == 0 and "erased 2 session(s) of P007" in out
     code, _, err = _bsp(capsys, "sessions", "show", "P007", "--store", store)
     assert code == 5 and "unknown subject P007" in err
@@ -112,27 +110,3 @@ def test_duplicate_and_bad_subject(tmp_path: Path, capsys: pytest.CaptureFixture
     assert code == 2 and "not a pseudonym" in err
     code, _, err = _bsp(capsys, "sessions", "add", str(tmp_path / "missing.json"), "--subject", "S1", "--store", store)
     assert code == 2 and "does not exist" in err
-
-
-def test_bag_without_offline_identification_is_a_clear_error(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: Any
-) -> None:
-    monkeypatch.setitem(sys.modules, "bsp_ros.bag.offline", None)  # import fails as if not written yet
-    bag = tmp_path / "rec.mcap"
-    bag.write_bytes(b"\x89MCAP0\r\n")
-    code, _, err = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(tmp_path / "s.sqlite"))
-    assert code == 5 and "bsp identify BAG --json" in err
-
-
-def test_bag_is_identified_then_stored(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: Any) -> None:
-    seen: list[Path] = []
-
-    def identify_bag(path: Path) -> dict[str, Any]:
-        seen.append(Path(path))
-        return sample_estimate(4, source=None)
-
-    monkeypatch.setitem(sys.modules, "bsp_ros.bag.offline", types.SimpleNamespace(identify_bag=identify_bag))
-    bag = tmp_path / "rec_0007"
-    bag.mkdir()  # a rosbag2 directory
-    code, out, _ = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(tmp_path / "s.sqlite"))
-    assert code == 0 and seen == [bag] and "from rec_0007" in out

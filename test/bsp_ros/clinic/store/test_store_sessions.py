@@ -144,15 +144,19 @@ def test_report_analysis_reads_either_backend(store_location: str) -> None:
 
     planted = {("joints", "elbow", "coulomb_nm"): (0.9, 0.03)}
     with open_store(store_location) as store:
-        for day in range(3):
+        for day in range(6):
             estimate = sample_estimate(
                 day,
                 start_time_ns=SAMPLE_START_NS + day * DAY_NS,
-                overrides=planted if day == 2 else None,
-                sem_rel=0.05,
+                overrides=planted if day == 5 else None,
+                sem_rel=0.05,  # a within-session SEM: it never judges a change
             )
             store.add_estimate(estimate, "R1")
+        assert analyse("R1", store.sessions("R1")).changes == []
+        for day in range(5):
+            retest = sample_estimate(100 + day, start_time_ns=SAMPLE_START_NS + day * DAY_NS + 3_600 * 10**9)
+            store.add_estimate(retest, "R1", retest=True)
         analysis = analyse("R1", store.sessions("R1"))
     assert [(c.key, c.after.time_ns) for c in analysis.changes] == [
-        (("joints", "elbow", "coulomb_nm"), SAMPLE_START_NS + 2 * DAY_NS)
+        (("joints", "elbow", "coulomb_nm"), SAMPLE_START_NS + 5 * DAY_NS)
     ]

@@ -1,0 +1,132 @@
+"""The options of `bsp identify` (method, passive model, body data, topics, tare), shared with `bsp sessions add`."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from bsp_ros.cli.argtypes import positive_float
+from bsp_ros.errors import InputError
+
+# bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy.
+METHODS = ("joint", "paper")
+SEXES = ("male", "female")
+
+
+def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
+    """Register the identification options on ``parser`` (a parser or an argument group)."""
+    parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
+    parser.add_argument(
+        "--passive",
+        default="coulomb",
+        help="passive model, e.g. coulomb+viscous or coulomb+offset+stiffness (default coulomb)",
+    )
+    parser.add_argument(
+        "--body-mass", type=positive_float, metavar="KG", help="body mass for the anthropometric prior, kg"
+    )
+    parser.add_argument("--height", type=positive_float, metavar="M", help="body height for the prior, m")
+    parser.add_argument(
+        "--sex", choices=SEXES, default=None, help="anthropometric table (default: the subject record's, else male)"
+    )
+    parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
+    parser.add_argument(
+        "--marker-topic",
+        action="append",
+        default=[],
+        metavar="NAME=TOPIC",
+        help="remap a marker topic, e.g. elbow=/vicon/elbow (repeatable)",
+    )
+    parser.add_argument("--tf-topic", default="/tf")
+    parser.add_argument("--tf-static-topic", default="/tf_static")
+    parser.add_argument(
+        "--tare",
+        type=Path,
+        metavar="FILE",
+        help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
+    )
+
+
+def looks_like_bag(path: Path) -> bool:
+    """Whether ``path`` is a recording (a rosbag2 directory or an .mcap file) rather than a tare file."""
+    if path.is_dir():
+        return (path / "metadata.yaml").is_file() or any(path.glob("*.mcap"))
+    return path.suffix == ".mcap"
+
+
+def read_tare(path: Path | None) -> Any:
+    """The tare file given as ``--tare``, or an InputError naming the file and, for a recording, how to make one."""
+    if path is None:
+        return None
+    from bsp_ros.core.tare import read_tare_file
+
+    if looks_like_bag(path):
+        raise InputError(
+            f"--tare {path} is a recording (a bag), not a tare file: make the file with "
+            f"`bsp tare {path} --out FILE`, then give --tare FILE"
+        )
+    if path.is_dir():
+        raise InputError(f"--tare {path} is a directory, not a tare file (`bsp tare TARE_BAG --out FILE` makes one)")
+    if not path.exists():
+        raise InputError(f"--tare {path}: no such file (`bsp tare TARE_BAG --out FILE` makes one)")
+    try:
+        return read_tare_file(path)
+    except InputError as error:
+        raise InputError(f"--tare {path}: {error}") from None
+
+
+def topics_from_args(args: argparse.Namespace) -> Any:
+    """The bag's topic names (:class:`bsp_ros.bag.TopicMap`) from ``--wrench-topic``, ``--marker-topic``, ..."""
+    from bsp_ros.bag import TopicMap
+
+    markers = dict(TopicMap().markers)
+    for item in args.marker_topic:
+        name, _, topic = item.partition("=")
+        if name not in markers or not topic:
+            raise InputError(f"--marker-topic takes NAME=TOPIC with NAME in {sorted(markers)}, got {item!r}")
+        if topic in (args.wrench_topic, args.tf_topic, args.tf_static_topic):
+            raise InputError(f"--marker-topic {item}: {topic} is already the wrench or a tf topic")
+        markers[name] = topic
+    return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
+
+
+def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = None) -> Any:
+    """:class:`bsp_ros.core.pipeline.IdentifyOptions` from the parsed options.
+
+    Parameters
+    ----------
+    args : the parsed command line (with the options of :func:`add_identify_arguments`).
+    body : body data known otherwise (``body_mass_kg``, ``height_m``, ``sex`` of a subject record); an
+        option given on the command line wins.
+    """
+    from bsp_ros.core.fusion import SubjectInfo
+    from bsp_ros.core.identification.passive import PassiveModel
+    from bsp_ros.core.pipeline import IdentifyOptions
+
+    known = body or {}
+    try:
+        passive = PassiveModel.parse(args.passive)
+    except InputError as error:
+        raise InputError(f"--passive {args.passive}: {error}") from None
+    subject = SubjectInfo(
+        args.body_mass if args.body_mass is not None else known.get("body_mass_kg"),
+        args.height if args.height is not None else known.get("height_m"),
+        args.sex or known.get("sex") or "male",
+    )
+    return IdentifyOptions(method=args.method, passive=passive, subject=subject, tare=read_tare(args.tare))
+
+
+def options_record(args: argparse.Namespace, options: Any) -> dict[str, Any]:
+    """What a stored session keeps of how it was identified: the settings, the body data and the tare file."""
+    config = dict(options.config())
+    config.update(
+        {
+            "body_mass_kg": options.subject.body_mass_kg,
+            "height_m": options.subject.height_m,
+            "sex": options.subject.sex,
+            "tare_file": None if args.tare is None else Path(args.tare).name,
+            "wrench_topic": args.wrench_topic,
+            "marker_topics": list(args.marker_topic),
+        }
+    )
+    return config

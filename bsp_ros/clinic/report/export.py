@@ -1,0 +1,89 @@
+"""The judged sessions as CSV: one row per session and parameter, with its changes and the MDC95 used."""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Iterable
+from typing import TextIO
+
+from bsp_ros.clinic.report.analysis import Analysis, Change
+from bsp_ros.clinic.store.records import format_time
+
+CSV_COLUMNS = (
+    "subject",
+    "arm",
+    "session_number",
+    "session_time_utc",
+    "retest",
+    "valid",
+    "group",
+    "part",
+    "quantity",
+    "unit",
+    "value",
+    "std",
+    "value_source",
+    "change_from_previous",
+    "change_from_first",
+    "mdc95",
+    "mdc95_source",
+    "mdc95_pairs",
+    "flagged",
+)
+
+
+def _num(value: float | None) -> str:
+    return "" if value is None else repr(float(value))
+
+
+def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
+    """Write every session and parameter of ``analyses`` to ``stream``; return the number of data rows.
+
+    ``change_from_previous`` and ``change_from_first`` compare a usable session with the usable session before
+    it and with the arm's first usable one (empty for retests, invalid sessions and the first); ``mdc95`` is the
+    change it would need to be flagged (empty when unknown: ``mdc95_source`` ``none``); ``flagged`` is 1 for a
+    change from the previous session beyond it.
+    """
+    writer = csv.writer(stream, lineterminator="\n")
+    writer.writerow(CSV_COLUMNS)
+    rows = 0
+    for analysis in analyses:
+        by_key = {(s.arm, s.key): s for s in analysis.series}
+        for record in analysis.sessions:
+            for key, quantity in record.parameters.items():
+                series = by_key.get((record.arm, key))
+                step: Change | None = None
+                first: Change | None = None
+                if series is not None and not record.retest:
+                    step = next((c for c in series.steps if c.after.session_id == record.id), None)
+                    usable = [p for p in series.points if p.usable]
+                    if usable and step is not None:
+                        first_point = usable[0]
+                        first = Change(key, first_point, step.after, step.after.value - first_point.value, series.error)  # type: ignore[operator]
+                error = series.error if series is not None else None
+                judged = series is not None and series.judged and error is not None and error.known
+                writer.writerow(
+                    [
+                        record.subject,
+                        record.arm or "",
+                        record.number or "",
+                        format_time(record.session_time_ns),
+                        int(record.retest),
+                        int(record.quality.valid),
+                        *key,
+                        series.unit if series is not None else "",
+                        _num(quantity.value),
+                        _num(quantity.std),
+                        quantity.source,
+                        _num(step.delta if step is not None else None),
+                        _num(first.delta if first is not None else None),
+                        _num(
+                            step.mdc95 if step is not None and judged else (error.mdc95 if judged and error else None)
+                        ),
+                        ("retest pairs" if judged else "none"),
+                        error.n_pairs if error is not None else 0,
+                        int(step is not None and judged and step.beyond_mdc),
+                    ]
+                )
+                rows += 1
+    return rows

@@ -1,0 +1,104 @@
+"""Simulated histories judged against retests: planted steps flagged exactly, an unchanged arm nowhere."""
+
+from __future__ import annotations
+
+import csv
+import io
+import itertools
+
+import pytest
+from clinic_history import FRICTION, INVALID_VALUE_NM, STIFFNESS, UNCHANGED, History, patient
+
+from bsp_ros.clinic.histories import HISTORY_START_NS, session_estimate
+from bsp_ros.clinic.report import Analysis, analyse
+from bsp_ros.clinic.report.export import write_analysis_csv
+from bsp_ros.clinic.report.summary import headline
+from bsp_ros.clinic.store import open_store
+from bsp_ros.errors import InputError, StoreError
+
+ELBOW = {"coulomb": ("joints", "elbow", "coulomb_nm"), "stiffness": ("joints", "elbow", "stiffness_nm_per_rad")}
+
+
+def _analysis(history: History, subject: str) -> Analysis:
+    with open_store(history.store) as store:
+        return analyse(
+            subject, store.sessions(subject), pool=store.sessions(), subject_record=store.subject_record(subject)
+        )
+
+
+@pytest.mark.parametrize(("subject", "which"), [(FRICTION, "coulomb"), (STIFFNESS, "stiffness")])
+def test_planted_steps_are_flagged_exactly_where_beyond_the_mdc(history: History, subject: str, which: str) -> None:
+    analysis = _analysis(history, subject)
+    (series,) = [s for s in analysis.series if s.key == ELBOW[which]]
+    plan = [visit[0 if which == "coulomb" else 1] for visit in history.plans[subject]]
+    usable = [p for p in series.points if p.usable]
+    assert len(usable) == len(plan), "every planned visit must be usable for this test to map steps"
+    assert series.error.known and series.error.n_pairs >= 5
+    planted = [b - a for a, b in itertools.pairwise(plan)]
+    assert any(abs(d) > 2 * series.error.mdc95 for d in planted)  # the history plants steps well beyond the MDC
+    flagged = [step.beyond_mdc for step in series.steps]
+    assert flagged == [abs(d) > series.error.mdc95 for d in planted]
+    # No other parameter of these arms is flagged anywhere.
+    assert [s.key for s in analysis.series if s.changes] == [ELBOW[which]]
+
+
+def test_an_unchanged_arm_is_flagged_nowhere_over_ten_sessions(history: History) -> None:
+    analysis = _analysis(history, UNCHANGED)
+    assert len(analysis.visits("left")) == 10 and analysis.judgeable
+    assert analysis.changes == [] and analysis.latest_changes == []
+    (sentence,) = headline(analysis, "left")
+    assert sentence.startswith("No change beyond measurement error")
+    # The day-to-day error is what the visits scatter by: the MDC is not a within-session 0.1 %.
+    (friction,) = [s for s in analysis.series if s.key == ELBOW["coulomb"]]
+    assert friction.error.source == "subject" and friction.error.mdc95 > 0.02 * 0.28
+
+
+def test_cell_pairs_serve_a_subject_without_retests(history: History) -> None:
+    analysis = _analysis(history, STIFFNESS)
+    (stiffness,) = [s for s in analysis.series if s.key == ELBOW["stiffness"]]
+    assert analysis.own_pairs == 0 and stiffness.error.source == "cell"
+    assert stiffness.error.n_subjects == 2 and stiffness.error.icc is not None
+
+
+def test_invalid_duplicate_and_future_sessions_do_not_move_the_headline(history: History) -> None:
+    before = _analysis(history, FRICTION)
+    (sentence,) = headline(before, "left")
+    assert sentence.startswith("Resistance to passive elbow movement (friction) fell 5")
+    # The invalid session's absurd value is not a point of any trend or comparison.
+    (friction,) = [s for s in before.series if s.key == ELBOW["coulomb"]]
+    invalid = [p for p in friction.points if not p.valid]
+    assert len(invalid) == 1 and invalid[0].value == INVALID_VALUE_NM
+    assert all(INVALID_VALUE_NM not in (c.before.value, c.after.value) for c in friction.steps)
+    without = analyse(
+        FRICTION,
+        [r for r in before.sessions if r.quality.valid],
+        pool=[r for r in before.sessions if r.quality.valid],
+        subject_record=before.record,
+    )
+    assert headline(without, "left") == [sentence]
+    first = session_estimate(patient(0.80, 1.5), 0, 100)  # F1 (k = 1): its first session again
+    future = session_estimate(patient(0.40, 1.5), 0, 77)
+    future["session"]["start_time_ns"] = HISTORY_START_NS + 7 * 365 * 86_400 * 10**9  # 2031
+    with open_store(history.store) as store:
+        count = len(store.sessions())
+        with pytest.raises(StoreError, match="duplicate"):
+            store.add_estimate(first, FRICTION)
+        with pytest.raises(StoreError, match="duplicate recording"):
+            store.add_estimate(first, FRICTION, session_time_ns=HISTORY_START_NS + 3_600 * 10**9)
+        with pytest.raises(InputError, match="in the future"):
+            store.add_estimate(future, FRICTION)
+        assert len(store.sessions()) == count
+    assert headline(_analysis(history, FRICTION), "left") == [sentence]
+
+
+def test_csv_export_flags_the_planted_steps(history: History) -> None:
+    analysis = _analysis(history, FRICTION)
+    stream = io.StringIO()
+    write_analysis_csv([analysis], stream)
+    rows = [r for r in csv.DictReader(io.StringIO(stream.getvalue())) if r["quantity"] == "coulomb_nm"]
+    elbow = [r for r in rows if r["part"] == "elbow"]
+    assert [int(r["session_number"]) for r in elbow] == list(range(1, len(analysis.sessions) + 1))
+    flagged = [r for r in elbow if r["flagged"] == "1"]
+    assert len(flagged) == 2 and all(r["mdc95_source"] == "retest pairs" for r in flagged)
+    assert all(float(r["change_from_previous"]) < -float(r["mdc95"]) for r in flagged)
+    assert {r["change_from_previous"] for r in elbow if r["retest"] == "1" or r["valid"] == "0"} == {""}
