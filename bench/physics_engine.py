@@ -9,10 +9,11 @@ same sines with periods / 4: 0.12 rad/s; ``--plan FILE`` adds a ``bsp plan`` tra
 sensor fixed in world (``/tf_static``) or turning with the handle (per-sample ``/tf``). A seed draws the subject
 (de Leva prior), its inertias, its friction and the sensor and marker noise. The bag goes through
 ``bsp identify BAG --json OUT`` (the CLI's own ``main``, in process) with the default model and again with
-every ``--passive MODEL`` its warnings suggest. Every data-sourced parameter (``source`` "data" or
-"data+prior") is scored against truth.json: |z| = |value - truth| / std. Per scenario and model: runs, valid,
-valid-and-wrong (valid, some |z| > 3), invalid-and-right (invalid, every |z| <= 3), the worst |z| and its
-parameter, the most common reason for invalid, and the engine's RMS inertial / gravity torque per joint.
+every ``--passive MODEL`` its warnings suggest (and every ``--also-passive MODEL``). Every data-sourced
+parameter (``source`` "data" or "data+prior") is scored against truth.json: |z| = |value - truth| / std. Per
+scenario and model: runs, valid, valid-and-wrong (valid, some |z| > 3), invalid-and-right (invalid, every
+|z| <= 3), the worst |z| and its parameter, the most common reason for invalid, and the engine's inertial / gravity
+torque per joint (RMS over RMS, peak over peak).
 
 Run for the issue-19 report (2 shared cores): ``python bench/physics_engine.py --seeds 3`` (duration 120 s,
 wrench 1 kHz, markers 100 Hz); ``--quick`` is 2 seeds of 40 s at 250 Hz on the 0.03 rad/s fixed-sensor rows.
@@ -126,15 +127,17 @@ def run_scenario(
             seed=seed,
         )
         cell = record(arm, options)
-        for joint, ratio in cell.truth["simulation"]["inertial_to_gravity_rms"].items():
-            ratios[joint].append(ratio)
+        for kind, per_joint in cell.truth["simulation"]["inertial_to_gravity"].items():
+            for joint, ratio in per_joint.items():
+                ratios[f"{joint}_{kind}"].append(ratio)
         ratios["weld_drift_m"].append(cell.truth["simulation"]["weld_drift_max_m"])
         stem = f"{scenario.motion}_{int(scenario.springs)}_{scenario.sensor}_{seed}"
         bag = write_bag(workdir / stem, cell)
         code, estimate = _identify(bag, workdir / f"{stem}_default.json")
         models = [("default", code, estimate)]
         warnings = estimate.get("quality", {}).get("warnings", [])
-        for model in sorted({m for w in warnings for m in _SUGGESTION.findall(str(w))}):
+        suggested = {m for w in warnings for m in _SUGGESTION.findall(str(w))}
+        for model in sorted(suggested | set(args.also_passive)):
             code_m, estimate_m = _identify(bag, workdir / f"{stem}_{model}.json", "--passive", model)
             models.append((model, code_m, estimate_m))
         for model, code_m, estimate_m in models:
@@ -167,6 +170,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=120.0)
     parser.add_argument("--wrench-hz", type=float, default=1000.0)
     parser.add_argument("--plan", type=Path, help="a `bsp plan --json` file: adds the planned-trajectory rows")
+    parser.add_argument(
+        "--also-passive", action="append", default=[], metavar="MODEL", help="try this --passive model on every run too"
+    )
     parser.add_argument("--only", default="", help="run only scenarios whose name contains this")
     parser.add_argument("--quick", action="store_true", help="2 seeds of 40 s at 250 Hz, 0.03 rad/s fixed sensor")
     parser.add_argument("--json", type=Path, help="write the table as JSON here")
@@ -201,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{name:52} {t.runs:4} {t.valid:5} {t.valid_wrong:7} {t.invalid_right:9}  {t.worst_z:8.3g} "
             f"({t.worst_param})  {reason}{fail}"
         )
-    print("\nengine, largest over seeds: RMS inertial / gravity torque per joint, weld drift (m)")
+    print("\nengine, largest over seeds: inertial / gravity torque per joint (RMS, peak), weld drift (m)")
     for name, values in engine.items():
         print(f"{name}  " + "  ".join(f"{k} {v:.3g}" for k, v in values.items()))
     if args.json:

@@ -103,7 +103,7 @@ def test_the_engine_s_dry_friction_is_the_frictionloss_of_the_truth_at_the_paper
         level = passive[moving, j] * np.sign(velocity[moving, j])
         assert np.abs(level - cell.truth["joints"][joint]["coulomb_nm"]).max() < 1e-6
     # NOTES 7: at 0.03 rad/s inertial torques are a few 1e-4 of gravity.
-    assert all(1e-5 < r < 2e-3 for r in cell.truth["simulation"]["inertial_to_gravity_rms"].values())
+    assert all(1e-5 < r < 2e-3 for r in cell.truth["simulation"]["inertial_to_gravity"]["rms"].values())
 
 
 def test_a_turning_sensor_s_wrench_and_tf_give_back_the_engine_s_world_wrench() -> None:
