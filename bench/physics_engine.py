@@ -1,7 +1,7 @@
 """Issue 19: `bsp identify` on a MuJoCo arm it did not write; counts valid-and-wrong and invalid-and-right.
 
 Usage: ``python bench/physics_engine.py [--seeds 10] [--duration 120] [--wrench-hz 1000] [--quick] [--plan FILE]
-[--only SUBSTRING] [--json OUT]`` (with the worktree first on PYTHONPATH).
+[--only 0.12/springs/fixed] [--json OUT]`` (with the worktree first on PYTHONPATH).
 
 Each scenario is a paper-protocol session (the sines of ``human_arm_cell()``, shoulder peak 0.03 rad/s, or the
 same sines with periods / 4: 0.12 rad/s; ``--plan FILE`` adds a ``bsp plan`` trajectory) of a MuJoCo arm
@@ -35,12 +35,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
 from mujoco_bag import record, write_bag
-from mujoco_cell import CellOptions, draw_arm, paper_sine
+from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine
 
 from bsp_ros.cli import main as bsp_main
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.model import gravity_regressor
 from bsp_ros.core.planning import planned_trajectory_from_file
 
 _SUGGESTION = re.compile(r"--passive ([a-z]+(?:\+[a-z]+)*)")
@@ -54,6 +58,11 @@ class Scenario:
     motion: str  # "0.03", "0.12" (paper sine peak rad/s) or "plan"
     springs: bool
     sensor: str
+
+    @property
+    def key(self) -> str:
+        """``0.03/springs/fixed``: what ``--only`` matches."""
+        return f"{self.motion}/{'springs' if self.springs else 'none'}/{self.sensor}"
 
     @property
     def name(self) -> str:
@@ -103,6 +112,26 @@ def _reason(estimate: dict[str, Any]) -> str:
     message = str(estimate.get("quality", {}).get("message") or "(no message)")
     first = message.split(";")[0].split(":")[0]
     return re.sub(r"[-+]?\d[\d.e+-]*", "#", first).strip()[:90]
+
+
+def inertia_only_shift(run: EngineRun, passive: str) -> np.ndarray:
+    """(3,) static-moment shift (kg m) the engine's inertial torques alone cause in a quasi-static fit.
+
+    The inertial joint torques (MuJoCo's RNE) are regressed, all joints stacked and unweighted, on the estimator's
+    columns: the gravity regressor of the grouped static moments and the ``passive`` model's columns per joint.
+    Unbounded: where the estimator holds a stiffness at its bound 0, its shift differs.
+    """
+    _, inertial = run.torque_split_nm(every=4)
+    q, velocity = run.q_rad[::4], run.qdot_rad_s[::4]
+    terms = PassiveModel.parse("coulomb" if passive == "default" else passive)
+    regressor = gravity_regressor(q)
+    blocks = []
+    for i in range(3):
+        row = np.zeros((q.shape[0], 3 * len(terms.terms)))
+        row[:, i * len(terms.terms) : (i + 1) * len(terms.terms)] = terms.columns(q, velocity, i)
+        blocks.append(np.hstack((regressor[:, i, :], row)))
+    solution = np.linalg.lstsq(np.vstack(blocks), inertial.T.reshape(-1), rcond=None)[0]
+    return np.asarray(solution[:3])
 
 
 def _trajectory(motion: str, plan: Path | None) -> Any:
@@ -161,6 +190,14 @@ def run_scenario(
             if args.verbose:
                 top = sorted(z.items(), key=lambda kv: -kv[1])[:3]
                 print(f"  seed {seed} {model}: valid={valid} " + ", ".join(f"{k} {v:.1f}" for k, v in top), flush=True)
+            if args.explain:
+                shift = inertia_only_shift(cell.run, model)
+                rows = []
+                for j, segment in enumerate(("upper_arm", "forearm", "hand")):
+                    q = estimate_m["segments"][segment]["static_moment_kgm"]
+                    error = q["value"] - cell.truth["segments"][segment]["static_moment_kgm"]
+                    rows.append(f"{segment} {error:+.2e} (inertia alone {shift[j]:+.2e}, std {q['std']:.1e})")
+                print(f"  seed {seed} {model}: static moment error " + "; ".join(rows), flush=True)
     return ratios
 
 
@@ -173,10 +210,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--also-passive", action="append", default=[], metavar="MODEL", help="try this --passive model on every run too"
     )
-    parser.add_argument("--only", default="", help="run only scenarios whose name contains this")
+    parser.add_argument("--only", default="", help="only scenarios whose key (e.g. 0.03/none/fixed) contains this")
     parser.add_argument("--quick", action="store_true", help="2 seeds of 40 s at 250 Hz, 0.03 rad/s fixed sensor")
     parser.add_argument("--json", type=Path, help="write the table as JSON here")
     parser.add_argument("--verbose", action="store_true", help="the worst three |z| of every run")
+    parser.add_argument(
+        "--explain", action="store_true", help="per run: static-moment errors beside the shift inertia alone causes"
+    )
     args = parser.parse_args(argv)
     if args.quick:
         args.seeds, args.duration, args.wrench_hz = min(args.seeds, 2), 40.0, 250.0
@@ -185,7 +225,7 @@ def main(argv: list[str] | None = None) -> int:
         motions.append("plan")
     sensors = ["fixed"] if args.quick else ["fixed", "turning"]
     scenarios = [Scenario(m, s, sensor) for m in motions for s in (False, True) for sensor in sensors]
-    scenarios = [s for s in scenarios if args.only in s.name]
+    scenarios = [s for s in scenarios if args.only in s.key]
     tallies: dict[str, Tally] = {}
     engine: dict[str, dict[str, float]] = {}
     start = time.monotonic()
