@@ -189,7 +189,7 @@ def _simulation(arm: ArmParams, options: CellOptions, run: EngineRun) -> dict[st
         "springref_rad": list(arm.springref_rad),
         "peak_speed_rad_s": list(peak_speed(run)),
         "angle_range_deg": degrees_range(run),
-        "inertial_to_gravity_rms": inertial_ratio(run),
+        "inertial_to_gravity": inertial_ratio(run),
         "weld_drift_max_m": float(run.weld_drift_m.max()),
         "weld_drift_max_rad": float(run.weld_drift_rad.max()),
         "sensor_angle_error_max_deg": float(angle_deg(known, run.rotation_world_from_site).max()) if turning else 0.0,

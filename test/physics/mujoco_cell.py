@@ -385,11 +385,15 @@ def run_engine(arm: ArmParams, options: CellOptions) -> EngineRun:
     )
 
 
-def inertial_ratio(run: EngineRun) -> dict[str, float]:
-    """Per joint: RMS inertial torque / RMS gravity torque over the run (MuJoCo's RNE on the engine's state)."""
+def inertial_ratio(run: EngineRun) -> dict[str, dict[str, float]]:
+    """Per joint, inertial over gravity torque (MuJoCo's RNE on the engine's state): RMS over RMS, peak over peak."""
     gravity, inertial = run.torque_split_nm()
-    ratio = np.sqrt((inertial**2).mean(axis=0)) / np.sqrt((gravity**2).mean(axis=0))
-    return {name: float(r) for name, r in zip(JOINTS, ratio, strict=True)}
+    rms = np.sqrt((inertial**2).mean(axis=0)) / np.sqrt((gravity**2).mean(axis=0))
+    peak = np.abs(inertial).max(axis=0) / np.abs(gravity).max(axis=0)
+    return {
+        "rms": {name: float(r) for name, r in zip(JOINTS, rms, strict=True)},
+        "peak": {name: float(r) for name, r in zip(JOINTS, peak, strict=True)},
+    }
 
 
 def peak_speed(run: EngineRun) -> tuple[float, float, float]:

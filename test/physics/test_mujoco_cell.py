@@ -16,7 +16,15 @@ from mujoco_cell import CellOptions, draw_arm, paper_sine, run_engine
 from bsp_ros.cli import main
 from bsp_ros.core import model
 from bsp_ros.core.planning import handle_poses_world, trajectory_from_points
-from bsp_ros.core.simulation import GRAVITY_M_S2, SessionTruth, TrajectorySpec
+from bsp_ros.core.simulation import (
+    GRAVITY_M_S2,
+    CellSimulator,
+    MarkerSpec,
+    SessionTruth,
+    SubjectTruth,
+    TrajectorySpec,
+    human_arm_cell,
+)
 
 STILL = TrajectorySpec((-43.3, 29.5, 0.2), (0.0, 0.0, 0.0), (10.0, 10.0, 10.0), (0.0, 0.0, 0.0))
 # Fast sines (peak ~1 rad/s): inertial torques of several % of gravity.
@@ -103,7 +111,7 @@ def test_the_engine_s_dry_friction_is_the_frictionloss_of_the_truth_at_the_paper
         level = passive[moving, j] * np.sign(velocity[moving, j])
         assert np.abs(level - cell.truth["joints"][joint]["coulomb_nm"]).max() < 1e-6
     # NOTES 7: at 0.03 rad/s inertial torques are a few 1e-4 of gravity.
-    assert all(1e-5 < r < 2e-3 for r in cell.truth["simulation"]["inertial_to_gravity_rms"].values())
+    assert all(1e-5 < r < 2e-3 for r in cell.truth["simulation"]["inertial_to_gravity"]["rms"].values())
 
 
 def test_a_turning_sensor_s_wrench_and_tf_give_back_the_engine_s_world_wrench() -> None:
@@ -163,3 +171,35 @@ def test_the_engine_follows_a_planned_trajectory_and_its_handle_is_the_planner_s
     assert np.abs(run.q_rad - run.q_command_rad).max() < 1e-3
     assert np.ptp(run.q_rad[:, 1]) > np.radians(20.0)  # it visits both operating points
     assert 0.05 < np.abs(run.qdot_rad_s).max() < 0.1
+
+
+class _Replay:
+    """A JointTrajectory that replays the engine's own joint angles (for bsp_ros's simulator)."""
+
+    def __init__(self, t_s: np.ndarray, q_rad: np.ndarray) -> None:
+        self._t, self._q = t_s, q_rad
+
+    n_joints = 3
+    peak_speed_rad_s = (0.0, 0.0, 0.0)
+
+    def angles_rad(self, t_s) -> np.ndarray:
+        return np.column_stack([np.interp(t_s, self._t, self._q[:, j]) for j in range(3)])
+
+    def velocities_rad_s(self, t_s) -> np.ndarray:
+        return np.zeros((np.size(t_s), 3))
+
+
+def test_skin_marker_sites_sit_where_bsp_ros_puts_skin_markers_for_the_same_angles() -> None:
+    offsets = ((0.01, 0.02), (-0.015, 0.01), (0.005, -0.012), (0.02, 0.015))
+    arm = draw_arm(9)
+    options = CellOptions(trajectory=paper_sine(0.12), duration_s=2.0, skin_offset_m=offsets, lead_in_s=0.1)
+    run = run_engine(arm, options)
+    spec = human_arm_cell(
+        subject=SubjectTruth(arm.lengths_m, arm.masses_kg, arm.com_along_m),
+        trajectory=_Replay(run.t_s, run.q_rad),
+        markers=MarkerSpec(shoulder_m=options.shoulder_m, skin_offset_m=offsets, noise_m=0.0),
+        duration_s=2.0,
+    )
+    expected = CellSimulator(spec).marker_positions_m(run.t_s)
+    for k, name in enumerate(("shoulder", "elbow", "wrist", "hand")):
+        assert np.abs(run.markers_m[:, k] - expected[name]).max() < 1e-12, name
