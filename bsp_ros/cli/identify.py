@@ -8,11 +8,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.cli.argtypes import float_within, positive_float
+# METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
+from bsp_ros.cli.identify_options import METHODS, add_identify_arguments, options_from_args, topics_from_args  # noqa: F401
 from bsp_ros.errors import BspError, DataError, InputError
-
-# bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy (a test keeps the two equal).
-METHODS = ("joint", "paper")
 
 # Distinct exit codes per failure, so scripts can tell them apart (0 valid, 1 written but invalid).
 EXIT_INVALID = 1
@@ -36,36 +34,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("bag", type=Path, help="rosbag2 directory or .mcap file")
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
-    parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
-    parser.add_argument("--passive", default="coulomb", help="passive model, e.g. coulomb+viscous (default coulomb)")
-    parser.add_argument(
-        "--body-mass", type=positive_float, metavar="KG", help="body mass for the anthropometric prior, kg"
-    )
-    parser.add_argument("--height", type=positive_float, metavar="M", help="body height for the prior, m")
-    parser.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table")
-    parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
-    parser.add_argument(
-        "--marker-topic",
-        action="append",
-        default=[],
-        metavar="NAME=TOPIC",
-        help="remap a marker topic, e.g. elbow=/vicon/elbow (repeatable)",
-    )
-    parser.add_argument("--tf-topic", default="/tf")
-    parser.add_argument("--tf-static-topic", default="/tf_static")
-    parser.add_argument(
-        "--tare",
-        type=Path,
-        metavar="FILE",
-        help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
-    )
-    parser.add_argument(
-        "--wrench-delay-s",
-        type=float_within(-10.0, 10.0),
-        metavar="S",
-        help="delay of the wrench stamps behind the marker stamps the cell knows (s; a wrench stamped t was "
-        "measured at t - S): compensated as given (default: estimated from the data, compensated when resolved)",
-    )
+    add_identify_arguments(parser)
     parser.add_argument(
         "--format",
         choices=("auto", "table", "tsv", "none"),
@@ -73,50 +42,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="stdout: a table on a terminal, tab-separated values otherwise",
     )
     return parser
-
-
-def _topics(args: argparse.Namespace) -> Any:
-    from bsp_ros.bag import TopicMap
-
-    markers = dict(TopicMap().markers)
-    for item in args.marker_topic:
-        name, _, topic = item.partition("=")
-        if name not in markers or not topic:
-            raise InputError(f"--marker-topic takes NAME=TOPIC with NAME in {sorted(markers)}, got {item!r}")
-        if topic in (args.wrench_topic, args.tf_topic, args.tf_static_topic):
-            raise InputError(f"--marker-topic {item}: {topic} is already the wrench or a tf topic")
-        markers[name] = topic
-    # A --wrench-topic that names a marker topic stays the wrench topic (TopicMap.expected_types), so a
-    # PoseStamped topic given there fails the bag's type check (exit 14) before anything is decoded.
-    return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
-
-
-def looks_like_bag(path: Path) -> bool:
-    """Whether ``path`` is a recording (a rosbag2 directory or an .mcap file) rather than a tare file."""
-    if path.is_dir():
-        return (path / "metadata.yaml").is_file() or any(path.glob("*.mcap"))
-    return path.suffix == ".mcap"
-
-
-def read_tare(path: Path | None) -> Any:
-    """The tare file given as ``--tare``, or an InputError naming the file and, for a recording, how to make one."""
-    if path is None:
-        return None
-    from bsp_ros.core.tare import read_tare_file
-
-    if looks_like_bag(path):
-        raise InputError(
-            f"--tare {path} is a recording (a bag), not a tare file: make the file with "
-            f"`bsp tare {path} --out FILE`, then give --tare FILE"
-        )
-    if path.is_dir():
-        raise InputError(f"--tare {path} is a directory, not a tare file (`bsp tare TARE_BAG --out FILE` makes one)")
-    if not path.exists():
-        raise InputError(f"--tare {path}: no such file (`bsp tare TARE_BAG --out FILE` makes one)")
-    try:
-        return read_tare_file(path)
-    except InputError as error:
-        raise InputError(f"--tare {path}: {error}") from None
 
 
 def _progress_bar() -> Any:
@@ -220,26 +145,13 @@ def run(args: argparse.Namespace) -> int:
     """Identify the bag; print the result; write the JSON."""
     from bsp_ros.bag.errors import BagError
     from bsp_ros.bag.offline import identify_bag
-    from bsp_ros.core.fusion import SubjectInfo
-    from bsp_ros.core.identification.passive import PassiveModel
-    from bsp_ros.core.pipeline import IdentifyOptions
     from bsp_ros.validation import check_output_file
 
     # Before the identification: a result that cannot be written is not worth computing.
     json_path = None if args.json is None else check_output_file("--json", args.json)
+    options = options_from_args(args)
     try:
-        passive = PassiveModel.parse(args.passive)
-    except InputError as error:
-        raise InputError(f"--passive {args.passive}: {error}") from None
-    options = IdentifyOptions(
-        method=args.method,
-        passive=passive,
-        subject=SubjectInfo(args.body_mass, args.height, args.sex),
-        tare=read_tare(args.tare),
-        wrench_delay_s=args.wrench_delay_s,
-    )
-    try:
-        document = identify_bag(args.bag, options, _topics(args), _progress_bar())
+        document = identify_bag(args.bag, options, topics_from_args(args), _progress_bar())
     except BagError as error:
         print(f"bsp identify: error: {error}", file=sys.stderr)
         return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)

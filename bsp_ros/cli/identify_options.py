@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.cli.argtypes import positive_float
+from bsp_ros.cli.argtypes import float_within, positive_float
 from bsp_ros.errors import InputError
 
 # bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy.
@@ -44,6 +44,13 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         type=Path,
         metavar="FILE",
         help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
+    )
+    parser.add_argument(
+        "--wrench-delay-s",
+        type=float_within(-10.0, 10.0),
+        metavar="S",
+        help="delay of the wrench stamps behind the marker stamps the cell knows (s; a wrench stamped t was "
+        "measured at t - S): compensated as given (default: estimated from the data, compensated when resolved)",
     )
 
 
@@ -113,7 +120,13 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
         args.height if args.height is not None else known.get("height_m"),
         args.sex or known.get("sex") or "male",
     )
-    return IdentifyOptions(method=args.method, passive=passive, subject=subject, tare=read_tare(args.tare))
+    return IdentifyOptions(
+        method=args.method,
+        passive=passive,
+        subject=subject,
+        tare=read_tare(args.tare),
+        wrench_delay_s=args.wrench_delay_s,
+    )
 
 
 def options_record(args: argparse.Namespace, options: Any) -> dict[str, Any]:
