@@ -37,13 +37,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("bag", type=Path, help="rosbag2 directory or .mcap file")
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
     parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
-    parser.add_argument("--passive", default="coulomb", help="passive model, e.g. coulomb+viscous (default coulomb)")
+    parser.add_argument(
+        "--passive", default="coulomb", metavar="MODEL", help="passive model, e.g. coulomb+viscous (default coulomb)"
+    )
     parser.add_argument(
         "--body-mass", type=positive_float, metavar="KG", help="body mass for the anthropometric prior, kg"
     )
     parser.add_argument("--height", type=positive_float, metavar="M", help="body height for the prior, m")
     parser.add_argument("--sex", choices=("male", "female"), default="male", help="anthropometric table")
-    parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
+    parser.add_argument(
+        "--wrench-topic", default="/ft_sensor/wrench", metavar="TOPIC", help="wrench topic (default /ft_sensor/wrench)"
+    )
     parser.add_argument(
         "--marker-topic",
         action="append",
@@ -51,8 +55,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="NAME=TOPIC",
         help="remap a marker topic, e.g. elbow=/vicon/elbow (repeatable)",
     )
-    parser.add_argument("--tf-topic", default="/tf")
-    parser.add_argument("--tf-static-topic", default="/tf_static")
+    parser.add_argument("--tf-topic", default="/tf", metavar="TOPIC", help="tf topic (default /tf)")
+    parser.add_argument(
+        "--tf-static-topic", default="/tf_static", metavar="TOPIC", help="static tf topic (default /tf_static)"
+    )
     parser.add_argument(
         "--tare",
         type=Path,

@@ -185,9 +185,9 @@ def support_table(analysis: Analysis) -> tuple[list[SupportRow], str]:
         f"{name} {deg:g}°" for name, deg in zip(JOINT_ORDER, REFERENCE_POSE_DEG[: len(segments)], strict=False)
     )
     note = (
-        f"From session {latest.id} ({day(latest.session_time_ns)}) at a reference pose ({pose_text}; CONTRACT "
-        "angles): the wrench the robot applies to the hand, in world axes (y forward, z up) at the handle, so "
-        "that it carries the given share of the arm's weight about every joint. The uncertainty ignores the "
+        f"From session {latest.id} ({day(latest.session_time_ns)}) at a reference pose ({pose_text}; angles as in "
+        "docs/contract.md): the wrench the robot applies to the hand, in world axes (y forward, z up) at the "
+        "handle, so that it carries the given share of the arm's weight about every joint. The uncertainty ignores the "
         "correlation of the static moments (not stored). Live, `bsp/weight_support` gives it at the current pose."
     )
     return rows, note
