@@ -20,6 +20,7 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
     parser.add_argument(
         "--passive",
         default="coulomb",
+        metavar="MODEL",
         help="passive model, e.g. coulomb+viscous or coulomb+offset+stiffness (default coulomb)",
     )
     parser.add_argument(

@@ -210,7 +210,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="NS",
         help="topics NS/joint_trajectory and NS/handle_path (default bsp/plan)",
     )
-    out.add_argument("--frame-id", default="world", help="frame of the handle path (default world)")
+    out.add_argument("--frame-id", default="world", metavar="FRAME", help="frame of the handle path (default world)")
     out.add_argument(
         "--plane-x",
         type=finite_float,

@@ -36,10 +36,16 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("bag", nargs="?", type=Path, metavar="TARE", help="tare recording (rosbag2 dir or .mcap)")
     parser.add_argument("--out", required=True, type=Path, metavar="FILE", help="tare file to write (YAML)")
-    parser.add_argument("--wrench-topic", default="/ft_sensor/wrench")
-    parser.add_argument("--tf-topic", default="/tf")
-    parser.add_argument("--tf-static-topic", default="/tf_static")
-    parser.add_argument("--world-frame", default="world")
+    parser.add_argument(
+        "--wrench-topic", default="/ft_sensor/wrench", metavar="TOPIC", help="wrench topic (default /ft_sensor/wrench)"
+    )
+    parser.add_argument("--tf-topic", default="/tf", metavar="TOPIC", help="tf topic (default /tf)")
+    parser.add_argument(
+        "--tf-static-topic", default="/tf_static", metavar="TOPIC", help="static tf topic (default /tf_static)"
+    )
+    parser.add_argument(
+        "--world-frame", default="world", metavar="FRAME", help="frame of gravity, z up (default world)"
+    )
     parser.add_argument("--live", action="store_true", help="record from the running wrench topic instead of a bag")
     parser.add_argument("--duration", type=float, metavar="S", help="--live: how long to record, s (>= 5)")
     parser.add_argument(

@@ -6,7 +6,7 @@ import re
 from pathlib import Path
 
 from bsp_ros import errors
-from bsp_ros.cli import identify
+from bsp_ros.cli import EXIT_BROKEN_PIPE, EXIT_INTERRUPTED, identify
 
 README = Path(__file__).resolve().parents[3] / "README.md"
 
@@ -22,6 +22,7 @@ def _error_classes(cls: type[errors.BspError]) -> list[type[errors.BspError]]:
 
 def test_the_readme_table_covers_every_exit_code() -> None:
     raised = {cls.exit_code for cls in _error_classes(errors.BspError)}
-    # 0 success, 1 invalid estimate / damaged bag played / no valid demo estimate, 130 Ctrl-C (cli.main).
-    returned = {0, identify.EXIT_INVALID, 130, *identify.BAG_EXIT_CODES.values()}
+    # 0 success, 1 invalid estimate / damaged bag played / demo not near the truth, 130 Ctrl-C and 141 a reader
+    # that went away (cli.main).
+    returned = {0, identify.EXIT_INVALID, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE, *identify.BAG_EXIT_CODES.values()}
     assert _documented_codes() == raised | returned
