@@ -387,7 +387,7 @@ def read_session(
     if not report.present or (seen == 0 and total_expected == 0 and nothing_lost):
         if report.damaged:
             raise BagCorruptError(
-                f"{root}: no intact message survives ({'; '.join(report.damage)})", report.crc_errors, None
+                f"{root}: no intact message survives ({_damage_summary(report.damage)})", report.crc_errors, None
             )
         raise EmptyBagError(f"{root} holds no messages")
 
@@ -469,7 +469,7 @@ def read_session(
                 # loss belongs to a channel unknown: the topic may have been lost, not missing.
                 raise BagCorruptError(
                     f"required topic {topic} is not among the topics that survive the damage "
-                    f"({', '.join(sorted(report.present)) or 'none'}; {'; '.join(report.damage)})",
+                    f"({', '.join(sorted(report.present)) or 'none'}; {_damage_summary(report.damage)})",
                     report.crc_errors,
                     report.lost_messages,
                 )
@@ -512,6 +512,14 @@ def read_session(
     return BagRead(session, report, receive)
 
 
+def _damage_summary(damage: list[str]) -> str:
+    """The damaged places of a bag in one short phrase: how many, and the first (a person reads one line; the
+    full list is in the estimate's bag section and the warnings)."""
+    if len(damage) <= 1:
+        return "".join(damage)
+    return f"{len(damage)} damaged places, the first: {damage[0]}"
+
+
 def _refuse_empty_stream(topic: str, report: ReadReport, stream: _Stream | None) -> None:
     """Raise the error that says why a required topic returned no message."""
     rep = report.topics.get(topic)
@@ -521,8 +529,10 @@ def _refuse_empty_stream(topic: str, report: ReadReport, stream: _Stream | None)
             causes.append(f"{rep.lost} of the {rep.expected} messages the bag lists are not in its files")
         if rep is not None and rep.undecodable and stream is not None:
             causes.append(f"{rep.undecodable} messages do not decode ({stream.first_error})")
+        if report.damage:
+            causes.append(_damage_summary(report.damage))
         raise BagCorruptError(
-            f"{topic}: no intact message survives ({'; '.join(causes + report.damage)})",
+            f"{topic}: no intact message survives ({'; '.join(causes)})",
             report.crc_errors,
             report.lost_messages,
         )
