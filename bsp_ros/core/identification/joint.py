@@ -56,8 +56,8 @@ class JointConfig:
         moments and grouped inertias, the latter two with Gaussian priors (``base_prior``; the default
         subject's anthropometric prior when None), so that what the data cannot tell keeps its prior
         uncertainty in the std instead of being taken as zero.
-    marker_placement_sd_m : how far (1 sd, m, per axis) a skin marker may sit from its joint centre: the
-        offsets enter the fit as nuisance parameters with this prior (0: markers taken as exact).
+    marker_placement_sd_m : how far (1 sd, m, per axis) a skin marker may sit from its joint centre: what
+        such offsets would move the estimate by joins its covariance (0: markers taken as exact).
     """
 
     passive: PassiveModel = field(default_factory=PassiveModel)
@@ -141,7 +141,7 @@ def _build_problem(
     """The stacked problem; ``widths`` (n,) rad/s > 0 replace a joint's Coulomb ``sign(v)`` by ``tanh(v / w)``.
 
     Columns: the static moments, the passive terms joint by joint, then (with ``extras``) the perpendicular
-    moments, the grouped inertias and the marker offsets, each of the latter with its Gaussian prior.
+    moments and the grouped inertias, each of the latter with its Gaussian prior.
     """
     n = data.n_joints
     joints, segments = joints_for(n), segments_for(n)

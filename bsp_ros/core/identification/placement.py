@@ -1,4 +1,4 @@
-"""Marker placement as nuisance parameters: skin markers a few mm off the joint centres, different every day."""
+"""How skin markers a few mm off the joint centres (different every day) move the torque equation."""
 
 from __future__ import annotations
 
@@ -11,12 +11,11 @@ from bsp_ros.core.model import contact_jacobian, joint_positions_m
 _STEP_M = 1e-3
 
 
-def _angles_from_points(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Joint angles (N, n) and per-sample segment lengths (N, n) of chain points (N, n + 1, 2)."""
+def _angles_from_points(points: np.ndarray) -> np.ndarray:
+    """Joint angles (N, n) of chain points (N, n + 1, 2)."""
     steps = np.diff(points, axis=1)
     phi = np.arctan2(steps[..., 1], steps[..., 0])
-    q = np.concatenate((phi[:, :1], np.diff(phi, axis=1)), axis=1)
-    return np.asarray(q), np.linalg.norm(steps, axis=-1)
+    return np.concatenate((phi[:, :1], np.diff(phi, axis=1)), axis=1)
 
 
 def wrench_from_torques(q_rad: np.ndarray, lengths_m: np.ndarray, tau_nm: np.ndarray) -> np.ndarray:
@@ -69,7 +68,7 @@ def placement_columns(
         for c, direction in enumerate((along, np.stack((-along[:, 1], along[:, 0]), axis=-1))):
             moved = points.copy()
             moved[:, k] -= _STEP_M * direction  # the true centre, if the marker sits o = +step off it
-            q_true, _ = _angles_from_points(moved)
+            q_true = _angles_from_points(moved)
             lever = moved[:, -1:, :] - moved[:, :n, :]  # (N, n, 2) contact point from each joint
             tau_true = -(lever[..., 0] * wrench[:, None, 1] - lever[..., 1] * wrench[:, None, 0] + wrench[:, None, 2])
             model_true = base_regressor(q_true, qd_rad_s, qdd_rad_s2, lengths_m) @ base_values
