@@ -37,6 +37,7 @@ protocol and :data:`PLANNED_LIMITS_DEG` stay between 41.7 and 70.9 deg.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -44,7 +45,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import opensim as osim
 from scipy.interpolate import CubicSpline
 
 from bsp_ros.bag.writer import write_session_bag
@@ -61,6 +61,23 @@ from bsp_ros.core.simulation import (
     rotation_from_rpy_deg,
 )
 from bsp_ros.core.streams import MarkerSeries, Session, WrenchSeries
+
+
+def import_opensim() -> Any:
+    """``import opensim``, keeping LD_LIBRARY_PATH: opensim 4.6's __init__ overwrites it with its own folder and
+    PATH, and every process started afterwards (the ROS 2 nodes of other tests) then cannot load rclpy's libraries."""
+    saved = os.environ.get("LD_LIBRARY_PATH")
+    try:
+        import opensim
+    finally:
+        if saved is None:
+            os.environ.pop("LD_LIBRARY_PATH", None)
+        else:
+            os.environ["LD_LIBRARY_PATH"] = saved
+    return opensim
+
+
+osim = import_opensim()
 
 ARM26_OSIM = Path(__file__).resolve().parents[1] / "data" / "arm26.osim"
 SEGMENTS = ("upper_arm", "forearm")

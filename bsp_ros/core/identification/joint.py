@@ -15,7 +15,7 @@ from bsp_ros.core.identification.covariance import correlation_from_covariance, 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.passive import TERMS, PassiveModel
 from bsp_ros.core.identification.placement import placement_columns
-from bsp_ros.core.identification.priors import BasePrior, base_prior_for_subject
+from bsp_ros.core.identification.priors import BasePrior, base_prior_for_subject, implausible_perpendicular_moments
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.robust import hampel_outliers, high_frequency_sd, robust_sd
 from bsp_ros.core.model import contact_jacobian, gravity_regressor
@@ -115,8 +115,7 @@ class _Extras:
     grouped inertias, with their priors."""
 
     base: np.ndarray  # (N, n, 3n) base regressor [beta, gamma, zeta]
-    prior_mean: np.ndarray  # (2n,) gamma, zeta
-    prior_sd: np.ndarray  # (2n,)
+    prior: BasePrior
 
 
 @dataclass(frozen=True)
@@ -167,9 +166,11 @@ def _build_problem(
         return problem
     extra_names: list[ParameterName] = [("perpendicular_moment_kgm", s) for s in segments]
     extra_names += [("grouped_inertia_kgm2", s) for s in segments]
-    sd = np.asarray(extras.prior_sd)
+    prior = extras.prior
+    mean = np.concatenate((prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
+    sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
     precision = np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)
-    return _augmented(problem, extras.base[:, :, n:], extra_names, np.asarray(extras.prior_mean), precision)
+    return _augmented(problem, extras.base[:, :, n:], extra_names, mean, precision)
 
 
 def _triangular(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -633,12 +634,9 @@ def _base_extras(data: IdentificationData, config: JointConfig) -> _Extras | Non
     qd = zeros if data.qd_rad_s is None else data.qd_rad_s
     qdd = zeros if data.qdd_rad_s2 is None else data.qdd_rad_s2
     prior = config.base_prior or base_prior_for_subject(SubjectInfo(), data.lengths_m)
-    base = base_regressor(data.q_rad, qd, qdd, data.lengths_m)
-    mean = np.concatenate((prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
-    sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
     if n != prior.inertia_mean_kgm2.size:
         raise InputError(f"the base prior is for {prior.inertia_mean_kgm2.size} segments, the data has {n}")
-    return _Extras(base, mean, sd)
+    return _Extras(base_regressor(data.q_rad, qd, qdd, data.lengths_m), prior)
 
 
 def _placement_covariance(data: IdentificationData, problem: _Problem, fit: _Fit, sd_m: float) -> np.ndarray:
@@ -825,6 +823,12 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "an elastic passive moment the model lacks is supported by the data and biases the static moments "
                 "(see warnings)"
             )
+    if extras is not None and not problems:
+        # Last: an elastic term the checks above name is the likelier cause of an off-axis moment.
+        perpendicular = [i for i, (key, _) in enumerate(problem.names) if key == "perpendicular_moment_kgm"]
+        problems += implausible_perpendicular_moments(
+            [problem.names[i][1] for i in perpendicular], fit.values[perpendicular], extras.prior
+        )
     sensitivity = _offset_sensitivity(problem, fit, n)
     valid = not problems and bool(np.isfinite(fit.values).all())
     message = "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples"

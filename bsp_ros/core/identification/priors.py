@@ -77,3 +77,32 @@ def base_prior_for_subject(subject: SubjectInfo, lengths_m: npt.ArrayLike) -> Ba
     return base_prior(
         lengths, prior.mean[:n], prior.covariance[:n, :n], prior.mean[n:], prior.covariance[n:, n:], subject.sex
     )
+
+
+# A perpendicular moment this many prior sd from its prior mean is no COM off the segment axis: an effect the
+# model lacks (two-joint muscles make a joint's passive moment depend on the proximal joint's angle, as gravity
+# on an off-axis COM does) has been taken up as one.
+PERPENDICULAR_MAX_PRIOR_SD = 4.0
+
+
+def implausible_perpendicular_moments(segments: list[str], values_kgm: np.ndarray, prior: BasePrior) -> list[str]:
+    """Why the identified perpendicular moments (kg m, (n,)) cannot be a real COM offset; empty when they can.
+
+    Parameters
+    ----------
+    segments : (n,) segment names.
+    values_kgm : (n,) identified perpendicular moments.
+    prior : the prior they were identified with.
+    """
+    problems = []
+    for name, value, mean, sd in zip(
+        segments, values_kgm, prior.perpendicular_mean_kgm, prior.perpendicular_sd_kgm, strict=True
+    ):
+        if sd > 0 and abs(value - mean) > PERPENDICULAR_MAX_PRIOR_SD * sd:
+            problems.append(
+                f"the {name}'s centre of mass would sit {abs(value - mean) / sd:.1f} prior sd off its axis "
+                f"(perpendicular moment {value:.3g} kg m): an angle-dependent moment the model lacks (a two-joint "
+                "muscle?) looks like gravity on an off-axis mass on this trajectory; a protocol that moves the "
+                "shoulder and the elbow independently (bsp plan) separates them"
+            )
+    return problems

@@ -21,14 +21,16 @@ PLAN += ["--wrist-range", "-20", "20", "--max-evaluations", "10"]
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    """A short simulated bag and a store holding its estimate for three subjects."""
+    """Short simulated bags and a store holding their estimates for three subjects (one recording each: the
+    store refuses the same recording twice)."""
     root = tmp_path_factory.mktemp("pipes")
-    bag, result, store = root / "session", root / "e.json", root / "store.sqlite"
-    assert main(["simulate", "--out", str(bag), "--duration", "10", "--seed", "3"]) == 0
-    assert main(["identify", str(bag), "--json", str(result), "--format", "none"]) in (0, 1)
-    for subject in ("S01", "S02", "S03"):
+    store = root / "store.sqlite"
+    for seed, subject in enumerate(("S01", "S02", "S03"), start=3):
+        bag, result = root / f"session{seed}", root / f"e{seed}.json"
+        assert main(["simulate", "--out", str(bag), "--duration", "10", "--seed", str(seed)]) == 0
+        assert main(["identify", str(bag), "--json", str(result), "--format", "none"]) in (0, 1)
         assert main(["sessions", "add", str(result), "--subject", subject, "--store", str(store)]) == 0
-    return bag, store
+    return root / "session3", store
 
 
 def _bsp(argv: list[str], **kwargs: object) -> subprocess.Popen[bytes]:
@@ -89,7 +91,11 @@ def test_ctrl_c_names_the_command_and_exits_130(
     monkeypatch.setattr(bsp_ros.cli, "build_parser", parser_with_interrupt)
     argv = {"identify": ["identify", "x"], "tare": ["tare", "x", "--out", "y"], "plan": PLAN, "play": ["play", "x"]}
     argv |= {"report": ["report", "S01", "--out", "r"], "record": ["record", "/t", "--out", "d"]}
-    argv |= {"simulate": ["simulate", "--out", "d"], "sessions": ["sessions", "list"], "subjects": ["subjects", "list"]}
+    argv |= {
+        "simulate": ["simulate", "--out", "d"],
+        "sessions": ["sessions", "list"],
+        "subjects": ["subjects", "show", "S01"],
+    }
     code = main(argv.get(command, [command]))
     assert code == EXIT_INTERRUPTED
     assert capsys.readouterr().err == f"bsp {command}: interrupted\n"
