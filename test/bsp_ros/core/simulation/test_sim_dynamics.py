@@ -166,6 +166,7 @@ def test_quasi_static_session_equals_the_simulator_before_inertia() -> None:
     human = human_arm_cell(
         seed=4,
         duration_s=6.0,
+        inertia=False,
         passive=PassiveTruth(
             coulomb_nm=(0.5, 0.28, 0.06),
             viscous_nms=(0.8, 0.3, 0.1),
@@ -193,9 +194,10 @@ def test_quasi_static_session_equals_the_simulator_before_inertia() -> None:
             stamp_jitter_s=1e-4,
         ),
     )
-    cases: dict[str, CellSpec] = {"human": human, "paper": paper_mechanical_arm_cell(seed=9, duration_s=6.0)}
+    paper = paper_mechanical_arm_cell(seed=9, duration_s=6.0, inertia=False)
+    cases: dict[str, CellSpec] = {"human": human, "paper": paper}
     for name, spec in cases.items():
-        assert not spec.inertia  # the core's default stays quasi-static
+        assert not spec.inertia  # quasi-static, as commit 3f2534c simulated (the core's default now has inertia)
         session = simulate_cell(spec).session
         want = golden[name]
         np.testing.assert_array_equal(session.wrench.t_ns[::7], want["wrench_t_ns"])
