@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from turning_sensor import TurningSession, turning_session
+from turning_sensor import TurningSession, assert_within_3_std, turning_session
 
 from bsp_ros.bag import read_session, write_session_bag
 from bsp_ros.bag.offline import identify_bag
@@ -15,17 +15,6 @@ from bsp_ros.bag.offline import identify_bag
 @pytest.fixture(scope="module")
 def turning() -> TurningSession:
     return turning_session(60.0, seed=7, tf_hz=100.0)
-
-
-def _within_3_std(document: dict, turning: TurningSession) -> None:
-    quality = document["quality"]
-    assert quality["valid"], quality["message"]
-    for segment, beta in zip(("upper_arm", "forearm", "hand"), turning.truth.static_moments_kgm, strict=True):
-        q = document["segments"][segment]["static_moment_kgm"]
-        assert abs(q["value"] - beta) <= 3 * q["std"], (segment, q, beta)
-    for joint, c in zip(("shoulder", "elbow", "wrist"), turning.coulomb_nm, strict=True):
-        q = document["joints"][joint]["coulomb_nm"]
-        assert abs(q["value"] - c) <= 3 * q["std"], (joint, q, c)
 
 
 @pytest.mark.parametrize("tf_hz", [100.0, 20.0])
@@ -40,7 +29,7 @@ def test_a_turning_sensor_on_tf_is_identified_within_3_std(
     assert rotation.shape == (turning.session.wrench.t_ns.size, 3, 3)
     assert read.report.rotation_source == "tf" and not any("/tf" in w for w in read.report.warnings)
     document = identify_bag(bag)
-    _within_3_std(document, turning)
+    assert_within_3_std(document, turning)
     assert document["quality"]["rotation"]["source"] == "tf"
     assert document["quality"]["rotation"]["per_sample"] is True
     assert document["quality"]["rotation"]["range_deg"] == pytest.approx(turning.range_deg, abs=0.05)

@@ -61,3 +61,15 @@ def turning_session(duration_s: float, seed: int, tf_hz: float, frame: str = "ft
         rotation_world_from_sensor=mount,
     )
     return TurningSession(session, sim.truth, spec.passive.coulomb_nm, samples, float(np.degrees(np.ptp(angles))))
+
+
+def assert_within_3_std(document: dict, turning: TurningSession) -> None:
+    """A valid estimate whose static moments and Coulomb amplitudes hold the truth within 3 std."""
+    quality = document["quality"]
+    assert quality["valid"], quality["message"]
+    for segment, beta in zip(("upper_arm", "forearm", "hand"), turning.truth.static_moments_kgm, strict=True):
+        q = document["segments"][segment]["static_moment_kgm"]
+        assert abs(q["value"] - beta) <= 3 * q["std"], (segment, q, beta)
+    for joint, c in zip(("shoulder", "elbow", "wrist"), turning.coulomb_nm, strict=True):
+        q = document["joints"][joint]["coulomb_nm"]
+        assert abs(q["value"] - c) <= 3 * q["std"], (joint, q, c)

@@ -18,7 +18,7 @@ from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bag"))
-from turning_sensor import TurningSession, turning_session
+from turning_sensor import TurningSession, assert_within_3_std, turning_session
 
 
 @pytest.fixture(scope="module")
@@ -65,15 +65,8 @@ def _run(turning: TurningSession, tf_samples: list, check: bool = True) -> tuple
 def test_a_turning_sensor_on_tf_is_rotated_per_wrench_stamp_and_identified(turning: TurningSession) -> None:
     document, frames = _run(turning, turning.tf_samples)
     assert frames.sources == {"ft_sensor": "tf (per sample)"}
-    quality = document["quality"]
-    assert quality["valid"], quality["message"]
-    for segment, beta in zip(("upper_arm", "forearm", "hand"), turning.truth.static_moments_kgm, strict=True):
-        q = document["segments"][segment]["static_moment_kgm"]
-        assert abs(q["value"] - beta) <= 3 * q["std"], (segment, q, beta)
-    for joint, c in zip(("shoulder", "elbow", "wrist"), turning.coulomb_nm, strict=True):
-        q = document["joints"][joint]["coulomb_nm"]
-        assert abs(q["value"] - c) <= 3 * q["std"], (joint, q, c)
-    assert quality["timing"] == {"wrench_delay_s": 0.0, "wrench_delay_std_s": 0.0, "source": "none"}
+    assert_within_3_std(document, turning)
+    assert document["quality"]["timing"] == {"wrench_delay_s": 0.0, "wrench_delay_std_s": 0.0, "source": "none"}
 
 
 def test_the_same_sensor_with_its_first_transform_only_does_not_fit(turning: TurningSession) -> None:
