@@ -105,21 +105,24 @@ def base_parameters(
     inertia_com_kgm2: npt.ArrayLike,
     com_normal_m: npt.ArrayLike | None = None,
 ) -> np.ndarray:
-    """Base parameters ``[beta, gamma, zeta]`` (3n,) of a chain from its standard parameters.
+    """Base parameters ``[beta, gamma, zeta]`` (..., 3n) of a chain from its standard parameters.
 
     Parameters
     ----------
-    lengths_m, masses_kg, com_m : (n,) segment lengths, masses and COM distances along the axis.
-    inertia_com_kgm2 : (n,) inertias about each COM for rotation in the plane (kg m^2).
-    com_normal_m : (n,) COM offsets normal to the axis (m); zero when None.
+    lengths_m, masses_kg, com_m : (..., n) segment lengths, masses and COM distances along the axis (leading
+        dimensions broadcast: many draws of a prior at once).
+    inertia_com_kgm2 : (..., n) inertias about each COM for rotation in the plane (kg m^2).
+    com_normal_m : (..., n) COM offsets normal to the axis (m); zero when None.
     """
     lengths = np.asarray(lengths_m, dtype=np.float64)
     masses = np.asarray(masses_kg, dtype=np.float64)
     along = np.asarray(com_m, dtype=np.float64)
     normal = np.zeros_like(along) if com_normal_m is None else np.asarray(com_normal_m, dtype=np.float64)
-    distal = np.concatenate((np.cumsum(masses[::-1])[::-1][1:], [0.0]))
+    # Mass distal to each segment: the reversed cumulative sum, shifted by one.
+    total_from = np.flip(np.cumsum(np.flip(masses, axis=-1), axis=-1), axis=-1)
+    distal = np.concatenate((total_from[..., 1:], np.zeros_like(total_from[..., :1])), axis=-1)
     own = np.asarray(inertia_com_kgm2, dtype=np.float64) + masses * (along**2 + normal**2)
-    return np.concatenate((masses * along + lengths * distal, masses * normal, own + lengths**2 * distal))
+    return np.concatenate((masses * along + lengths * distal, masses * normal, own + lengths**2 * distal), axis=-1)
 
 
 def inertial_torque_nm(motion: ChainMotion, lengths_m: npt.ArrayLike, parameters: npt.ArrayLike) -> np.ndarray:

@@ -61,7 +61,7 @@ def base_prior(
     )
     fractions = np.array([segment_norm(sex, s).gyration_fraction for s in segments_for(n)])
     radii = fractions * lengths * np.clip(1.0 + GYRATION_REL_SD * rng.standard_normal((_DRAWS, n)), 0.3, None)
-    draws = np.array([base_parameters(lengths, m, c, m * r**2) for m, c, r in zip(masses, coms, radii, strict=True)])
+    draws = base_parameters(lengths, masses, coms, masses * radii**2)  # (draws, 3n) at once
     static = draws[:, :n].mean(axis=0)
     inertia = draws[:, 2 * n :]
     return BasePrior(
