@@ -823,8 +823,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "an elastic passive moment the model lacks is supported by the data and biases the static moments "
                 "(see warnings)"
             )
-    if extras is not None and not problems:
-        # Last: an elastic term the checks above name is the likelier cause of an off-axis moment.
+    if config.check_elastic and extras is not None and not problems:
+        # Last, with the model checks (live, they run beside the updates): a drift or an elastic term the checks
+        # above name is the likelier cause of an off-axis moment.
         perpendicular = [i for i, (key, _) in enumerate(problem.names) if key == "perpendicular_moment_kgm"]
         problems += implausible_perpendicular_moments(
             [problem.names[i][1] for i in perpendicular], fit.values[perpendicular], extras.prior

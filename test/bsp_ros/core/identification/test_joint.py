@@ -12,7 +12,6 @@ from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.passive import PassiveModel
 
-
 # The simulated markers sit on the joint centres: no placement uncertainty to add.
 EXACT = JointConfig(marker_placement_sd_m=0.0)
 
