@@ -437,7 +437,8 @@ def _term_test(
     problem: _Problem, fit: _Fit, extra: np.ndarray, names: list[ParameterName], watched: list[int]
 ) -> tuple[float, float, int, _Fit]:
     """Fit with the extra columns; return the p-value of their coefficients, the largest shift of a
-    ``watched`` parameter in std of the wider fit, which one, and the wider fit."""
+    ``watched`` parameter in std (the larger of the two fits': the base fit's is the std the estimate reports,
+    marker placement included), which one, and the wider fit."""
     wide = _fit(_augmented(problem, extra, names))
     p = len(problem.names)
     picks = list(range(p, p + len(names)))
@@ -446,8 +447,8 @@ def _term_test(
         statistic = float(theta @ np.linalg.solve(wide.covariance[np.ix_(picks, picks)], theta))
     except np.linalg.LinAlgError:
         return 1.0, 0.0, watched[0], wide
-    std = np.sqrt(np.clip(np.diag(wide.covariance)[watched], 1e-300, None))
-    shift = np.abs(wide.values[watched] - fit.values[watched]) / std
+    variance = np.maximum(np.diag(wide.covariance)[watched], np.diag(fit.covariance)[watched])
+    shift = np.abs(wide.values[watched] - fit.values[watched]) / np.sqrt(np.clip(variance, 1e-300, None))
     worst = int(np.argmax(shift))
     return float(chi2.sf(statistic, len(picks))), float(shift[worst]), watched[worst], wide
 
