@@ -21,7 +21,10 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         "--passive",
         default="coulomb",
         metavar="MODEL",
-        help="passive model, e.g. coulomb+viscous or coulomb+offset+stiffness (default coulomb)",
+        help="passive model: coulomb (default), terms joined by + out of coulomb, viscous, offset, stiffness, "
+        "nonlinear, "
+        "coupling (e.g. coulomb+offset+stiffness), or auto: the data choose the elastic terms and the std holds the "
+        "spread of the models they cannot reject",
     )
     parser.add_argument(
         "--body-mass", type=positive_float, metavar="KG", help="body mass for the anthropometric prior, kg"

@@ -96,6 +96,11 @@ def estimate_document(
     for i, (key, owner) in enumerate(result.names):
         if owner in joints:
             joints[owner][key] = quantity(result.values[i], result.std[i], "data")
+    curves: dict[str, Any] = result.diagnostics.get("passive_curves") or {}  # type: ignore[assignment]
+    for joint, curve in curves.items():
+        # The elastic passive moment over the measured range: what a clinician compares day to day.
+        if joint in joints and result.valid:
+            joints[joint]["passive_curve"] = curve
     quality: dict[str, Any] = {
         "valid": bool(result.valid),
         "n_samples": int(result.n_samples),
@@ -127,7 +132,7 @@ def estimate_document(
         "diagnostics": {
             "parameters": [f"{key}/{owner}" for key, owner in result.names],
             "correlation": [[_finite(c) for c in row] for row in correlation],
-            **{k: v for k, v in result.diagnostics.items() if k != "paper_pi"},
+            **{k: v for k, v in result.diagnostics.items() if k not in ("paper_pi", "passive_curves")},
             **({"paper_pi": result.diagnostics["paper_pi"]} if "paper_pi" in result.diagnostics else {}),
         },
         "software": {"name": "bsp_ros", "version": __version__},

@@ -16,41 +16,91 @@ TERMS = {
     "offset": ("offset_nm", "Nm", -np.inf),
     "stiffness": ("stiffness_nm_per_rad", "Nm/rad", 0.0),
 }
+# Elastic terms beyond a linear spring (bsp_ros.core.identification.elastic): a moment nonlinear in the joint's
+# own angle, and the stiffness shared with the proximal joint (two-joint muscles). Both need the linear spring.
+ELASTIC_TERMS = ("nonlinear", "coupling")
+# What `--passive auto` chooses among, beside the base terms: the elastic family, nested.
+AUTO = "auto"
+AUTO_FAMILY = (
+    (),
+    ("offset", "stiffness"),
+    ("offset", "stiffness", "coupling"),
+    ("offset", "stiffness", "nonlinear"),
+    ("offset", "stiffness", "coupling", "nonlinear"),
+)
 
 
 @dataclass(frozen=True)
 class PassiveModel:
-    """A passive moment model: a tuple of terms out of ``coulomb``, ``viscous``, ``offset``, ``stiffness``."""
+    """A passive moment model: terms out of ``coulomb``, ``viscous``, ``offset``, ``stiffness``, ``nonlinear``,
+    ``coupling``; with ``select`` the data choose the elastic terms among :data:`AUTO_FAMILY` (``--passive auto``)
+    and the estimate's std holds what that choice leaves uncertain."""
 
     terms: tuple[str, ...] = ("coulomb",)
+    select: bool = False
 
     def __post_init__(self) -> None:
-        unknown = [term for term in self.terms if term not in TERMS]
+        known = (*TERMS, *ELASTIC_TERMS)
+        unknown = [term for term in self.terms if term not in known]
         if unknown or not self.terms or len(set(self.terms)) != len(self.terms):
-            raise InputError(f"passive model terms must be distinct names out of {tuple(TERMS)}, got {self.terms}")
+            raise InputError(f"passive model terms must be distinct names out of {known}, got {self.terms}")
         if "stiffness" in self.terms and "offset" not in self.terms:
             # k (q - q0) = k q - k q0: a stiffness without its offset forces the neutral angle to q = 0.
             raise InputError("a stiffness term needs an offset term too (passive model 'coulomb+offset+stiffness')")
+        for term in ELASTIC_TERMS:
+            if term in self.terms and "stiffness" not in self.terms:
+                raise InputError(f"a {term} term extends the linear spring: it needs 'offset+stiffness' too")
+        if not any(term in ("coulomb", "viscous", "offset") for term in self.terms):
+            raise InputError(f"a passive model needs 'coulomb', 'viscous' or 'offset', got {'+'.join(self.terms)}")
 
     @classmethod
     def parse(cls, text: str) -> PassiveModel:
-        """``"coulomb+viscous"`` -> ``PassiveModel(("coulomb", "viscous"))``."""
-        return cls(tuple(part.strip() for part in text.split("+") if part.strip()))
+        """``"coulomb+viscous"`` -> ``PassiveModel(("coulomb", "viscous"))``; ``"auto"`` -> Coulomb friction with
+        the elastic terms chosen by the data."""
+        parts = [part.strip() for part in text.split("+") if part.strip()]
+        if parts == [AUTO]:
+            return cls(("coulomb",), select=True)
+        return cls(tuple(parts))
 
     @property
     def label(self) -> str:
-        """The ``+``-joined term names."""
-        return "+".join(self.terms)
+        """The ``+``-joined term names (``auto`` when the data choose)."""
+        return AUTO if self.select else "+".join(self.terms)
+
+    @property
+    def local(self) -> tuple[str, ...]:
+        """The terms with one column per joint in that joint's row (:data:`TERMS`)."""
+        return tuple(term for term in self.terms if term in TERMS)
+
+    @property
+    def elastic(self) -> tuple[str, ...]:
+        """The elastic terms beyond a linear spring (:data:`ELASTIC_TERMS`)."""
+        return tuple(term for term in self.terms if term in ELASTIC_TERMS)
+
+    def with_terms(self, extra: tuple[str, ...]) -> PassiveModel:
+        """This model's terms plus ``extra`` (in family order), a fixed model."""
+        order = (*TERMS, *ELASTIC_TERMS)
+        terms = tuple(term for term in order if term in self.terms or term in extra)
+        return PassiveModel(terms)
+
+    def candidates(self) -> list[PassiveModel]:
+        """The models ``--passive auto`` chooses among: these terms with each set of :data:`AUTO_FAMILY`."""
+        out: list[PassiveModel] = []
+        for extra in AUTO_FAMILY:
+            model = self.with_terms(extra)
+            if model not in out:
+                out.append(model)
+        return out
 
     def columns(self, q_rad: np.ndarray, velocity_rad_s: np.ndarray, joint: int) -> np.ndarray:
-        """Regressor columns of one joint's passive terms: (N, n_terms)."""
+        """Regressor columns of one joint's local passive terms: (N, n_local)."""
         q = q_rad[:, joint]
         v = velocity_rad_s[:, joint]
         table = {"coulomb": np.sign(v), "viscous": v, "offset": np.ones_like(q), "stiffness": q}
-        return np.column_stack([table[term] for term in self.terms])
+        return np.column_stack([table[term] for term in self.local])
 
     def row_one(self, q_rad: float, velocity_rad_s: float) -> list[float]:
-        """One joint's passive columns at one instant, as floats (the 1 kHz live filter's fast path)."""
+        """One joint's local passive columns at one instant, as floats (the 1 kHz live filter's fast path)."""
         sign = (velocity_rad_s > 0) - (velocity_rad_s < 0)
         table = {"coulomb": float(sign), "viscous": velocity_rad_s, "offset": 1.0, "stiffness": q_rad}
-        return [table[term] for term in self.terms]
+        return [table[term] for term in self.local]

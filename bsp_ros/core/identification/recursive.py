@@ -64,7 +64,7 @@ class RecursiveIdentifier:
     def __init__(self, n_segments: int, config: RecursiveConfig | None = None) -> None:
         self.config = config or RecursiveConfig()
         self.n = n_segments
-        terms = self.config.passive.terms
+        terms = self.config.passive.local
         self.names: list[ParameterName] = [("static_moment_kgm", s) for s in segments_for(n_segments)]
         self.names += [(TERMS[t][0], j) for j in joints_for(n_segments) for t in terms]
         self.lower = np.array([0.0] * n_segments + [TERMS[t][2] for _ in range(n_segments) for t in terms])
@@ -114,7 +114,7 @@ class RecursiveIdentifier:
         self._information *= forget
         self._weighted_target *= forget
         gravity = gravity_regressor_one(q)
-        k = len(self.config.passive.terms)
+        k = len(self.config.passive.local)
         rows = np.zeros((len(moving), len(self.names)))
         for r, j in enumerate(moving):
             rows[r, : self.n] = gravity[j]

@@ -157,7 +157,7 @@ def parameter_names(n_joints: int, passive: PassiveModel) -> list[ParameterName]
     """The estimator's parameter order: static moments, then each joint's passive terms."""
     names: list[ParameterName] = [("static_moment_kgm", s) for s in segments_for(n_joints)]
     for joint in joints_for(n_joints):
-        names += [(TERMS[term][0], joint) for term in passive.terms]
+        names += [(TERMS[term][0], joint) for term in passive.local]
     return names
 
 
@@ -167,7 +167,7 @@ def regressor(q_rad: np.ndarray, velocity_rad_s: np.ndarray, passive: PassiveMod
     Gravity columns from ``bsp_ros.core.model.gravity_regressor``, passive columns from ``PassiveModel.columns``.
     """
     n = q_rad.shape[1]
-    k = len(passive.terms)
+    k = len(passive.local)
     out = np.zeros((q_rad.shape[0], n, n + n * k))
     out[:, :, :n] = gravity_regressor(q_rad)
     for j in range(n):

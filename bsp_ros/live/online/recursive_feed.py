@@ -32,7 +32,7 @@ class RecursiveFeed:
         self.identifier = RecursiveIdentifier(n_segments, RecursiveConfig(passive=passive))
         self.guard = StreamGuard("wrench")
         self.angles = AngleTrack(n_segments)
-        self._terms = len(passive.terms)
+        self._terms = len(passive.local)
         self.passive_joints: tuple[str, ...] = tuple(name for key, name in self.identifier.names if key == "coulomb_nm")
 
     def add_joint_state(self, t_ns: int, q_rad: np.ndarray, velocity_rad_s: np.ndarray) -> bool:

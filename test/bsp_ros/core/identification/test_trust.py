@@ -38,12 +38,18 @@ def test_a_narrow_friction_transition_is_modelled_and_the_coulomb_amplitudes_cov
         assert abs(result.value("static_moment_kgm", segment) - beta) < 3 * result.std_of("static_moment_kgm", segment)
 
 
-def test_a_joint_that_never_leaves_the_transition_is_flagged_not_reported_as_measured() -> None:
-    """At 2 mrad/s the wrist (peak 5.8 mrad/s) stays inside its transition."""
-    data, _ = data_with_transition(0.002)
+def test_a_joint_that_never_leaves_the_transition_keeps_its_estimate_with_the_std_it_has() -> None:
+    """At 2 mrad/s the wrist (peak 5.8 mrad/s) stays inside its transition: its Coulomb amplitude is weakly
+    identified, not wrong; the estimate stays valid and every parameter holds the truth within 3 std."""
+    data, truth = data_with_transition(0.002)
     result = identify_joint(data)
-    assert not result.valid
-    assert "wrist hardly leaves its friction transition" in result.message
+    assert result.valid, result.message
+    assert any("wrist hardly leaves its friction transition" in w for w in result.warnings)
+    for j, joint in enumerate(("shoulder", "elbow", "wrist")):
+        z = (result.value("coulomb_nm", joint) - COULOMB_NM[j]) / result.std_of("coulomb_nm", joint)
+        assert abs(z) < 3, (joint, z)
+    for segment, beta in zip(truth.segment_names, truth.static_moments_kgm, strict=True):
+        assert abs(result.value("static_moment_kgm", segment) - beta) < 3 * result.std_of("static_moment_kgm", segment)
 
 
 def test_a_sign_step_is_not_taken_for_a_transition() -> None:

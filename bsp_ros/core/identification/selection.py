@@ -1,0 +1,131 @@
+"""Choice of the passive model by the data (``--passive auto``), and what the choice leaves uncertain."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.stacked import Extras, Fit, Problem, build_problem, fit_problem, problem_names
+
+# A candidate is rejected by the data when the terms it leaves out differ from 0 at this level (HAC Wald test on
+# the richest fit); the others are the models the data cannot reject, whose estimates must agree within the std.
+REJECT_P = 0.01
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One passive model the data were asked about: its problem, fit, criterion and weight."""
+
+    model: PassiveModel
+    problem: Problem | None
+    fit: Fit | None
+    criterion: float  # BIC-like, relative to the richest model (smaller is better)
+    weight: float  # posterior-like weight, exp(-criterion / 2), normalised over the candidates
+    p_value: float  # of the terms it leaves out (1 for the richest model)
+
+    @property
+    def rejected(self) -> bool:
+        """Whether the data reject this model (:data:`REJECT_P`)."""
+        return self.p_value < REJECT_P
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The chosen model (smallest criterion) and every candidate."""
+
+    chosen: Candidate
+    candidates: list[Candidate]
+
+    def to_dict(self) -> dict[str, dict[str, float]]:
+        """``{label: {"criterion": float, "weight": float}}`` for ``diagnostics.passive_selection``."""
+        return {
+            c.model.label: {"criterion": c.criterion, "weight": c.weight, "p_value": c.p_value, "rejected": c.rejected}
+            for c in self.candidates
+        }
+
+
+def select_passive(
+    data: IdentificationData,
+    model: PassiveModel,
+    rows: np.ndarray,
+    widths: np.ndarray | None,
+    extras: Extras | None,
+    covariance_of: Callable[[Problem, Fit], np.ndarray] | None = None,
+) -> Selection:
+    """Choose among ``model.candidates()`` by a Wald-form BIC on the richest candidate's fit.
+
+    The richest model is fitted once; a candidate that leaves out terms is scored by the HAC Wald statistic of
+    those terms (autocorrelation-robust, unlike a likelihood ratio on correlated residuals) minus ``ln N`` per
+    term left out, N the used torque rows (Schwarz 1978; the Wald form as in Kass and Raftery 1995). Weights
+    ``exp(-criterion / 2)`` are reported; the models the data cannot reject (:data:`REJECT_P`) are fitted for
+    :func:`spread_covariance`. ``covariance_of`` gives the richest fit's full covariance for the tests (the
+    marker placement's share included: offsets of skin markers bend the torques like elastic terms, and a test
+    on the sensor noise alone would reject every simple model of a precise session).
+    """
+    models = model.candidates()
+    rich_problem = build_problem(data, models[-1], rows, widths, extras)
+    rich_fit = fit_problem(rich_problem)
+    rich_covariance = rich_fit.covariance if covariance_of is None else covariance_of(rich_problem, rich_fit)
+    penalty = float(np.log(max(int(rows.sum()), 2)))
+    index = {name: i for i, name in enumerate(rich_problem.names)}
+    criteria, p_values = [], []
+    for candidate in models:
+        kept = set(problem_names(candidate, data.n_joints, extras is not None))
+        left_out = [i for name, i in index.items() if name not in kept]
+        if not left_out:
+            criteria.append(0.0)
+            p_values.append(1.0)
+            continue
+        theta = rich_fit.values[left_out]
+        sub = rich_covariance[np.ix_(left_out, left_out)]
+        # Directions the data cannot test (terms confounded with gravity, held by their priors) carry no evidence:
+        # a relative cut keeps their near-zero eigenvalues from turning rounding into significance.
+        statistic = float(theta @ np.linalg.pinv(sub, rcond=1e-6, hermitian=True) @ theta)
+        criteria.append(statistic - penalty * len(left_out))
+        p_values.append(float(chi2.sf(statistic, len(left_out))))
+    criterion = np.array(criteria)
+    weight = np.exp(-0.5 * (criterion - criterion.min()))
+    weight /= weight.sum()
+    best = int(np.argmin(criterion))
+    candidates = []
+    for i, candidate in enumerate(models):
+        problem: Problem | None = None
+        fit: Fit | None = None
+        if i == len(models) - 1:
+            problem, fit = rich_problem, rich_fit
+        elif p_values[i] >= REJECT_P or i == best:
+            problem = build_problem(data, candidate, rows, widths, extras)
+            fit = fit_problem(problem)
+        candidates.append(Candidate(candidate, problem, fit, float(criterion[i]), float(weight[i]), p_values[i]))
+    return Selection(candidates[best], candidates)
+
+
+def spread_covariance(selection: Selection) -> tuple[np.ndarray, np.ndarray]:
+    """What the model choice leaves uncertain: per parameter of the chosen model, the largest squared difference
+    to the estimate of any candidate the data cannot reject (the richest one included), as a diagonal
+    covariance (p, p), and that difference in units of the chosen fit's std (p,), for the warnings.
+
+    A static moment is trusted only as far as it is stable across the passive models the data leave open:
+    a simpler model is more precise only if its restrictions hold, which the data may be unable to test when
+    the left-out terms are confounded with gravity (then the richer models' estimates differ and say so).
+    """
+    chosen = selection.chosen
+    assert chosen.problem is not None and chosen.fit is not None
+    names = chosen.problem.names
+    p = len(names)
+    spread = np.zeros(p)
+    std = np.sqrt(np.clip(np.diag(chosen.fit.covariance), 1e-300, None))
+    for candidate in selection.candidates:
+        if candidate is chosen or candidate.rejected or candidate.fit is None or candidate.problem is None:
+            continue
+        theirs = {name: i for i, name in enumerate(candidate.problem.names)}
+        shared = [i for i, name in enumerate(names) if name in theirs]
+        d = np.zeros(p)
+        d[shared] = candidate.fit.values[[theirs[names[i]] for i in shared]] - chosen.fit.values[shared]
+        spread = np.maximum(spread, d**2)
+    return np.diag(spread), np.sqrt(spread) / std

@@ -1,0 +1,220 @@
+"""The stacked least-squares problem of all joints: its columns, priors, weighted bounded fit and HAC covariance."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import lsq_linear
+
+from bsp_ros.core.identification.covariance import hac_covariance
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.elastic import ELASTIC_PRIOR_SD, ElasticReference, elastic_columns, elastic_names
+from bsp_ros.core.identification.passive import TERMS, PassiveModel
+from bsp_ros.core.identification.priors import BasePrior
+from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.model import gravity_regressor
+from bsp_ros.core.streams import joints_for, segments_for
+
+
+@dataclass(frozen=True)
+class Problem:
+    names: list[ParameterName]
+    regressor: np.ndarray  # (N, n, p)
+    torque: np.ndarray  # (N, n)
+    rows: np.ndarray  # (N, n) bool: row used
+    lower: np.ndarray
+    upper: np.ndarray
+    prior_mean: np.ndarray  # (p,) Gaussian prior means (0 where none)
+    prior_precision: np.ndarray  # (p,) 1 / sd^2 of the priors (0 where none)
+    passive_end: int  # parameters [n, passive_end) are the passive terms
+
+
+@dataclass(frozen=True)
+class Extras:
+    """The base-parameter blocks beyond gravity: dynamics of the static moments, perpendicular moments and
+    grouped inertias, with their priors."""
+
+    base: np.ndarray  # (N, n, 3n) base regressor [beta, gamma, zeta]
+    prior: BasePrior
+
+
+@dataclass(frozen=True)
+class Fit:
+    values: np.ndarray
+    covariance: np.ndarray
+    residual: np.ndarray  # (N, n), NaN off the used rows
+    sigma: np.ndarray  # (n,)
+    condition: float
+    lags: int
+    design: np.ndarray  # (p, p) X^T W X over the used rows
+    weights: np.ndarray  # (n,) per-joint weights 1 / sigma^2
+
+
+def build_problem(
+    data: IdentificationData,
+    passive: PassiveModel,
+    rows: np.ndarray,
+    widths: np.ndarray | None = None,
+    extras: Extras | None = None,
+) -> Problem:
+    """The stacked problem; ``widths`` (n,) rad/s > 0 replace a joint's Coulomb ``sign(v)`` by ``tanh(v / w)``.
+
+    Columns: the static moments, the local passive terms joint by joint, the elastic terms beyond a linear spring
+    (centred on the session's range, :class:`ElasticReference`), then (with ``extras``) the perpendicular
+    moments and the grouped inertias, each of the latter with its Gaussian prior.
+    """
+    n = data.n_joints
+    joints, segments = joints_for(n), segments_for(n)
+    local = passive.local
+    k = len(local)
+    regressor = np.zeros((data.t_ns.size, n, n + n * k))
+    regressor[:, :, :n] = gravity_regressor(data.q_rad) if extras is None else extras.base[:, :, :n]
+    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments]
+    lower = [0.0] * n
+    for j, joint in enumerate(joints):
+        regressor[:, j, n + j * k : n + (j + 1) * k] = passive.columns(data.q_rad, data.velocity_rad_s, j)
+        for term in local:
+            key, _, bound = TERMS[term]
+            names.append((key, joint))
+            lower.append(bound)
+        if widths is not None and widths[j] > 0 and "coulomb" in local:
+            column = n + j * k + local.index("coulomb")
+            regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
+    if passive.elastic:
+        reference = ElasticReference.from_angles(data.q_rad)
+        regressor = np.concatenate((regressor, elastic_columns(data.q_rad, passive.elastic, reference)), axis=2)
+        elastic = elastic_names(passive.elastic, n)
+        names += elastic
+        lower += [-np.inf] * len(elastic)
+    p = len(names)
+    precision = np.zeros(p)
+    for i, (key, _) in enumerate(names):
+        if key in ELASTIC_PRIOR_SD:
+            precision[i] = 1.0 / ELASTIC_PRIOR_SD[key] ** 2
+    problem = Problem(
+        names, regressor, data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), precision, p
+    )
+    if extras is None:
+        return problem
+    extra_names: list[ParameterName] = [("perpendicular_moment_kgm", s) for s in segments]
+    extra_names += [("grouped_inertia_kgm2", s) for s in segments]
+    prior = extras.prior
+    mean = np.concatenate((prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
+    sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
+    precision = np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)
+    return augmented(problem, extras.base[:, :, n:], extra_names, mean, precision)
+
+
+def problem_names(passive: PassiveModel, n: int, dynamics: bool) -> list[ParameterName]:
+    """The parameter names of :func:`build_problem`'s columns, in order, for an ``n``-joint chain."""
+    joints, segments = joints_for(n), segments_for(n)
+    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments]
+    names += [(TERMS[term][0], joint) for joint in joints for term in passive.local]
+    names += elastic_names(passive.elastic, n)
+    if dynamics:
+        names += [("perpendicular_moment_kgm", s) for s in segments] + [("grouped_inertia_kgm2", s) for s in segments]
+    return names
+
+
+def triangular(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``R, c`` with ``|a x - b|^2 = |R x - c|^2 + const``: the bounded problem at p x p cost.
+
+    Normal equations with Cholesky are fast for tall, column-scaled, well-conditioned ``a``; QR otherwise.
+    """
+    gram = a.T @ a
+    try:
+        lower = np.linalg.cholesky(gram)
+        if np.linalg.cond(lower) < 1e6:
+            return lower.T, np.linalg.solve(lower, a.T @ b)
+    except np.linalg.LinAlgError:
+        pass
+    q_factor, r_factor = np.linalg.qr(a, mode="reduced")
+    return r_factor, q_factor.T @ b
+
+
+def prior_rows(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+    """Pseudo-observations ``sqrt(P) (theta - theta_0)`` of the Gaussian priors: rows (m, p) and targets (m,)."""
+    picks = np.flatnonzero(problem.prior_precision > 0)
+    root = np.sqrt(problem.prior_precision[picks])
+    rows = np.zeros((picks.size, len(problem.names)))
+    rows[np.arange(picks.size), picks] = root
+    return rows, root * problem.prior_mean[picks]
+
+
+def normal_equations(problem: Problem, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """``A + P``, ``X^T W y + P theta_0`` and ``y^T W y + theta_0^T P theta_0`` over the used rows."""
+    w = np.where(problem.rows, weights[None, :], 0.0)
+    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor) + np.diag(problem.prior_precision)
+    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
+    moment += problem.prior_precision * problem.prior_mean
+    total = float((w * problem.torque**2).sum() + (problem.prior_precision * problem.prior_mean**2).sum())
+    return design, moment, total
+
+
+def weighted_solve(problem: Problem, weights: np.ndarray) -> np.ndarray:
+    root = np.sqrt(weights)[None, :, None]
+    prior_a, prior_b = prior_rows(problem)
+    a = np.vstack(((problem.regressor * root)[problem.rows], prior_a))
+    b = np.concatenate(((problem.torque * root[..., 0])[problem.rows], prior_b))
+    # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
+    scale = np.linalg.norm(a, axis=0)
+    scale[scale == 0] = 1.0
+    r_factor, rhs = triangular(a / scale, b)
+    solution = lsq_linear(
+        r_factor, rhs, bounds=(problem.lower * scale, problem.upper * scale), method="bvls", tol=1e-12
+    )
+    return np.asarray(solution.x / scale)
+
+
+def fit_problem(problem: Problem) -> Fit:
+    n = problem.torque.shape[1]
+    weights = np.ones(n)
+    values = weighted_solve(problem, weights)
+    for _ in range(2):  # reweight by per-joint residual variance (Gautier and Poignet 2001)
+        residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+        counts = problem.rows.sum(axis=0)
+        sigma = np.sqrt(np.where(problem.rows, residual**2, 0.0).sum(axis=0) / np.maximum(counts, 1))
+        sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(problem.torque).max()), 1e-9))
+        weights = 1.0 / sigma**2
+        values = weighted_solve(problem, weights)
+    residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+    w = np.where(problem.rows, weights[None, :], 0.0)
+    design, _, _ = normal_equations(problem, weights)
+    scores = np.einsum("tip,ti->tp", problem.regressor, w * np.where(problem.rows, residual, 0.0))
+    used_samples = problem.rows.any(axis=1)
+    covariance, lags = hac_covariance(design, scores[used_samples])
+    if problem.prior_precision.any():
+        # The prior is an independent source of information: (A + P)^-1 (S + P) (A + P)^-1.
+        inverse = np.linalg.pinv(design)
+        covariance = covariance + inverse @ np.diag(problem.prior_precision) @ inverse
+        covariance = 0.5 * (covariance + covariance.T)
+    a = np.vstack(((problem.regressor * np.sqrt(weights)[None, :, None])[problem.rows], prior_rows(problem)[0]))
+    norms = np.linalg.norm(a, axis=0)
+    # Singular values of the column-scaled matrix are those of its triangular factor.
+    singular = np.linalg.svd(triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0], compute_uv=False)
+    condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+    residual_used = np.where(problem.rows, residual, np.nan)
+    return Fit(values, covariance, residual_used, sigma, condition, lags, design, weights)
+
+
+def augmented(
+    problem: Problem,
+    extra: np.ndarray,
+    names: list[ParameterName],
+    prior_mean: np.ndarray | None = None,
+    prior_precision: np.ndarray | None = None,
+) -> Problem:
+    """``problem`` with extra unbounded columns ``extra`` (N, n, m), with Gaussian priors where given."""
+    m = len(names)
+    return Problem(
+        problem.names + names,
+        np.concatenate((problem.regressor, extra), axis=2),
+        problem.torque,
+        problem.rows,
+        np.concatenate((problem.lower, np.full(m, -np.inf))),
+        np.concatenate((problem.upper, np.full(m, np.inf))),
+        np.concatenate((problem.prior_mean, np.zeros(m) if prior_mean is None else prior_mean)),
+        np.concatenate((problem.prior_precision, np.zeros(m) if prior_precision is None else prior_precision)),
+        problem.passive_end,
+    )
