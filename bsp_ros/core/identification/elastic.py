@@ -163,17 +163,23 @@ def curve_gradients(
 
 
 def passive_curves(
-    gradients: np.ndarray, values: np.ndarray, covariance: np.ndarray, reference: ElasticReference
+    gradients: np.ndarray,
+    values: np.ndarray,
+    covariance: np.ndarray,
+    reference: ElasticReference,
+    extra_variance: np.ndarray | None = None,
 ) -> dict[str, dict[str, Any]]:
     """Joint -> ``{"angle_deg", "moment_nm", "std_nm", "reference_angle_deg", "stiffness_nm_per_rad",
-    "stiffness_std_nm_per_rad"}`` from :func:`curve_gradients` (n, K + 1, p) and the estimate (p,), (p, p)."""
+    "stiffness_std_nm_per_rad"}`` from :func:`curve_gradients` (n, K + 1, p) and the estimate (p,), (p, p);
+    ``extra_variance`` (n, K + 1) joins the variance of each point and slope (what a model choice leaves open)."""
     n, k_points = gradients.shape[0], gradients.shape[1] - 1
     angles = curve_angles_rad(reference, k_points)
     out: dict[str, dict[str, Any]] = {}
     for j, joint in enumerate(joints_for(n)):
         g = gradients[j]
         mean = g @ values
-        std = np.sqrt(np.clip(np.einsum("kp,pq,kq->k", g, covariance, g), 0.0, None))
+        variance = np.clip(np.einsum("kp,pq,kq->k", g, covariance, g), 0.0, None)
+        std = np.sqrt(variance if extra_variance is None else variance + extra_variance[j])
         out[joint] = {
             "angle_deg": np.degrees(angles[j]).tolist(),
             "moment_nm": mean[:k_points].tolist(),

@@ -13,22 +13,13 @@ from bsp_ros.core.dynamics import base_regressor
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
-from bsp_ros.core.identification.elastic import (
-    COUPLING_DISTAL_KEY,
-    COUPLING_KEY,
-    COUPLING_PROXIMAL_KEY,
-    CUBIC_KEY,
-    QUADRATIC_KEY,
-    ElasticReference,
-    curve_gradients,
-    passive_curves,
-)
+from bsp_ros.core.identification.elastic import ElasticReference, curve_gradients, passive_curves
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.priors import BasePrior, base_prior_for_subject, implausible_perpendicular_moments
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.robust import hampel_outliers, high_frequency_sd, robust_sd
-from bsp_ros.core.identification.selection import Selection, select_passive, spread_covariance
+from bsp_ros.core.identification.selection import Candidate, Selection, select_passive, spread_covariance
 from bsp_ros.core.identification.stacked import (
     Extras,
     Fit,
@@ -160,20 +151,17 @@ def _elastic_check(
     widths: np.ndarray,
     extras: Extras | None = None,
 ) -> list[str]:
-    """Warn when an elastic term the model lacks (a spring, a nonlinear or two-joint moment) is supported by the
-    data and moves the static moments: the fixed model would then be valid and wrong."""
-    # A linear spring only: testing polynomial terms against a model without a spring asks them to fit the
-    # smallest systematic errors (of the angle filters, on noise-free data) against a gravity torque they can
-    # mimic, and names an elastic moment where there is none.
-    # The terms beyond it are not tested against a fixed model: on our own simulator's linear springs, with the
-    # dynamics, they were "supported" (chi2 ~200) and moved the upper arm's static moment by 30 % (a polynomial
-    # in the shoulder angle mimics its gravity torque), so such a test would throw right estimates away;
+    """Warn when a linear spring (offset, stiffness) the model lacks is supported by the data and moves the static
+    moments: the fixed model would then be valid and wrong."""
+    # A linear spring only. Polynomial terms tested against a model without a spring fit the smallest systematic
+    # errors (of the angle filters, on noise-free data) against a gravity torque they can mimic; tested against a
+    # fixed spring model, on our own simulator's linear springs with the dynamics, they were "supported" (chi2
+    # ~200) and moved the upper arm's static moment by 30 %. Either would throw right estimates away;
     # `--passive auto` weighs them instead, with the spread in the std.
     if "stiffness" in config.passive.terms:
         return []
     wider = config.passive.with_terms(("offset", "stiffness"))
-    if wider.terms == config.passive.terms:
-        return []
+    kinds = " and ".join(term for term in wider.terms if term not in config.passive.terms)
     problem = build_problem(data, wider, rows, widths, extras)
     fit = fit_problem(problem)
     n = data.n_joints
@@ -194,9 +182,8 @@ def _elastic_check(
         if chi2.sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD:
             worst = int(np.argmax(shift_sd))
             corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
-            kinds = sorted({_ELASTIC_KIND.get(problem.names[i][0], "elastic") for i in picks})
             notes.append(
-                f"elastic passive moment at the {joint}: {' and '.join(kinds)} terms the model lacks are supported by "
+                f"elastic passive moment at the {joint}: {kinds} terms the model lacks are supported by "
                 f"the data (chi2 {statistic:.0f}) and confounded with gravity (|corr| {corr:.2f}); modelling them "
                 f"moves the {problem.names[worst][1]} static moment by {100 * change[worst]:.1f}% "
                 f"({shift_sd[worst]:.1f} std): the static moments may be biased (try --passive auto, which chooses "
@@ -204,17 +191,6 @@ def _elastic_check(
                 "removed looks like an elastic offset: apply one with --tare)"
             )
     return notes
-
-
-_ELASTIC_KIND = {
-    "offset_nm": "offset",
-    "stiffness_nm_per_rad": "stiffness",
-    QUADRATIC_KEY: "nonlinear",
-    CUBIC_KEY: "nonlinear",
-    COUPLING_KEY: "two-joint coupling",
-    COUPLING_PROXIMAL_KEY: "two-joint coupling",
-    COUPLING_DISTAL_KEY: "two-joint coupling",
-}
 
 
 # Above this column-scaled condition number no std is meaningful: parameters the motion cannot tell apart.
@@ -526,15 +502,8 @@ def _placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, 
     return np.asarray(sd_m**2 * response @ response.T)
 
 
-def _elastic_terms(names: list[ParameterName]) -> tuple[str, ...]:
-    """The elastic terms whose parameters are among ``names``."""
-    keys = {key for key, _ in names}
-    nonlinear = ("nonlinear",) if QUADRATIC_KEY in keys else ()
-    return nonlinear + (("coupling",) if COUPLING_KEY in keys else ())
-
-
 def _curves(
-    data: IdentificationData, problem: Problem, fit: Fit, selection: Selection | None
+    data: IdentificationData, reference: ElasticReference, fit: Fit, selection: Selection | None
 ) -> dict[str, dict[str, Any]]:
     """Per joint, the elastic passive moment over the measured range with its std (``passive_curve``), the other
     joints at their session means; with a model choice, the candidates' curves join its variance as the
@@ -543,22 +512,19 @@ def _curves(
         # A fixed model's curve would carry no uncertainty of its form (a linear spring on a muscle's exponential
         # curve, a two-joint moment it lacks): curves come with the model choice, whose spread their std holds.
         return {}
-    reference = ElasticReference.from_angles(data.q_rad)
-    gradients = curve_gradients(problem.names, _elastic_terms(problem.names), reference)
-    curves = passive_curves(gradients, fit.values, fit.covariance, reference)
+
+    def curve_of(candidate: Candidate) -> np.ndarray:
+        assert candidate.problem is not None
+        return curve_gradients(candidate.problem.names, candidate.model.elastic, reference)
+
+    gradients = curve_of(selection.chosen)
     chosen = gradients @ fit.values  # (n, K + 1)
-    extra = np.zeros_like(chosen)
+    spread = np.zeros_like(chosen)
     for candidate in selection.candidates:
-        if candidate.fit is None or candidate.problem is None or candidate is selection.chosen or candidate.rejected:
+        if candidate.fit is None or candidate is selection.chosen or candidate.rejected:
             continue
-        theirs = curve_gradients(candidate.problem.names, candidate.model.elastic, reference) @ candidate.fit.values
-        extra = np.maximum(extra, (theirs - chosen) ** 2)
-    for j, joint in enumerate(joints_for(data.n_joints)):
-        curve = curves[joint]
-        k_points = len(curve["std_nm"])
-        curve["std_nm"] = np.sqrt(np.square(curve["std_nm"]) + extra[j, :k_points]).tolist()
-        curve["stiffness_std_nm_per_rad"] = float(np.hypot(curve["stiffness_std_nm_per_rad"], np.sqrt(extra[j, -1])))
-    return curves
+        spread = np.maximum(spread, (curve_of(candidate) @ candidate.fit.values - chosen) ** 2)
+    return passive_curves(gradients, fit.values, fit.covariance, reference, spread)
 
 
 def _prior_share(problem: Problem, covariance: np.ndarray) -> dict[str, float]:
@@ -698,7 +664,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 f"the {problem.names[index][1]} static moment depends on the passive model the data cannot choose "
                 f"between (they differ by up to {model_shift[index]:.1f} of its data std): that spread is in its std"
             )
-    curves = _curves(data, problem, fit, selection)
+    reference = ElasticReference.from_angles(data.q_rad)
+    curves = _curves(data, reference, fit, selection)
     noise, misfit = _misfit(fit)
     for j, joint in enumerate(joints):
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
@@ -782,7 +749,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "passive_model": config.passive.label,
             "passive_selection": {} if selection is None else selection.to_dict(),
             "passive_curves": curves,
-            "elastic_reference": ElasticReference.from_angles(data.q_rad).to_dict(),
+            "elastic_reference": reference.to_dict(),
             "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
             "sensor_noise_nm": {j: float(v) for j, v in zip(joints, noise, strict=True)},
             "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},

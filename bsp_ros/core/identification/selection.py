@@ -42,7 +42,7 @@ class Selection:
     candidates: list[Candidate]
 
     def to_dict(self) -> dict[str, dict[str, float]]:
-        """``{label: {"criterion": float, "weight": float}}`` for ``diagnostics.passive_selection``."""
+        """``{label: {"criterion", "weight", "p_value", "rejected"}}`` for ``diagnostics.passive_selection``."""
         return {
             c.model.label: {"criterion": c.criterion, "weight": c.weight, "p_value": c.p_value, "rejected": c.rejected}
             for c in self.candidates

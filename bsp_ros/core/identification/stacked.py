@@ -65,45 +65,32 @@ def build_problem(
     moments and the grouped inertias, each of the latter with its Gaussian prior.
     """
     n = data.n_joints
-    joints, segments = joints_for(n), segments_for(n)
     local = passive.local
     k = len(local)
+    names = problem_names(passive, n, extras is not None)
     regressor = np.zeros((data.t_ns.size, n, n + n * k))
     regressor[:, :, :n] = gravity_regressor(data.q_rad) if extras is None else extras.base[:, :, :n]
-    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments]
-    lower = [0.0] * n
-    for j, joint in enumerate(joints):
+    for j in range(n):
         regressor[:, j, n + j * k : n + (j + 1) * k] = passive.columns(data.q_rad, data.velocity_rad_s, j)
-        for term in local:
-            key, _, bound = TERMS[term]
-            names.append((key, joint))
-            lower.append(bound)
         if widths is not None and widths[j] > 0 and "coulomb" in local:
             column = n + j * k + local.index("coulomb")
             regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
     if passive.elastic:
         reference = ElasticReference.from_angles(data.q_rad)
         regressor = np.concatenate((regressor, elastic_columns(data.q_rad, passive.elastic, reference)), axis=2)
-        elastic = elastic_names(passive.elastic, n)
-        names += elastic
-        lower += [-np.inf] * len(elastic)
-    p = len(names)
-    precision = np.zeros(p)
-    for i, (key, _) in enumerate(names):
-        if key in ELASTIC_PRIOR_SD:
-            precision[i] = 1.0 / ELASTIC_PRIOR_SD[key] ** 2
+    p = regressor.shape[2]
+    lower = [0.0] * n + [TERMS[term][2] for _ in range(n) for term in local] + [-np.inf] * (p - n - n * k)
+    precision = np.array([1.0 / ELASTIC_PRIOR_SD[key] ** 2 if key in ELASTIC_PRIOR_SD else 0.0 for key, _ in names[:p]])
     problem = Problem(
-        names, regressor, data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), precision, p
+        names[:p], regressor, data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), precision, p
     )
     if extras is None:
         return problem
-    extra_names: list[ParameterName] = [("perpendicular_moment_kgm", s) for s in segments]
-    extra_names += [("grouped_inertia_kgm2", s) for s in segments]
     prior = extras.prior
     mean = np.concatenate((prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
     sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
     precision = np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)
-    return augmented(problem, extras.base[:, :, n:], extra_names, mean, precision)
+    return augmented(problem, extras.base[:, :, n:], names[p:], mean, precision)
 
 
 def problem_names(passive: PassiveModel, n: int, dynamics: bool) -> list[ParameterName]:
