@@ -43,7 +43,10 @@ class PassiveModel:
         known = (*TERMS, *ELASTIC_TERMS)
         unknown = [term for term in self.terms if term not in known]
         if unknown or not self.terms or len(set(self.terms)) != len(self.terms):
-            raise InputError(f"passive model terms must be distinct names out of {known}, got {self.terms}")
+            raise InputError(
+                f"passive model terms must be distinct names out of {known} joined by '+', or '{AUTO}', "
+                f"got {self.terms}"
+            )
         if "stiffness" in self.terms and "offset" not in self.terms:
             # k (q - q0) = k q - k q0: a stiffness without its offset forces the neutral angle to q = 0.
             raise InputError("a stiffness term needs an offset term too (passive model 'coulomb+offset+stiffness')")

@@ -63,6 +63,8 @@ def test_a_curve_is_the_columns_evaluated_with_the_other_joints_at_their_means()
 def test_elastic_terms_extend_a_linear_spring_only() -> None:
     with pytest.raises(InputError, match="needs 'offset\\+stiffness'"):
         PassiveModel.parse("coulomb+coupling")
+    with pytest.raises(InputError, match="or 'auto', got \\('automatic',\\)"):
+        PassiveModel.parse("automatic")
     assert PassiveModel.parse("auto").select
     assert PassiveModel.parse("auto").candidates()[-1].label == "coulomb+offset+stiffness+nonlinear+coupling"
 
