@@ -213,7 +213,7 @@ TRANSITION_MIN_GAIN = 100.0
 
 def _transition_widths(
     problem: Problem, fit: Fit, data: IdentificationData, config: JointConfig
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Width of a smooth Coulomb transition at each joint, and how uncertain that leaves the amplitude.
 
     A profile over :data:`TRANSITION_WIDTHS_RAD_S` (and the sign step, width 0), one joint at a time, on
@@ -225,11 +225,13 @@ def _transition_widths(
     spread : (n,) half the range (Nm) of the Coulomb amplitudes over the widths the data cannot tell from
         the chosen one (residual within :data:`TRANSITION_MIN_GAIN` of it): a model uncertainty the
         covariance of one fit does not hold.
+    span : (n,) the full range (Nm) of the Coulomb amplitudes from the sign step to the chosen width: what a
+        joint that hardly leaves its transition leaves open (the data then cannot say how wide it is).
     """
     n = data.n_joints
-    widths, spread = np.zeros(n), np.zeros(n)
+    widths, spread, span = np.zeros(n), np.zeros(n), np.zeros(n)
     if "coulomb" not in config.passive.terms:
-        return widths, spread
+        return widths, spread, span
     k = len(config.passive.local)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     design, moment, total = normal_equations(problem, fit.weights)
@@ -260,7 +262,9 @@ def _transition_widths(
         widths[j] = chosen[1]
         near = [c for value, _, c in profile if value <= chosen[0] + TRANSITION_MIN_GAIN and np.isfinite(c)]
         spread[j] = 0.5 * (max(near) - min(near)) if near else 0.0
-    return widths, spread
+        narrower = [c for _, width, c in profile if width <= chosen[1] and np.isfinite(c)]
+        span[j] = max(narrower) - min(narrower) if narrower else 0.0
+    return widths, spread, span
 
 
 # An unmodelled term counts when its coefficients differ from 0 at this significance (HAC chi-square) AND
@@ -577,7 +581,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                     "tell the direction of motion"
                 )
     fit = fit_problem(problem)
-    widths, spread = _transition_widths(problem, fit, data, config)
+    widths, spread, span = _transition_widths(problem, fit, data, config)
     if widths.any():
         problem = build_problem(data, config.passive, rows, widths, extras)
         fit = fit_problem(problem)
@@ -590,7 +594,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 f"modelled); {100 * beyond:.0f}% of samples move faster than 3 widths"
             )
             if beyond < config.min_row_share:
-                # Weakly identified, not wrong: the amplitudes the data cannot tell apart are in its std (spread).
+                # Weakly identified, not wrong: every width from the sign step to the chosen one stays plausible,
+                # and the amplitudes over them join its std.
+                spread[j] = max(spread[j], span[j])
                 warnings.append(
                     f"the {joint} hardly leaves its friction transition ({100 * beyond:.0f}% of samples beyond 3 "
                     f"widths): its Coulomb amplitude is weakly identified, and its std says by how much"
