@@ -19,12 +19,12 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
     parser.add_argument("--method", choices=METHODS, default="joint", help="joint (ours, default) or paper")
     parser.add_argument(
         "--passive",
-        default="coulomb",
+        default=None,
         metavar="MODEL",
-        help="passive model: coulomb (default), terms joined by + out of coulomb, viscous, offset, stiffness, "
-        "nonlinear, "
-        "coupling (e.g. coulomb+offset+stiffness), or auto: the data choose the elastic terms and the std holds the "
-        "spread of the models they cannot reject",
+        help="passive model: terms joined by + out of coulomb, viscous, offset, stiffness, nonlinear, coupling "
+        "(e.g. coulomb+offset+stiffness), or auto: the data choose the elastic terms and the std holds the spread "
+        "of the models they cannot reject. Default: coulomb, and auto where the data show an elastic passive "
+        "moment (a model given here is kept: such data then make the estimate invalid)",
     )
     parser.add_argument(
         "--body-mass", type=positive_float, metavar="KG", help="body mass for the anthropometric prior, kg"
@@ -116,7 +116,7 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
 
     known = body or {}
     try:
-        passive = PassiveModel.parse(args.passive)
+        passive = PassiveModel() if args.passive is None else PassiveModel.parse(args.passive)
     except InputError as error:
         raise InputError(f"--passive {args.passive}: {error}") from None
     subject = SubjectInfo(
@@ -127,6 +127,7 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
     return IdentifyOptions(
         method=args.method,
         passive=passive,
+        elastic_fallback=args.passive is None,
         subject=subject,
         tare=read_tare(args.tare),
         wrench_delay_s=args.wrench_delay_s,

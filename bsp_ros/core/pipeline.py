@@ -44,6 +44,9 @@ class IdentifyOptions:
     marker_placement_sd_m: float = 0.002
     # Stream timing (timing.py): a wrench delay the cell knows (s), or None to estimate it from the data.
     wrench_delay_s: float | None = None
+    # Where the data show an elastic passive moment the model lacks, let the data choose the elastic terms
+    # (`--passive auto`) instead of returning an invalid estimate: the default when no model was asked for.
+    elastic_fallback: bool = True
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -56,6 +59,7 @@ class IdentifyOptions:
         return {
             "method": self.method,
             "passive": self.passive.label,
+            "elastic_fallback": self.elastic_fallback,
             "angle_cutoff_hz": self.kinematics.cutoff_hz,
             "direction_cutoff_hz": self.kinematics.direction_cutoff_hz,
             "max_gap_s": self.kinematics.max_gap_s,
@@ -80,6 +84,7 @@ def identify_data(
             check_elastic=check_elastic,
             base_prior=base_prior_for_subject(options.subject, data.lengths_m),
             marker_placement_sd_m=options.marker_placement_sd_m,
+            elastic_fallback=options.elastic_fallback,
         )
         result = identify_joint(data, config)
     if result.valid:

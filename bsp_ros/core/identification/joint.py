@@ -70,6 +70,9 @@ class JointConfig:
         uncertainty in the std instead of being taken as zero.
     marker_placement_sd_m : how far (1 sd, m, per axis) a skin marker may sit from its joint centre: what
         such offsets would move the estimate by joins its covariance (0: markers taken as exact).
+    elastic_fallback : when the elastic check finds an elastic passive moment the model lacks, identify again
+        with the elastic terms chosen by the data (``--passive auto``) instead of returning an invalid estimate:
+        what `bsp identify` does when no passive model was asked for.
     """
 
     passive: PassiveModel = field(default_factory=PassiveModel)
@@ -90,6 +93,7 @@ class JointConfig:
     dynamics: bool = True
     base_prior: BasePrior | None = None
     marker_placement_sd_m: float = 0.002
+    elastic_fallback: bool = False
 
     def __post_init__(self) -> None:
         check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)
@@ -152,7 +156,8 @@ def _elastic_check(
     extras: Extras | None = None,
 ) -> list[str]:
     """Warn when a linear spring (offset, stiffness) the model lacks is supported by the data and moves the static
-    moments: the fixed model would then be valid and wrong."""
+    moments: the fixed model would then be valid and wrong (with ``config.elastic_fallback`` the warning says the
+    estimate uses the elastic terms the data choose instead)."""
     # A linear spring only. Polynomial terms tested against a model without a spring fit the smallest systematic
     # errors (of the angle filters, on noise-free data) against a gravity torque they can mimic; tested against a
     # fixed spring model, on our own simulator's linear springs with the dynamics, they were "supported" (chi2
@@ -186,9 +191,16 @@ def _elastic_check(
                 f"elastic passive moment at the {joint}: {kinds} terms the model lacks are supported by "
                 f"the data (chi2 {statistic:.0f}) and confounded with gravity (|corr| {corr:.2f}); modelling them "
                 f"moves the {problem.names[worst][1]} static moment by {100 * change[worst]:.1f}% "
-                f"({shift_sd[worst]:.1f} std): the static moments may be biased (try --passive auto, which chooses "
-                "the elastic terms and puts what the choice leaves open in the std; an F/T sensor offset no tare "
-                "removed looks like an elastic offset: apply one with --tare)"
+                f"({shift_sd[worst]:.1f} std): "
+                + (
+                    "the estimate uses the elastic terms the data choose (--passive auto), and what that choice "
+                    "leaves open is in its std"
+                    if config.elastic_fallback
+                    else "the static moments may be biased (try --passive auto, which chooses the elastic terms and "
+                    "puts what the choice leaves open in the std"
+                )
+                + "; an F/T sensor offset no tare removed looks like an elastic offset: apply one with --tare"
+                + ("" if config.elastic_fallback else ")")
             )
     return notes
 
@@ -661,6 +673,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     if config.marker_placement_sd_m > 0:
         placement = _placement_covariance(data, problem, fit, config.marker_placement_sd_m)
         fit = dataclasses.replace(fit, covariance=fit.covariance + placement)
+    model_spread = np.zeros_like(fit.covariance)
     if selection is not None:
         # What the choice of passive model leaves open belongs in the std (model-averaged variance).
         model_spread, model_shift = spread_covariance(selection)
@@ -719,6 +732,12 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
     if config.check_elastic and selection is None and not problems:
         elastic = _elastic_check(data, config, problem.rows, fit, widths, extras)
+        if elastic and config.elastic_fallback:
+            # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
+            chosen = dataclasses.replace(config.passive, select=True)
+            fallback = identify_joint(data, dataclasses.replace(config, passive=chosen, elastic_fallback=False))
+            fallback.warnings = elastic + fallback.warnings
+            return fallback
         warnings += elastic
         if elastic:
             problems.append(
@@ -730,7 +749,10 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         # above name is the likelier cause of an off-axis moment.
         perpendicular = [i for i, (key, _) in enumerate(problem.names) if key == "perpendicular_moment_kgm"]
         problems += implausible_perpendicular_moments(
-            [problem.names[i][1] for i in perpendicular], fit.values[perpendicular], extras.prior
+            [problem.names[i][1] for i in perpendicular],
+            fit.values[perpendicular],
+            extras.prior,
+            np.sqrt(np.clip(np.diag(model_spread)[perpendicular], 0.0, None)),
         )
     sensitivity = _offset_sensitivity(problem, fit, n)
     valid = not problems and bool(np.isfinite(fit.values).all())

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,7 +86,9 @@ def base_prior_for_subject(subject: SubjectInfo, lengths_m: npt.ArrayLike) -> Ba
 PERPENDICULAR_MAX_PRIOR_SD = 4.0
 
 
-def implausible_perpendicular_moments(segments: list[str], values_kgm: np.ndarray, prior: BasePrior) -> list[str]:
+def implausible_perpendicular_moments(
+    segments: list[str], values_kgm: np.ndarray, prior: BasePrior, model_sd_kgm: np.ndarray | None = None
+) -> list[str]:
     """Why the identified perpendicular moments (kg m, (n,)) cannot be a real COM offset; empty when they can.
 
     Parameters
@@ -93,12 +96,15 @@ def implausible_perpendicular_moments(segments: list[str], values_kgm: np.ndarra
     segments : (n,) segment names.
     values_kgm : (n,) identified perpendicular moments.
     prior : the prior they were identified with.
+    model_sd_kgm : (n,) how far the passive models the data cannot choose between move each value (kg m,
+        ``--passive auto``): a value the choice alone could move back into the prior's range is no evidence.
     """
     problems = []
-    for name, value, mean, sd in zip(
-        segments, values_kgm, prior.perpendicular_mean_kgm, prior.perpendicular_sd_kgm, strict=True
+    spread = np.zeros(len(segments)) if model_sd_kgm is None else np.asarray(model_sd_kgm, dtype=np.float64)
+    for name, value, mean, sd, extra in zip(
+        segments, values_kgm, prior.perpendicular_mean_kgm, prior.perpendicular_sd_kgm, spread, strict=True
     ):
-        if sd > 0 and abs(value - mean) > PERPENDICULAR_MAX_PRIOR_SD * sd:
+        if sd > 0 and abs(value - mean) > PERPENDICULAR_MAX_PRIOR_SD * math.hypot(sd, extra):
             problems.append(
                 f"the {name}'s centre of mass would sit {abs(value - mean) / sd:.1f} prior sd off its axis "
                 f"(perpendicular moment {value:.3g} kg m): an angle-dependent moment the model lacks (a two-joint "

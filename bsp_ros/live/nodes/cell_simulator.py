@@ -20,7 +20,7 @@ from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
 from msg_adapters.pose import PoseSample, build_pose_stamped
 from msg_adapters.rotation import quaternion_from_matrix
-from msg_adapters.tf import TransformSample, build_tf_message
+from msg_adapters.tf import TransformSample, build_tf_message, build_transform_stamped
 from msg_adapters.wrench import WrenchSample, build_wrench_stamped
 
 NAME = "cell_simulator"
@@ -64,6 +64,12 @@ PARAMETERS = (
     Param("trajectory_file", "", "follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in motion"),
     Param("inertia", True, "rigid-body dynamics (false: quasi-static, as the method paper models it)"),
     Param("sensor_turns", False, "the sensor turns with the handle's pitch; its orientation goes on /tf per sample"),
+    Param(
+        "transform_topic",
+        "",
+        "also publish the sensor frame's transform in world as geometry_msgs/TransformStamped here, per wrench "
+        "sample if it turns ('': not)",
+    ),
     Param("wrench_filter_delay_s", 0.0, "group delay of the sensor's causal low-pass (0: none)", "s", lo=0.0, hi=1.0),
     Param("wrench_filter", "first_order", "the sensor's low-pass", choices=("first_order", "moving_average")),
     Param("wrench_clock_offset_s", 0.0, "wrench stamps lag the marker clock by this much", "s", lo=-1.0, hi=1.0),
@@ -178,6 +184,10 @@ class CellSimulatorNode(RosNode):
         quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
         self.turns = spec.sensor.turns_with_handle
         self.tf_pub = None  # /tf of a turning sensor, one transform per wrench sample
+        self.transform_pub = None  # the same as TransformStamped (a robot publishing its flange pose)
+        if p["transform_topic"] and self.turns:
+            transform_type = message_class("geometry_msgs/msg/TransformStamped")
+            self.transform_pub = self.create_publisher(transform_type, p["transform_topic"], 100)
         where = "/tf (per sample)" if self.turns else "/tf_static"
         if has_message(TF_TYPE):
             if self.turns:
@@ -229,6 +239,8 @@ class CellSimulatorNode(RosNode):
                 self.wrench_pub.publish(build_wrench_stamped(self.types, wrench))
             if self.tf_pub is not None:  # the robot still reports its flange when the sensor stalls
                 self.tf_pub.publish(build_tf_message(self.types, [transform]))
+            if self.transform_pub is not None:
+                self.transform_pub.publish(build_transform_stamped(self.types, transform))
         for name, pose in self._due(self.marker_queue, now, self.marker_period_ns, self._simulate_markers):
             self.marker_pubs[name].publish(build_pose_stamped(self.types, pose))
 

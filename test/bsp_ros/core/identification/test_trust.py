@@ -10,8 +10,9 @@ import pytest
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.joint import identify_joint
+from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.pipeline import identify_session
+from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 
 COULOMB_NM = np.array([0.5, 0.28, 0.06])
 
@@ -80,10 +81,34 @@ def test_the_no_offset_assumption_is_stated_with_a_sensitivity_that_matches_a_re
     assert shift == pytest.approx(predicted, rel=0.1)
 
 
-def test_an_elastic_offset_makes_the_estimate_invalid_with_its_cause_named() -> None:
+@pytest.fixture(scope="module")
+def elastic_session() -> tuple[sim.SimulatedSession, dict]:
     spec = sim.human_arm_cell(seed=7, duration_s=60.0)
     passive = dataclasses.replace(spec.passive, offset_nm=(0.2, 0.2, 0.2))
-    quality = identify_session(sim.simulate_cell(dataclasses.replace(spec, passive=passive)).session)["quality"]
+    simulated = sim.simulate_cell(dataclasses.replace(spec, passive=passive))
+    return simulated, simulated.truth.to_dict()
+
+
+def test_by_default_an_elastic_offset_lets_the_data_choose_the_elastic_terms_and_the_std_covers_the_truth(
+    elastic_session,
+) -> None:
+    simulated, truth = elastic_session
+    document = identify_session(simulated.session)
+    quality = document["quality"]
+    assert any(w.startswith("elastic passive moment at the") and "--passive auto" in w for w in quality["warnings"])
+    assert document["diagnostics"]["passive_selection"], "the elastic terms were not chosen by the data"
+    assert quality["valid"], quality["message"]
+    for segment, q in document["segments"].items():
+        value, std = q["static_moment_kgm"]["value"], q["static_moment_kgm"]["std"]
+        assert abs(value - truth["segments"][segment]["static_moment_kgm"]) < 3 * std, segment
+    for joint, q in document["joints"].items():
+        assert abs(q["coulomb_nm"]["value"] - truth["joints"][joint]["coulomb_nm"]) < 3 * q["coulomb_nm"]["std"], joint
+
+
+def test_an_elastic_offset_makes_a_model_the_user_fixed_invalid_with_its_cause_named(elastic_session) -> None:
+    simulated, _ = elastic_session
+    options = IdentifyOptions(passive=PassiveModel.parse("coulomb"), elastic_fallback=False)
+    quality = identify_session(simulated.session, options)["quality"]
     assert not quality["valid"]
     assert "elastic passive moment" in quality["message"]
     assert any(w.startswith("elastic passive moment at the") for w in quality["warnings"])

@@ -160,6 +160,32 @@ def test_a_rotated_sensor_taken_as_unrotated_gives_a_wrong_or_invalid_estimate(c
     assert wrong, document["quality"]
 
 
+def test_a_turning_sensor_with_its_transform_on_a_topic_is_identified_right(cell) -> None:
+    # The sensor on the robot's flange turns with the handle; the robot publishes the flange's transform as
+    # TransformStamped (the PyPI wheels have no tf2_msgs): each wrench is rotated at its own stamp.
+    simulator = ["speed:=2.0", "seed:=10", "sensor_turns:=true", "transform_topic:=ft_sensor/transform"]
+    c = cell(6, simulator, ["wrench_frame_source:=topic"])
+    assert c.spin_until(lambda: _valid(c), 60), c.latest()
+    c.spin_until(lambda: False, 10)
+    document = c.latest()
+    assert document["quality"]["valid"], document["quality"]
+    for name, z in _z_scores(document, c.truth).items():
+        assert abs(z) < 3, (name, z)
+    for name, error in _errors(document, c.truth).items():
+        assert error < (0.02 if "static_moment" in name else 0.25), (name, error)
+
+
+def test_a_turning_sensor_taken_as_fixed_is_not_valid_and_right(cell) -> None:
+    # The control of the test above: the same turning sensor with one fixed rotation (its mean) for every wrench.
+    simulator = ["speed:=2.0", "seed:=10", "sensor_turns:=true"]
+    c = cell(7, simulator, ["wrench_frame_source:=parameter"])
+    c.spin_until(lambda: len(c.estimates) > 60, 60)
+    document = c.latest()
+    assert document is not None
+    right = document["quality"]["valid"] and max(abs(z) for z in _z_scores(document, c.truth).values()) < 3
+    assert not right, document["quality"]
+
+
 def test_recursive_mode_estimate_is_right_within_its_std(cell) -> None:
     c = cell(5, ["speed:=2.0", "seed:=9"], ["mode:=recursive"])
     assert c.spin_until(lambda: _valid(c), 90), c.latest()
