@@ -2,7 +2,8 @@
 
 For each seed and scenario a human arm cell is simulated and identified (joint method, defaults). Reported:
 the share of valid estimates, for valid ones the share of data-sourced parameters whose truth lies within
-3 std, and how often each kind of warning fires. Run:
+3 std, both error rates per session (valid-and-wrong: valid, some data-sourced parameter beyond 3 std;
+invalid-and-right: invalid, every one within 3 std), and how often each kind of warning fires. Run:
 
     python bench/coverage.py --sessions 200 --duration 120 --scenario clean
     python bench/coverage.py --sessions 50 --scenario elastic
@@ -24,6 +25,7 @@ import time
 from typing import Any
 
 import numpy as np
+from scoring import rates, verdict, z_scores
 
 from bsp_ros.core import glitches
 from bsp_ros.core import simulation as sim
@@ -86,6 +88,7 @@ def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dic
     worst: list[tuple[float, int, str]] = []
     kinds: collections.Counter[str] = collections.Counter()
     messages: collections.Counter[str] = collections.Counter()
+    verdicts: list[str] = []
     started = time.perf_counter()
     for seed in range(first_seed, first_seed + sessions):
         spec = _spec(scenario, seed, duration_s)
@@ -106,18 +109,15 @@ def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dic
             document = identify_session(simulated.session)
         for kind in {_kind(w) for w in document["quality"]["warnings"]}:
             kinds[kind] += 1
+        scores = z_scores(document, truth)
+        verdicts.append(verdict(document["quality"]["valid"], max(scores.values(), default=float("nan"))))
         if not document["quality"]["valid"]:
             messages[_kind(document["quality"]["message"])] += 1
             continue
         valid += 1
-        for group in ("segments", "joints"):
-            for owner, quantities in document[group].items():
-                for key, q in quantities.items():
-                    if q["source"] != "data" or key not in truth[group][owner] or not q["std"]:
-                        continue
-                    z = abs(q["value"] - truth[group][owner][key]) / q["std"]
-                    z_all.append(z)
-                    worst.append((z, seed, f"{key}/{owner}"))
+        for name, z_value in scores.items():
+            z_all.append(z_value)
+            worst.append((z_value, seed, name))
     z = np.array(z_all)
     return {
         "scenario": scenario,
@@ -126,6 +126,8 @@ def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dic
         "valid": valid,
         "parameters": int(z.size),
         "within_3_std": float((z < 3).mean()) if z.size else None,
+        "valid_and_wrong": rates(verdicts)[1],
+        "invalid_and_right": rates(verdicts)[2],
         "worst": sorted(worst, reverse=True)[:5],
         "warning_rate": {k: v / sessions for k, v in kinds.most_common()},
         "invalid_reasons": dict(messages),
@@ -146,14 +148,25 @@ def main() -> None:
         print(json.dumps(run(args.scenario, args.sessions, args.duration, args.first_seed), indent=1))
         return
     results = [run(scenario, args.sessions, args.duration, args.first_seed) for scenario in SCENARIOS]
-    print(f"{'scenario':18s} {'valid':>9s} {'parameters':>10s} {'within 3 std':>12s}  worst |z|")
+    print(
+        f"{'scenario':18s} {'valid':>9s} {'parameters':>10s} {'within 3 std':>12s} {'worst |z|':>9s}"
+        f" {'v&wrong':>7s} {'inv&right':>9s}"
+    )
     for r in results:
         within = "-" if r["within_3_std"] is None else f"{100 * r['within_3_std']:.2f} %"
         worst = f"{r['worst'][0][0]:.2f}" if r["worst"] else "-"
-        print(f"{r['scenario']:18s} {r['valid']:>4d}/{r['sessions']:<4d} {r['parameters']:>10d} {within:>12s}  {worst}")
+        print(
+            f"{r['scenario']:18s} {r['valid']:>4d}/{r['sessions']:<4d} {r['parameters']:>10d} {within:>12s}"
+            f" {worst:>9s} {r['valid_and_wrong']:>7d} {r['invalid_and_right']:>9d}"
+        )
     parameters = sum(r["parameters"] for r in results)
     inside = sum(r["parameters"] * (r["within_3_std"] or 0.0) for r in results)
     sessions, valid = sum(r["sessions"] for r in results), sum(r["valid"] for r in results)
+    wrong, thrown = sum(r["valid_and_wrong"] for r in results), sum(r["invalid_and_right"] for r in results)
+    print(
+        f"valid-and-wrong {wrong}/{sessions} sessions ({100 * wrong / sessions:.1f} %), "
+        f"invalid-and-right {thrown}/{sessions} ({100 * thrown / sessions:.1f} %)"
+    )
     print(
         f"pooled: {valid}/{sessions} sessions valid, {parameters} data-sourced parameters of valid estimates,"
         f" {100 * inside / max(parameters, 1):.2f} % within 3 std ({sum(r['seconds'] for r in results):.0f} s)"

@@ -7,9 +7,11 @@ with the default options (``bsp_ros.core.pipeline.identify_session``, body mass 
 simulates the cell's tare recording (20 s, a minute before the session, the sensor swung 20 deg in roll and
 pitch, orientation known as from ``/tf``), estimates it (``bsp_ros.core.tare``) and applies it. Per nuisance and
 mode the table shows, over the seeds: the worst static-moment error (% of the truth, worst segment, worst
-seed), the worst Coulomb error (%), the largest |z| = |estimate - truth| / std of those data-sourced parameters,
-how many estimates were valid, how many were valid yet beyond 3 std ("bad"), and the most frequent warning
-kinds. Sensor nuisances (offset, drift, handle) pick a seeded random direction per seed.
+seed), the worst Coulomb error (%), the largest |z| = |estimate - truth| / std over every data-sourced parameter
+(``source`` data or data+prior, invalid estimates included), how many estimates were valid, both error rates:
+valid yet some parameter beyond 3 std ("v&wrong") and invalid with every parameter within 3 std ("inv&right": a
+right result thrown away), and the most frequent warning kinds; the totals of both rates close the table.
+Sensor nuisances (offset, drift, handle) pick a seeded random direction per seed.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from scoring import rates, verdict, z_scores
 
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
@@ -114,20 +117,18 @@ def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
     simulated = simulate_cell(spec)
     truth = simulated.truth.to_dict()
     document = identify_session(simulated.session, options)
-    moment_err, coulomb_err, z = [], [], []
+    moment_err, coulomb_err = [], []
     for segment, q in document["segments"].items():
-        value, std, true = q["static_moment_kgm"]["value"], q["static_moment_kgm"]["std"], truth["segments"][segment]
+        value, true = q["static_moment_kgm"]["value"], truth["segments"][segment]
         value = math.nan if value is None else value
         moment_err.append(100.0 * abs(value - true["static_moment_kgm"]) / true["static_moment_kgm"])
-        z.append(abs(value - true["static_moment_kgm"]) / std if std else math.inf)
     for joint, q in document["joints"].items():
         if "coulomb_nm" not in q:
             continue
-        value, std = q["coulomb_nm"]["value"], q["coulomb_nm"]["std"]
-        value = math.nan if value is None else value
+        value = math.nan if q["coulomb_nm"]["value"] is None else q["coulomb_nm"]["value"]
         true_c = truth["joints"][joint]["coulomb_nm"]
         coulomb_err.append(100.0 * abs(value - true_c) / true_c)
-        z.append(abs(value - true_c) / std if std else math.inf)
+    z = list(z_scores(document, truth).values()) or [math.nan]
     return {
         "valid": bool(document["quality"]["valid"]),
         "moment_err_pct": float(np.nanmax(moment_err)) if not np.isnan(moment_err).all() else math.nan,
@@ -153,7 +154,8 @@ def main(argv: list[str] | None = None) -> int:
     modes = (False,) if args.no_tare else (False, True)
     rows, runs = [], []
     header = (
-        f"{'nuisance':28s} {'tare':4s} {'moment %':>9s} {'Coulomb %':>9s} {'max|z|':>7s} {'valid':>6s} {'bad':>4s}"
+        f"{'nuisance':28s} {'tare':4s} {'moment %':>9s} {'Coulomb %':>9s} {'max|z|':>7s} {'valid':>6s}"
+        f" {'v&wrong':>7s} {'inv&right':>9s}"
         "  warnings (runs)"
     )
     print(header)
@@ -176,25 +178,35 @@ def main(argv: list[str] | None = None) -> int:
                         "message": str(error),
                     }
                 results.append(result)
-                runs.append({"nuisance": name, "tare": tare, "seed": seed, **result})
+                runs.append({"nuisance": name, "tare": tare, "seed": seed, "result": result})
             valid = [r for r in results if r["valid"]]
-            bad = sum(1 for r in valid if r["max_z"] > 3.0)
+            for r in results:
+                r["verdict"] = verdict(r["valid"], r["max_z"])
+            _, wrong, thrown = rates(r["verdict"] for r in results)
             kinds = collections.Counter(k for r in results for k in set(r["warnings"]) if not k.startswith(_ROUTINE))
             common = "; ".join(f"{k} ({c})" for k, c in kinds.most_common(2)) or "-"
             row = (
                 f"{name:28s} {'yes' if tare else 'no':4s} "
                 f"{max(r['moment_err_pct'] for r in results):9.3g} {max(r['coulomb_err_pct'] for r in results):9.3g} "
-                f"{max(r['max_z'] for r in results):7.3g} {len(valid):>3d}/{len(results):<2d} {bad:>4d}  {common}"
+                f"{max(r['max_z'] for r in results):7.3g} {len(valid):>3d}/{len(results):<2d} {wrong:>7d}"
+                f" {thrown:>9d}  {common}"
             )
             rows.append(row)
             print(row, flush=True)
+    total, wrong, thrown = rates(run["result"]["verdict"] for run in runs)
+    print(
+        f"valid-and-wrong {wrong}/{total} runs ({100 * wrong / max(total, 1):.1f} %), "
+        f"invalid-and-right {thrown}/{total} ({100 * thrown / max(total, 1):.1f} %)"
+    )
     print(
         f"({len(runs)} runs in {time.perf_counter() - started:.0f} s; seeds {args.first_seed}..."
         f"{args.first_seed + args.seeds - 1}, {args.duration:g} s sessions)"
     )
     if args.json:
         with open(args.json, "w", encoding="utf-8") as stream:
-            json.dump(runs, stream, indent=1, allow_nan=True)
+            json.dump(
+                [{**{k: v for k, v in run.items() if k != "result"}, **run["result"]} for run in runs], stream, indent=1
+            )
     return 0
 
 
