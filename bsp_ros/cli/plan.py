@@ -304,6 +304,19 @@ def precision_warning(plan: Any, target_percent: float, replan: Any) -> str | No
                 f"{head}; a {duration:.0f} s session reaches {worst_then:.3g} % (planned with the same options: "
                 f"--duration {duration:.0f})"
             )
+    passive = plan.request.passive
+    if passive.select or "stiffness" in passive.terms:
+        # In one vertical plane a joint's gravity torque is a smooth function of the joint angles, as the elastic
+        # moments are: no motion in that plane separates them, only a change of gravity's direction does.
+        return (
+            f"{head}; no session up to {duration:.0f} s reaches it: with elastic passive moments (--passive "
+            f"{passive.label}) the {owner}'s gravity torque is a smooth function of the joint angles in this plane, "
+            "as the elastic moment is, and no motion in the plane separates them. Widen the ranges, or change "
+            "gravity's direction relative to the arm between two recordings (trunk tilted, or the arm moved in a "
+            "horizontal plane, where gravity adds no torque about vertical joint axes and the robot measures the "
+            "passive moments alone), or identify with the Coulomb model, which assumes no elastic moment and says "
+            "when the data refute it"
+        )
     return f"{head}; no session up to {duration:.0f} s reaches it: widen the ranges or reduce the sensor noise"
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import numpy.typing as npt
 
 from bsp_ros.core.anthropometry import check_body_mass_kg, check_sex, segment_norm
+from bsp_ros.core.identification.elastic import ELASTIC_PRIOR_SD, ElasticReference, elastic_columns, elastic_names
 from bsp_ros.core.identification.joint import JointConfig
 from bsp_ros.core.identification.passive import TERMS, PassiveModel
 from bsp_ros.core.identification.result import ParameterName
@@ -153,26 +154,44 @@ class Prediction:
         return rows
 
 
+def predicted_model(passive: PassiveModel) -> PassiveModel:
+    """The fixed model a prediction is made for: ``--passive auto`` as its richest candidate (every elastic term
+    of the family; the std `auto` reports holds the spread across the models the data cannot reject, which the
+    richest model's covariance bounds from above where the data cannot reject it)."""
+    return passive.candidates()[-1] if passive.select else passive
+
+
 def parameter_names(n_joints: int, passive: PassiveModel) -> list[ParameterName]:
-    """The estimator's parameter order: static moments, then each joint's passive terms."""
+    """The estimator's parameter order: static moments, each joint's local passive terms, then the elastic ones."""
+    model = predicted_model(passive)
     names: list[ParameterName] = [("static_moment_kgm", s) for s in segments_for(n_joints)]
     for joint in joints_for(n_joints):
-        names += [(TERMS[term][0], joint) for term in passive.local]
-    return names
+        names += [(TERMS[term][0], joint) for term in model.local]
+    return names + elastic_names(model.elastic, n_joints)
 
 
 def regressor(q_rad: np.ndarray, velocity_rad_s: np.ndarray, passive: PassiveModel) -> np.ndarray:
-    """The stacked regressor the estimator builds (``identification.joint``): (N, n, p).
+    """The stacked regressor the estimator builds (``identification.stacked``): (N, n, p).
 
-    Gravity columns from ``bsp_ros.core.model.gravity_regressor``, passive columns from ``PassiveModel.columns``.
+    Gravity columns from ``bsp_ros.core.model.gravity_regressor``, passive columns from ``PassiveModel.columns``,
+    elastic columns (nonlinear, coupling) from ``elastic_columns`` centred on these angles' range.
     """
+    model = predicted_model(passive)
     n = q_rad.shape[1]
-    k = len(passive.local)
+    k = len(model.local)
     out = np.zeros((q_rad.shape[0], n, n + n * k))
     out[:, :, :n] = gravity_regressor(q_rad)
     for j in range(n):
-        out[:, j, n + j * k : n + (j + 1) * k] = passive.columns(q_rad, velocity_rad_s, j)
+        out[:, j, n + j * k : n + (j + 1) * k] = model.columns(q_rad, velocity_rad_s, j)
+    if model.elastic:
+        reference = ElasticReference.from_angles(q_rad)
+        out = np.concatenate((out, elastic_columns(q_rad, model.elastic, reference)), axis=2)
     return out
+
+
+def prior_precision(names: list[ParameterName]) -> np.ndarray:
+    """(p,) the Gaussian prior precisions the estimator puts on the elastic terms (0 where it has none)."""
+    return np.array([1.0 / ELASTIC_PRIOR_SD[key] ** 2 if key in ELASTIC_PRIOR_SD else 0.0 for key, _ in names])
 
 
 def _angle_noise_covariance(q_rad: np.ndarray, lengths: np.ndarray, marker_noise_m: float) -> np.ndarray:
@@ -303,11 +322,13 @@ def predict_covariance(
     design = per_wrench * (x.reshape(-1, p).T @ flat)
     noise_cov = per_wrench * force_cov + noise.wrench_hz**2 / (noise.marker_hz * grid) * marker_cov
     long_run = flat.T @ (noise_cov @ wx).reshape(-1, p)
-    inverse = np.linalg.pinv(design)
-    covariance = inverse @ long_run @ inverse
+    names = parameter_names(n, passive)
+    # The elastic terms' priors are information the estimator adds (pseudo-observations of variance 1 / P).
+    precision = np.diag(prior_precision(names))
+    inverse = np.linalg.pinv(design + precision)
+    covariance = inverse @ (long_run + precision) @ inverse
     covariance = 0.5 * (covariance + covariance.T)
 
-    names = parameter_names(n, passive)
     # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
     norms = np.sqrt(np.clip(np.diag(design), 0.0, None))
     condition = float("inf")

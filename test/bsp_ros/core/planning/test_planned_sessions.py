@@ -12,6 +12,7 @@ from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.planning import Plan, compare_with_result, compare_with_scatter
+from bsp_ros.core.planning.information import predict_covariance
 
 ELASTIC_MODEL = PassiveModel.parse("coulomb+offset+stiffness")
 
@@ -107,3 +108,18 @@ def test_predicted_std_matches_the_scatter_of_eight_sessions(plan: Plan) -> None
     results = [_identify(plan.trajectory, seed, passive, AS_PLANNED)[0] for seed in range(8)]
     for row in compare_with_scatter(plan.prediction, results):
         assert 0.5 < float(row["ratio"]) < 2.0, row
+
+
+def test_predicted_std_matches_the_reported_std_with_every_elastic_term(plan: Plan) -> None:
+    # The model `bsp plan --passive auto` predicts for: the richest of the family, nonlinear and two-joint
+    # coupling terms with the estimator's priors. Static moments are what the plan's warning is judged on.
+    richest = PassiveModel.parse("auto").candidates()[-1]
+    request = plan.request
+    prediction = predict_covariance(plan.trajectory, request.duration_s, request.nominal, richest, request.noise)
+    config = JointConfig(passive=richest, marker_placement_sd_m=0.0, dynamics=False)
+    result, _ = _identify(plan.trajectory, seed=3, config=config)
+    rows = compare_with_result(prediction, result)
+    assert len(rows) == len(result.names) > 20
+    for row in rows:
+        if row["quantity"] == "static_moment_kgm":
+            assert 1 / 1.5 < float(row["ratio"]) < 1.5, row
