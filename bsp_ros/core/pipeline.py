@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -96,6 +96,15 @@ def identify_data(
     return result
 
 
+def refit_options(result: IdentificationResult, options: IdentifyOptions) -> IdentifyOptions:
+    """The options that refit ``result``'s own model (finite differences, sensitivities): the passive model the
+    estimate used, fixed. With ``--passive auto`` or the elastic fallback a refit could otherwise choose another
+    model than the estimate's, with other parameters."""
+    used = result.diagnostics.get("passive_model")
+    passive = PassiveModel.parse(used) if isinstance(used, str) and used else options.passive
+    return replace(options, passive=passive, elastic_fallback=False)
+
+
 def fuse(result: IdentificationResult, data: IdentificationData, subject: SubjectInfo) -> Posterior | None:
     """Masses and COMs from the prior and the identified static moments; None if they are not usable."""
     _, beta, beta_cov = result.block("static_moment_kgm")
@@ -126,13 +135,14 @@ def identify_session(
     # --- end stream timing ---
     data = identification_data_from_session(session, options.kinematics)
     result = identify_data(data, options)
+    refit = refit_options(result, options)
     offsets = account_for_tare(
         result,
         data,
         session.rotation_world_from_sensor,
         session.wrench.frame_id,
         options.tare,
-        lambda d: identify_data(d, options, check_elastic=False),
+        lambda d: identify_data(d, refit, check_elastic=False),
     )
     posterior = fuse(result, data, options.subject) if result.valid else None
     info = {

@@ -13,7 +13,7 @@ from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import parameter_timing
 from bsp_ros.core.joint_angles import kinematics_from_angles, resample_kinematics, resample_motion
 from bsp_ros.core.model import contact_torques_nm
-from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data
+from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data, refit_options
 from bsp_ros.errors import BspError
 from bsp_ros.live.online.buffer import TimedBuffer
 from bsp_ros.live.online.guard import StreamGuard
@@ -295,7 +295,7 @@ class WindowedIdentifier:
                     window.rotation_world_from_sensor,
                     window.wrench_frame_id,
                     self.config.options.tare,
-                    lambda d: identify_data(d, self.config.options, check_elastic=False),
+                    lambda d: identify_data(d, refit_options(result, self.config.options), check_elastic=False),
                 )
         except BspError as error:
             return self._invalid(str(error), last_wrench)

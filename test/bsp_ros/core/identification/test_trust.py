@@ -13,6 +13,7 @@ from bsp_ros.core.identification.joint import identify_joint
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+from bsp_ros.core.tare import estimate_tare
 
 COULOMB_NM = np.array([0.5, 0.28, 0.06])
 
@@ -112,3 +113,18 @@ def test_an_elastic_offset_makes_a_model_the_user_fixed_invalid_with_its_cause_n
     assert not quality["valid"]
     assert "elastic passive moment" in quality["message"]
     assert any(w.startswith("elastic passive moment at the") for w in quality["warnings"])
+
+
+def test_the_tare_uncertainty_joins_the_estimate_of_the_elastic_terms_the_data_chose() -> None:
+    # The tare's sensitivity refits the model the estimate used (here chosen by the data), not the default one.
+    spec = sim.human_arm_cell(seed=7, duration_s=60.0)
+    stiff = dataclasses.replace(spec.passive, stiffness_nm_per_rad=(0.0, 1.2, 0.0), neutral_rad=(0.0, 1.87, 0.0))
+    spec = dataclasses.replace(spec, passive=stiff)
+    tare_spec = sim.TareSpec(duration_s=20.0, start_offset_s=-60.0, swing_rpy_deg=(20.0, 20.0, 0.0))
+    recording = sim.simulate_tare(spec, tare_spec).wrench
+    tare = estimate_tare(recording.t_ns, recording.force_n, recording.torque_nm, recording.frame_id)
+    document = identify_session(sim.simulate_cell(spec).session, IdentifyOptions(tare=tare))
+    assert document["diagnostics"]["passive_model"] != "coulomb"  # the data chose elastic terms
+    added = document["quality"]["tare"]["std_added"]
+    assert set(added) == set(document["diagnostics"]["parameters"])
+    assert all(v > 0 for k, v in added.items() if k.startswith("static_moment_kgm/"))
