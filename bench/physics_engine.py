@@ -38,7 +38,6 @@ import collections
 import contextlib
 import io
 import json
-import math
 import re
 import sys
 import tempfile
@@ -53,6 +52,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics")
 
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine
+from scoring import z_scores
 
 from bsp_ros.cli import main as bsp_main
 from bsp_ros.core.identification.passive import PassiveModel
@@ -60,7 +60,6 @@ from bsp_ros.core.model import gravity_regressor
 from bsp_ros.core.planning import planned_trajectory_from_file
 
 _SUGGESTION = re.compile(r"--passive ([a-z]+(?:\+[a-z]+)*)")
-_DATA_SOURCES = ("data", "data+prior")
 
 
 @dataclass(frozen=True)
@@ -93,23 +92,6 @@ class Tally:
     worst_param: str = ""
     messages: collections.Counter[str] = field(default_factory=collections.Counter)
     failures: collections.Counter[str] = field(default_factory=collections.Counter)
-
-
-def scores(estimate: dict[str, Any], truth: dict[str, Any]) -> dict[str, float]:
-    """|z| of every data-sourced quantity that truth.json has a value for: ``"segment/key"`` -> |z|."""
-    out: dict[str, float] = {}
-    for group in ("segments", "joints"):
-        for owner, quantities in estimate.get(group, {}).items():
-            for key, q in quantities.items():
-                if not isinstance(q, dict) or q.get("source") not in _DATA_SOURCES or q.get("value") is None:
-                    continue
-                true = truth.get(group, {}).get(owner, {}).get(key)
-                if not isinstance(true, int | float):
-                    continue
-                error = abs(float(q["value"]) - float(true))
-                std = q.get("std")
-                out[f"{owner}/{key}"] = error / std if std else (0.0 if error == 0.0 else math.inf)
-    return out
 
 
 def _identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
@@ -187,7 +169,7 @@ def run_scenario(
             if not estimate_m:
                 tally.failures[f"exit {code_m}"] += 1
                 continue
-            z = scores(estimate_m, cell.truth)
+            z = z_scores(estimate_m, cell.truth)
             valid = bool(estimate_m["quality"]["valid"])
             wrong = any(v > 3.0 for v in z.values())
             tally.valid += valid

@@ -13,7 +13,7 @@ def z_scores(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, float
     """|value - truth| / std of every data-sourced parameter the truth knows, keyed ``quantity/owner``.
 
     Invalid estimates are scored too (their values are what a user who ignored the flag would take); a
-    parameter without a value or std is left out.
+    parameter without a value is left out, one with a zero or missing std scores 0 if exact, else infinity.
     """
     out = {}
     for group in ("segments", "joints"):
@@ -23,9 +23,10 @@ def z_scores(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, float
                     continue
                 true = truth.get(group, {}).get(owner, {}).get(key)
                 value, std = q.get("value"), q.get("std")
-                if not isinstance(true, (int, float)) or value is None or not std:
+                if not isinstance(true, (int, float)) or value is None:
                     continue
-                out[f"{key}/{owner}"] = abs(value - true) / std
+                error = abs(float(value) - float(true))
+                out[f"{key}/{owner}"] = error / std if std else (0.0 if error == 0.0 else math.inf)
     return out
 
 

@@ -34,6 +34,13 @@ ELASTIC_PRIOR_SD = {
     COUPLING_PROXIMAL_KEY: 1.0,
     COUPLING_DISTAL_KEY: 1.0,
 }
+
+
+def elastic_prior_precision(names: list[ParameterName]) -> np.ndarray:
+    """(p,) the Gaussian prior precisions 1 / sd^2 of the elastic terms among ``names`` (0 for every other one)."""
+    return np.array([1.0 / ELASTIC_PRIOR_SD[key] ** 2 if key in ELASTIC_PRIOR_SD else 0.0 for key, _ in names])
+
+
 # A range narrower than this (rad) is not scaled up: its nonlinear columns would be noise amplifiers.
 MIN_HALF_RANGE_RAD = 0.01
 

@@ -9,7 +9,12 @@ from scipy.optimize import lsq_linear
 
 from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.data import IdentificationData
-from bsp_ros.core.identification.elastic import ELASTIC_PRIOR_SD, ElasticReference, elastic_columns, elastic_names
+from bsp_ros.core.identification.elastic import (
+    ElasticReference,
+    elastic_columns,
+    elastic_names,
+    elastic_prior_precision,
+)
 from bsp_ros.core.identification.passive import TERMS, PassiveModel
 from bsp_ros.core.identification.priors import BasePrior
 from bsp_ros.core.identification.result import ParameterName
@@ -80,7 +85,7 @@ def build_problem(
         regressor = np.concatenate((regressor, elastic_columns(data.q_rad, passive.elastic, reference)), axis=2)
     p = regressor.shape[2]
     lower = [0.0] * n + [TERMS[term][2] for _ in range(n) for term in local] + [-np.inf] * (p - n - n * k)
-    precision = np.array([1.0 / ELASTIC_PRIOR_SD[key] ** 2 if key in ELASTIC_PRIOR_SD else 0.0 for key, _ in names[:p]])
+    precision = elastic_prior_precision(names[:p])
     problem = Problem(
         names[:p], regressor, data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), precision, p
     )

@@ -9,10 +9,11 @@ import numpy as np
 import numpy.typing as npt
 
 from bsp_ros.core.anthropometry import check_body_mass_kg, check_sex, segment_norm
-from bsp_ros.core.identification.elastic import ELASTIC_PRIOR_SD, ElasticReference, elastic_columns, elastic_names
+from bsp_ros.core.identification.elastic import ElasticReference, elastic_columns, elastic_prior_precision
 from bsp_ros.core.identification.joint import JointConfig
-from bsp_ros.core.identification.passive import TERMS, PassiveModel
+from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.identification.stacked import problem_names
 from bsp_ros.core.joint_angles import KinematicsConfig, _direction_noise_gain
 from bsp_ros.core.model import (
     absolute_angles_rad,
@@ -162,12 +163,9 @@ def predicted_model(passive: PassiveModel) -> PassiveModel:
 
 
 def parameter_names(n_joints: int, passive: PassiveModel) -> list[ParameterName]:
-    """The estimator's parameter order: static moments, each joint's local passive terms, then the elastic ones."""
-    model = predicted_model(passive)
-    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments_for(n_joints)]
-    for joint in joints_for(n_joints):
-        names += [(TERMS[term][0], joint) for term in model.local]
-    return names + elastic_names(model.elastic, n_joints)
+    """The estimator's parameter order (quasi-static): static moments, each joint's local passive terms, then the
+    elastic ones (``identification.stacked.problem_names``)."""
+    return problem_names(predicted_model(passive), n_joints, dynamics=False)
 
 
 def regressor(q_rad: np.ndarray, velocity_rad_s: np.ndarray, passive: PassiveModel) -> np.ndarray:
@@ -187,11 +185,6 @@ def regressor(q_rad: np.ndarray, velocity_rad_s: np.ndarray, passive: PassiveMod
         reference = ElasticReference.from_angles(q_rad)
         out = np.concatenate((out, elastic_columns(q_rad, model.elastic, reference)), axis=2)
     return out
-
-
-def prior_precision(names: list[ParameterName]) -> np.ndarray:
-    """(p,) the Gaussian prior precisions the estimator puts on the elastic terms (0 where it has none)."""
-    return np.array([1.0 / ELASTIC_PRIOR_SD[key] ** 2 if key in ELASTIC_PRIOR_SD else 0.0 for key, _ in names])
 
 
 def _angle_noise_covariance(q_rad: np.ndarray, lengths: np.ndarray, marker_noise_m: float) -> np.ndarray:
@@ -324,7 +317,7 @@ def predict_covariance(
     long_run = flat.T @ (noise_cov @ wx).reshape(-1, p)
     names = parameter_names(n, passive)
     # The elastic terms' priors are information the estimator adds (pseudo-observations of variance 1 / P).
-    precision = np.diag(prior_precision(names))
+    precision = np.diag(elastic_prior_precision(names))
     inverse = np.linalg.pinv(design + precision)
     covariance = inverse @ (long_run + precision) @ inverse
     covariance = 0.5 * (covariance + covariance.T)

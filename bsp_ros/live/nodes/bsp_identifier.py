@@ -147,7 +147,8 @@ class BspIdentifierNode(RosNode):
             )
         use_tf = source == "tf" or (source == "auto" and tf_installed)
         # A TransformStamped topic feeds the same transform buffer as /tf: turning or fixed, slerped per wrench.
-        self.frames = WrenchFrames(self.world_frame, use_tf or source == "topic", parameter_rotation, p["tf_wait_s"])
+        transforms = use_tf or source == "topic"
+        self.frames = WrenchFrames(self.world_frame, transforms, parameter_rotation, p["tf_wait_s"])
         self.wrench_queue = WrenchQueue(self.frames)  # a turning sensor's wrench waits for the /tf after it
         self.frame_source = (
             f"topic {p['wrench_frame_topic']} (TransformStamped)"
@@ -158,7 +159,7 @@ class BspIdentifierNode(RosNode):
         )
         self.get_logger().info(
             f"wrench frame rotation from {self.frame_source}"
-            + ("" if use_tf or source == "topic" else f" = {p['wrench_frame_rotation_xyzw']} ({TF_TYPE} not used)")
+            + ("" if transforms else f" = {p['wrench_frame_rotation_xyzw']} ({TF_TYPE} not used)")
         )
         subject = SubjectInfo(p["body_mass_kg"] or None, p["height_m"] or None, p["sex"])
         try:

@@ -289,13 +289,14 @@ class WindowedIdentifier:
                         "checked every few updates)"
                     )
             if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
+                refit = refit_options(result, self.config.options)
                 quality = account_for_tare(
                     result,
                     data,
                     window.rotation_world_from_sensor,
                     window.wrench_frame_id,
                     self.config.options.tare,
-                    lambda d: identify_data(d, refit_options(result, self.config.options), check_elastic=False),
+                    lambda d: identify_data(d, refit, check_elastic=False),
                 )
         except BspError as error:
             return self._invalid(str(error), last_wrench)
