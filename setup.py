@@ -48,7 +48,14 @@ setup(
         # pin: pinocchio, the independent rigid-body dynamics the simulator and the regressor are tested against;
         # mujoco: an independent physics-engine cell; opensim (cp311 wheel only): a musculoskeletal arm (test/physics).
         "test": [
-            "pytest>=7", "ruff", "mypy", "psycopg[binary]>=3.1", "colcon-core", "colcon-ros", "pin>=3", "mujoco",
+            "pytest>=7",
+            "ruff",
+            "mypy",
+            "psycopg[binary]>=3.1",
+            "colcon-core",
+            "colcon-ros",
+            "pin>=3",
+            "mujoco",
             'opensim; python_version == "3.11"',
         ],
         "postgres": ["psycopg[binary]>=3.1"],
@@ -59,7 +66,6 @@ setup(
     description="Online identification of arm body segment parameters for rehabilitation robot cells.",
     license="Apache-2.0",
     entry_points={
-        "console_scripts": ["bsp = bsp_ros.cli:main"]
-        + [f"{node} = bsp_ros.live.nodes.{node}:main" for node in NODES],
+        "console_scripts": ["bsp = bsp_ros.cli:main"] + [f"{node} = bsp_ros.live.nodes.{node}:main" for node in NODES],
     },
 )

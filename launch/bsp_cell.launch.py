@@ -19,11 +19,19 @@ def generate_launch_description() -> LaunchDescription:
             DeclareLaunchArgument("params_file", default_value=config, description="ros__parameters YAML"),
             DeclareLaunchArgument("simulate", default_value="false", description="also start the simulated cell"),
             DeclareLaunchArgument("record_sessions", default_value="false", description="start session_recorder"),
-            Node(package="bsp_ros", executable="cell_simulator", parameters=[params],
-                 condition=IfCondition(LaunchConfiguration("simulate"))),
+            Node(
+                package="bsp_ros",
+                executable="cell_simulator",
+                parameters=[params],
+                condition=IfCondition(LaunchConfiguration("simulate")),
+            ),
             Node(package="bsp_ros", executable="joint_angle_estimator", parameters=[params]),
             Node(package="bsp_ros", executable="bsp_identifier", parameters=[params]),
-            Node(package="bsp_ros", executable="session_recorder", parameters=[params],
-                 condition=IfCondition(LaunchConfiguration("record_sessions"))),
+            Node(
+                package="bsp_ros",
+                executable="session_recorder",
+                parameters=[params],
+                condition=IfCondition(LaunchConfiguration("record_sessions")),
+            ),
         ]
     )

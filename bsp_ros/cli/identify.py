@@ -10,6 +10,7 @@ from typing import Any
 
 # METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
 from bsp_ros.cli.identify_options import METHODS, add_identify_arguments, options_from_args, topics_from_args  # noqa: F401
+from bsp_ros.core.quantities import quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
 
 # Distinct exit codes per failure, so scripts can tell them apart (0 valid, 1 written but invalid).
@@ -60,12 +61,20 @@ def _progress_bar() -> Any:
 
 
 def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
-    """(group, owner/key, value, std, source) for every quantity of an estimate document."""
-    out = []
-    for group in ("segments", "joints"):
-        for owner, quantities in document[group].items():
-            for key, q in quantities.items():
-                out.append((owner, key, q["value"], q["std"], q["source"]))
+    """(owner, key, value, std, source) for every quantity of an estimate document, then each joint's passive
+    curve point by point (``passive_moment_nm@<angle>deg``) and its stiffness at the reference angle."""
+    out: list[tuple[str, str, Any, Any, str]] = [
+        (owner, key, q["value"], q["std"], q["source"]) for _, owner, key, q in quantities_of(document)
+    ]
+    for joint, entries in document.get("joints", {}).items():
+        curve = entries.get("passive_curve")
+        if not isinstance(curve, dict):
+            continue
+        for angle, moment, std in zip(curve["angle_deg"], curve["moment_nm"], curve["std_nm"], strict=True):
+            out.append((joint, f"passive_moment_nm@{angle:.1f}deg", moment, std, "data"))
+        if curve.get("reference_angle_deg") is not None:
+            key = f"passive_stiffness_nm_per_rad@{curve['reference_angle_deg']:.1f}deg"
+            out.append((joint, key, curve.get("stiffness_nm_per_rad"), curve.get("stiffness_std_nm_per_rad"), "data"))
     return out
 
 

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.quantities import is_quantity
 from msg_adapters.diagnostics import ERROR, OK, WARN, DiagnosticArraySample, DiagnosticStatusData
 from msg_adapters.inertia import InertiaSample
 from msg_adapters.joint_state import JointStateSample
@@ -21,7 +23,9 @@ def level_of(document: dict[str, Any]) -> int:
 def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str = "bsp") -> DiagnosticArraySample:
     """One status per segment and joint (every quantity's value, std and source) and one for quality.
 
-    Keys are ``<quantity>``, ``<quantity>.std`` and ``<quantity>.source``, e.g. ``mass_kg.std``.
+    Keys are ``<quantity>``, ``<quantity>.std`` and ``<quantity>.source``, e.g. ``mass_kg.std``; a joint's passive
+    curve adds ``passive_curve.<k>.angle_deg``, ``.moment_nm`` and ``.std_nm`` per point and
+    ``passive_curve.stiffness_nm_per_rad`` (``.std``, ``.reference_angle_deg``).
     """
     level = level_of(document)
     quality = document["quality"]
@@ -30,9 +34,11 @@ def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str =
         for owner, quantities in document.get(group, {}).items():
             values: dict[str, object] = {}
             for key, q in quantities.items():
-                values[key] = q["value"]
-                values[f"{key}.std"] = q["std"]
-                values[f"{key}.source"] = q["source"]
+                if is_quantity(q):
+                    values[key] = q["value"]
+                    values[f"{key}.std"] = q["std"]
+                    values[f"{key}.source"] = q["source"]
+            values.update(_curve_values(quantities.get("passive_curve")))
             statuses.append(
                 DiagnosticStatusData.with_values(level, f"{prefix}/{owner}", quality.get("message", ""), "", values)
             )
@@ -47,6 +53,20 @@ def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str =
         DiagnosticStatusData.with_values(level, f"{prefix}/quality", quality.get("message", ""), "", quality_values)
     )
     return DiagnosticArraySample(t_ns, "", tuple(statuses))
+
+
+def _curve_values(curve: Any) -> dict[str, object]:
+    """A passive curve as diagnostic key/values (empty without one)."""
+    if not isinstance(curve, dict):
+        return {}
+    values: dict[str, object] = {}
+    for k, point in enumerate(zip(curve["angle_deg"], curve["moment_nm"], curve["std_nm"], strict=True)):
+        for name, number in zip(("angle_deg", "moment_nm", "std_nm"), point, strict=True):
+            values[f"passive_curve.{k}.{name}"] = number
+    values["passive_curve.reference_angle_deg"] = curve.get("reference_angle_deg")
+    values["passive_curve.stiffness_nm_per_rad"] = curve.get("stiffness_nm_per_rad")
+    values["passive_curve.stiffness_nm_per_rad.std"] = curve.get("stiffness_std_nm_per_rad")
+    return values
 
 
 def inertias_from_estimate(document: dict[str, Any], t_ns: int) -> dict[str, InertiaSample]:
@@ -69,10 +89,26 @@ def inertias_from_estimate(document: dict[str, Any], t_ns: int) -> dict[str, Ine
 
 
 def passive_moments_from_estimate(document: dict[str, Any], t_ns: int) -> JointStateSample | None:
-    """Joint names with effort = Coulomb amplitude (Nm); None when there is none."""
+    """Joint names with effort = Coulomb amplitude (Nm); None when there is none.
+
+    Where the estimate has passive curves, each curve point follows as ``<joint>/passive_curve/<k>`` with
+    position = its angle (rad) and effort = the passive moment there (Nm); the Coulomb entries' position is NaN
+    (no angle). The curves' std are on ``bsp/diagnostics``.
+    """
     joints = document.get("joints", {})
     names = [j for j, q in joints.items() if q.get("coulomb_nm", {}).get("value") is not None]
     if not names:
         return None
-    effort = np.array([joints[j]["coulomb_nm"]["value"] for j in names], dtype=np.float64)
-    return JointStateSample(t_ns, "", tuple(names), np.zeros(0), np.zeros(0), effort)
+    effort = [float(joints[j]["coulomb_nm"]["value"]) for j in names]
+    position = [math.nan] * len(names)
+    for joint, quantities in joints.items():
+        curve = quantities.get("passive_curve")
+        if not isinstance(curve, dict):
+            continue
+        for k, (angle_deg, moment_nm) in enumerate(zip(curve["angle_deg"], curve["moment_nm"], strict=True)):
+            names.append(f"{joint}/passive_curve/{k}")
+            position.append(math.radians(angle_deg))
+            effort.append(float(moment_nm))
+    if all(math.isnan(p) for p in position):
+        position = []  # no curve: the message as before (effort only)
+    return JointStateSample(t_ns, "", tuple(names), np.array(position), np.zeros(0), np.array(effort))

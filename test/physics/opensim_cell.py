@@ -295,9 +295,11 @@ class Arm26:
         return torque, passive, jac
 
     def passive_moment_nm(self, q_rad: npt.ArrayLike) -> np.ndarray:
-        """(N, 2) the relaxed muscles' moments at rest (what the driver supplies beside gravity), Nm."""
+        """(N, 2) the relaxed muscles' moments at rest (what the driver supplies beside gravity), Nm; 0 without them."""
         q = np.atleast_2d(np.asarray(q_rad, dtype=np.float64))
         zeros = np.zeros_like(q)
+        if not self.options.muscles:  # the rigid arm has no passive moment: its truth curve is 0, not the muscles'
+            return zeros
         return np.array([np.subtract(*self._torques(c, zeros[0], zeros[0])) for c in self.coordinates_rad(q)])
 
     def gravity_torque_nm(self, q_rad: npt.ArrayLike) -> np.ndarray:

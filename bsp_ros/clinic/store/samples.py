@@ -7,6 +7,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from bsp_ros.clinic.store.records import ParamKey
+from bsp_ros.core.quantities import quantities_of
 
 # (length m, mass kg, COM distance m) of a typical adult arm.
 _SEGMENTS = {"upper_arm": (0.30, 2.1, 0.17), "forearm": (0.27, 1.25, 0.12), "hand": (0.08, 0.45, 0.06)}
@@ -104,9 +105,7 @@ def sample_estimate(
             "n_valid_cycles": 5,
             "parameters": {
                 f"{group}.{part}.{name}": {"sem": abs(q["value"]) * sem_rel, "n": 5}
-                for group in ("segments", "joints")
-                for part, quantities in estimate[group].items()
-                for name, q in quantities.items()
+                for group, part, name, q in quantities_of(estimate)
                 if q["source"] == "data" and isinstance(q["value"], float) and q["value"] == q["value"]
             },
         }

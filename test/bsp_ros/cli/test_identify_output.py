@@ -6,6 +6,7 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bsp_ros.cli import main
@@ -137,3 +138,47 @@ def test_a_corrupt_bag_gives_the_count_and_the_first_damaged_place(
     assert code == CORRUPT
     assert err.count("\n") == 1 and len(err) < 400
     assert "damaged places, the first: " in err and "CRC errors" in err
+
+
+def test_a_session_with_springs_prints_its_passive_curves_in_the_tsv(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Elastic terms chosen by the data write joints.<joint>.passive_curve, which is not a quantity: the TSV
+    # once crashed on it (KeyError 'value'), whatever the passive option that chose them.
+    bag = _simulate(
+        tmp_path,
+        "springs",
+        "--duration",
+        "30",
+        "--seed",
+        "4",
+        "--stiffness",
+        "0.3",
+        "0.5",
+        "0",
+        "--passive-offset",
+        "0.1",
+        "0.2",
+        "0",
+    )
+    capsys.readouterr()
+    out = tmp_path / "e.json"
+    assert main(["identify", str(bag), "--passive", "auto", "--json", str(out), "--format", "tsv"]) == 0
+    document = json.loads(out.read_text())
+    table = [line.split("\t") for line in capsys.readouterr().out.splitlines()]
+    assert {len(row) for row in table} == {5}
+    curves = {j: q["passive_curve"] for j, q in document["joints"].items() if "passive_curve" in q}
+    assert "elbow" in curves
+    for joint, curve in curves.items():
+        printed = [row for row in table if row[0] == joint and row[1].startswith("passive_moment_nm@")]
+        assert [float(row[1].split("@")[1].removesuffix("deg")) for row in printed] == pytest.approx(
+            curve["angle_deg"], abs=0.051
+        )
+        assert [float(row[2]) for row in printed] == curve["moment_nm"]
+        assert [float(row[3]) for row in printed] == curve["std_nm"]
+        (stiffness,) = [row for row in table if row[0] == joint and row[1].startswith("passive_stiffness")]
+        assert float(stiffness[2]) == curve["stiffness_nm_per_rad"]
+    # The simulated elbow spring (offset 0.2 Nm + 0.5 Nm/rad from neutral 0) lies within 3 std of its curve.
+    elbow = curves["elbow"]
+    truth = 0.2 + 0.5 * np.radians(elbow["angle_deg"])
+    assert np.all(np.abs(np.array(elbow["moment_nm"]) - truth) <= 3 * np.array(elbow["std_nm"]))
