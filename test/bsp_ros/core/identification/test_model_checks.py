@@ -9,7 +9,8 @@ import pytest
 
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.identification.data import identification_data_from_session
-from bsp_ros.core.identification.joint import JointConfig, _near_gaps, identify_joint
+from bsp_ros.core.identification.joint import JointConfig, identify_joint
+from bsp_ros.core.identification.joint.outliers import near_gaps
 from bsp_ros.core.identification.result import IdentificationResult
 
 
@@ -66,6 +67,6 @@ def test_near_gaps_marks_the_samples_beside_a_gap_only() -> None:
     t_ns = np.concatenate(
         [np.arange(0, 1_000_000_000, 10_000_000), np.arange(2_000_000_000, 3_000_000_000, 10_000_000)]
     )
-    near = _near_gaps(t_ns, 0.05)
+    near = near_gaps(t_ns, 0.05)
     # The last 6 samples before the gap (0.94-0.99 s) and the first 6 after it (2.00-2.05 s).
     assert np.flatnonzero(near).tolist() == [*range(94, 100), *range(100, 106)]

@@ -1,0 +1,37 @@
+"""The elastic passive moment curves of a model choice, with the candidates' spread in their std."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.elastic import ElasticReference, curve_gradients, passive_curves
+from bsp_ros.core.identification.selection import Candidate, Selection
+from bsp_ros.core.identification.stacked import Fit
+
+
+def selection_curves(
+    data: IdentificationData, reference: ElasticReference, fit: Fit, selection: Selection | None
+) -> dict[str, dict[str, Any]]:
+    """Per joint, the elastic passive moment over the measured range with its std (``passive_curve``), the other
+    joints at their session means; with a model choice, the candidates' curves join its variance as the
+    parameters' do. Empty for a fixed model."""
+    if selection is None:
+        # A fixed model's curve would carry no uncertainty of its form (a linear spring on a muscle's exponential
+        # curve, a two-joint moment it lacks): curves come with the model choice, whose spread their std holds.
+        return {}
+
+    def curve_of(candidate: Candidate) -> np.ndarray:
+        assert candidate.problem is not None
+        return curve_gradients(candidate.problem.names, candidate.model.elastic, reference)
+
+    gradients = curve_of(selection.chosen)
+    chosen = gradients @ fit.values  # (n, K + 1)
+    spread = np.zeros_like(chosen)
+    for candidate in selection.candidates:
+        if candidate.fit is None or candidate is selection.chosen or candidate.rejected:
+            continue
+        spread = np.maximum(spread, (curve_of(candidate) @ candidate.fit.values - chosen) ** 2)
+    return passive_curves(gradients, fit.values, fit.covariance, reference, spread)

@@ -1,0 +1,71 @@
+"""Model check: an elastic passive moment (offset, stiffness) the fixed model lacks."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi2
+
+from bsp_ros.core.identification.covariance import correlation_from_covariance
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_SHIFT_SD
+from bsp_ros.core.identification.stacked import Extras, Fit, build_problem, fit_problem, problem_names
+from bsp_ros.core.streams import joints_for
+
+
+def elastic_check(
+    data: IdentificationData,
+    config: JointConfig,
+    rows: np.ndarray,
+    base: Fit,
+    widths: np.ndarray,
+    extras: Extras | None = None,
+) -> list[str]:
+    """Warn when a linear spring (offset, stiffness) the model lacks is supported by the data and moves the static
+    moments: the fixed model would then be valid and wrong (with ``config.elastic_fallback`` the warning says the
+    estimate uses the elastic terms the data choose instead)."""
+    # A linear spring only. Polynomial terms tested against a model without a spring fit the smallest systematic
+    # errors (of the angle filters, on noise-free data) against a gravity torque they can mimic; tested against a
+    # fixed spring model, on our own simulator's linear springs with the dynamics, they were "supported" (chi2
+    # ~200) and moved the upper arm's static moment by 30 %. Either would throw right estimates away;
+    # `--passive auto` weighs them instead, with the spread in the std.
+    if "stiffness" in config.passive.terms:
+        return []
+    wider = config.passive.with_terms(("offset", "stiffness"))
+    kinds = " and ".join(term for term in wider.terms if term not in config.passive.terms)
+    problem = build_problem(data, wider, rows, widths, extras)
+    fit = fit_problem(problem)
+    n = data.n_joints
+    notes = []
+    base_beta, wide_beta = base.values[:n], fit.values[:n]
+    change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
+    # Against the base fit's std (marker placement included): a shift well inside it cannot make it wrong.
+    shift_sd = np.abs(wide_beta - base_beta) / np.sqrt(np.clip(np.diag(base.covariance)[:n], 1e-300, None))
+    correlation = correlation_from_covariance(fit.covariance)
+    have = set(problem_names(config.passive, n, extras is not None))
+    for joint in joints_for(n):
+        picks = [i for i, name in enumerate(problem.names) if name[1] == joint and name not in have and i >= n]
+        if not picks:
+            continue
+        sub = fit.covariance[np.ix_(picks, picks)]
+        theta = fit.values[picks]
+        statistic = float(theta @ np.linalg.pinv(sub) @ theta)
+        if chi2.sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD:
+            worst = int(np.argmax(shift_sd))
+            corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
+            notes.append(
+                f"elastic passive moment at the {joint}: {kinds} terms the model lacks are supported by "
+                f"the data (chi2 {statistic:.0f}) and confounded with gravity (|corr| {corr:.2f}); modelling them "
+                f"moves the {problem.names[worst][1]} static moment by {100 * change[worst]:.1f}% "
+                f"({shift_sd[worst]:.1f} std): "
+                + (
+                    "the estimate uses the elastic terms the data choose (--passive auto), and what that choice "
+                    "leaves open is in its std"
+                    if config.elastic_fallback
+                    else "the static moments may be biased (try --passive auto, which chooses the elastic terms and "
+                    "puts what the choice leaves open in the std"
+                )
+                + "; an F/T sensor offset no tare removed looks like an elastic offset: apply one with --tare"
+                + ("" if config.elastic_fallback else ")")
+            )
+    return notes

@@ -1,0 +1,46 @@
+"""Which rows tell the direction of motion, and whether the motion excites every joint."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.streams import joints_for
+
+
+def motion_rows(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
+    """Rows with a trustworthy direction of motion (all rows when the model has no Coulomb term)."""
+    speed = np.abs(data.velocity_rad_s)
+    if "coulomb" not in config.passive.terms:
+        return np.ones_like(speed, dtype=bool), []
+    typical = np.percentile(speed, 95, axis=0)
+    noise = np.nan_to_num(data.velocity_noise_rad_s, nan=0.0)
+    deadband = np.maximum(config.deadband_fraction * typical, config.deadband_noise_sd * noise)
+    notes = []
+    for j, joint in enumerate(joints_for(data.n_joints)):
+        if noise[j] > 0 and config.deadband_noise_sd * noise[j] > 0.5 * typical[j]:
+            notes.append(
+                f"uncertain direction of motion at the {joint}: velocity noise {noise[j]:.2g} rad/s against "
+                f"a typical speed of {typical[j]:.2g} rad/s"
+            )
+    return speed > deadband[None, :], notes
+
+
+def excitation_problems(data: IdentificationData, rows: np.ndarray, config: JointConfig) -> list[str]:
+    """Why the motion cannot support an estimate: too few samples, a joint that does not move, or (with a
+    Coulomb term) one that moves in one direction only among the ``rows`` (N, n) of trustworthy direction."""
+    problems = []
+    if data.t_ns.size < config.min_samples:
+        problems.append(f"too few samples: {data.t_ns.size} < {config.min_samples}")
+        return problems
+    range_deg = np.degrees(np.ptp(data.q_rad, axis=0))
+    for j, joint in enumerate(joints_for(data.n_joints)):
+        if range_deg[j] < config.min_range_deg:
+            problems.append(f"no motion at the {joint}: range {range_deg[j]:.3f} deg < {config.min_range_deg} deg")
+        elif "coulomb" in config.passive.terms:
+            signs = np.sign(data.velocity_rad_s[rows[:, j], j])
+            share = min((signs > 0).mean(), (signs < 0).mean()) if signs.size else 0.0
+            if share < config.min_direction_share:
+                problems.append(f"the {joint} moved in one direction only ({100 * share:.1f}% of rows the other way)")
+    return problems

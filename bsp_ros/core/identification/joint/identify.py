@@ -1,0 +1,301 @@
+"""The stacked identification of all joints: the fit, the model checks and the validity verdict, in order."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from bsp_ros.core.identification.covariance import correlation_from_covariance
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.elastic import ElasticReference
+from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.identification.joint.curves import selection_curves
+from bsp_ros.core.identification.joint.drift import drift_check
+from bsp_ros.core.identification.joint.elastic_check import elastic_check
+from bsp_ros.core.identification.joint.excitation import excitation_problems, motion_rows
+from bsp_ros.core.identification.joint.extras import base_extras
+from bsp_ros.core.identification.joint.misfit import misfit_against_noise
+from bsp_ros.core.identification.joint.outliers import (
+    GAP_EDGE_S,
+    MIN_OUTLIER_NM,
+    fit_outliers,
+    near_gaps,
+    wrench_spikes,
+)
+from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
+from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
+from bsp_ros.core.identification.joint.stribeck import stribeck_check
+from bsp_ros.core.identification.joint.transition import transition_widths
+from bsp_ros.core.identification.priors import implausible_perpendicular_moments
+from bsp_ros.core.identification.result import IdentificationResult, ParameterName
+from bsp_ros.core.identification.selection import select_passive, spread_covariance
+from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem
+from bsp_ros.core.streams import joints_for
+
+# Above this column-scaled condition number no std is meaningful: parameters the motion cannot tell apart.
+UNIDENTIFIABLE_CONDITION = 1e8
+
+
+def _prior_share(problem: Problem, covariance: np.ndarray) -> dict[str, float]:
+    """Posterior / prior variance of every parameter with a prior: near 1, the prior alone decided it."""
+    out = {}
+    for i in np.flatnonzero(problem.prior_precision > 0):
+        key, owner = problem.names[i]
+        out[f"{key}/{owner}"] = float(covariance[i, i] * problem.prior_precision[i])
+    return out
+
+
+def _failed(
+    data: IdentificationData, names: list[ParameterName], problems: list[str], warnings: list[str]
+) -> IdentificationResult:
+    """An invalid result: NaN values and covariance, the problems as its message."""
+    p = len(names)
+    return IdentificationResult(
+        "joint",
+        names,
+        np.full(p, np.nan),
+        np.full((p, p), np.nan),
+        False,
+        "; ".join(problems),
+        warnings,
+        n_samples=int(data.t_ns.size),
+    )
+
+
+def identify_joint(data: IdentificationData, config: JointConfig | None = None) -> IdentificationResult:
+    """Identify static moments and passive moments of all joints in one stacked problem.
+
+    Wrench spikes are removed before the fit and samples far off the fit after it (counted in the
+    warnings); if removing the latter moves a parameter by more than its standard deviation, the
+    estimate is not valid: it would hang on a few samples. Nor is it valid when the residuals are far
+    above the sensor noise the data shows (the model does not fit), when a static moment sits at its
+    bound 0, or when most samples of a joint lie in the direction dead band.
+
+    Parameters
+    ----------
+    data : samples with joint angles, direction velocities and measured torques.
+    config : passive model and validity thresholds.
+
+    Returns
+    -------
+    IdentificationResult with a HAC covariance; ``valid`` False with a message when excitation is poor.
+    """
+    config = config or JointConfig()
+    n = data.n_joints
+    joints = joints_for(n)
+    rows, notes = motion_rows(data, config)
+    spikes, spike_notes = wrench_spikes(data, config)
+    rows &= ~spikes[:, None]
+    problems = excitation_problems(data, rows, config)
+    extras = base_extras(data, config)
+    problem = build_problem(data, config.passive, rows, extras=extras)
+    warnings = list(data.warnings) + spike_notes + notes
+    if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
+        problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
+        return _failed(data, problem.names, problems, warnings)
+    usable = int((~spikes).sum())
+    if "coulomb" in config.passive.terms:
+        for j, joint in enumerate(joints):
+            share = rows[:, j].sum() / max(usable, 1)
+            if share < config.min_row_share:
+                problems.append(
+                    f"most samples of the {joint} were dropped: only {100 * share:.0f}% move clearly enough to "
+                    "tell the direction of motion"
+                )
+    fit = fit_problem(problem)
+    widths, spread, span = transition_widths(problem, fit, data, config)
+    if widths.any():
+        problem = build_problem(data, config.passive, rows, widths, extras)
+        fit = fit_problem(problem)
+        for j, joint in enumerate(joints):
+            if widths[j] == 0:
+                continue
+            beyond = float((np.abs(data.velocity_rad_s[rows[:, j], j]) > 3 * widths[j]).sum()) / max(usable, 1)
+            warnings.append(
+                f"friction at the {joint} changes direction smoothly (tanh width about {1e3 * widths[j]:.2g} mrad/s, "
+                f"modelled); {100 * beyond:.0f}% of samples move faster than 3 widths"
+            )
+            if beyond < config.min_row_share:
+                # Weakly identified, not wrong: every width from the sign step to the chosen one stays plausible,
+                # and the amplitudes over them join its std.
+                spread[j] = max(spread[j], span[j])
+                warnings.append(
+                    f"the {joint} hardly leaves its friction transition ({100 * beyond:.0f}% of samples beyond 3 "
+                    f"widths): its Coulomb amplitude is weakly identified, and its std says by how much"
+                )
+    selection = None
+    if config.passive.select:
+        sd_m = config.marker_placement_sd_m
+
+        def with_placement(candidate: Problem, candidate_fit: Fit) -> np.ndarray:
+            if sd_m == 0:
+                return candidate_fit.covariance
+            return candidate_fit.covariance + placement_covariance(data, candidate, candidate_fit, sd_m)
+
+        selection = select_passive(data, config.passive, rows, widths if widths.any() else None, extras, with_placement)
+        assert selection.chosen.problem is not None and selection.chosen.fit is not None
+        config = dataclasses.replace(config, passive=selection.chosen.model)
+        problem, fit = selection.chosen.problem, selection.chosen.fit
+    far = fit_outliers(fit, config)
+    n_far = int(far.sum())
+    n_removed = 0
+    if n_far > 0.05 * usable:
+        problems.append(
+            f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
+        )
+    elif n_far:
+        kept = build_problem(data, config.passive, rows & ~far[:, None], widths, extras)
+        refit = fit_problem(kept)
+        # Against the larger std of the two fits: samples far off the fit (a filter's edge, a glitch) also
+        # inflate the std of the fit that keeps them.
+        std = np.sqrt(np.clip(np.maximum(np.diag(refit.covariance), np.diag(fit.covariance)), 0.0, None))
+        shift = np.abs(refit.values - fit.values) / np.maximum(std, 1e-300)
+        near_gap = int((far & near_gaps(data.t_ns, GAP_EDGE_S)).sum())
+        where = (
+            f"; {near_gap} of them within {GAP_EDGE_S:g} s of a gap in the joint angles (marker dropouts: the "
+            "direction of motion, hence the sign of friction, is least certain there)"
+            if near_gap
+            else ""
+        )
+        warnings.append(
+            f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over "
+            f"{config.outlier_sd:g} robust sd){where}"
+        )
+        if shift.max() > config.max_outlier_shift:
+            worst = int(np.argmax(shift))
+            key, owner = problem.names[worst]
+            problems.append(
+                f"the fit hangs on a few samples: removing {n_far} far off it moves {key} at the {owner} by "
+                f"{shift[worst]:.1f} std"
+            )
+        problem, fit, n_removed = kept, refit, n_far
+    if spread.any():
+        # Whether friction steps or changes smoothly at low speed is itself uncertain: its effect on each
+        # Coulomb amplitude joins that amplitude's variance (independent of the other parameters).
+        covariance = fit.covariance.copy()
+        k = len(config.passive.local)
+        for j in range(n):
+            index = n + j * k + config.passive.local.index("coulomb")
+            covariance[index, index] += spread[j] ** 2
+        fit = dataclasses.replace(fit, covariance=covariance)
+    # Whether the data or the prior decided a parameter, judged before the placement uncertainty is added.
+    prior_share = _prior_share(problem, fit.covariance)
+    if config.marker_placement_sd_m > 0:
+        placement = placement_covariance(data, problem, fit, config.marker_placement_sd_m)
+        fit = dataclasses.replace(fit, covariance=fit.covariance + placement)
+    model_spread = np.zeros_like(fit.covariance)
+    if selection is not None:
+        # What the choice of passive model leaves open belongs in the std (model-averaged variance).
+        model_spread, model_shift = spread_covariance(selection)
+        fit = dataclasses.replace(fit, covariance=fit.covariance + model_spread)
+        for index in np.flatnonzero(model_shift[:n] > 0.5).tolist():
+            warnings.append(
+                f"the {problem.names[index][1]} static moment depends on the passive model the data cannot choose "
+                f"between (they differ by up to {model_shift[index]:.1f} of its data std): that spread is in its std"
+            )
+    reference = ElasticReference.from_angles(data.q_rad)
+    curves = selection_curves(data, reference, fit, selection)
+    noise, misfit = misfit_against_noise(fit)
+    for j, joint in enumerate(joints):
+        if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
+            problems.append(
+                f"the model does not fit at the {joint}: residual RMS {misfit[j] * noise[j]:.3g} Nm is "
+                f"{misfit[j]:.1f} times the sensor noise ({noise[j]:.2g} Nm) the data shows (a missing or "
+                "wrong sensor transform, an unmodelled load or passive moment?)"
+            )
+    if fit.condition > UNIDENTIFIABLE_CONDITION:
+        problems.append(
+            f"not identifiable: condition number {fit.condition:.3g} (the motion cannot tell some parameters apart; "
+            "move each joint over a wider range: bsp plan)"
+        )
+    elif fit.condition > config.max_condition:
+        # An honest std is large here, not wrong: the estimate stays, its std says what the motion leaves open.
+        warnings.append(f"poorly excited: condition number {fit.condition:.3g} > {config.max_condition:g}")
+    correlation = correlation_from_covariance(fit.covariance)
+    all_std = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
+    max_corr_with_gravity = {}
+    for i, (key, owner) in enumerate(problem.names[: problem.passive_end]):
+        if i >= n:
+            partner = int(np.argmax(np.abs(correlation[i, :n])))
+            corr = float(abs(correlation[i, partner]))
+            max_corr_with_gravity[f"{key}/{owner}"] = corr
+            value = fit.values[partner]
+            rel_std = all_std[partner] / value if value > 0 else np.inf
+            if corr > config.confounded_corr and rel_std > config.confounded_rel_std:
+                warnings.append(
+                    f"confounded: {key} at the {owner} is correlated with gravity (|corr| {corr:.3f}); the "
+                    f"{problem.names[partner][1]} static moment is uncertain by {rel_std:.1%} "
+                    "(a session at several operating points separates them: bsp plan)"
+                )
+        std = all_std[i]
+        at_bound = np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12
+        if at_bound and i < n:
+            problems.append(f"the {owner} static moment sits at its bound 0: the data do not support it")
+        elif at_bound and std > 0:
+            warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
+        if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
+            warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
+    if config.check_elastic and not problems:
+        unmodelled = drift_check(data, problem, fit) + stribeck_check(data, problem, fit, config, widths)
+        warnings += unmodelled
+        if unmodelled:
+            problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
+    if config.check_elastic and selection is None and not problems:
+        elastic = elastic_check(data, config, problem.rows, fit, widths, extras)
+        if elastic and config.elastic_fallback:
+            # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
+            chosen = dataclasses.replace(config.passive, select=True)
+            fallback = identify_joint(data, dataclasses.replace(config, passive=chosen, elastic_fallback=False))
+            fallback.warnings = elastic + fallback.warnings
+            return fallback
+        warnings += elastic
+        if elastic:
+            problems.append(
+                "an elastic passive moment the model lacks is supported by the data and biases the static moments "
+                "(see warnings)"
+            )
+    if config.check_elastic and extras is not None and not problems:
+        # Last, with the model checks (live, they run beside the updates): a drift or an elastic term the checks
+        # above name is the likelier cause of an off-axis moment.
+        perpendicular = [i for i, (key, _) in enumerate(problem.names) if key == "perpendicular_moment_kgm"]
+        problems += implausible_perpendicular_moments(
+            [problem.names[i][1] for i in perpendicular],
+            fit.values[perpendicular],
+            extras.prior,
+            np.sqrt(np.clip(np.diag(model_spread)[perpendicular], 0.0, None)),
+        )
+    sensitivity = passive_offset_sensitivity(problem, fit, n)
+    valid = not problems and bool(np.isfinite(fit.values).all())
+    message = "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples"
+    residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)}
+    used = problem.rows.sum(axis=0)
+    removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_removed}
+    return IdentificationResult(
+        "joint",
+        problem.names,
+        fit.values,
+        fit.covariance,
+        valid,
+        message,
+        warnings,
+        fit.condition,
+        residual_rms,
+        int(data.t_ns.size),
+        {
+            "hac_lags": fit.lags,
+            "max_corr_with_gravity": max_corr_with_gravity,
+            "passive_model": config.passive.label,
+            "passive_selection": {} if selection is None else selection.to_dict(),
+            "passive_curves": curves,
+            "elastic_reference": reference.to_dict(),
+            "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
+            "sensor_noise_nm": {j: float(v) for j, v in zip(joints, noise, strict=True)},
+            "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},
+            "removed_samples": {k: v for k, v in removed.items() if v},
+            "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
+            "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
+            "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
+            "prior_share": prior_share,
+        },
+    )

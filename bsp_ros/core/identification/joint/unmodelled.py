@@ -1,0 +1,35 @@
+"""The test of a term the model lacks: significant, and moving a watched parameter beyond its std."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi2
+
+from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.identification.stacked import Fit, Problem, augmented, fit_problem
+
+# An unmodelled term counts when its coefficients differ from 0 at this significance (HAC chi-square) AND
+# modelling it moves a static moment or a Coulomb amplitude by more than this many of its std: only then
+# would the estimate be wrong beyond its std without it.
+MODEL_CHECK_P = 1e-6
+MODEL_CHECK_SHIFT_SD = 1.0
+
+
+def term_test(
+    problem: Problem, fit: Fit, extra: np.ndarray, names: list[ParameterName], watched: list[int]
+) -> tuple[float, float, int, Fit]:
+    """Fit with the extra columns; return the p-value of their coefficients, the largest shift of a
+    ``watched`` parameter in std (the larger of the two fits': the base fit's is the std the estimate reports,
+    marker placement included), which one, and the wider fit."""
+    wide = fit_problem(augmented(problem, extra, names))
+    p = len(problem.names)
+    picks = list(range(p, p + len(names)))
+    theta = wide.values[picks]
+    try:
+        statistic = float(theta @ np.linalg.solve(wide.covariance[np.ix_(picks, picks)], theta))
+    except np.linalg.LinAlgError:
+        return 1.0, 0.0, watched[0], wide
+    variance = np.maximum(np.diag(wide.covariance)[watched], np.diag(fit.covariance)[watched])
+    shift = np.abs(wide.values[watched] - fit.values[watched]) / np.sqrt(np.clip(variance, 1e-300, None))
+    worst = int(np.argmax(shift))
+    return float(chi2.sf(statistic, len(picks))), float(shift[worst]), watched[worst], wide
