@@ -11,7 +11,9 @@ invalid-and-right: invalid, every one within 3 std), and how often each kind of 
 Scenarios: clean; elastic (0.2 Nm passive offset per joint) and elastic_small (0.05 Nm); random_subject
 (body mass 55-100 kg drawn from the prior); dropouts (5% marker dropouts, 20 frames mean); glitches (one
 elbow frame off by ~0.3 m and ten 1 kN wrench spikes); transition_1mrad / transition_2mrad (Coulomb
-friction as c tanh(v / w), added to the torques of a friction-free session).
+friction as c tanh(v / w), added to the torques of a friction-free session); skin_3mm (every marker re-placed
+within +-3 mm of its joint centre per axis, drawn anew per session) and skin_3mm_planned (the same on the
+planner's protocol for shoulder -70..-10, elbow 10..100, wrist -20..20 deg, in place of the sines).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
+import functools
 import json
 import re
 import time
@@ -42,7 +45,10 @@ SCENARIOS = (
     "glitches",
     "transition_1mrad",
     "transition_2mrad",
+    "skin_3mm",
+    "skin_3mm_planned",
 )
+SKIN_BOUND_M = 0.003  # issue 19: markers re-placed within +-3 mm of the joint centres, anew every session
 COULOMB_NM = np.array([0.5, 0.28, 0.06])
 
 
@@ -58,11 +64,25 @@ def _spec(scenario: str, seed: int, duration_s: float) -> sim.CellSpec:
         )
     if scenario.startswith("transition"):
         spec = dataclasses.replace(spec, passive=sim.PassiveTruth(coulomb_nm=(0.0, 0.0, 0.0)))
+    if scenario.startswith("skin"):
+        spec = dataclasses.replace(spec, markers=dataclasses.replace(spec.markers, skin_offset_bound_m=SKIN_BOUND_M))
+    if scenario.endswith("planned"):
+        spec = dataclasses.replace(spec, trajectory=_plan().trajectory)
     if scenario.startswith("elastic"):
         offset = 0.2 if scenario == "elastic" else 0.05
         passive = dataclasses.replace(spec.passive, offset_nm=(offset, offset, offset))
         spec = dataclasses.replace(spec, passive=passive)
     return spec
+
+
+@functools.cache
+def _plan() -> Any:
+    """`bsp plan`'s default protocol for the simulator's subject (ranges of bsp plan's help example)."""
+    from bsp_ros.core.planning import JointLimits, NominalArm, PlanRequest, plan_protocol
+
+    nominal = NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
+    limits = JointLimits(((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0)))
+    return plan_protocol(PlanRequest(nominal, (0.0, 1.2), limits))
 
 
 def _transition_document(spec: sim.CellSpec, simulated: sim.SimulatedSession, width_rad_s: float) -> dict[str, Any]:
@@ -74,7 +94,9 @@ def _transition_document(spec: sim.CellSpec, simulated: sim.SimulatedSession, wi
     options = IdentifyOptions()
     result = identify_data(data, options)
     posterior = fuse(result, data, options.subject) if result.valid else None
-    return estimate_document(result, data, posterior, options.subject)
+    return estimate_document(
+        result, data, posterior, options.subject, marker_placement_sd_m=options.marker_placement_sd_m
+    )
 
 
 def _kind(warning: str) -> str:

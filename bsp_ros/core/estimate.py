@@ -50,6 +50,7 @@ def estimate_document(
     posterior: Posterior | None,
     subject: SubjectInfo,
     session: dict[str, Any] | None = None,
+    marker_placement_sd_m: float = 0.0,
 ) -> dict[str, Any]:
     """Build the estimate JSON (as a dict) of CONTRACT.md.
 
@@ -63,16 +64,20 @@ def estimate_document(
     posterior : masses and COMs fused with the prior, None if the fusion could not run.
     subject : the subject facts used for the prior.
     session : extra facts about the session (times, source, configuration).
+    marker_placement_sd_m : how far (1 sd per axis, m) a skin marker may sit from its joint centre: a segment
+        length is the distance of two markers, so each length's std holds ``sqrt(2)`` times it.
 
     Returns
     -------
     A JSON-ready dict (strict JSON: no NaN).
     """
     n = data.n_joints
+    # Two markers' offsets along the segment move the measured length; the truth is the joint centres' distance.
+    lengths_std_m = np.hypot(data.lengths_std_m, math.sqrt(2.0) * marker_placement_sd_m)
     segments: dict[str, dict[str, Any]] = {}
     for j, segment in enumerate(segments_for(n)):
         entry = {
-            "length_m": quantity(data.lengths_m[j], data.lengths_std_m[j], "data"),
+            "length_m": quantity(data.lengths_m[j], lengths_std_m[j], "data"),
             "static_moment_kgm": quantity(
                 result.value("static_moment_kgm", segment), result.std_of("static_moment_kgm", segment), "data"
             ),

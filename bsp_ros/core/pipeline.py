@@ -154,7 +154,9 @@ def identify_session(
         "config": options.config(),
         **(session_info or {}),
     }
-    document = estimate_document(result, data, posterior, options.subject, info)
+    document = estimate_document(
+        result, data, posterior, options.subject, info, marker_placement_sd_m=options.marker_placement_sd_m
+    )
     document["quality"].update(offsets)
     # --- stream timing and sensor rotation (timing.py, sensor_rotation.py) ---
     document["quality"]["timing"] = timing.quality()

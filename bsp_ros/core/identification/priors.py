@@ -96,8 +96,9 @@ def implausible_perpendicular_moments(
     segments : (n,) segment names.
     values_kgm : (n,) identified perpendicular moments.
     prior : the prior they were identified with.
-    model_sd_kgm : (n,) how far the passive models the data cannot choose between move each value (kg m,
-        ``--passive auto``): a value the choice alone could move back into the prior's range is no evidence.
+    model_sd_kgm : (n,) how far what the data cannot tell moves each value (kg m): the passive models the data
+        cannot choose between (``--passive auto``), skin markers off their joint centres; a value these alone
+        could move back into the prior's range is no evidence.
     """
     problems = []
     spread = np.zeros(len(segments)) if model_sd_kgm is None else np.asarray(model_sd_kgm, dtype=np.float64)

@@ -138,4 +138,6 @@ def recursive_document(result: IdentificationResult, lengths_m: np.ndarray, opti
         np.zeros(n),
     )
     posterior = fuse(result, data, options.subject) if result.valid else None
-    return estimate_document(result, data, posterior, options.subject)
+    return estimate_document(
+        result, data, posterior, options.subject, marker_placement_sd_m=options.marker_placement_sd_m
+    )

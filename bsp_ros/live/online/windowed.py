@@ -19,7 +19,7 @@ from bsp_ros.live.online.buffer import TimedBuffer
 from bsp_ros.live.online.guard import StreamGuard
 from bsp_ros.validation import check_finite_scalar, check_positive
 
-# Warnings of the model checks (identification/joint.py) that make an estimate invalid; live they run every
+# Warnings of the model checks (identification/joint/) that make an estimate invalid; live they run every
 # ``elastic_check_every`` updates and their verdict holds in between.
 MODEL_CHECK_WARNINGS = ("elastic passive moment", "the wrench drifts", "depends on speed (Stribeck")
 # The verdict before the first model check of a session has come back (see WindowedIdentifier.model_check).
@@ -309,7 +309,14 @@ class WindowedIdentifier:
             "clock_jumps": window.clock_jumps,
             "config": self.config.options.config(),
         }
-        document = estimate_document(result, data, posterior, self.config.options.subject, info)
+        document = estimate_document(
+            result,
+            data,
+            posterior,
+            self.config.options.subject,
+            info,
+            marker_placement_sd_m=self.config.options.marker_placement_sd_m,
+        )
         document["quality"]["timing"] = parameter_timing(self.config.options.wrench_delay_s)  # the node shifts stamps
         if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
             document["quality"].update(quality)

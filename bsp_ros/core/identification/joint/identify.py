@@ -24,7 +24,7 @@ from bsp_ros.core.identification.joint.outliers import (
     wrench_spikes,
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
-from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
+from bsp_ros.core.identification.joint.placement_covariance import placement_covariance, placement_effect
 from bsp_ros.core.identification.joint.stribeck import stribeck_check
 from bsp_ros.core.identification.joint.transition import transition_widths
 from bsp_ros.core.identification.priors import implausible_perpendicular_moments
@@ -181,9 +181,13 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         fit = dataclasses.replace(fit, covariance=covariance)
     # Whether the data or the prior decided a parameter, judged before the placement uncertainty is added.
     prior_share = _prior_share(problem, fit.covariance)
+    judged_residual = None
+    placement_sd = np.zeros(len(problem.names))
     if config.marker_placement_sd_m > 0:
-        placement = placement_covariance(data, problem, fit, config.marker_placement_sd_m)
-        fit = dataclasses.replace(fit, covariance=fit.covariance + placement)
+        placement = placement_effect(data, problem, fit, config.marker_placement_sd_m)
+        fit = dataclasses.replace(fit, covariance=fit.covariance + placement.covariance)
+        judged_residual = placement.residual
+        placement_sd = np.sqrt(np.clip(np.diag(placement.covariance), 0.0, None))
     model_spread = np.zeros_like(fit.covariance)
     if selection is not None:
         # What the choice of passive model leaves open belongs in the std (model-averaged variance).
@@ -196,7 +200,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             )
     reference = ElasticReference.from_angles(data.q_rad)
     curves = selection_curves(data, reference, fit, selection)
-    noise, misfit = misfit_against_noise(fit)
+    noise, misfit = misfit_against_noise(fit, judged_residual)
     for j, joint in enumerate(joints):
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
             problems.append(
@@ -237,10 +241,16 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
     if config.check_elastic and not problems:
-        unmodelled = drift_check(data, problem, fit) + stribeck_check(data, problem, fit, config, widths)
-        warnings += unmodelled
+        stribeck = stribeck_check(data, problem, fit, config, widths)
+        unmodelled = drift_check(data, problem, fit) + [f.note for f in stribeck if f.biases_estimate]
+        warnings += unmodelled + [f.note for f in stribeck if not f.biases_estimate]
         if unmodelled:
             problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
+        covariance = fit.covariance.copy()
+        for finding in (f for f in stribeck if not f.biases_estimate):
+            # Which friction law holds at low speed is open; the amplitudes of both join the Coulomb variance.
+            covariance[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
+        fit = dataclasses.replace(fit, covariance=covariance)
     if config.check_elastic and selection is None and not problems:
         elastic = elastic_check(data, config, problem.rows, fit, widths, extras)
         if elastic and config.elastic_fallback:
@@ -263,7 +273,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             [problem.names[i][1] for i in perpendicular],
             fit.values[perpendicular],
             extras.prior,
-            np.sqrt(np.clip(np.diag(model_spread)[perpendicular], 0.0, None)),
+            # A marker off its joint centre, normal to the segment, tilts the segment's angle: an apparent
+            # off-axis moment as large as the placement std says, no evidence of a missing moment.
+            np.hypot(np.sqrt(np.clip(np.diag(model_spread)[perpendicular], 0.0, None)), placement_sd[perpendicular]),
         )
     sensitivity = passive_offset_sensitivity(problem, fit, n)
     valid = not problems and bool(np.isfinite(fit.values).all())

@@ -8,8 +8,12 @@ from bsp_ros.core.identification.robust import high_frequency_sd
 from bsp_ros.core.identification.stacked import Fit
 
 
-def misfit_against_noise(fit: Fit) -> tuple[np.ndarray, np.ndarray]:
-    """Per joint: the sensor noise the data shows (Nm) and the residual RMS as a multiple of it."""
+def misfit_against_noise(fit: Fit, residual: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Per joint: the sensor noise the data shows (Nm) and the residual RMS as a multiple of it.
+
+    ``residual`` (N, n), if given, is the one judged (e.g. less what marker placement explains); the noise is
+    always the fit's own."""
     noise = high_frequency_sd(fit.residual)
-    rms = np.sqrt(np.nanmean(fit.residual**2, axis=0))
+    judged = fit.residual if residual is None else residual
+    rms = np.sqrt(np.nanmean(judged**2, axis=0))
     return noise, rms / np.maximum(noise, 1e-12)

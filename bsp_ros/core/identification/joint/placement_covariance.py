@@ -1,22 +1,43 @@
-"""The covariance of the estimate from where the skin markers sit relative to the joint centres."""
+"""What skin markers off their joint centres do to an estimate: its covariance, and the residual they explain."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.placement import placement_columns
-from bsp_ros.core.identification.stacked import Fit, Problem
+from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.identification.stacked import Fit, Problem, augmented, fit_problem
 
 
-def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> np.ndarray:
-    """Covariance (p, p) of the estimate from where the skin markers sit relative to the joint centres.
+@dataclass(frozen=True)
+class PlacementEffect:
+    """The effect of marker placement on one fit.
+
+    Attributes
+    ----------
+    covariance : (p, p) of the estimate, from offsets of ``sd_m`` per axis.
+    residual : (N, n) the residual (Nm, NaN where unused) of the fit that also takes marker offsets, each with a
+        prior of ``sd_m``: what is left once offsets of that size explain what they can.
+    """
+
+    covariance: np.ndarray
+    residual: np.ndarray
+
+
+def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> PlacementEffect:
+    """Covariance of the estimate from where the skin markers sit relative to the joint centres, and the residual
+    once offsets of that size (a Gaussian prior, ``sd_m``) have taken what they can explain.
 
     Each marker's offset (along and normal to its segment, ``sd_m`` each, independent) moves the lever arms
     and the segment angles the fit is computed on; the estimate responds linearly, ``G = (A + P)^-1 X^T W D``.
     Part of this cannot be told from the parameters by any data (offsets along the chain scale every lever
     arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
-    estimated: it is a known uncertainty of every session, different every day, and belongs in the std.
+    estimated: it is a known uncertainty of every session, different every day, and belongs in the std. The
+    rest bends the torques in ways the model cannot follow (over a wide planned range, at the wrist): a residual
+    that offsets of a few mm explain is no misfit of the model.
     """
     n = data.n_joints
     if len(problem.names) >= 3 * n and problem.names[-1][0] == "grouped_inertia_kgm2":
@@ -29,4 +50,16 @@ def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, s
     columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, data.tau_nm, base_values)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     response = np.linalg.lstsq(fit.design, np.einsum("tip,ti,tim->pm", problem.regressor, w, columns), rcond=None)[0]
-    return np.asarray(sd_m**2 * response @ response.T)
+    # The offsets fitted with the parameters (not on the residual alone: much of their effect resembles a change
+    # of the parameters, and only together do they explain it), each with its prior N(0, sd^2).
+    m = columns.shape[2]
+    names: list[ParameterName] = [
+        (f"marker_offset_{k // 2}_{'normal' if k % 2 else 'along'}_m", "markers") for k in range(m)
+    ]
+    with_offsets = augmented(problem, columns, names, np.zeros(m), np.full(m, 1.0 / max(sd_m, 1e-12) ** 2))
+    return PlacementEffect(np.asarray(sd_m**2 * response @ response.T), fit_problem(with_offsets).residual)
+
+
+def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> np.ndarray:
+    """Covariance (p, p) of the estimate from marker placement (:func:`placement_effect`)."""
+    return placement_effect(data, problem, fit, sd_m).covariance

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from bsp_ros.core.identification.data import IdentificationData
@@ -10,17 +12,54 @@ from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CH
 from bsp_ros.core.identification.stacked import Fit, Problem, normal_equations
 from bsp_ros.core.streams import joints_for
 
+# A Coulomb amplitude moved by at most this many std is weakly identified (its std takes the shift); beyond it the
+# estimate is invalid. Skin markers 3 mm off their centres moved it by 1.2-1.9 std; a wrench 12 ms late by 5.1.
+STRIBECK_WIDEN_MAX_SD = 3.0
 # Candidate speeds (rad/s) of a Stribeck-like excess of friction at low speed, sign(v) exp(-(v / v_s)^2).
 STRIBECK_SPEEDS_RAD_S = (0.002, 0.004, 0.008, 0.016, 0.032)
 
 
+@dataclass(frozen=True)
+class StribeckFinding:
+    """A joint whose friction is larger at low speed: what modelling it moves.
+
+    Attributes
+    ----------
+    joint : index of the joint.
+    coulomb_column : index of its Coulomb amplitude among the fit's parameters.
+    coulomb_shift_nm : how far the low-speed term moves that amplitude (Nm).
+    static_shift_sd : the largest shift of a static moment, in std (the larger of the two fits').
+    note : the warning, in words.
+    coulomb_shift_sd : the Coulomb amplitude's shift in its std.
+    """
+
+    joint: int
+    coulomb_column: int
+    coulomb_shift_nm: float
+    static_shift_sd: float
+    note: str
+
+    coulomb_shift_sd: float
+
+    @property
+    def biases_estimate(self) -> bool:
+        """Whether no honest std covers it: a static moment moves by more than its std, or the Coulomb amplitude
+        by more than a weakly identified amplitude would (then the friction law itself is wrong, and what makes
+        it look so, e.g. a wrench stream late against the markers, biases more than friction)."""
+        return self.static_shift_sd > MODEL_CHECK_SHIFT_SD or self.coulomb_shift_sd > STRIBECK_WIDEN_MAX_SD
+
+
 def stribeck_check(
     data: IdentificationData, problem: Problem, fit: Fit, config: JointConfig, widths: np.ndarray
-) -> list[str]:
+) -> list[StribeckFinding]:
     """Friction that is larger at low speed than at high speed (Stribeck-like), joint by joint: the Coulomb
     amplitude of a sign step is then a speed-dependent average, not the joint's friction. Joints with a
     modelled smooth transition (``widths`` > 0) are left out: a tanh step plus a low-speed bump fit direction
-    errors near reversals, and the transition's uncertainty is already in their Coulomb variance."""
+    errors near reversals, and the transition's uncertainty is already in their Coulomb variance.
+
+    A finding that moves only the Coulomb amplitude is a weakly identified amplitude (its std should hold the
+    shift, e.g. where skin markers off their joint centres bend the torques near reversals); one that moves a
+    static moment by more than its std is a bias no std covers."""
     if "coulomb" not in config.passive.terms:
         return []
     n, k = data.n_joints, len(config.passive.local)
@@ -50,13 +89,38 @@ def stribeck_check(
             continue
         extra = np.zeros((data.t_ns.size, n, 1))
         extra[:, j, 0] = np.sign(data.velocity_rad_s[:, j]) * np.exp(-((speed / best_speed) ** 2))
-        p_value, shift, _, wide = term_test(problem, fit, extra, [("stribeck_nm", joint)], [column])
+        p_value, shift, worst, wide = term_test(problem, fit, extra, [("stribeck_nm", joint)], [column, *range(n)])
         # Only an excess of friction at low speed is Stribeck-like; a deficit is what direction-of-motion
         # errors near reversals (e.g. around marker gaps) look like, and the transition test covers it.
-        if wide.values[-1] > 0 and p_value < MODEL_CHECK_P and shift > MODEL_CHECK_SHIFT_SD:
-            notes.append(
-                f"friction at the {joint} depends on speed (Stribeck-like, larger below about "
-                f"{1e3 * best_speed:.2g} mrad/s): modelling it moves its Coulomb amplitude by {shift:.1f} std; the "
-                "amplitude of a sign step is a speed-dependent average here"
+        if not (wide.values[-1] > 0 and p_value < MODEL_CHECK_P and shift > MODEL_CHECK_SHIFT_SD):
+            continue
+        variance = np.maximum(np.diag(wide.covariance)[:n], np.diag(fit.covariance)[:n])
+        static_shift = float(
+            (np.abs(wide.values[:n] - fit.values[:n]) / np.sqrt(np.clip(variance, 1e-300, None))).max()
+        )
+        coulomb_shift = float(wide.values[column] - fit.values[column])
+        coulomb_sd = abs(coulomb_shift) / float(
+            np.sqrt(max(wide.covariance[column, column], fit.covariance[column, column], 1e-300))
+        )
+        if worst != column:
+            moved = f"moves the {problem.names[worst][1]} static moment by {shift:.1f} std"
+        elif coulomb_sd > STRIBECK_WIDEN_MAX_SD:
+            moved = f"moves its Coulomb amplitude by {coulomb_sd:.1f} std"
+        else:
+            moved = (
+                f"moves its Coulomb amplitude by {abs(coulomb_shift):.2g} Nm ({coulomb_sd:.1f} std), which its std "
+                "includes"
             )
+        notes.append(
+            StribeckFinding(
+                j,
+                column,
+                coulomb_shift,
+                static_shift,
+                f"friction at the {joint} depends on speed (Stribeck-like, larger below about "
+                f"{1e3 * best_speed:.2g} mrad/s): modelling it {moved}; the amplitude of a sign step is a "
+                "speed-dependent average here",
+                coulomb_sd,
+            )
+        )
     return notes
