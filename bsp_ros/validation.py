@@ -29,9 +29,14 @@ def check_finite_scalar(name: str, value: Any, lo: float = -math.inf, hi: float 
 
 def check_positive(name: str, value: Any, hi: float = math.inf) -> float:
     """Return ``value`` as a float if it is finite, strictly positive and at most ``hi``."""
-    number = check_finite_scalar(name, value, 0.0, hi)
-    if number <= 0.0:
-        raise InputError(f"{name} must be positive, got {value!r}")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {value!r}") from None
+    # One message with the whole allowed range, whichever side the value fell off (0 itself is outside).
+    if not (math.isfinite(number) and 0.0 < number <= hi):
+        allowed = "greater than 0" if math.isinf(hi) else f"within (0, {hi:g}]"
+        raise InputError(f"{name} must be finite and {allowed}, got {value!r}")
     return number
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from bsp_ros.bag import TopicMap, read_session
+from bsp_ros.bag.fingerprint import content_sha256
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 
 
@@ -28,7 +29,10 @@ def identify_bag(
     """
     read = read_session(path, topics=topics, progress=progress)
     report = read.report
-    document = identify_session(read.session, options, {"source": Path(path).name})
+    # The content hash lets the session store refuse this recording's result JSON once the bag is stored.
+    document = identify_session(
+        read.session, options, {"source": Path(path).name, "content_sha256": content_sha256(path)}
+    )
     warnings = document["quality"]["warnings"]
     if report.damaged:
         warnings.insert(

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import sys
 import time
@@ -14,17 +13,16 @@ from bsp_ros.clinic.store import (
     WALL_CLOCK_START_NS,
     SessionRecord,
     Store,
+    SubjectRecord,
     format_time,
     load_estimate_file,
     open_store,
     parse_time_ns,
 )
 from bsp_ros.clinic.store.estimate import check_future
+from bsp_ros.clinic.store.records import describe_body
 from bsp_ros.clinic.store.subject import check_pseudonymous_id
 from bsp_ros.errors import InputError, StoreError
-
-BAG_SUFFIXES = (".mcap", ".db3", ".bag")
-
 
 STORE_HELP = "SQLite file or postgresql:// URL (default: $BSP_STORE, else ~/.local/share/bsp_ros/sessions.sqlite)"
 
@@ -169,23 +167,14 @@ def _erase(store: Store, subject: str, yes: bool) -> int:
 
 def is_bag(path: Path) -> bool:
     """Whether ``path`` looks like a recording (a rosbag2 directory or a bag file) rather than a result."""
+    from bsp_ros.bag.fingerprint import BAG_SUFFIXES  # here: the bag package pulls in numpy, not needed to start
+
     return path.is_dir() or path.suffix.lower() in BAG_SUFFIXES
-
-
-def content_sha256(path: Path) -> str:
-    """SHA-256 of a recording's content: the file's bytes, or a directory's data files in name order."""
-    digest = hashlib.sha256()
-    files = sorted(f for f in path.iterdir() if f.suffix.lower() in BAG_SUFFIXES) if path.is_dir() else [path]
-    for file in files:
-        with file.open("rb") as stream:
-            for block in iter(lambda: stream.read(1 << 20), b""):
-                digest.update(block)
-    return digest.hexdigest()
 
 
 def identify_bag_for_store(path: Path, args: argparse.Namespace, body: dict[str, Any]) -> dict[str, Any]:
     """The estimate of a bag identified with the `bsp identify` options of ``args`` (body data default to
-    ``body``), with its within-session repeatability, the options and the recording's content hash."""
+    ``body``), with its within-session repeatability, the options and (from identify_bag) the content hash."""
     from bsp_ros.bag import read_session
     from bsp_ros.bag.offline import identify_bag
     from bsp_ros.cli.identify_options import options_from_args, options_record, topics_from_args
@@ -198,9 +187,8 @@ def identify_bag_for_store(path: Path, args: argparse.Namespace, body: dict[str,
     if found.message:
         print(f"note: no within-session repeatability for {path.name}: {found.message}")
     estimate["repeatability"] = found.to_json()
-    session = estimate.setdefault("session", {})
-    session["config"] = options_record(args, options)
-    session["content_sha256"] = content_sha256(path)
+    # identify_bag put the recording's content_sha256 in the session block: the store's duplicate check.
+    estimate.setdefault("session", {})["config"] = options_record(args, options)
     return estimate
 
 
@@ -287,7 +275,24 @@ def _add(store: Store, args: argparse.Namespace) -> int:
         f"from {record.source} ({'valid' if record.quality.valid else 'NOT VALID'}, "
         f"{len(record.parameters)} parameters)"
     )
+    if known is not None and known.differs_from(record.subject_info):
+        print(_body_warning(path, record, known), file=sys.stderr)
     return 0
+
+
+def _body_warning(path: Path, record: SessionRecord, known: SubjectRecord) -> str:
+    """One line: the session's masses come from other body data than the subject record's, and how to fix it."""
+    said = (
+        f"warning: {path.name} was identified with body data {describe_body(record.subject_info)}, not "
+        f"{record.subject}'s record ({describe_body(known.body())}): its masses and centres of mass come from that "
+        "prior and are stored with it"
+    )
+    if is_bag(path):
+        return f"{said} (the body data given here override the record)"
+    return (
+        f"{said}; to use the record, add the bag itself (`bsp sessions add BAG --subject {record.subject}`) or make "
+        f"the result with `bsp identify BAG {known.identify_options()} --json RESULT.json`"
+    )
 
 
 def _list(store: Store) -> int:

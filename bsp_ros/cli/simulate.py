@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from bsp_ros.cli.argtypes import positive_float
+from bsp_ros.cli.simulate_errors import option_names
 from bsp_ros.errors import InputError
 
 
@@ -60,8 +62,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in sines (default: the sines)",
     )
     human = parser.add_argument_group("human subject (de Leva table means)")
-    human.add_argument("--body-mass", type=float, metavar="KG", help="body mass (default: 75)")
-    human.add_argument("--height", type=float, metavar="M", help="stature (default: 1.78)")
+    human.add_argument("--body-mass", type=positive_float, metavar="KG", help="body mass (default: 75)")
+    human.add_argument("--height", type=positive_float, metavar="M", help="stature (default: 1.78)")
     human.add_argument("--sex", choices=("male", "female"), help="table to use (default: male)")
     noise = parser.add_argument_group("noise and occlusion")
     noise.add_argument("--force-noise", type=float, metavar="N", help="force noise per axis, N (1 sd) (default: 0.05)")
@@ -366,11 +368,14 @@ def run(args: argparse.Namespace) -> int:
         ]
         if session_only:
             raise InputError(f"{', '.join(session_only)} apply to a session only, not to a --tare recording")
-        return _run_tare(args, _spec(args))
+        with option_names():
+            tare_spec = _spec(args)
+        return _run_tare(args, tare_spec)
     tare_only = [f"--{n.replace('_', '-')}" for n in ("tare_swing", "tare_period", "tare_start") if getattr(args, n)]
     if tare_only:
         raise InputError(f"{', '.join(tare_only)} apply to a tare recording only (add --tare)")
-    spec = _spec(args)
+    with option_names():  # the simulator's checks name its spec fields; the user typed options
+        spec = _spec(args)
     simulated = simulate_cell(spec)
     samples = _orientation_samples(simulated)
     write_session_bag(
@@ -421,7 +426,9 @@ def _run_tare(args: argparse.Namespace, spec: Any) -> int:
         options["swing_period_s"] = args.tare_period
     if args.tare_start is not None:
         options["start_offset_s"] = args.tare_start
-    tare = simulate_tare(spec, TareSpec(**options))
+    with option_names():
+        tare_options = TareSpec(**options)
+    tare = simulate_tare(spec, tare_options)
     frame = tare.wrench.frame_id
     samples = [
         TransformSample(int(t), "world", frame, np.zeros(3), quaternion_from_matrix(r))

@@ -61,6 +61,10 @@ class Point:
         return self.valid and self.value is not None
 
 
+MDC_SOURCES = ("retest pairs", "session uncertainty", "none")
+"""What a change's MDC95 is: the retest pairs', the two sessions' own uncertainty where larger, or none."""
+
+
 @dataclass(frozen=True)
 class Change:
     """The difference of one parameter between two usable sessions, against the day-to-day error."""
@@ -81,8 +85,20 @@ class Change:
         """
         if self.error.mdc95 is None:
             return None
-        own = Z95 * math.hypot(self.before.std or 0.0, self.after.std or 0.0)
-        return max(self.error.mdc95, own)
+        return max(self.error.mdc95, self.own_mdc95)
+
+    @property
+    def own_mdc95(self) -> float:
+        """The two estimates' own 95 % uncertainty of their difference, 1.96 sqrt(std_a^2 + std_b^2)."""
+        return Z95 * math.hypot(self.before.std or 0.0, self.after.std or 0.0)
+
+    @property
+    def mdc95_source(self) -> str:
+        """Where :attr:`mdc95` comes from: ``retest pairs``, ``session uncertainty`` (the two estimates' own,
+        where larger) or ``none`` (too few retest pairs)."""
+        if self.error.mdc95 is None:
+            return MDC_SOURCES[2]
+        return MDC_SOURCES[1] if self.own_mdc95 > self.error.mdc95 else MDC_SOURCES[0]
 
     @property
     def at_bound(self) -> bool:

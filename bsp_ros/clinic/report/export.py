@@ -6,7 +6,7 @@ import csv
 from collections.abc import Iterable
 from typing import TextIO
 
-from bsp_ros.clinic.report.analysis import Analysis, Change
+from bsp_ros.clinic.report.analysis import MDC_SOURCES, Analysis, Change
 from bsp_ros.clinic.store.records import format_time
 
 CSV_COLUMNS = (
@@ -36,13 +36,21 @@ def _num(value: float | None) -> str:
     return "" if value is None else repr(float(value))
 
 
+def _mdc95_source(step: Change | None, judged: bool) -> str:
+    # A step's MDC95 may be the two sessions' own uncertainty (larger than the retest pairs'): say which.
+    if step is not None:
+        return step.mdc95_source
+    return MDC_SOURCES[0] if judged else MDC_SOURCES[2]
+
+
 def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
     """Write every session and parameter of ``analyses`` to ``stream``; return the number of data rows.
 
     ``change_from_previous`` and ``change_from_first`` compare a usable session with the usable session before
     it and with the arm's first usable one (empty for retests, invalid sessions and the first); ``mdc95`` is the
-    change it would need to be flagged (empty when unknown: ``mdc95_source`` ``none``); ``flagged`` is 1 for a
-    change from the previous session beyond it.
+    change it would need to be flagged (empty when unknown: ``mdc95_source`` ``none``) and ``mdc95_source`` says
+    what it is: ``retest pairs``, or ``session uncertainty`` where the two sessions' own uncertainty is the larger;
+    ``flagged`` is 1 for a change from the previous session beyond it.
     """
     writer = csv.writer(stream, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
@@ -80,7 +88,7 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
                         _num(
                             step.mdc95 if step is not None and judged else (error.mdc95 if judged and error else None)
                         ),
-                        ("retest pairs" if judged else "none"),
+                        _mdc95_source(step if judged else None, judged),
                         error.n_pairs if error is not None else 0,
                         int(step is not None and judged and step.beyond_mdc),
                     ]

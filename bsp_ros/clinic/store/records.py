@@ -137,6 +137,18 @@ class SubjectRecord:
         found = {"body_mass_kg": self.body_mass_kg, "height_m": self.height_m, "sex": self.sex}
         return {k: v for k, v in found.items() if v is not None}
 
+    def differs_from(self, subject_info: dict[str, Any]) -> bool:
+        """Whether a session's body data (what its prior was made with) contradict or lack what this record sets."""
+        return any(subject_info.get(key) != value for key, value in self.body().items())
+
+    def identify_options(self) -> str:
+        """The `bsp identify` options that make an estimate's prior from this record's body data."""
+        flags = {"body_mass_kg": "--body-mass", "height_m": "--height", "sex": "--sex"}
+        return " ".join(
+            f"{flags[key]} {value:g}" if isinstance(value, float) else f"{flags[key]} {value}"
+            for key, value in self.body().items()
+        )
+
     def arm_status(self, arm: str | None) -> str | None:
         """``affected`` / ``unaffected`` for ``arm``, None if unknown."""
         if arm is None or self.affected is None:
@@ -171,3 +183,17 @@ def ns_to_datetime(time_ns: int) -> dt.datetime:
 def format_time(time_ns: int) -> str:
     """``time_ns`` as ISO 8601 UTC to the second, e.g. ``2024-03-01T09:30:00Z``."""
     return ns_to_datetime(time_ns).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def describe_body(subject_info: dict[str, Any]) -> str:
+    """A session's body data in words, e.g. ``female, 68 kg, 1.65 m``."""
+    if not subject_info:
+        return "no body data"
+    mass, height = subject_info.get("body_mass_kg"), subject_info.get("height_m")
+    return ", ".join(
+        (
+            str(subject_info.get("sex", "sex not given")),
+            "body mass not given (population prior)" if mass is None else f"{float(mass):g} kg",
+            "no height" if height is None else f"{float(height):g} m",
+        )
+    )

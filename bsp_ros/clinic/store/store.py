@@ -113,8 +113,9 @@ class Store:
     def add(self, record: SessionRecord) -> SessionRecord:
         """Store one session; return it with ``id`` and ``added_ns`` set, after the commit.
 
-        The arm defaults to the subject record's; its body data replace the session's (an estimate made without
-        them carries the population default).
+        The arm defaults to the subject record's. The session keeps its own body data, those its prior was made
+        with (an estimate made without them carries the population default): writing the record's over them would
+        label masses with a prior they were not computed from (see :meth:`SubjectRecord.differs_from`).
 
         Raises
         ------
@@ -129,11 +130,7 @@ class Store:
         check_future(record.session_time_ns, added_ns)
         known = self.subject_record(record.subject)
         if known is not None:
-            record = replace(
-                record,
-                arm=record.arm or known.arm,
-                subject_info={**record.subject_info, **known.body()},  # the record is the subject's truth
-            )
+            record = replace(record, arm=record.arm or known.arm)
         quality: dict[str, Any] = {
             "residual_rms_nm": record.quality.residual_rms_nm,
             "warnings": list(record.quality.warnings),

@@ -5,11 +5,13 @@ from __future__ import annotations
 import csv
 import io
 import itertools
+import math
 
 import pytest
 from clinic_history import FRICTION, INVALID_VALUE_NM, STIFFNESS, UNCHANGED, History, patient
 
 from bsp_ros.clinic.histories import HISTORY_START_NS, session_estimate
+from bsp_ros.clinic.mdc import Z95
 from bsp_ros.clinic.report import Analysis, analyse
 from bsp_ros.clinic.report.export import write_analysis_csv
 from bsp_ros.clinic.report.summary import headline
@@ -114,6 +116,39 @@ def test_csv_export_flags_the_planted_steps(history: History) -> None:
     elbow = [r for r in rows if r["part"] == "elbow"]
     assert [int(r["session_number"]) for r in elbow] == list(range(1, len(analysis.sessions) + 1))
     flagged = [r for r in elbow if r["flagged"] == "1"]
-    assert len(flagged) == 2 and all(r["mdc95_source"] == "retest pairs" for r in flagged)
+    assert len(flagged) == 2 and all(r["mdc95_source"] in ("retest pairs", "session uncertainty") for r in flagged)
     assert all(float(r["change_from_previous"]) < -float(r["mdc95"]) for r in flagged)
     assert {r["change_from_previous"] for r in elbow if r["retest"] == "1" or r["valid"] == "0"} == {""}
+
+
+def _csv_rows(analysis: Analysis) -> dict[tuple[str, str, str, str], dict[str, str]]:
+    stream = io.StringIO()
+    write_analysis_csv([analysis], stream)
+    rows = csv.DictReader(io.StringIO(stream.getvalue()))
+    return {(r["arm"], r["part"], r["quantity"], r["session_number"]): r for r in rows if r["retest"] == "0"}
+
+
+def test_csv_export_says_which_mdc95_was_used(history: History) -> None:
+    analysis = _analysis(history, FRICTION)
+    rows = _csv_rows(analysis)
+    seen = set()
+    for series in analysis.series:
+        if not (series.judged and series.error.known):
+            continue
+        retest = series.error.mdc95
+        for step in series.steps:
+            row = rows[(series.arm or "", series.key[1], series.key[2], str(step.after.number))]
+            own = Z95 * math.hypot(step.before.std or 0.0, step.after.std or 0.0)
+            # The larger bound is the one used, and the column names it.
+            expected = "session uncertainty" if own > retest else "retest pairs"
+            assert (row["mdc95_source"], float(row["mdc95"])) == (expected, pytest.approx(max(own, retest)))
+            seen.add(expected)
+    assert seen == {"retest pairs", "session uncertainty"}  # the seeded history has both kinds of step
+    # The first session has no step: the MDC95 it shows is the retest pairs'.
+    (friction,) = [s for s in analysis.series if s.key == ELBOW["coulomb"]]
+    first = rows[("left", "elbow", "coulomb_nm", "1")]
+    assert (first["mdc95_source"], float(first["mdc95"])) == ("retest pairs", pytest.approx(friction.error.mdc95))
+    # Without retest pairs no MDC95 is used at all, whatever the sessions' own uncertainty.
+    visits = [r for r in analysis.sessions if not r.retest]
+    alone = analyse(FRICTION, visits, pool=visits, subject_record=analysis.record)
+    assert {(r["mdc95_source"], r["mdc95"], r["flagged"]) for r in _csv_rows(alone).values()} == {("none", "", "0")}

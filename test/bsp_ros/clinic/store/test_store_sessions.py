@@ -6,7 +6,7 @@ import io
 
 import pytest
 
-from bsp_ros.clinic.store import SessionRecord, open_store, parse_estimate, write_sessions_csv
+from bsp_ros.clinic.store import SessionRecord, SubjectRecord, open_store, parse_estimate, write_sessions_csv
 from bsp_ros.clinic.store.samples import SAMPLE_START_NS, sample_estimate
 from bsp_ros.errors import InputError, StoreError
 
@@ -125,6 +125,20 @@ def test_subject_block_keeps_only_anthropometrics(store_location: str) -> None:
     assert back.subject_info == {"body_mass_kg": 72.5, "sex": "female"}
     with pytest.raises(InputError, match="body mass"):
         parse_estimate(sample_estimate(1, subject={"body_mass_kg": 7.0}), "S01")
+
+
+def test_a_session_keeps_the_body_data_its_prior_was_made_with(store_location: str) -> None:
+    made_with = {"body_mass_kg": 75.0, "height_m": 1.78, "sex": "male"}
+    with open_store(store_location) as store:
+        store.set_subject(SubjectRecord("S01", 68.0, 1.65, "female", "left"))
+        stored = store.add_estimate(sample_estimate(1, subject=made_with), "S01")
+        (back,) = store.sessions("S01")
+        known = store.subject_record("S01")
+    # Not the record's female 68 kg: the masses were fused with the male 75 kg table.
+    assert back.subject_info == stored.subject_info == made_with and back.arm == "left"
+    assert known is not None and known.differs_from(back.subject_info)
+    assert not known.differs_from({"body_mass_kg": 68, "height_m": 1.65, "sex": "female"})
+    assert known.identify_options() == "--body-mass 68 --height 1.65 --sex female"
 
 
 def test_csv_export(store_location: str) -> None:
