@@ -10,7 +10,7 @@ from typing import Any
 
 # METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
 from bsp_ros.cli.identify_options import METHODS, add_identify_arguments, options_from_args, topics_from_args  # noqa: F401
-from bsp_ros.core.quantities import quantities_of
+from bsp_ros.core.quantities import passive_curves_of, quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
 
 # Distinct exit codes per failure, so scripts can tell them apart (0 valid, 1 written but invalid).
@@ -66,10 +66,7 @@ def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
     out: list[tuple[str, str, Any, Any, str]] = [
         (owner, key, q["value"], q["std"], q["source"]) for _, owner, key, q in quantities_of(document)
     ]
-    for joint, entries in document.get("joints", {}).items():
-        curve = entries.get("passive_curve")
-        if not isinstance(curve, dict):
-            continue
+    for joint, curve in passive_curves_of(document):
         for angle, moment, std in zip(curve["angle_deg"], curve["moment_nm"], curve["std_nm"], strict=True):
             out.append((joint, f"passive_moment_nm@{angle:.1f}deg", moment, std, "data"))
         if curve.get("reference_angle_deg") is not None:

@@ -11,6 +11,7 @@ from bsp_ros import __version__
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.quantities import PASSIVE_CURVE
 from bsp_ros.core.streams import joints_for, segments_for
 
 SCHEMA = "bsp_ros/core/estimate/1"
@@ -105,7 +106,7 @@ def estimate_document(
     for joint, curve in curves.items():
         # The elastic passive moment over the measured range: what a clinician compares day to day.
         if joint in joints and result.valid:
-            joints[joint]["passive_curve"] = curve
+            joints[joint][PASSIVE_CURVE] = curve
     quality: dict[str, Any] = {
         "valid": bool(result.valid),
         "n_samples": int(result.n_samples),

@@ -1,9 +1,12 @@
-"""Walking the quantities of an estimate document (``value``, ``std``, ``source``), curves left out."""
+"""Walking an estimate document: its quantities (``value``, ``std``, ``source``) and, apart, its passive curves."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from typing import Any
+
+# ``joints.<joint>.passive_curve``: a curve (``angle_deg``, ``moment_nm``, ``std_nm``...), not a quantity.
+PASSIVE_CURVE = "passive_curve"
 
 
 def is_quantity(entry: Any) -> bool:
@@ -18,3 +21,11 @@ def quantities_of(document: dict[str, Any]) -> Iterator[tuple[str, str, str, dic
             for key, entry in entries.items():
                 if is_quantity(entry):
                     yield group, owner, key, entry
+
+
+def passive_curves_of(document: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
+    """``(joint, curve)`` for every joint of an estimate document that has a passive curve."""
+    for joint, entries in document.get("joints", {}).items():
+        curve = entries.get(PASSIVE_CURVE)
+        if isinstance(curve, dict):
+            yield joint, curve

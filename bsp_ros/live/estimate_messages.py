@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.core.quantities import is_quantity
+from bsp_ros.core.quantities import PASSIVE_CURVE, is_quantity, passive_curves_of
 from msg_adapters.diagnostics import ERROR, OK, WARN, DiagnosticArraySample, DiagnosticStatusData
 from msg_adapters.inertia import InertiaSample
 from msg_adapters.joint_state import JointStateSample
@@ -38,7 +38,7 @@ def diagnostics_from_estimate(document: dict[str, Any], t_ns: int, prefix: str =
                     values[key] = q["value"]
                     values[f"{key}.std"] = q["std"]
                     values[f"{key}.source"] = q["source"]
-            values.update(_curve_values(quantities.get("passive_curve")))
+            values.update(_curve_values(quantities.get(PASSIVE_CURVE)))
             statuses.append(
                 DiagnosticStatusData.with_values(level, f"{prefix}/{owner}", quality.get("message", ""), "", values)
             )
@@ -93,22 +93,20 @@ def passive_moments_from_estimate(document: dict[str, Any], t_ns: int) -> JointS
 
     Where the estimate has passive curves, each curve point follows as ``<joint>/passive_curve/<k>`` with
     position = its angle (rad) and effort = the passive moment there (Nm); the Coulomb entries' position is NaN
-    (no angle). The curves' std are on ``bsp/diagnostics``.
+    (no angle). The curves' std are on ``bsp/estimate`` (:func:`diagnostics_from_estimate`).
     """
     joints = document.get("joints", {})
     names = [j for j, q in joints.items() if q.get("coulomb_nm", {}).get("value") is not None]
     if not names:
         return None
     effort = [float(joints[j]["coulomb_nm"]["value"]) for j in names]
-    position = [math.nan] * len(names)
-    for joint, quantities in joints.items():
-        curve = quantities.get("passive_curve")
-        if not isinstance(curve, dict):
-            continue
+    n_coulomb = len(names)
+    position = [math.nan] * n_coulomb
+    for joint, curve in passive_curves_of(document):
         for k, (angle_deg, moment_nm) in enumerate(zip(curve["angle_deg"], curve["moment_nm"], strict=True)):
             names.append(f"{joint}/passive_curve/{k}")
             position.append(math.radians(angle_deg))
             effort.append(float(moment_nm))
-    if all(math.isnan(p) for p in position):
+    if len(names) == n_coulomb:
         position = []  # no curve: the message as before (effort only)
     return JointStateSample(t_ns, "", tuple(names), np.array(position), np.zeros(0), np.array(effort))

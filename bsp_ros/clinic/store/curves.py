@@ -7,9 +7,10 @@ import re
 from typing import Any
 
 from bsp_ros.clinic.store.records import ParamKey, Quantity
+from bsp_ros.core.quantities import PASSIVE_CURVE
 from bsp_ros.errors import StoreError
 
-CURVE_KEY = "passive_curve"
+CURVE_KEY = PASSIVE_CURVE
 """``joints.<joint>.passive_curve`` = ``{"angle_deg": [...], "moment_nm": [...], "std_nm": [...]}``."""
 STEP_DEG = 5
 """Curves are compared at the multiples of this angle inside the measured range (no extrapolation)."""
