@@ -9,21 +9,15 @@ from typing import Any
 
 import pytest
 import yaml
+from cli_run import bsp
 
 from bsp_ros.bag.writer import write_session_bag
-from bsp_ros.cli import main
 from bsp_ros.clinic.store import open_store
 from bsp_ros.clinic.store.samples import sample_estimate
 from bsp_ros.core.simulation import paper_mechanical_arm_cell, simulate_cell
 
 BOOT_START_NS = 1000 * 10**9  # a controller clock counting from boot: 1000 s
 WALL_START_NS = 1_717_225_200 * 10**9  # 2024-06-01T07:00:00Z
-
-
-def _bsp(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _boot_stamped_bag(tmp_path: Path, *, receive_wall_clock: bool) -> Path:
@@ -51,7 +45,7 @@ def test_boot_stamped_bag_takes_the_wall_clock_recorded_start(
 ) -> None:
     bag = _boot_stamped_bag(tmp_path, receive_wall_clock=True)
     store = tmp_path / "s.sqlite"
-    code, out, err = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store))
+    code, out, err = bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store))
     assert code == 0, err
     assert "recorded start 2024-06-01T07:00:00Z" in out
     (record,) = _stored(store)
@@ -64,10 +58,10 @@ def test_boot_stamped_bag_without_a_wall_clock_asks_for_time(
 ) -> None:
     bag = _boot_stamped_bag(tmp_path, receive_wall_clock=False)
     store = tmp_path / "s.sqlite"
-    code, _, err = _bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store))
+    code, _, err = bsp(capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store))
     assert code != 0 and "--time" in err and "stamped from 1000" in err and "seconds or ms" not in err
     assert not store.exists() or not _stored_any(store)
-    code, _, err = _bsp(
+    code, _, err = bsp(
         capsys, "sessions", "add", str(bag), "--subject", "S1", "--store", str(store), "--time", "2024-06-01"
     )
     assert code == 0, err
@@ -83,7 +77,7 @@ def _stored_any(store: Path) -> bool:
 def test_boot_stamped_result_json_names_time_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     result = tmp_path / "r.json"
     result.write_text(json.dumps(sample_estimate(1, start_time_ns=BOOT_START_NS)))
-    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(tmp_path / "s.sq"))
+    code, _, err = bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(tmp_path / "s.sq"))
     assert code != 0 and "--time" in err and "not a wall clock" in err
 
 
@@ -94,7 +88,7 @@ def test_time_accepts_what_users_type(tmp_path: Path, capsys: pytest.CaptureFixt
     result = tmp_path / "r.json"
     result.write_text(json.dumps(sample_estimate(1, start_time_ns=None)))
     store = tmp_path / "s.sqlite"
-    code, _, err = _bsp(
+    code, _, err = bsp(
         capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store), "--time", typed
     )
     assert code == 0, err
@@ -106,9 +100,7 @@ def test_time_accepts_a_date(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     result.write_text(json.dumps(sample_estimate(1, start_time_ns=None)))
     store = tmp_path / "s.sqlite"
     assert (
-        _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store), "--time", "2024-06-01")[
-            0
-        ]
+        bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store), "--time", "2024-06-01")[0]
         == 0
     )
     assert _stored(store)[0].session_time_ns == 1_717_200_000 * 10**9
@@ -121,9 +113,9 @@ def test_identifying_subject_ids_are_refused_with_the_reason(
     result = tmp_path / "r.json"
     result.write_text(json.dumps(sample_estimate(1)))
     store = tmp_path / "s.sqlite"
-    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", subject, "--store", str(store))
+    code, _, err = bsp(capsys, "sessions", "add", str(result), "--subject", subject, "--store", str(store))
     assert code != 0 and "--allow-identifying-id" in err and ("date" in err or "name" in err)
-    code, _, err = _bsp(
+    code, _, err = bsp(
         capsys, "sessions", "add", str(result), "--subject", subject, "--store", str(store), "--allow-identifying-id"
     )
     assert code == 0, err
@@ -133,7 +125,7 @@ def test_identifying_subject_ids_are_refused_with_the_reason(
 def test_pseudonyms_pass(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     result = tmp_path / "r.json"
     result.write_text(json.dumps(sample_estimate(1)))
-    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "P007", "--store", str(tmp_path / "s.sq"))
+    code, _, err = bsp(capsys, "sessions", "add", str(result), "--subject", "P007", "--store", str(tmp_path / "s.sq"))
     assert code == 0, err
 
 
@@ -142,7 +134,7 @@ def test_nan_inside_a_valid_estimate_is_refused(tmp_path: Path, capsys: pytest.C
     result = tmp_path / "r.json"
     result.write_text(json.dumps(estimate))  # Python writes the NaN literal, as a careless exporter would
     store = tmp_path / "s.sqlite"
-    code, _, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store))
+    code, _, err = bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store))
     assert code != 0 and "joints.elbow.coulomb_nm.value is nan" in err and "marked valid" in err
     assert not _stored_any(store)
 
@@ -152,7 +144,7 @@ def test_invalid_estimate_is_stored_as_not_valid(tmp_path: Path, capsys: pytest.
     result = tmp_path / "r.json"
     result.write_text(json.dumps(estimate))
     store = tmp_path / "s.sqlite"
-    code, out, err = _bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store))
+    code, out, err = bsp(capsys, "sessions", "add", str(result), "--subject", "S1", "--store", str(store))
     assert code == 0 and "NOT VALID" in out, err
     (record,) = _stored(store)
     assert record.quality.valid is False

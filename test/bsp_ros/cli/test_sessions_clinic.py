@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import pytest
+from cli_run import bsp
 
 from bsp_ros.cli import main
 from bsp_ros.clinic.store import open_store
@@ -15,12 +16,6 @@ from bsp_ros.clinic.store.samples import SAMPLE_START_NS, sample_estimate
 
 NUISANCE = ("--force-offset", "3", "-3", "3", "--handle-mass", "0.3", "--handle-com", "0", "0.02", "0.05")
 DAY_NS = 86_400 * 10**9
-
-
-def _bsp(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +35,7 @@ def test_a_bag_is_stored_with_its_options_tare_body_data_and_repeatability(
     bags: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     store = str(tmp_path / "s.sqlite")
-    code, out, _ = _bsp(
+    code, out, _ = bsp(
         capsys,
         "subjects",
         "set",
@@ -59,7 +54,7 @@ def test_a_bag_is_stored_with_its_options_tare_body_data_and_repeatability(
         store,
     )
     assert code == 0 and "body mass 68 kg" in out and "affected arm left" in out
-    code, out, err = _bsp(
+    code, out, err = bsp(
         capsys,
         "sessions",
         "add",
@@ -93,7 +88,7 @@ def test_a_bag_is_stored_with_its_options_tare_body_data_and_repeatability(
     digest = hashlib.sha256(b"".join(f.read_bytes() for f in sorted(bags["session"].glob("*.mcap")))).hexdigest()
     assert record.content_sha256 == digest
     # The same recording again, under another time: refused, nothing added.
-    code, _, err = _bsp(
+    code, _, err = bsp(
         capsys, "sessions", "add", str(bags["session"]), "--subject", "S1", "--time", "2024-06-08", "--store", store
     )
     assert code == 5 and "duplicate recording" in err and "session 1 of S1" in err
@@ -104,23 +99,23 @@ def test_a_bag_is_stored_with_its_options_tare_body_data_and_repeatability(
 def _add_json(tmp_path: Path, capsys: pytest.CaptureFixture[str], store: str, seed: int, day: int) -> None:
     path = tmp_path / f"e{seed}.json"
     path.write_text(json.dumps(sample_estimate(seed, start_time_ns=SAMPLE_START_NS + day * DAY_NS)))
-    assert _bsp(capsys, "sessions", "add", str(path), "--subject", "S1", "--store", store)[0] == 0
+    assert bsp(capsys, "sessions", "add", str(path), "--subject", "S1", "--store", store)[0] == 0
 
 
 def test_remove_asks_then_renumbers(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     store = str(tmp_path / "s.sqlite")
     for seed, day in ((1, 0), (2, 7), (3, 14)):
         _add_json(tmp_path, capsys, store, seed, day)
-    code, _, err = _bsp(capsys, "sessions", "remove", "S1", "2", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "remove", "S1", "2", "--store", store)
     assert code == 2 and "--yes" in err  # not a terminal: not asked, refused
-    code, out, _ = _bsp(capsys, "sessions", "remove", "S1", "2", "--yes", "--store", store)
+    code, out, _ = bsp(capsys, "sessions", "remove", "S1", "2", "--yes", "--store", store)
     assert code == 0 and "removed session 2 of S1 (2024-06-08" in out
     with open_store(store) as opened:
         assert [(r.number, r.session_time_ns) for r in opened.sessions("S1")] == [
             (1, SAMPLE_START_NS),
             (2, SAMPLE_START_NS + 14 * DAY_NS),
         ]
-    code, _, err = _bsp(capsys, "sessions", "remove", "S1", "3", "--yes", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "remove", "S1", "3", "--yes", "--store", store)
     assert code == 5 and "sessions 1 to 2, not 3" in err
 
 
@@ -128,23 +123,23 @@ def test_future_dates_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[
     store = str(tmp_path / "s.sqlite")
     path = tmp_path / "e.json"
     path.write_text(json.dumps(sample_estimate(1)))
-    code, _, err = _bsp(
+    code, _, err = bsp(
         capsys, "sessions", "add", str(path), "--subject", "S1", "--time", "2031-03-01", "--store", store
     )
     assert code == 2 and "--time 2031-03-01 00:00 UTC is in the future" in err
     path.write_text(json.dumps(sample_estimate(1, start_time_ns=1_930_000_000 * 10**9)))  # 2031
-    code, _, err = _bsp(capsys, "sessions", "add", str(path), "--subject", "S1", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "add", str(path), "--subject", "S1", "--store", store)
     assert code == 2 and "in the future" in err
 
 
 def test_erase_asks_and_reading_needs_an_existing_store(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     store = str(tmp_path / "s.sqlite")
     _add_json(tmp_path, capsys, store, 1, 0)
-    code, _, err = _bsp(capsys, "sessions", "erase", "S1", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "erase", "S1", "--store", store)
     assert code == 2 and "--yes" in err
-    code, out, _ = _bsp(capsys, "sessions", "--store", store, "list")  # --store before the action
+    code, out, _ = bsp(capsys, "sessions", "--store", store, "list")  # --store before the action
     assert code == 0 and "S1" in out
-    assert _bsp(capsys, "sessions", "--store", store, "erase", "S1", "--yes")[0] == 0
+    assert bsp(capsys, "sessions", "--store", store, "erase", "S1", "--yes")[0] == 0
     typo = tmp_path / "sesions.sqlite"
     for argv in (
         ("sessions", "list", "--store", str(typo)),
@@ -153,7 +148,7 @@ def test_erase_asks_and_reading_needs_an_existing_store(tmp_path: Path, capsys: 
         ("report", "S1", "--out", str(tmp_path / "r.html"), "--store", str(typo)),
         ("subjects", "show", "S1", "--store", str(typo)),
     ):
-        code, _, err = _bsp(capsys, *argv)
+        code, _, err = bsp(capsys, *argv)
         assert code == 5 and f"no store at {typo}" in err, argv
     assert not typo.exists()
 
@@ -164,7 +159,7 @@ def test_report_says_changes_cannot_be_judged_without_retests(
     store = str(tmp_path / "s.sqlite")
     for seed, day in ((1, 0), (2, 7)):
         _add_json(tmp_path, capsys, store, seed, day)
-    code, out, _ = _bsp(capsys, "report", "S1", "--store", store, "--csv", str(tmp_path / "r.csv"))
+    code, out, _ = bsp(capsys, "report", "S1", "--store", store, "--csv", str(tmp_path / "r.csv"))
     assert code == 0 and "cannot be judged against measurement error" in out and "--retest" in out
-    code, _, err = _bsp(capsys, "subjects", "set", "Maria_Garcia", "--sex", "female", "--store", store)
+    code, _, err = bsp(capsys, "subjects", "set", "Maria_Garcia", "--sex", "female", "--store", store)
     assert code == 2 and "identifies a person" in err

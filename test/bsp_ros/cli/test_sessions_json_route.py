@@ -6,18 +6,13 @@ import json
 from pathlib import Path
 
 import pytest
+from cli_run import bsp
 
 from bsp_ros.bag.fingerprint import content_sha256
 from bsp_ros.cli import main
 from bsp_ros.clinic.store import open_store
 
 RECORD = ("--body-mass", "68", "--height", "1.65", "--sex", "female")
-
-
-def _bsp(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +29,7 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 def _store_with_record(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> str:
     store = str(tmp_path / "s.sqlite")
-    assert _bsp(capsys, "subjects", "set", "S1", *RECORD, "--store", store)[0] == 0
+    assert bsp(capsys, "subjects", "set", "S1", *RECORD, "--store", store)[0] == 0
     return store
 
 
@@ -44,7 +39,7 @@ def test_a_result_keeps_the_body_data_it_was_made_with_and_says_so(
     store = _store_with_record(tmp_path, capsys)
     result = json.loads(recording["default"].read_text())
     assert result["subject"] == {"body_mass_kg": None, "height_m": None, "sex": "male"}  # the population prior
-    code, out, err = _bsp(
+    code, out, err = bsp(
         capsys,
         "sessions",
         "add",
@@ -73,7 +68,7 @@ def test_a_result_made_with_the_records_body_data_is_stored_without_a_warning(
     recording: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     store = _store_with_record(tmp_path, capsys)
-    code, _, err = _bsp(
+    code, _, err = bsp(
         capsys, "sessions", "add", str(recording["own"]), "--subject", "S1", "--time", "2024-06-01", "--store", store
     )
     assert code == 0 and err == ""
@@ -88,12 +83,12 @@ def test_the_result_of_a_stored_bag_is_refused_as_the_same_recording(
     store = _store_with_record(tmp_path, capsys)
     digest = content_sha256(recording["bag"])
     assert json.loads(recording["default"].read_text())["session"]["content_sha256"] == digest
-    code, _, err = _bsp(
+    code, _, err = bsp(
         capsys, "sessions", "add", str(recording["bag"]), "--subject", "S1", "--time", "2024-06-01", "--store", store
     )
     assert code == 0, err
     for result in ("default", "own"):  # whichever body data the result was made with
-        code, _, err = _bsp(
+        code, _, err = bsp(
             capsys,
             "sessions",
             "add",

@@ -7,8 +7,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from cli_run import bsp
 
-from bsp_ros.cli import main
 from bsp_ros.clinic.store import open_store
 from bsp_ros.clinic.store.samples import SAMPLE_START_NS, sample_estimate
 
@@ -18,39 +18,33 @@ def _write(path: Path, estimate: dict[str, Any]) -> Path:
     return path
 
 
-def _bsp(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
 def test_add_list_show_export_erase(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     store = str(tmp_path / "s.sqlite")
     first = _write(tmp_path / "a.json", sample_estimate(1))
     second = _write(tmp_path / "b.json", sample_estimate(2, start_time_ns=SAMPLE_START_NS + 10**12))
-    code, out, _ = _bsp(capsys, "sessions", "add", str(first), "--subject", "P007", "--store", store)
+    code, out, _ = bsp(capsys, "sessions", "add", str(first), "--subject", "P007", "--store", store)
     assert code == 0 and "added session 1 of P007 at 2024-06-01T07:00:00Z from session.mcap" in out
-    assert _bsp(capsys, "sessions", "add", str(second), "--subject", "P007", "--store", store)[0] == 0
-    code, out, _ = _bsp(capsys, "sessions", "list", "--store", store)
+    assert bsp(capsys, "sessions", "add", str(second), "--subject", "P007", "--store", store)[0] == 0
+    code, out, _ = bsp(capsys, "sessions", "list", "--store", store)
     assert code == 0 and "P007" in out and " 2 " in out
-    code, out, _ = _bsp(capsys, "sessions", "show", "P007", "--store", store)
+    code, out, _ = bsp(capsys, "sessions", "show", "P007", "--store", store)
     assert code == 0 and out.count("session ") == 2 and "forearm.static_moment_kgm" in out
-    code, out, _ = _bsp(capsys, "sessions", "show", "P007", "--json", "--store", store)
+    code, out, _ = bsp(capsys, "sessions", "show", "P007", "--json", "--store", store)
     shown = json.loads(out)
     assert shown[0]["joints"]["elbow"]["coulomb_nm"] == sample_estimate(1)["joints"]["elbow"]["coulomb_nm"]
     csv_path = tmp_path / "out.csv"
-    assert _bsp(capsys, "sessions", "export", "--csv", str(csv_path), "--store", store)[0] == 0
+    assert bsp(capsys, "sessions", "export", "--csv", str(csv_path), "--store", store)[0] == 0
     assert len(csv_path.read_text().splitlines()) == 1 + 2 * 18
-    code, out, _ = _bsp(capsys, "sessions", "erase", "P007", "--yes", "--store", store)
+    code, out, _ = bsp(capsys, "sessions", "erase", "P007", "--yes", "--store", store)
     assert code == 0 and "erased 2 session(s) of P007" in out
-    code, _, err = _bsp(capsys, "sessions", "show", "P007", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "show", "P007", "--store", store)
     assert code == 5 and "unknown subject P007" in err
 
 
 def test_store_from_environment(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: Any) -> None:
     monkeypatch.setenv("BSP_STORE", str(tmp_path / "env.sqlite"))
     assert (
-        _bsp(capsys, "sessions", "add", str(_write(tmp_path / "a.json", sample_estimate(1))), "--subject", "E1")[0] == 0
+        bsp(capsys, "sessions", "add", str(_write(tmp_path / "a.json", sample_estimate(1))), "--subject", "E1")[0] == 0
     )
     assert (tmp_path / "env.sqlite").exists()
 
@@ -58,9 +52,9 @@ def test_store_from_environment(tmp_path: Path, capsys: pytest.CaptureFixture[st
 def test_time_and_source_options_fill_a_bare_estimate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     store = str(tmp_path / "s.sqlite")
     bare = _write(tmp_path / "rec-3.json", sample_estimate(1, start_time_ns=None, source=None, method=None))
-    code, _, err = _bsp(capsys, "sessions", "add", str(bare), "--subject", "S1", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "add", str(bare), "--subject", "S1", "--store", store)
     assert code == 5 and "--time" in err
-    code, out, _ = _bsp(
+    code, out, _ = bsp(
         capsys, "sessions", "add", str(bare), "--subject", "S1", "--time", "2024-06-02T08:00:00Z", "--store", store
     )
     assert code == 0 and "at 2024-06-02T08:00:00Z from rec-3.json" in out
@@ -80,7 +74,7 @@ def test_bad_input_is_a_clear_error_and_nothing_lost(
 ) -> None:
     store = str(tmp_path / "s.sqlite")
     assert (
-        _bsp(
+        bsp(
             capsys,
             "sessions",
             "add",
@@ -94,7 +88,7 @@ def test_bad_input_is_a_clear_error_and_nothing_lost(
     )
     bad = tmp_path / "bad.json"
     bad.write_text(content)
-    code, out, err = _bsp(capsys, "sessions", "add", str(bad), "--subject", "S1", "--store", store)
+    code, out, err = bsp(capsys, "sessions", "add", str(bad), "--subject", "S1", "--store", store)
     assert code == 5 and message in err and out == ""
     with open_store(store) as opened:
         assert len(opened.sessions("S1")) == 1
@@ -103,10 +97,10 @@ def test_bad_input_is_a_clear_error_and_nothing_lost(
 def test_duplicate_and_bad_subject(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     store = str(tmp_path / "s.sqlite")
     path = str(_write(tmp_path / "a.json", sample_estimate(1)))
-    assert _bsp(capsys, "sessions", "add", path, "--subject", "S1", "--store", store)[0] == 0
-    code, _, err = _bsp(capsys, "sessions", "add", path, "--subject", "S1", "--store", store)
+    assert bsp(capsys, "sessions", "add", path, "--subject", "S1", "--store", store)[0] == 0
+    code, _, err = bsp(capsys, "sessions", "add", path, "--subject", "S1", "--store", store)
     assert code == 5 and "duplicate session" in err
-    code, _, err = _bsp(capsys, "sessions", "add", path, "--subject", "Jane Doe", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "add", path, "--subject", "Jane Doe", "--store", store)
     assert code == 2 and "not a pseudonym" in err
-    code, _, err = _bsp(capsys, "sessions", "add", str(tmp_path / "missing.json"), "--subject", "S1", "--store", store)
+    code, _, err = bsp(capsys, "sessions", "add", str(tmp_path / "missing.json"), "--subject", "S1", "--store", store)
     assert code == 2 and "does not exist" in err
