@@ -27,18 +27,8 @@ class PlacementEffect:
     residual: np.ndarray
 
 
-def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> PlacementEffect:
-    """Covariance of the estimate from where the skin markers sit relative to the joint centres, and the residual
-    once offsets of that size (a Gaussian prior, ``sd_m``) have taken what they can explain.
-
-    Each marker's offset (along and normal to its segment, ``sd_m`` each, independent) moves the lever arms
-    and the segment angles the fit is computed on; the estimate responds linearly, ``G = (A + P)^-1 X^T W D``.
-    Part of this cannot be told from the parameters by any data (offsets along the chain scale every lever
-    arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
-    estimated: it is a known uncertainty of every session, different every day, and belongs in the std. The
-    rest bends the torques in ways the model cannot follow (over a wide planned range, at the wrist): a residual
-    that offsets of a few mm explain is no misfit of the model.
-    """
+def _columns(data: IdentificationData, problem: Problem, fit: Fit) -> np.ndarray:
+    """(N, n, 2 (n + 1)) how each marker's offset moves the torque equation at this fit (``placement_columns``)."""
     n = data.n_joints
     if len(problem.names) >= 3 * n and problem.names[-1][0] == "grouped_inertia_kgm2":
         base_values = np.concatenate((fit.values[:n], fit.values[-2 * n :]))
@@ -47,9 +37,32 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     zeros = np.zeros_like(data.q_rad)
     qd = zeros if data.qd_rad_s is None else data.qd_rad_s
     qdd = zeros if data.qdd_rad_s2 is None else data.qdd_rad_s2
-    columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, data.tau_nm, base_values)
+    return placement_columns(data.q_rad, qd, qdd, data.lengths_m, data.tau_nm, base_values)
+
+
+def _covariance(problem: Problem, fit: Fit, columns: np.ndarray, sd_m: float) -> np.ndarray:
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     response = np.linalg.lstsq(fit.design, np.einsum("tip,ti,tim->pm", problem.regressor, w, columns), rcond=None)[0]
+    return np.asarray(sd_m**2 * response @ response.T)
+
+
+def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> np.ndarray:
+    """Covariance (p, p) of the estimate from where the skin markers sit relative to the joint centres.
+
+    Each marker's offset (along and normal to its segment, ``sd_m`` each, independent) moves the lever arms
+    and the segment angles the fit is computed on; the estimate responds linearly, ``G = (A + P)^-1 X^T W D``.
+    Part of this cannot be told from the parameters by any data (offsets along the chain scale every lever
+    arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
+    estimated: it is a known uncertainty of every session, different every day, and belongs in the std.
+    """
+    return _covariance(problem, fit, _columns(data, problem, fit), sd_m)
+
+
+def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> PlacementEffect:
+    """:func:`placement_covariance`, and the residual once offsets of that size (a Gaussian prior, ``sd_m``) have
+    taken what they can explain: they also bend the torques in ways the model cannot follow (over a wide planned
+    range, at the wrist), and a residual that offsets of a few mm explain is no misfit of the model."""
+    columns = _columns(data, problem, fit)
     # The offsets fitted with the parameters (not on the residual alone: much of their effect resembles a change
     # of the parameters, and only together do they explain it), each with its prior N(0, sd^2).
     m = columns.shape[2]
@@ -57,9 +70,4 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
         (f"marker_offset_{k // 2}_{'normal' if k % 2 else 'along'}_m", "markers") for k in range(m)
     ]
     with_offsets = augmented(problem, columns, names, np.zeros(m), np.full(m, 1.0 / max(sd_m, 1e-12) ** 2))
-    return PlacementEffect(np.asarray(sd_m**2 * response @ response.T), fit_problem(with_offsets).residual)
-
-
-def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> np.ndarray:
-    """Covariance (p, p) of the estimate from marker placement (:func:`placement_effect`)."""
-    return placement_effect(data, problem, fit, sd_m).covariance
+    return PlacementEffect(_covariance(problem, fit, columns, sd_m), fit_problem(with_offsets).residual)
