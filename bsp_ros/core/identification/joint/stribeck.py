@@ -8,7 +8,7 @@ import numpy as np
 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
-from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, term_test
+from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, shifts_sd, term_test
 from bsp_ros.core.identification.stacked import Fit, Problem, normal_equations
 from bsp_ros.core.streams import joints_for
 
@@ -94,14 +94,9 @@ def stribeck_check(
         # errors near reversals (e.g. around marker gaps) look like, and the transition test covers it.
         if not (wide.values[-1] > 0 and p_value < MODEL_CHECK_P and shift > MODEL_CHECK_SHIFT_SD):
             continue
-        variance = np.maximum(np.diag(wide.covariance)[:n], np.diag(fit.covariance)[:n])
-        static_shift = float(
-            (np.abs(wide.values[:n] - fit.values[:n]) / np.sqrt(np.clip(variance, 1e-300, None))).max()
-        )
+        static_shift = float(shifts_sd(fit, wide, list(range(n))).max())
         coulomb_shift = float(wide.values[column] - fit.values[column])
-        coulomb_sd = abs(coulomb_shift) / float(
-            np.sqrt(max(wide.covariance[column, column], fit.covariance[column, column], 1e-300))
-        )
+        coulomb_sd = float(shifts_sd(fit, wide, [column])[0])
         if worst != column:
             moved = f"moves the {problem.names[worst][1]} static moment by {shift:.1f} std"
         elif coulomb_sd > STRIBECK_WIDEN_MAX_SD:
