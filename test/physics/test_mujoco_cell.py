@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from pinocchio_chain import planar_chain
 
 pytest.importorskip("mujoco", reason="the physics-engine cell needs MuJoCo (pip install mujoco, the test extra)")
 
@@ -67,18 +68,9 @@ def test_the_engine_s_joint_torques_minus_gravity_match_pinocchio_s_rnea_on_a_fa
     options = CellOptions(trajectory=FAST, duration_s=3.0, lead_in_s=0.5)
     run = run_engine(arm, options)
 
-    chain = pin.Model()
-    parent, offsets = 0, (options.shoulder_m, (0.0, arm.lengths_m[0], 0.0), (0.0, arm.lengths_m[1], 0.0))
-    for j in range(3):
-        placement = pin.SE3(np.eye(3), np.asarray(offsets[j], dtype=float))
-        parent = chain.addJoint(parent, pin.JointModelRX(), placement, f"joint{j}")
-        i_com = arm.inertia_com_kgm2[j]
-        inertia = pin.Inertia(
-            arm.masses_kg[j],
-            np.array([0.0, arm.com_along_m[j], arm.com_normal_m[j]]),
-            np.diag([i_com, 0.1 * i_com, i_com]),
-        )
-        chain.appendBodyToJoint(parent, inertia, pin.SE3.Identity())
+    chain = planar_chain(
+        pin, arm.lengths_m, arm.masses_kg, arm.com_along_m, arm.com_normal_m, arm.inertia_com_kgm2, options.shoulder_m
+    )
     data = chain.createData()
 
     measured = model.contact_torques_nm(run.q_rad, arm.lengths_m, run.wrench_world())

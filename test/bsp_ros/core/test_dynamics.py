@@ -4,26 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from pinocchio_chain import planar_chain
 
 from bsp_ros.core.dynamics import base_parameters, base_regressor
 from bsp_ros.core.model import gravity_regressor
 
 pin = pytest.importorskip("pinocchio", reason="pinocchio (pip 'pin') is the independent rigid-body oracle")
-
-
-def _pinocchio_chain(lengths, masses, com, com_normal, inertia_com):
-    """The arm as a pinocchio model: revolute joints about world x, segments along +y at q = 0."""
-    model = pin.Model()
-    parent = 0
-    placement = pin.SE3.Identity()
-    for a, m, c, d, inertia in zip(lengths, masses, com, com_normal, inertia_com, strict=True):
-        parent = model.addJoint(parent, pin.JointModelRX(), placement, f"j{parent}")
-        # Segment frame: y along the segment, z its 90 deg counter-clockwise normal, x the joint axis.
-        rotational = np.diag([inertia, 1e-3, 1e-3])
-        model.appendBodyToJoint(parent, pin.Inertia(m, np.array([0.0, c, d]), rotational), pin.SE3.Identity())
-        placement = pin.SE3(np.eye(3), np.array([0.0, a, 0.0]))
-    model.gravity.linear = np.array([0.0, 0.0, -9.81])
-    return model
 
 
 @pytest.mark.parametrize("n", [2, 3])
@@ -34,7 +20,7 @@ def test_base_regressor_equals_pinocchio_rnea(n):
     com = np.array([0.16, 0.12, 0.06])[:n]
     com_normal = np.array([0.004, -0.006, 0.003])[:n]
     inertia = np.array([0.015, 0.008, 0.0012])[:n]
-    model = _pinocchio_chain(lengths, masses, com, com_normal, inertia)
+    model = planar_chain(pin, lengths, masses, com, com_normal, inertia)
     data = model.createData()
     q, qd, qdd = rng.uniform(-1.5, 1.5, (3, 50, n)) * np.array([1.0, 0.8, 3.0])[:, None, None]
     theta = base_parameters(lengths, masses, com, inertia, com_normal)

@@ -335,6 +335,12 @@ def test_record_lists_the_publishers_offered_qos_and_spans_every_topic(
         recorder = _bsp("record", "/ft_sensor/wrench", "/mocap/hand", "--out", out, "--domain", domain)
         procs.append(recorder)
         _wait_line(recorder, "recording")
+        # Publish only once discovery matched both topics: on a loaded machine it can take seconds, and
+        # messages sent before it reach nobody (the recorder would then rightly report nothing recorded).
+        matched = client.spin_until(
+            lambda: reliable.get_subscription_count() > 0 and durable.get_subscription_count() > 0, 20.0
+        )
+        assert matched, "the recorder's subscriptions were not discovered in 20 s"
         deadline = time.monotonic() + 20
         sent = 0
         while time.monotonic() < deadline and sent < 300:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from pinocchio_chain import planar_chain
 
 from bsp_ros.core.anthropometry import inertia_com_kgm2
 from bsp_ros.core.simulation import (
@@ -42,19 +43,12 @@ def _chain(subject: SubjectTruth) -> PlanarChain:
 
 
 def _pinocchio_model(subject: SubjectTruth):
-    """The same chain as a pinocchio model: revolute joints about x, links along the parent's y axis."""
+    """The same chain as a pinocchio model."""
     pin = pytest.importorskip("pinocchio")  # the test extra installs it (PyPI: pin)
-    model = pin.Model()
-    parent = 0
-    for j in range(subject.n_segments):
-        placement = pin.SE3(np.eye(3), np.array([0.0, subject.lengths_m[j - 1] if j else 0.0, 0.0]))
-        parent = model.addJoint(parent, pin.JointModelRX(), placement, f"joint{j}")
-        lever = np.array([0.0, subject.com_m[j], subject.com_perpendicular_m[j]])
-        # Only the inertia about x acts in the plane; the others are set to something plausible and unused.
-        rotational = np.diag([subject.inertia_com_kgm2[j], 1e-3, subject.inertia_com_kgm2[j]])
-        model.appendBodyToJoint(parent, pin.Inertia(subject.masses_kg[j], lever, rotational), pin.SE3.Identity())
-    model.gravity.linear = np.array([0.0, 0.0, -G])
-    return model
+    return planar_chain(
+        pin, subject.lengths_m, subject.masses_kg, subject.com_m, subject.com_perpendicular_m,
+        subject.inertia_com_kgm2, gravity_m_s2=G,
+    )  # fmt: skip
 
 
 @pytest.mark.parametrize("n", [2, 3])
