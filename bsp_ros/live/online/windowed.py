@@ -220,10 +220,14 @@ class WindowedIdentifier:
             t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
         )
         q, velocity, valid = resample_kinematics(kinematics, t_w)
+        qd_all, qdd_all = resample_motion(kinematics, t_w)
+        # As offline (identification/data.py): the newest half second has no trustworthy derivative yet (the
+        # zero-phase filter's edge); taken as a still arm, its inertial torque would bias the window's fit.
+        valid &= np.isfinite(qd_all).all(axis=1) & np.isfinite(qdd_all).all(axis=1)
         if valid.sum() < 2:
             return "no wrench sample in the window has joint angles"
         tau = contact_torques_nm(q[valid], lengths, wrench[valid])
-        qd, qdd = (np.nan_to_num(v) for v in resample_motion(kinematics, t_w[valid]))
+        qd, qdd = qd_all[valid], qdd_all[valid]
         data = IdentificationData(
             t_w[valid],
             q[valid],
@@ -237,7 +241,7 @@ class WindowedIdentifier:
             qd_rad_s=qd,
             qdd_rad_s2=qdd,
         )
-        return data, t_w
+        return data, t_w[valid]
 
     def model_check(self, window: WindowSamples) -> list[str]:
         """Run the model checks (drift, Stribeck, elastic) on a window; their warnings, empty if it passes.
