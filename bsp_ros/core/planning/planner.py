@@ -30,7 +30,8 @@ MIN_AMPLITUDE_DEG = 1.0
 RAMP_S = 1.0
 #: Shortest move between reversals, s: the direction of motion is read from angles low-passed at 0.5 Hz.
 MIN_MOVE_S = 4.0
-#: Inertial torques above this share of the gravity torques break the quasi-static model (noted in the plan).
+#: Inertial torques above this share of the gravity torques are noted in the plan: the estimator models them
+#: (rigid-body dynamics), but the predicted stds are those of the quasi-static regressor.
 QUASI_STATIC_SHARE = 0.01
 #: Planned speeds stay this share below the limit, so the check never rests on round-off.
 _SPEED_MARGIN = 0.98
@@ -373,8 +374,9 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     for joint, share in zip(joints_for(n), ratio, strict=True):
         if share >= QUASI_STATIC_SHARE:
             notes.append(
-                f"not quasi-static: inertial torques at the {joint} reach {100 * share:.2f}% of gravity (limit "
-                f"{100 * QUASI_STATIC_SHARE:g}%): lower --max-speed"
+                f"not quasi-static: inertial torques at the {joint} reach {100 * share:.2f}% of gravity (over "
+                f"{100 * QUASI_STATIC_SHARE:g}%): the estimator models them and identifies the grouped inertias "
+                "from them; the predicted stds above are the quasi-static model's"
             )
     notes.append(f"optimiser: {result.nfev} evaluations, objective {request.objective} {cost(best):.4g}")
     return Plan(request, trajectory, np.degrees(centres), np.degrees(amplitudes), prediction, ratio, notes)
