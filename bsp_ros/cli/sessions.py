@@ -247,6 +247,10 @@ def _add(store: Store, args: argparse.Namespace) -> int:
         check_future(time_ns, time.time_ns(), "--time")
     known = store.subject_record(subject)
     if is_bag(path):
+        from bsp_ros.bag.fingerprint import content_sha256
+
+        # A stored recording is refused before it is identified (the same check runs again on adding).
+        store.refuse_stored_content(content_sha256(path))
         estimate = identify_bag_for_store(path, args, known.body() if known is not None else {})
     else:
         estimate = load_estimate_file(path)

@@ -192,10 +192,14 @@ class Store:
         return replace(record, id=session_id, added_ns=added_ns, number=number)
 
     def _refuse_same_content(self, record: SessionRecord) -> None:
-        if record.content_sha256 is None:
+        self.refuse_stored_content(record.content_sha256)
+
+    def refuse_stored_content(self, content_sha256: str | None) -> None:
+        """StoreError naming the session if a recording with this content hash is stored (None: no check)."""
+        if content_sha256 is None:
             return
         rows = self._backend.query(
-            "SELECT id, subject, session_time_ns FROM sessions WHERE content_sha256 = ?", (record.content_sha256,)
+            "SELECT id, subject, session_time_ns FROM sessions WHERE content_sha256 = ?", (content_sha256,)
         )
         if rows:
             sid, subject, time_ns = rows[0]

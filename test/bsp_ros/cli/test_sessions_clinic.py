@@ -32,7 +32,7 @@ def bags(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 
 def test_a_bag_is_stored_with_its_options_tare_body_data_and_repeatability(
-    bags: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    bags: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     store = str(tmp_path / "s.sqlite")
     code, out, _ = bsp(
@@ -87,7 +87,13 @@ def test_a_bag_is_stored_with_its_options_tare_body_data_and_repeatability(
     assert repeat["parameters"]["joints.elbow.coulomb_nm"]["sem"] > 0
     digest = hashlib.sha256(b"".join(f.read_bytes() for f in sorted(bags["session"].glob("*.mcap")))).hexdigest()
     assert record.content_sha256 == digest
-    # The same recording again, under another time: refused, nothing added.
+    # The same recording again, under another time: refused before it is identified, nothing added.
+    import bsp_ros.cli.sessions as sessions_cli
+
+    def identified(*_: object) -> None:
+        raise AssertionError("a stored recording was identified again before being refused")
+
+    monkeypatch.setattr(sessions_cli, "identify_bag_for_store", identified)
     code, _, err = bsp(
         capsys, "sessions", "add", str(bags["session"]), "--subject", "S1", "--time", "2024-06-08", "--store", store
     )
