@@ -33,5 +33,10 @@ def selection_curves(
     for candidate in selection.candidates:
         if candidate.fit is None or candidate is selection.chosen or candidate.rejected:
             continue
-        spread = np.maximum(spread, (curve_of(candidate) @ candidate.fit.values - chosen) ** 2)
+        theirs = curve_of(candidate)
+        # The candidate's own variance too: a chosen model without elastic terms has a curve of 0 with no variance
+        # by assumption, and at one posture a richer candidate's curve level is as uncertain as its confounding
+        # with gravity makes it (arm26 at 150 % of gravity, paper protocol: 0 +- 1.7 Nm against a true 5.3 Nm).
+        variance = np.clip(np.einsum("jkp,pq,jkq->jk", theirs, candidate.fit.covariance, theirs), 0.0, None)
+        spread = np.maximum(spread, (theirs @ candidate.fit.values - chosen) ** 2 + variance)
     return passive_curves(gradients, fit.values, fit.covariance, reference, spread)
