@@ -16,11 +16,13 @@ def identify_bag(
     options: IdentifyOptions | None = None,
     topics: TopicMap | None = None,
     progress: Callable[[int, int], None] | None = None,
+    sha256: str | None = None,
 ) -> dict[str, Any]:
     """The CONTRACT.md estimate of a rosbag2 MCAP bag, with a ``bag`` section on what was read and lost.
 
     Damage (CRC errors, truncation) does not stop the identification of what is intact; it is reported in
-    ``bag`` and as a warning in ``quality.warnings``.
+    ``bag`` and as a warning in ``quality.warnings``. ``sha256``: the bag's :func:`content_sha256` if the
+    caller has it already (else it is computed here).
 
     Raises
     ------
@@ -31,7 +33,7 @@ def identify_bag(
     report = read.report
     # The content hash lets the session store refuse this recording's result JSON once the bag is stored.
     document = identify_session(
-        read.session, options, {"source": Path(path).name, "content_sha256": content_sha256(path)}
+        read.session, options, {"source": Path(path).name, "content_sha256": sha256 or content_sha256(path)}
     )
     warnings = document["quality"]["warnings"]
     if report.damaged:

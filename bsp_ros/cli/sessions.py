@@ -172,9 +172,11 @@ def is_bag(path: Path) -> bool:
     return path.is_dir() or path.suffix.lower() in BAG_SUFFIXES
 
 
-def identify_bag_for_store(path: Path, args: argparse.Namespace, body: dict[str, Any]) -> dict[str, Any]:
+def identify_bag_for_store(
+    path: Path, args: argparse.Namespace, body: dict[str, Any], sha256: str | None = None
+) -> dict[str, Any]:
     """The estimate of a bag identified with the `bsp identify` options of ``args`` (body data default to
-    ``body``), with its within-session repeatability, the options and (from identify_bag) the content hash."""
+    ``body``), with its within-session repeatability, the options and the content hash (``sha256`` if given)."""
     from bsp_ros.bag import read_session
     from bsp_ros.bag.offline import identify_bag
     from bsp_ros.cli.identify_options import options_from_args, options_record, topics_from_args
@@ -182,7 +184,7 @@ def identify_bag_for_store(path: Path, args: argparse.Namespace, body: dict[str,
 
     options = options_from_args(args, body)
     topics = topics_from_args(args)
-    estimate = identify_bag(path, options, topics)
+    estimate = identify_bag(path, options, topics, sha256=sha256)
     found = cycle_repeatability(read_session(path, topics=topics).session, options)
     if found.message:
         print(f"note: no within-session repeatability for {path.name}: {found.message}")
@@ -250,8 +252,9 @@ def _add(store: Store, args: argparse.Namespace) -> int:
         from bsp_ros.bag.fingerprint import content_sha256
 
         # A stored recording is refused before it is identified (the same check runs again on adding).
-        store.refuse_stored_content(content_sha256(path))
-        estimate = identify_bag_for_store(path, args, known.body() if known is not None else {})
+        sha256 = content_sha256(path)
+        store.refuse_stored_content(sha256)
+        estimate = identify_bag_for_store(path, args, known.body() if known is not None else {}, sha256)
     else:
         estimate = load_estimate_file(path)
     session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}

@@ -529,3 +529,21 @@ def resample_motion(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tuple[
         column = [np.interp(where, grid, values[:, j]) for j in range(n)]
         out.append(np.column_stack(column))
     return out[0], out[1]
+
+
+def resample_with_motion(
+    kinematics: MarkerKinematics, t_ns: npt.ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`resample_kinematics` with the joint velocities and accelerations of the inertial torques.
+
+    Returns
+    -------
+    q_rad, velocity_rad_s, qd_rad_s, qdd_rad_s2 : (N, n) each.
+    valid : (N,) bool, also False where the derivatives are unknown: near gaps and the ends of runs (the
+        zero-phase filter's edge, hence the newest half second of a live window). Taken as a still arm there,
+        the inertial torque would bias the fit; offline and live drop those samples alike.
+    """
+    q_rad, velocity, valid = resample_kinematics(kinematics, t_ns)
+    qd, qdd = resample_motion(kinematics, t_ns)
+    valid &= np.isfinite(qd).all(axis=1) & np.isfinite(qdd).all(axis=1)
+    return q_rad, velocity, qd, qdd, valid

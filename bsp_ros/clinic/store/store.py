@@ -148,7 +148,7 @@ class Store:
                     (record.subject, record.session_time_ns, record.source),
                 ):
                     raise duplicate
-                self._refuse_same_content(record)
+                self.refuse_stored_content(record.content_sha256)
                 if record.retest:
                     self._check_retest(record)
                 rows = self._backend.query(
@@ -190,9 +190,6 @@ class Store:
             raise
         number = self._number_of(record.subject, session_id)
         return replace(record, id=session_id, added_ns=added_ns, number=number)
-
-    def _refuse_same_content(self, record: SessionRecord) -> None:
-        self.refuse_stored_content(record.content_sha256)
 
     def refuse_stored_content(self, content_sha256: str | None) -> None:
         """StoreError naming the session if a recording with this content hash is stored (None: no check)."""

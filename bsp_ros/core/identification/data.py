@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_markers, resample_kinematics, resample_motion
+from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_markers, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.streams import Session, WrenchSeries
 from bsp_ros.errors import DataError, InputError
@@ -168,10 +168,7 @@ def identification_data_from_session(
         session.wrench.frame_id,
     )
     wrench_yzx = wrench_world_yzx(wrench, rotation)
-    q_rad, velocity, valid = resample_kinematics(kinematics, wrench.t_ns)
-    qd_all, qdd_all = resample_motion(kinematics, wrench.t_ns)
-    # Joint velocities and accelerations for the inertial torques are lost near gaps and run edges too.
-    valid &= np.isfinite(qd_all).all(axis=1) & np.isfinite(qdd_all).all(axis=1)
+    q_rad, velocity, qd_all, qdd_all, valid = resample_with_motion(kinematics, wrench.t_ns)
     if not valid.any():
         raise DataError("no wrench sample falls where the markers give joint angles (streams do not overlap)")
     # Samples before the first and after the last angle are the session's edges (filter run-in): expected,

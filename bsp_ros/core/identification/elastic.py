@@ -169,6 +169,11 @@ def curve_gradients(
     return out
 
 
+def curve_variance(gradients: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """(n, K + 1) variances of the points and slopes of :func:`curve_gradients` (n, K + 1, p) under ``covariance``."""
+    return np.clip(np.einsum("jkp,pq,jkq->jk", gradients, covariance, gradients), 0.0, None)
+
+
 def passive_curves(
     gradients: np.ndarray,
     values: np.ndarray,
@@ -181,12 +186,13 @@ def passive_curves(
     ``extra_variance`` (n, K + 1) joins the variance of each point and slope (what a model choice leaves open)."""
     n, k_points = gradients.shape[0], gradients.shape[1] - 1
     angles = curve_angles_rad(reference, k_points)
+    variance = curve_variance(gradients, covariance)
+    if extra_variance is not None:
+        variance = variance + extra_variance
     out: dict[str, dict[str, Any]] = {}
     for j, joint in enumerate(joints_for(n)):
-        g = gradients[j]
-        mean = g @ values
-        variance = np.clip(np.einsum("kp,pq,kq->k", g, covariance, g), 0.0, None)
-        std = np.sqrt(variance if extra_variance is None else variance + extra_variance[j])
+        mean = gradients[j] @ values
+        std = np.sqrt(variance[j])
         out[joint] = {
             "angle_deg": np.degrees(angles[j]).tolist(),
             "moment_nm": mean[:k_points].tolist(),

@@ -11,7 +11,7 @@ from bsp_ros.core.estimate import estimate_document, invalid_document
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import parameter_timing
-from bsp_ros.core.joint_angles import kinematics_from_angles, resample_kinematics, resample_motion
+from bsp_ros.core.joint_angles import kinematics_from_angles, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data, refit_options
 from bsp_ros.errors import BspError
@@ -211,24 +211,20 @@ class WindowedIdentifier:
             self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
         )
 
-    def _window_data(self, window: WindowSamples) -> tuple[IdentificationData, np.ndarray] | str:
-        """The identification data of a window and its wrench stamps, or why there are none."""
+    def _window_data(self, window: WindowSamples) -> IdentificationData | str:
+        """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none."""
         t_w, wrench = block_average(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
         t_a, rows = window.angle_t_ns, window.angle_rows
         lengths = np.median(rows[:, self.n :], axis=0)
         kinematics = kinematics_from_angles(
             t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
         )
-        q, velocity, valid = resample_kinematics(kinematics, t_w)
-        qd_all, qdd_all = resample_motion(kinematics, t_w)
-        # As offline (identification/data.py): the newest half second has no trustworthy derivative yet (the
-        # zero-phase filter's edge); taken as a still arm, its inertial torque would bias the window's fit.
-        valid &= np.isfinite(qd_all).all(axis=1) & np.isfinite(qdd_all).all(axis=1)
+        # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
+        q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
         if valid.sum() < 2:
             return "no wrench sample in the window has joint angles"
         tau = contact_torques_nm(q[valid], lengths, wrench[valid])
-        qd, qdd = qd_all[valid], qdd_all[valid]
-        data = IdentificationData(
+        return IdentificationData(
             t_w[valid],
             q[valid],
             velocity[valid],
@@ -238,10 +234,9 @@ class WindowedIdentifier:
             kinematics.direction_velocity_noise_rad_s,
             int(t_w.size),
             [],
-            qd_rad_s=qd,
-            qdd_rad_s2=qdd,
+            qd_rad_s=qd[valid],
+            qdd_rad_s2=qdd[valid],
         )
-        return data, t_w[valid]
 
     def model_check(self, window: WindowSamples) -> list[str]:
         """Run the model checks (drift, Stribeck, elastic) on a window; their warnings, empty if it passes.
@@ -254,7 +249,7 @@ class WindowedIdentifier:
             prepared = self._window_data(window)
             if isinstance(prepared, str):
                 return []
-            result = identify_data(prepared[0], self.config.options, check_elastic=True)
+            result = identify_data(prepared, self.config.options, check_elastic=True)
         except BspError:
             return []
         return model_check_warnings(result.warnings)
@@ -271,10 +266,9 @@ class WindowedIdentifier:
         """
         last_wrench = int(window.wrench_t_ns[-1])
         try:
-            prepared = self._window_data(window)
-            if isinstance(prepared, str):
-                return self._invalid(prepared, last_wrench)
-            data, t_w = prepared
+            data = self._window_data(window)
+            if isinstance(data, str):
+                return self._invalid(data, last_wrench)
             check = verdict is None and self._updates % self.config.elastic_check_every == 0
             self._updates += 1
             result = identify_data(data, self.config.options, check_elastic=check)
@@ -306,8 +300,8 @@ class WindowedIdentifier:
             return self._invalid(str(error), last_wrench)
         posterior = fuse(result, data, self.config.options.subject) if result.valid else None
         info = {
-            "start_time_ns": int(t_w[0]),
-            "end_time_ns": int(t_w[-1]),
+            "start_time_ns": int(data.t_ns[0]),
+            "end_time_ns": int(data.t_ns[-1]),
             "window_s": self.config.window_s,
             "refused_samples": window.refused,
             "clock_jumps": window.clock_jumps,

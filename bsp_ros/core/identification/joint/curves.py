@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.identification.data import IdentificationData
-from bsp_ros.core.identification.elastic import ElasticReference, curve_gradients, passive_curves
+from bsp_ros.core.identification.elastic import ElasticReference, curve_gradients, curve_variance, passive_curves
 from bsp_ros.core.identification.selection import Candidate, Selection
 from bsp_ros.core.identification.stacked import Fit
 
@@ -37,6 +37,7 @@ def selection_curves(
         # The candidate's own variance too: a chosen model without elastic terms has a curve of 0 with no variance
         # by assumption, and at one posture a richer candidate's curve level is as uncertain as its confounding
         # with gravity makes it (arm26 at 150 % of gravity, paper protocol: 0 +- 1.7 Nm against a true 5.3 Nm).
-        variance = np.clip(np.einsum("jkp,pq,jkq->jk", theirs, candidate.fit.covariance, theirs), 0.0, None)
-        spread = np.maximum(spread, (theirs @ candidate.fit.values - chosen) ** 2 + variance)
+        spread = np.maximum(
+            spread, (theirs @ candidate.fit.values - chosen) ** 2 + curve_variance(theirs, candidate.fit.covariance)
+        )
     return passive_curves(gradients, fit.values, fit.covariance, reference, spread)
