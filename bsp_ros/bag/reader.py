@@ -398,6 +398,10 @@ def read_session(
     for name, topic in topic_map.markers.items():
         if topic in report.present or topic in sink.streams:
             marker_data[name] = _collect(sink.streams.get(topic), 7)
+    pose_topic = topic_map.handle_pose
+    pose_data = None
+    if pose_topic not in topic_map.markers.values() and (pose_topic in report.present or pose_topic in sink.streams):
+        pose_data = _collect(sink.streams.get(pose_topic), 7)
 
     def topic_report(topic: str, read: int) -> TopicReport:
         expected = None if expected_counts is None else expected_counts.get(topic, 0)
@@ -412,8 +416,11 @@ def read_session(
     wrench_report.note_stamps(t_w)
     wrench_report.non_finite = int((~np.isfinite(v_w)).any(axis=1).sum())
 
-    for name, (t_m, v_m, _f, frames_m, _log) in marker_data.items():
-        rep = topic_report(topic_map.markers[name], t_m.size)
+    positions = [(topic_map.markers[name], data) for name, data in marker_data.items()]
+    if pose_data is not None:
+        positions.append((pose_topic, pose_data))
+    for topic, (t_m, v_m, _f, frames_m, _log) in positions:
+        rep = topic_report(topic, t_m.size)
         rep.frame_ids = frames_m
         rep.note_stamps(t_m)
         rep.non_finite = int((~np.isfinite(v_m[:, :3])).any(axis=1).sum())
@@ -459,9 +466,11 @@ def read_session(
             "chunks give the message counts: the number of lost messages is unknown"
         )
 
-    # Required streams.
+    # Required streams (the robot's handle pose stands in for the hand marker).
+    from_robot = pose_data is not None and pose_data[0].size > 0
+    required = [m for m in REQUIRED_MARKERS if not (from_robot and m == "hand")]
     for name, topic, count in [("wrench", wrench_topic, t_w.size)] + [
-        (m, topic_map.markers[m], marker_data[m][0].size if m in marker_data else 0) for m in REQUIRED_MARKERS
+        (m, topic_map.markers[m], marker_data[m][0].size if m in marker_data else 0) for m in required
     ]:
         if topic not in report.present and (name == "wrench" or name not in marker_data):
             if metadata is None and not all(scan.channels_complete for scan in scans) and (losses.unknown or orphans):
@@ -506,9 +515,16 @@ def read_session(
         ),
         markers=markers,
         rotation_world_from_sensor=rotation,
+        handle_pose=(
+            MarkerSeries(t_ns=pose_data[0], position_m=np.ascontiguousarray(pose_data[1][:, :3]))
+            if pose_data is not None and from_robot
+            else None
+        ),
     )
     receive = {"wrench": log_w}
     receive.update({name: data[4] for name, data in marker_data.items() if data[0].size})
+    if pose_data is not None and from_robot:
+        receive["handle_pose"] = pose_data[4]
     return BagRead(session, report, receive)
 
 

@@ -26,12 +26,15 @@ class TopicMap:
     markers : marker name (``shoulder``, ``elbow``, ``wrist``, ``hand``) -> its PoseStamped topic.
         ``wrist`` is optional: without it the chain has 2 segments.
     tf_static, tf : the TFMessage topics.
+    handle_pose : the robot's PoseStamped of the contact point in ``world`` (optional): where a bag has it, it
+        stands for the ``hand`` marker.
     """
 
     wrench: str = "/ft_sensor/wrench"
     markers: dict[str, str] = field(default_factory=_default_markers)
     tf_static: str = "/tf_static"
     tf: str = "/tf"
+    handle_pose: str = "/robot/handle_pose"
 
     def expected_types(self) -> dict[str, str]:
         """Topic -> required message type, for every topic of the map.
@@ -40,6 +43,6 @@ class TopicMap:
         the wrench topic then fails the reader's type check (MessageTypeError) instead of having its poses
         decoded as wrenches.
         """
-        types = {topic: POSE_TYPE for topic in self.markers.values()}
+        types = {topic: POSE_TYPE for topic in (*self.markers.values(), self.handle_pose)}
         types.update({self.tf_static: TF_TYPE, self.tf: TF_TYPE, self.wrench: WRENCH_TYPE})
         return types

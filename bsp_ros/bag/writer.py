@@ -42,9 +42,11 @@ def _check_session(session: Session, world_frame: str) -> None:
     n = np.asarray(w.t_ns).size
     if np.shape(w.force_n) != (n, 3) or np.shape(w.torque_nm) != (n, 3):
         raise BagWriteError(f"wrench arrays must be ({n}, 3), got {np.shape(w.force_n)}, {np.shape(w.torque_nm)}")
-    for name, series in session.markers.items():
-        if name not in MARKERS_3:
-            raise BagWriteError(f"unknown marker {name!r}; markers are {list(MARKERS_3)}")
+    unknown = [name for name in session.markers if name not in MARKERS_3]
+    if unknown:
+        raise BagWriteError(f"unknown marker {unknown[0]!r}; markers are {list(MARKERS_3)}")
+    poses = {**session.markers, **({} if session.handle_pose is None else {"handle pose": session.handle_pose})}
+    for name, series in poses.items():
         m = np.asarray(series.t_ns).size
         if np.shape(series.position_m) != (m, 3):
             raise BagWriteError(f"marker {name} positions must be ({m}, 3), got {np.shape(series.position_m)}")
@@ -125,16 +127,16 @@ def write_session_bag(
             False,
         )
     )
-    for name in MARKERS_3:
-        if name not in session.markers:
-            continue
-        series = session.markers[name]
+    poses = [(topic_map.markers[name], session.markers[name]) for name in MARKERS_3 if name in session.markers]
+    if session.handle_pose is not None:
+        poses.append((topic_map.handle_pose, session.handle_pose))
+    for topic, series in poses:
         t_m = np.asarray(series.t_ns, dtype=np.int64)
         values = np.hstack([np.asarray(series.position_m, dtype=np.float64), np.tile(_IDENTITY_XYZW, (t_m.size, 1))])
         rows = encode_fixed(t_m, world_frame, values)
         payloads.append(
             (
-                topic_map.markers[name],
+                topic,
                 POSE_TYPE,
                 [r.tobytes() for r in rows],
                 t_m,

@@ -44,6 +44,21 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
     parser.add_argument("--tf-topic", default="/tf")
     parser.add_argument("--tf-static-topic", default="/tf_static")
     parser.add_argument(
+        "--handle-pose-topic",
+        default="/robot/handle_pose",
+        metavar="TOPIC",
+        help="the robot's PoseStamped of the contact point in world: where the bag has it, it stands for the hand "
+        "marker ('' to use the marker) (default: /robot/handle_pose)",
+    )
+    parser.add_argument(
+        "--handle-pose-sd-mm",
+        type=float_within(0.0, 50.0),
+        default=0.5,
+        metavar="MM",
+        help="how far (1 sd per axis) the robot's contact point may sit from the motion capture's: its registration "
+        "to world; in the std like a skin marker's placement (2 mm) (default: 0.5)",
+    )
+    parser.add_argument(
         "--tare",
         type=Path,
         metavar="FILE",
@@ -95,10 +110,10 @@ def topics_from_args(args: argparse.Namespace) -> Any:
         name, _, topic = item.partition("=")
         if name not in markers or not topic:
             raise InputError(f"--marker-topic takes NAME=TOPIC with NAME in {sorted(markers)}, got {item!r}")
-        if topic in (args.wrench_topic, args.tf_topic, args.tf_static_topic):
-            raise InputError(f"--marker-topic {item}: {topic} is already the wrench or a tf topic")
+        if topic in (args.wrench_topic, args.tf_topic, args.tf_static_topic, args.handle_pose_topic):
+            raise InputError(f"--marker-topic {item}: {topic} is already the wrench, a tf or the handle pose topic")
         markers[name] = topic
-    return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic)
+    return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic, args.handle_pose_topic)
 
 
 def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = None) -> Any:
@@ -131,6 +146,7 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
         subject=subject,
         tare=read_tare(args.tare),
         wrench_delay_s=args.wrench_delay_s,
+        handle_pose_sd_m=args.handle_pose_sd_mm / 1000.0,
     )
 
 
@@ -145,6 +161,7 @@ def options_record(args: argparse.Namespace, options: Any) -> dict[str, Any]:
             "tare_file": None if args.tare is None else Path(args.tare).name,
             "wrench_topic": args.wrench_topic,
             "marker_topics": list(args.marker_topic),
+            "handle_pose_topic": args.handle_pose_topic,
         }
     )
     return config

@@ -166,6 +166,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "frame and its orientation goes on /tf at every wrench sample (default: fixed, on /tf_static)",
     )
     sensor.add_argument(
+        "--robot-handle-pose",
+        action="store_true",
+        help="the robot publishes the contact point from its kinematics on /robot/handle_pose at every wrench "
+        "sample (bsp identify then takes it for the hand marker) (default: not published)",
+    )
+    sensor.add_argument(
         "--wrench-filter-delay-s",
         type=float,
         metavar="S",
@@ -345,6 +351,7 @@ def _spec(args: argparse.Namespace) -> Any:
         duration_s=duration,
         seed=args.seed,
         inertia=args.inertia,
+        robot_handle_pose=args.robot_handle_pose,
     )
 
 
@@ -363,7 +370,7 @@ def run(args: argparse.Namespace) -> int:
     if args.tare:
         session_only = [
             f"--{n.replace('_', '-')}"
-            for n in ("trajectory", "speed_scale", "sensor_turns", "skin_offset_mm")
+            for n in ("trajectory", "speed_scale", "sensor_turns", "skin_offset_mm", "robot_handle_pose")
             if getattr(args, n) is not None and getattr(args, n) is not False
         ]
         if session_only:
@@ -391,7 +398,10 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"wrote {out} ({session.n_segments} segments, {spec.duration_s:g} s"
         f"{', inertia' if spec.inertia else ', quasi-static'}): wrench {session.wrench.t_ns.size}, "
-        f"markers: {counts}" + (f", /tf {len(samples)}" if samples else "") + f"; truth in {out / TRUTH_FILE}",
+        f"markers: {counts}"
+        + (f", /robot/handle_pose {session.handle_pose.t_ns.size}" if session.handle_pose is not None else "")
+        + (f", /tf {len(samples)}" if samples else "")
+        + f"; truth in {out / TRUTH_FILE}",
         file=sys.stdout,
     )
     return 0

@@ -136,7 +136,9 @@ def window(session: Session, start_ns: int, stop_ns: int) -> Session:
     markers = {
         name: MarkerSeries(m.t_ns[cut(m.t_ns)], m.position_m[cut(m.t_ns)]) for name, m in session.markers.items()
     }
-    return replace(session, wrench=wrench, markers=markers)
+    pose = session.handle_pose
+    handle_pose = None if pose is None else MarkerSeries(pose.t_ns[cut(pose.t_ns)], pose.position_m[cut(pose.t_ns)])
+    return replace(session, wrench=wrench, markers=markers, handle_pose=handle_pose)
 
 
 @dataclass(frozen=True)

@@ -51,7 +51,7 @@ def estimate_document(
     posterior: Posterior | None,
     subject: SubjectInfo,
     session: dict[str, Any] | None = None,
-    marker_placement_sd_m: float = 0.0,
+    marker_placement_sd_m: float | np.ndarray = 0.0,
 ) -> dict[str, Any]:
     """Build the estimate JSON (as a dict) of CONTRACT.md.
 
@@ -65,8 +65,9 @@ def estimate_document(
     posterior : masses and COMs fused with the prior, None if the fusion could not run.
     subject : the subject facts used for the prior.
     session : extra facts about the session (times, source, configuration).
-    marker_placement_sd_m : how far (1 sd per axis, m) a skin marker may sit from its joint centre: a segment
-        length is the distance of two markers, so each length's std holds ``sqrt(2)`` times it.
+    marker_placement_sd_m : how far (1 sd per axis, m) a skin marker may sit from its joint centre, one value or
+        (n + 1,) per chain point (:func:`chain_placement_sd_m`): a segment length is the distance of two points,
+        so its std holds both.
 
     Returns
     -------
@@ -74,7 +75,8 @@ def estimate_document(
     """
     n = data.n_joints
     # Two markers' offsets along the segment move the measured length; the truth is the joint centres' distance.
-    lengths_std_m = np.hypot(data.lengths_std_m, math.sqrt(2.0) * marker_placement_sd_m)
+    sd_m = np.broadcast_to(np.asarray(marker_placement_sd_m, dtype=np.float64), (n + 1,))
+    lengths_std_m = np.hypot(data.lengths_std_m, np.hypot(sd_m[:-1], sd_m[1:]))
     segments: dict[str, dict[str, Any]] = {}
     for j, segment in enumerate(segments_for(n)):
         entry = {
@@ -116,6 +118,8 @@ def estimate_document(
         "message": result.message,
         "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
         "removed_samples": removed_samples(result, data),
+        # Where the handle wrench's point of action came from: it sets the lever arms (and their placement std).
+        "contact_point": "robot_handle_pose" if data.contact_from_robot else "hand_marker",
     }
     sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
     if sensitivity:

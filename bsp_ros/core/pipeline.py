@@ -19,6 +19,7 @@ from bsp_ros.core.identification.data import IdentificationData, identification_
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.paper import PaperConfig, identify_paper
 from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.placement import chain_placement_sd_m
 from bsp_ros.core.identification.priors import base_prior_for_subject
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
@@ -42,6 +43,8 @@ class IdentifyOptions:
     kinematics: KinematicsConfig = field(default_factory=KinematicsConfig)
     tare: Tare | None = None
     marker_placement_sd_m: float = 0.002
+    # The contact point's placement sd where the robot's handle pose gives it (its registration to `world`), m.
+    handle_pose_sd_m: float = 0.0005
     # Stream timing (timing.py): a wrench delay the cell knows (s), or None to estimate it from the data.
     wrench_delay_s: float | None = None
     # Where the data show an elastic passive moment the model lacks, let the data choose the elastic terms
@@ -64,7 +67,14 @@ class IdentifyOptions:
             "direction_cutoff_hz": self.kinematics.direction_cutoff_hz,
             "max_gap_s": self.kinematics.max_gap_s,
             "marker_placement_sd_m": self.marker_placement_sd_m,
+            "handle_pose_sd_m": self.handle_pose_sd_m,
         }
+
+    def placement_sd_m(self, data: IdentificationData) -> np.ndarray:
+        """(n + 1,) placement sd of each chain point of ``data``, m (:func:`chain_placement_sd_m`)."""
+        return chain_placement_sd_m(
+            data.n_joints, self.marker_placement_sd_m, self.handle_pose_sd_m, data.contact_from_robot
+        )
 
 
 def identify_data(
@@ -84,6 +94,7 @@ def identify_data(
             check_elastic=check_elastic,
             base_prior=base_prior_for_subject(options.subject, data.lengths_m),
             marker_placement_sd_m=options.marker_placement_sd_m,
+            handle_pose_sd_m=options.handle_pose_sd_m,
             elastic_fallback=options.elastic_fallback,
         )
         result = identify_joint(data, config)
@@ -155,7 +166,7 @@ def identify_session(
         **(session_info or {}),
     }
     document = estimate_document(
-        result, data, posterior, options.subject, info, marker_placement_sd_m=options.marker_placement_sd_m
+        result, data, posterior, options.subject, info, marker_placement_sd_m=options.placement_sd_m(data)
     )
     document["quality"].update(offsets)
     # --- stream timing and sensor rotation (timing.py, sensor_rotation.py) ---

@@ -66,11 +66,14 @@ class Session:
     wrench : the force/torque stream.
     markers : marker name (``shoulder``, ``elbow``, ``wrist``, ``hand``) -> its series.
     rotation_world_from_sensor : (3, 3) rotation taking wrench-frame vectors into ``world``.
+    handle_pose : the contact point in ``world`` as the robot's kinematics give it (its handle pose), or None
+        where the cell publishes none: then the ``hand`` skin marker stands for the contact point.
     """
 
     wrench: WrenchSeries
     markers: dict[str, MarkerSeries]
     rotation_world_from_sensor: np.ndarray = field(default_factory=lambda: np.eye(3))
+    handle_pose: MarkerSeries | None = None
 
     @property
     def n_segments(self) -> int:

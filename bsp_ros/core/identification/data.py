@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_markers, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.streams import Session, WrenchSeries
@@ -31,6 +32,8 @@ class IdentificationData:
     qd_rad_s, qdd_rad_s2 : (N, n) smooth joint velocities (rad/s) and accelerations (rad/s^2) for the inertial
         torques; None when the source gives none (then the arm is taken as quasi-static, and the inertial
         terms' prior uncertainty cannot be propagated).
+    contact_from_robot : True where the contact point came from the robot's handle pose, not a skin marker (its
+        placement uncertainty is then the robot's registration to ``world``, not a marker's).
     """
 
     t_ns: np.ndarray
@@ -45,6 +48,7 @@ class IdentificationData:
     removed_samples: dict[str, int] = field(default_factory=dict)
     qd_rad_s: np.ndarray | None = None
     qdd_rad_s2: np.ndarray | None = None
+    contact_from_robot: bool = False
 
     @property
     def n_joints(self) -> int:
@@ -66,6 +70,7 @@ class IdentificationData:
             dict(self.removed_samples),
             None if self.qd_rad_s is None else self.qd_rad_s[start:stop],
             None if self.qdd_rad_s2 is None else self.qdd_rad_s2[start:stop],
+            self.contact_from_robot,
         )
 
 
@@ -155,7 +160,7 @@ def identification_data_from_session(
     n_wrench = int(np.asarray(session.wrench.t_ns).size)
     if n_wrench == 0:
         raise DataError("the session holds no wrench samples")
-    kinematics = kinematics_from_markers(session.markers, session.n_segments, kinematics_config)
+    kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, kinematics_config)
     rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
     keep, notes, removed = _clean_wrench(session.wrench)
     removed.update({f"marker_{name}": count for name, count in kinematics.n_frames_rejected.items()})
@@ -192,4 +197,5 @@ def identification_data_from_session(
         removed,
         qd,
         qdd,
+        session.handle_pose is not None,
     )

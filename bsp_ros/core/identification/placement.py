@@ -11,6 +11,18 @@ from bsp_ros.core.model import contact_jacobian, joint_positions_m
 _STEP_M = 1e-3
 
 
+def chain_placement_sd_m(
+    n_joints: int, marker_placement_sd_m: float, handle_pose_sd_m: float, contact_from_robot: bool
+) -> np.ndarray:
+    """(n + 1,) how far (1 sd per axis, m) each chain point may sit from where the data put it, shoulder to contact
+    point: a skin marker ``marker_placement_sd_m``; a contact point from the robot's handle pose ``handle_pose_sd_m``
+    (the robot's registration to the motion-capture ``world``)."""
+    sd = np.full(n_joints + 1, float(marker_placement_sd_m))
+    if contact_from_robot:
+        sd[-1] = handle_pose_sd_m
+    return sd
+
+
 def _angles_from_points(points: np.ndarray) -> np.ndarray:
     """Joint angles (N, n) of chain points (N, n + 1, 2)."""
     steps = np.diff(points, axis=1)

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.data import IdentificationData, _clean_wrench, wrench_world_yzx
 from bsp_ros.core.identification.passive import PassiveModel
@@ -134,7 +135,7 @@ def delay_problem(session: Session, kinematics_config: KinematicsConfig | None =
     wrench = WrenchSeries(
         session.wrench.t_ns[keep], session.wrench.force_n[keep], session.wrench.torque_nm[keep], session.wrench.frame_id
     )
-    kinematics = kinematics_from_markers(session.markers, session.n_segments, kinematics_config)
+    kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, kinematics_config)
     return DelayProblem(kinematics, np.asarray(wrench.t_ns, dtype=np.int64), wrench_world_yzx(wrench, rotation))
 
 

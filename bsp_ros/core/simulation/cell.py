@@ -44,6 +44,8 @@ class CellSpec:
         + tau_p = -J^T F_end`` with the trajectory's velocities and accelerations (the default: a real arm
         has inertia). False: quasi-static, ``tau_G(q) + tau_p = -J^T F_end``, as the method paper models it
         (inertial terms are ~1e-4 of gravity at 0.03 rad/s).
+    robot_handle_pose : True: the robot publishes the contact point from its kinematics (``Session.handle_pose``,
+        ``/robot/handle_pose``), exact, at each wrench sample's instant on the marker clock.
 
     Raises
     ------
@@ -61,6 +63,7 @@ class CellSpec:
     start_ns: int = DEFAULT_START_NS
     seed: int = 0
     inertia: bool = True
+    robot_handle_pose: bool = False
 
     def __post_init__(self) -> None:
         for name, kind in (

@@ -196,6 +196,11 @@ class CellSimulator:
             out[name] = xyz
         return out
 
+    def handle_positions_m(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """The contact point in ``world`` as the robot's kinematics give it (no skin offset): (N,) s -> (N, 3) m."""
+        points = self._joint_points_yz(self.joint_angles_rad(t_s))
+        return np.column_stack([np.full(points.shape[0], self._shoulder[0]), points[:, -1, :]])
+
     def gravity_torque_nm(self, t_s: npt.ArrayLike) -> np.ndarray:
         """Torque needed at each joint to hold the arm against gravity: (N,) s -> (N, n) Nm.
 
@@ -456,7 +461,11 @@ def simulate_cell(spec: CellSpec) -> SimulatedSession:
     wrench = sim.sample_wrench(sim.wrench_stamps_ns())
     markers = sim.sample_markers(sim.marker_stamps_ns())
     rotation = np.array(sim.rotation_world_from_sensor) if spec.sensor.tf_static else np.eye(3)
-    session = Session(wrench=wrench, markers=markers, rotation_world_from_sensor=rotation)
+    handle_pose = None
+    if spec.robot_handle_pose:
+        pose_t_ns = sim.orientation_stamps_ns(wrench.t_ns)
+        handle_pose = MarkerSeries(pose_t_ns, sim.handle_positions_m(sim.seconds_since_start(pose_t_ns)))
+    session = Session(wrench=wrench, markers=markers, rotation_world_from_sensor=rotation, handle_pose=handle_pose)
     if spec.sensor.turns_with_handle and spec.sensor.tf_static:
         tf_t_ns = sim.orientation_stamps_ns(wrench.t_ns)
         rotations = sim.rotations_world_from_sensor(sim.seconds_since_start(tf_t_ns))

@@ -263,6 +263,7 @@ def simulation_settings(
         "start_ns": spec.start_ns,
         "gravity_m_s2": GRAVITY_M_S2,
         "inertia": spec.inertia,
+        "robot_handle_pose": spec.robot_handle_pose,
         "wrench_hz": s.wrench_hz,
         "wrench_phase_s": s.phase_s,
         "wrench_stamp_jitter_s": s.stamp_jitter_s,

@@ -313,7 +313,7 @@ class WindowedIdentifier:
             posterior,
             self.config.options.subject,
             info,
-            marker_placement_sd_m=self.config.options.marker_placement_sd_m,
+            marker_placement_sd_m=self.config.options.placement_sd_m(data),
         )
         document["quality"]["timing"] = parameter_timing(self.config.options.wrench_delay_s)  # the node shifts stamps
         if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:

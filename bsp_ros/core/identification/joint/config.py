@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.placement import chain_placement_sd_m
 from bsp_ros.core.identification.priors import BasePrior
 from bsp_ros.validation import check_finite_scalar, check_positive
 
@@ -43,6 +46,8 @@ class JointConfig:
         uncertainty in the std instead of being taken as zero.
     marker_placement_sd_m : how far (1 sd, m, per axis) a skin marker may sit from its joint centre: what
         such offsets would move the estimate by joins its covariance (0: markers taken as exact).
+    handle_pose_sd_m : the same for the contact point where the robot's handle pose gives it (1 sd, m, per
+        axis): the robot's registration to the motion-capture ``world``, not a skin marker's placement.
     elastic_fallback : when the elastic check finds an elastic passive moment the model lacks, identify again
         with the elastic terms chosen by the data (``--passive auto``) instead of returning an invalid estimate:
         what `bsp identify` does when no passive model was asked for.
@@ -66,6 +71,7 @@ class JointConfig:
     dynamics: bool = True
     base_prior: BasePrior | None = None
     marker_placement_sd_m: float = 0.002
+    handle_pose_sd_m: float = 0.0005
     elastic_fallback: bool = False
 
     def __post_init__(self) -> None:
@@ -83,3 +89,8 @@ class JointConfig:
         check_finite_scalar("confounded_corr", self.confounded_corr, 0.0, 1.0)
         check_finite_scalar("confounded_rel_std", self.confounded_rel_std, 0.0, 1e6)
         check_finite_scalar("marker_placement_sd_m", self.marker_placement_sd_m, 0.0, 0.05)
+        check_finite_scalar("handle_pose_sd_m", self.handle_pose_sd_m, 0.0, 0.05)
+
+    def placement_sd_m(self, n_joints: int, contact_from_robot: bool) -> np.ndarray:
+        """(n + 1,) placement sd of each chain point, m (:func:`chain_placement_sd_m`)."""
+        return chain_placement_sd_m(n_joints, self.marker_placement_sd_m, self.handle_pose_sd_m, contact_from_robot)

@@ -126,10 +126,10 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 )
     selection = None
     if config.passive.select:
-        sd_m = config.marker_placement_sd_m
+        sd_m = config.placement_sd_m(n, data.contact_from_robot)
 
         def with_placement(candidate: Problem, candidate_fit: Fit) -> np.ndarray:
-            if sd_m == 0:
+            if not sd_m.any():
                 return candidate_fit.covariance
             return candidate_fit.covariance + placement_covariance(data, candidate, candidate_fit, sd_m)
 
@@ -183,8 +183,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     prior_share = _prior_share(problem, fit.covariance)
     judged_residual = None
     placement_sd = np.zeros(len(problem.names))
-    if config.marker_placement_sd_m > 0:
-        placement = placement_effect(data, problem, fit, config.marker_placement_sd_m)
+    placement_sd_m = config.placement_sd_m(n, data.contact_from_robot)
+    if placement_sd_m.any():
+        placement = placement_effect(data, problem, fit, placement_sd_m)
         fit = dataclasses.replace(fit, covariance=fit.covariance + placement.covariance)
         judged_residual = placement.residual
         placement_sd = np.sqrt(np.clip(np.diag(placement.covariance), 0.0, None))

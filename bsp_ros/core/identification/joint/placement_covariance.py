@@ -20,15 +20,16 @@ class PlacementEffect:
     ----------
     covariance : (p, p) of the estimate, from offsets of ``sd_m`` per axis.
     residual : (N, n) the residual (Nm, NaN where unused) of the fit that also takes marker offsets, each with a
-        prior of ``sd_m``: what is left once offsets of that size explain what they can.
+        prior of its ``sd_m``: what is left once offsets of that size explain what they can.
     """
 
     covariance: np.ndarray
     residual: np.ndarray
 
 
-def _columns(data: IdentificationData, problem: Problem, fit: Fit) -> np.ndarray:
-    """(N, n, 2 (n + 1)) how each marker's offset moves the torque equation at this fit (``placement_columns``)."""
+def _columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
+    """(N, n, 2 (n + 1)) how an offset of one sd of each marker (``sd_m``, (n + 1,) m) moves the torque equation at
+    this fit (``placement_columns``, scaled)."""
     n = data.n_joints
     if len(problem.names) >= 3 * n and problem.names[-1][0] == "grouped_inertia_kgm2":
         base_values = np.concatenate((fit.values[:n], fit.values[-2 * n :]))
@@ -37,37 +38,41 @@ def _columns(data: IdentificationData, problem: Problem, fit: Fit) -> np.ndarray
     zeros = np.zeros_like(data.q_rad)
     qd = zeros if data.qd_rad_s is None else data.qd_rad_s
     qdd = zeros if data.qdd_rad_s2 is None else data.qdd_rad_s2
-    return placement_columns(data.q_rad, qd, qdd, data.lengths_m, data.tau_nm, base_values)
+    columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, data.tau_nm, base_values)
+    return columns * np.repeat(np.asarray(sd_m, dtype=np.float64), 2)
 
 
-def _covariance(problem: Problem, fit: Fit, columns: np.ndarray, sd_m: float) -> np.ndarray:
+def _covariance(problem: Problem, fit: Fit, columns: np.ndarray) -> np.ndarray:
+    """Covariance of the estimate from offsets of unit variance along ``columns``."""
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     response = np.linalg.lstsq(fit.design, np.einsum("tip,ti,tim->pm", problem.regressor, w, columns), rcond=None)[0]
-    return np.asarray(sd_m**2 * response @ response.T)
+    return np.asarray(response @ response.T)
 
 
-def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> np.ndarray:
+def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
     """Covariance (p, p) of the estimate from where the skin markers sit relative to the joint centres.
 
-    Each marker's offset (along and normal to its segment, ``sd_m`` each, independent) moves the lever arms
+    Each marker's offset (along and normal to its segment, ``sd_m[k]`` m each for chain point k, shoulder to
+    contact point, independent) moves the lever arms
     and the segment angles the fit is computed on; the estimate responds linearly, ``G = (A + P)^-1 X^T W D``.
     Part of this cannot be told from the parameters by any data (offsets along the chain scale every lever
     arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
     estimated: it is a known uncertainty of every session, different every day, and belongs in the std.
     """
-    return _covariance(problem, fit, _columns(data, problem, fit), sd_m)
+    return _covariance(problem, fit, _columns(data, problem, fit, sd_m))
 
 
-def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: float) -> PlacementEffect:
+def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> PlacementEffect:
     """:func:`placement_covariance`, and the residual once offsets of that size (a Gaussian prior, ``sd_m``) have
     taken what they can explain: they also bend the torques in ways the model cannot follow (over a wide planned
     range, at the wrist), and a residual that offsets of a few mm explain is no misfit of the model."""
-    columns = _columns(data, problem, fit)
+    columns = _columns(data, problem, fit, sd_m)
     # The offsets fitted with the parameters (not on the residual alone: much of their effect resembles a change
     # of the parameters, and only together do they explain it), each with its prior N(0, sd^2).
     m = columns.shape[2]
     names: list[ParameterName] = [
-        (f"marker_offset_{k // 2}_{'normal' if k % 2 else 'along'}_m", "markers") for k in range(m)
+        (f"marker_offset_{k // 2}_{'normal' if k % 2 else 'along'}_sd", "markers") for k in range(m)
     ]
-    with_offsets = augmented(problem, columns, names, np.zeros(m), np.full(m, 1.0 / max(sd_m, 1e-12) ** 2))
-    return PlacementEffect(_covariance(problem, fit, columns, sd_m), fit_problem(with_offsets).residual)
+    # Offsets in units of their sd (the columns are scaled): each with the prior N(0, 1).
+    with_offsets = augmented(problem, columns, names, np.zeros(m), np.ones(m))
+    return PlacementEffect(_covariance(problem, fit, columns), fit_problem(with_offsets).residual)
