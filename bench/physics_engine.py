@@ -198,6 +198,7 @@ def run_scenario(
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--first-seed", type=int, default=0, help="seeds FIRST .. FIRST + SEEDS - 1 (split a long run)")
     parser.add_argument("--duration", type=float, default=120.0)
     parser.add_argument("--wrench-hz", type=float, default=1000.0)
     parser.add_argument("--plan", type=Path, help="a `bsp plan --json` file: adds the planned-trajectory rows")
@@ -226,7 +227,8 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="physics_engine_") as tmp:
         for scenario in scenarios:
             print(f"{scenario.name} ...", flush=True)
-            ratios = run_scenario(scenario, list(range(args.seeds)), args, Path(tmp), tallies)
+            seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+            ratios = run_scenario(scenario, seeds, args, Path(tmp), tallies)
             engine[scenario.name] = {k: max(v) for k, v in ratios.items()}
     print(f"\n{args.seeds} seeds, {args.duration:g} s, wrench {args.wrench_hz:g} Hz, {time.monotonic() - start:.0f} s")
     header = (
