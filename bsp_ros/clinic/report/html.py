@@ -15,6 +15,7 @@ from bsp_ros.clinic.report.summary import (
     arm_title,
     day,
     error_source,
+    first_page_rows,
     headline,
     percent,
     period_line,
@@ -76,8 +77,7 @@ def _headline(analysis: Analysis) -> list[str]:
 
 
 def _session_table(analysis: Analysis, rows_limit: int | None, table_id: str) -> str:
-    rows = session_rows(analysis)
-    shown = rows if rows_limit is None else rows[-rows_limit:]
+    shown, note = first_page_rows(session_rows(analysis), rows_limit)
     out = [f"<table id='{table_id}'><tr><th>No.</th><th>Date</th><th>Arm</th><th>Status</th></tr>"]
     for row in shown:
         cls = " class='attention'" if row.attention else ""
@@ -86,10 +86,8 @@ def _session_table(analysis: Analysis, rows_limit: int | None, table_id: str) ->
             f"<td>{escape(row.status)}</td></tr>"
         )
     out.append("</table>")
-    if len(shown) < len(rows):
-        out.append(
-            f"<p class='note'>The latest {len(shown)} of {len(rows)} sessions; all are listed in the detail.</p>"
-        )
+    if note:
+        out.append(f"<p class='note'>{escape(note)}</p>")
     return "\n".join(out)
 
 

@@ -25,6 +25,7 @@ from bsp_ros.clinic.report.summary import (
     arm_title,
     day,
     error_source,
+    first_page_rows,
     headline,
     percent,
     period_line,
@@ -125,8 +126,7 @@ def _headline_box(flow: _Flow, analysis: Analysis) -> None:
 
 
 def _session_list(flow: _Flow, analysis: Analysis, limit: int | None) -> None:
-    rows = session_rows(analysis)
-    shown = rows if limit is None else rows[-limit:]
+    shown, note = first_page_rows(session_rows(analysis), limit)
     flow.line("No.   Date          Arm     Status", 8.0, GREY, "bold")
     for row in shown:
         colour, weight = (RED, "bold") if row.attention else (INK, "normal")
@@ -138,8 +138,8 @@ def _session_list(flow: _Flow, analysis: Analysis, limit: int | None) -> None:
         for part in status:
             flow.page.text(LEFT + 0.24, flow.y, part, fontsize=8, color=colour, weight=weight, va="top")
             flow.y -= LINE * 0.9
-    if len(shown) < len(rows):
-        flow.line(f"The latest {len(shown)} of {len(rows)} sessions; all are listed in the detail.", 7.5, GREY)
+    if note:
+        flow.line(note, 7.5, GREY)
 
 
 def _change_text(change: Change | None, unit: str) -> str:

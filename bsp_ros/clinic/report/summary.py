@@ -145,7 +145,15 @@ def error_source(analysis: Analysis) -> str:
         return "No measurement error is known yet (no or too few retests): changes are not judged."
     error = judged[0].error
     whose = "this patient" if error.source == "subject" else f"{error.n_subjects} patient(s) measured in this cell"
-    icc = f"; agreement (ICC) {error.icc:.2f}" if error.icc is not None else ""
+    # The agreement differs per quantity: name the one it belongs to, or give the range over those judged.
+    iccs = [(s.error.icc, s.label) for s in judged if s.error.icc is not None]
+    if len(iccs) == 1:
+        icc = f"; agreement (ICC) {iccs[0][0]:.2f} for {iccs[0][1].lower()}"
+    elif iccs:
+        low, high = min(i for i, _ in iccs), max(i for i, _ in iccs)
+        icc = f"; agreement (ICC) {low:.2f} to {high:.2f} over the {len(iccs)} quantities judged"
+    else:
+        icc = ""
     return (
         f"Measurement error (MDC95) from {error.n_pairs} same-day retests of {whose}{icc}. A change is reported "
         "only when it is larger."
@@ -240,6 +248,26 @@ def session_rows(analysis: Analysis) -> list[SessionRow]:
         else:
             rows.append(SessionRow(record.number or 0, day(record.session_time_ns), arm, "Usable", False))
     return rows
+
+
+def first_page_rows(rows: list[SessionRow], limit: int | None) -> tuple[list[SessionRow], str]:
+    """The rows the first page lists, and a note on those left out (empty when all are listed).
+
+    A long history keeps its latest sessions and its baseline, the first usable session that changes "since the
+    first session" are measured from: a list without it leaves a therapist no way to see where progress started.
+    """
+    if limit is None or len(rows) <= limit:
+        return rows, ""
+    baseline = next((r for r in rows if not r.attention and not r.status.startswith("Retest")), rows[0])
+    latest = rows[-(limit - 1) :]
+    if baseline in latest:
+        latest = rows[-limit:]
+        return latest, f"The latest {len(latest)} of {len(rows)} sessions; all are listed in the detail."
+    return (
+        [baseline, *latest],
+        f"The baseline (session {baseline.number}) and the latest {len(latest)} of {len(rows)} sessions; all are "
+        "listed in the detail.",
+    )
 
 
 def quality_notes(record: SessionRecord) -> list[str]:
