@@ -8,6 +8,7 @@ from typing import Any
 
 from bsp_ros.bag import TopicMap, read_session
 from bsp_ros.bag.fingerprint import content_sha256
+from bsp_ros.bag.reader import BagRead
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 
 
@@ -29,7 +30,14 @@ def identify_bag(
     BspError
         The bag is missing, not a bag, empty, lacks a required topic or carries a wrong type.
     """
-    read = read_session(path, topics=topics, progress=progress)
+    return estimate_from_read(read_session(path, topics=topics, progress=progress), path, options, sha256)
+
+
+def estimate_from_read(
+    read: BagRead, path: str | Path, options: IdentifyOptions | None = None, sha256: str | None = None
+) -> dict[str, Any]:
+    """:func:`identify_bag` on a bag already read (``read_session`` of ``path``): a caller that needs the streams
+    too (the session store's within-session cycles) reads the bag once."""
     report = read.report
     # The content hash lets the session store refuse this recording's result JSON once the bag is stored.
     document = identify_session(

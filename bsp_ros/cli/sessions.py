@@ -178,14 +178,14 @@ def identify_bag_for_store(
     """The estimate of a bag identified with the `bsp identify` options of ``args`` (body data default to
     ``body``), with its within-session repeatability, the options and the content hash (``sha256`` if given)."""
     from bsp_ros.bag import read_session
-    from bsp_ros.bag.offline import identify_bag
+    from bsp_ros.bag.offline import estimate_from_read
     from bsp_ros.cli.identify_options import options_from_args, options_record, topics_from_args
     from bsp_ros.clinic.cycles import cycle_repeatability
 
     options = options_from_args(args, body)
-    topics = topics_from_args(args)
-    estimate = identify_bag(path, options, topics, sha256=sha256)
-    found = cycle_repeatability(read_session(path, topics=topics).session, options)
+    read = read_session(path, topics=topics_from_args(args))  # once: the estimate and the cycles share it
+    estimate = estimate_from_read(read, path, options, sha256=sha256)
+    found = cycle_repeatability(read.session, options)
     if found.message:
         print(f"note: no within-session repeatability for {path.name}: {found.message}")
     estimate["repeatability"] = found.to_json()
