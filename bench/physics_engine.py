@@ -195,6 +195,17 @@ def run_scenario(
     return ratios
 
 
+def _row(name: str, t: Tally) -> str:
+    """One table row: a scenario and passive model's runs and error rates."""
+    common = t.messages.most_common(1)
+    reason = f"{common[0][1]}x {common[0][0]}" if common else "-"
+    fail = f" failed {dict(t.failures)}" if t.failures else ""
+    return (
+        f"{name:52} {t.runs:4} {t.valid:5} {t.valid_wrong:7} {t.invalid_right:9}  {t.worst_z:8.3g} "
+        f"({t.worst_param})  {reason}{fail}"
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
@@ -228,21 +239,18 @@ def main(argv: list[str] | None = None) -> int:
         for scenario in scenarios:
             print(f"{scenario.name} ...", flush=True)
             seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+            before = set(tallies)
             ratios = run_scenario(scenario, seeds, args, Path(tmp), tallies)
             engine[scenario.name] = {k: max(v) for k, v in ratios.items()}
+            for name in [n for n in tallies if n not in before]:  # as it finishes: a long run is read as it goes
+                print("  " + _row(name, tallies[name]), flush=True)
     print(f"\n{args.seeds} seeds, {args.duration:g} s, wrench {args.wrench_hz:g} Hz, {time.monotonic() - start:.0f} s")
     header = (
         f"{'motion sens sensor  model':52} runs valid v&wrong inv&right  worst|z| (parameter)   most common invalid"
     )
     print(header)
     for name, t in tallies.items():
-        common = t.messages.most_common(1)
-        reason = f"{common[0][1]}x {common[0][0]}" if common else "-"
-        fail = f" failed {dict(t.failures)}" if t.failures else ""
-        print(
-            f"{name:52} {t.runs:4} {t.valid:5} {t.valid_wrong:7} {t.invalid_right:9}  {t.worst_z:8.3g} "
-            f"({t.worst_param})  {reason}{fail}"
-        )
+        print(_row(name, t))
     print("\nengine, largest over seeds: inertial / gravity torque per joint (RMS, peak), weld drift (m)")
     for name, values in engine.items():
         print(f"{name}  " + "  ".join(f"{k} {v:.3g}" for k, v in values.items()))
