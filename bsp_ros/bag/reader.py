@@ -467,8 +467,10 @@ def read_session(
         )
 
     # Required streams (the robot's handle pose stands in for the hand marker).
-    from_robot = pose_data is not None and pose_data[0].size > 0
-    required = [m for m in REQUIRED_MARKERS if not (from_robot and m == "hand")]
+    handle_pose = None
+    if pose_data is not None and pose_data[0].size:
+        handle_pose = MarkerSeries(t_ns=pose_data[0], position_m=np.ascontiguousarray(pose_data[1][:, :3]))
+    required = [m for m in REQUIRED_MARKERS if not (handle_pose is not None and m == "hand")]
     for name, topic, count in [("wrench", wrench_topic, t_w.size)] + [
         (m, topic_map.markers[m], marker_data[m][0].size if m in marker_data else 0) for m in required
     ]:
@@ -515,15 +517,11 @@ def read_session(
         ),
         markers=markers,
         rotation_world_from_sensor=rotation,
-        handle_pose=(
-            MarkerSeries(t_ns=pose_data[0], position_m=np.ascontiguousarray(pose_data[1][:, :3]))
-            if pose_data is not None and from_robot
-            else None
-        ),
+        handle_pose=handle_pose,
     )
     receive = {"wrench": log_w}
     receive.update({name: data[4] for name, data in marker_data.items() if data[0].size})
-    if pose_data is not None and from_robot:
+    if handle_pose is not None and pose_data is not None:
         receive["handle_pose"] = pose_data[4]
     return BagRead(session, report, receive)
 

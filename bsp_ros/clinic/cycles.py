@@ -130,15 +130,16 @@ def window(session: Session, start_ns: int, stop_ns: int) -> Session:
     def cut(t_ns: np.ndarray) -> np.ndarray:
         return (t_ns >= start_ns) & (t_ns < stop_ns)
 
+    def cut_series(series: MarkerSeries) -> MarkerSeries:
+        keep = cut(series.t_ns)
+        return MarkerSeries(series.t_ns[keep], series.position_m[keep])
+
     w = session.wrench
     keep = cut(w.t_ns)
     wrench = WrenchSeries(w.t_ns[keep], w.force_n[keep], w.torque_nm[keep], w.frame_id)
-    markers = {
-        name: MarkerSeries(m.t_ns[cut(m.t_ns)], m.position_m[cut(m.t_ns)]) for name, m in session.markers.items()
-    }
-    pose = session.handle_pose
-    handle_pose = None if pose is None else MarkerSeries(pose.t_ns[cut(pose.t_ns)], pose.position_m[cut(pose.t_ns)])
-    return replace(session, wrench=wrench, markers=markers, handle_pose=handle_pose)
+    markers = {name: cut_series(m) for name, m in session.markers.items()}
+    pose = None if session.handle_pose is None else cut_series(session.handle_pose)
+    return replace(session, wrench=wrench, markers=markers, handle_pose=pose)
 
 
 @dataclass(frozen=True)

@@ -34,10 +34,9 @@ def contact_from_robot(markers: dict[str, MarkerSeries], handle_pose: MarkerSeri
     t_robot = np.asarray(handle_pose.t_ns, dtype=np.int64)
     position = np.asarray(handle_pose.position_m, dtype=np.float64)
     finite = np.isfinite(position).all(axis=1)
-    order = np.argsort(t_robot[finite], kind="stable")
-    t_robot, position = t_robot[finite][order], position[finite][order]
-    t_robot, unique = np.unique(t_robot, return_index=True)
-    position = position[unique]
+    # Sorted, one pose per stamp (the first received): np.unique sorts and keeps each stamp's first index.
+    t_robot, first = np.unique(t_robot[finite], return_index=True)
+    position = position[finite][first]
     if not frames or t_robot.size < 2:
         return MarkerSeries(np.zeros(0, dtype=np.int64), np.zeros((0, 3)))
     t_ns = np.unique(np.concatenate(frames))

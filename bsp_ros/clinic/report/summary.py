@@ -208,13 +208,14 @@ def invalid_cause(record: SessionRecord) -> tuple[str, str]:
 
 @dataclass(frozen=True)
 class SessionRow:
-    """One line of the session list."""
+    """One line of the session list (``retest``: a same-day retest, kept for the measurement error)."""
 
     number: int
     date: str
     arm: str
     status: str
     attention: bool
+    retest: bool = False
 
 
 def session_rows(analysis: Analysis) -> list[SessionRow]:
@@ -239,7 +240,7 @@ def session_rows(analysis: Analysis) -> list[SessionRow]:
         elif record.retest:
             rows.append(
                 SessionRow(
-                    record.number or 0, day(record.session_time_ns), arm, "Retest (for measurement error)", False
+                    record.number or 0, day(record.session_time_ns), arm, "Retest (for measurement error)", False, True
                 )
             )
         elif record.id in flagged:
@@ -258,7 +259,7 @@ def first_page_rows(rows: list[SessionRow], limit: int | None) -> tuple[list[Ses
     """
     if limit is None or len(rows) <= limit:
         return rows, ""
-    baseline = next((r for r in rows if not r.attention and not r.status.startswith("Retest")), rows[0])
+    baseline = next((r for r in rows if not r.attention and not r.retest), rows[0])
     latest = rows[-(limit - 1) :]
     if baseline in latest:
         latest = rows[-limit:]

@@ -84,6 +84,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     config = config or JointConfig()
     n = data.n_joints
     joints = joints_for(n)
+    # How far each chain point may sit from where the data put it (skin markers; the robot's contact point).
+    placement_sd_m = config.placement_sd_m(n, data.contact_from_robot)
     rows, notes = motion_rows(data, config)
     spikes, spike_notes = wrench_spikes(data, config)
     rows &= ~spikes[:, None]
@@ -126,12 +128,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 )
     selection = None
     if config.passive.select:
-        sd_m = config.placement_sd_m(n, data.contact_from_robot)
 
         def with_placement(candidate: Problem, candidate_fit: Fit) -> np.ndarray:
-            if not sd_m.any():
+            if not placement_sd_m.any():
                 return candidate_fit.covariance
-            return candidate_fit.covariance + placement_covariance(data, candidate, candidate_fit, sd_m)
+            return candidate_fit.covariance + placement_covariance(data, candidate, candidate_fit, placement_sd_m)
 
         selection = select_passive(data, config.passive, rows, widths if widths.any() else None, extras, with_placement)
         assert selection.chosen.problem is not None and selection.chosen.fit is not None
@@ -183,7 +184,6 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     prior_share = _prior_share(problem, fit.covariance)
     judged_residual = None
     placement_sd = np.zeros(len(problem.names))
-    placement_sd_m = config.placement_sd_m(n, data.contact_from_robot)
     if placement_sd_m.any():
         placement = placement_effect(data, problem, fit, placement_sd_m)
         fit = dataclasses.replace(fit, covariance=fit.covariance + placement.covariance)

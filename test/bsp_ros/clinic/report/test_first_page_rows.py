@@ -7,7 +7,7 @@ from bsp_ros.clinic.report.summary import SessionRow, first_page_rows
 
 def _rows(n: int) -> list[SessionRow]:
     rows = [SessionRow(1, "day 1", "Right", "Not usable: the elbow did not move; repeat.", True)]
-    rows.append(SessionRow(2, "day 1", "Right", "Retest (for measurement error)", False))
+    rows.append(SessionRow(2, "day 1", "Right", "Retest (for measurement error)", False, retest=True))
     rows += [SessionRow(k, f"day {k}", "Right", "Usable", False) for k in range(3, n + 1)]
     return rows
 
