@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from bsp_ros import __version__
+from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
@@ -119,7 +120,7 @@ def estimate_document(
         "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
         "removed_samples": removed_samples(result, data),
         # Where the handle wrench's point of action came from: it sets the lever arms (and their placement std).
-        "contact_point": "robot_handle_pose" if data.contact_from_robot else "hand_marker",
+        "contact_point": CONTACT_FROM_ROBOT if data.contact_from_robot else CONTACT_FROM_MARKER,
     }
     sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
     if sensitivity:

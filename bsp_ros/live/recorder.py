@@ -23,7 +23,7 @@ _LOG = logging.getLogger("bsp_ros.live.recorder")
 
 #: Topics (exact names, or prefixes ending in ``/``) subscribed best effort, so reliable and best-effort
 #: publishers both match.
-SENSOR_TOPIC_PREFIXES: tuple[str, ...] = ("/ft_sensor/wrench", "/mocap/")
+SENSOR_TOPIC_PREFIXES: tuple[str, ...] = ("/ft_sensor/wrench", "/mocap/", "/robot/handle_pose")
 DEFAULT_CHUNK_BYTES = 48 * 1024
 DEFAULT_FLUSH_S = 0.25
 _TAKE_N = 256

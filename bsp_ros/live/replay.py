@@ -33,7 +33,7 @@ __all__ = [
 _LOG = logging.getLogger("bsp_ros.live.replay")
 
 #: Topics (exact names, or prefixes ending in ``/``) published best effort with the ``sensor_data`` profile.
-SENSOR_TOPIC_PREFIXES: tuple[str, ...] = ("/ft_sensor/wrench", "/mocap/")
+SENSOR_TOPIC_PREFIXES: tuple[str, ...] = ("/ft_sensor/wrench", "/mocap/", "/robot/handle_pose")
 #: Writer history of reliable volatile topics: deep, so a fast replay does not overwrite unacknowledged samples.
 RELIABLE_DEPTH = 1000
 _LATCHED_DEPTH_MAX = 1000

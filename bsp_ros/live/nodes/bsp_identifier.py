@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.contact_point import CONTACT_FROM_ROBOT
 from bsp_ros.core.estimate import invalid_document
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.passive import PassiveModel
@@ -239,6 +240,9 @@ class BspIdentifierNode(RosNode):
         self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, estimates)
         self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, estimates)
         self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
+        self.create_subscription(
+            message_class("std_msgs/msg/String"), "arm/contact_point", self.on_contact_point, rclpy_qos("tf_static")
+        )
         if use_tf:
             tf = message_class(TF_TYPE)
             self.create_subscription(tf, "/tf_static", self.on_tf_static, rclpy_qos("tf_static_listener"))
@@ -287,6 +291,18 @@ class BspIdentifierNode(RosNode):
             self.windowed.reset()
             self.recursive.reset()
             self.model_verdict = [MODEL_CHECK_PENDING]
+
+    def on_contact_point(self, msg: Any) -> None:
+        """Where the angles' contact point comes from (`joint_angle_estimator`): the robot's handle pose holds
+        the robot's registration sd in the estimate, a skin marker the marker placement sd."""
+        robot = msg.data == CONTACT_FROM_ROBOT
+        if robot != self.windowed.contact_from_robot:
+            # The hand's segment length changes with the source: samples of both must not mix.
+            self.get_logger().info(f"contact point: {msg.data}; estimate restarted")
+            self.windowed.reset()
+            self.recursive.reset()
+            self.model_verdict = [MODEL_CHECK_PENDING]
+            self.windowed.contact_from_robot = robot
 
     def on_lengths(self, msg: Any) -> None:
         """Segment lengths from the joint angle estimator."""
@@ -436,7 +452,8 @@ class BspIdentifierNode(RosNode):
             assert self.lengths is not None  # stale_reason() waits for them
             result, lengths = self.recursive.identifier.result(), self.lengths.copy()
             stamp = self.recursive.guard.last_t_ns or 0
-            job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp)  # noqa: E731
+            robot = self.windowed.contact_from_robot
+            job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp, robot)  # noqa: E731
         self.worker.submit(lambda: self.publish(self._timed(job), counts))
 
     def _timed(self, job: Callable[[], jobs.EstimateOutputs]) -> jobs.EstimateOutputs:

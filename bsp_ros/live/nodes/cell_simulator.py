@@ -74,6 +74,13 @@ PARAMETERS = (
     Param("wrench_filter", "first_order", "the sensor's low-pass", choices=("first_order", "moving_average")),
     Param("wrench_clock_offset_s", 0.0, "wrench stamps lag the marker clock by this much", "s", lo=-1.0, hi=1.0),
     Param("skin_offset_mm", 0.0, "skin markers re-placed per session within +- this per axis", "mm", lo=0.0, hi=100.0),
+    Param(
+        "hand_marker_offset_mm",
+        [0.0, 0.0],
+        "the hand marker sits this far from the contact point (along, normal to the hand: on the back of the hand)",
+        "mm",
+    ),
+    Param("robot_handle_pose", False, "the robot publishes the contact point on /robot/handle_pose per wrench sample"),
     Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
     Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
     # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
@@ -124,6 +131,11 @@ class CellSimulatorNode(RosNode):
             raise InputError(f"{NAME}: sensor_roll_pitch_yaw_deg needs 3 angles, got {rpy}")
         self.start_wall_ns = self.now_ns()
         base = sim.human_arm_cell() if p["subject"] == "human" else sim.paper_mechanical_arm_cell()
+        hand_offset = p["hand_marker_offset_mm"]
+        if len(hand_offset) != 2:
+            raise InputError(f"{NAME}: hand_marker_offset_mm needs 2 offsets (along, normal), got {hand_offset}")
+        n_markers = base.n_segments + 1
+        skin_offset_m = ((0.0, 0.0),) * (n_markers - 1) + ((hand_offset[0] / 1000.0, hand_offset[1] / 1000.0),)
         spec = dataclasses.replace(
             base,
             seed=p["seed"],
@@ -148,6 +160,7 @@ class CellSimulatorNode(RosNode):
                 marker_hz=marker_hz,
                 dropout_fraction=p["dropout_fraction"],
                 skin_offset_bound_m=p["skin_offset_mm"] / 1000.0,
+                skin_offset_m=skin_offset_m if any(hand_offset) else base.markers.skin_offset_m,
             ),
             inertia=p["inertia"],
             passive=dataclasses.replace(
@@ -177,6 +190,9 @@ class CellSimulatorNode(RosNode):
             message_class("geometry_msgs/msg/WrenchStamped"), p["wrench_topic"], sensor_data
         )
         pose = message_class("geometry_msgs/msg/PoseStamped")
+        self.handle_pose_pub = None  # the contact point from the robot's kinematics, exact
+        if p["robot_handle_pose"]:
+            self.handle_pose_pub = self.create_publisher(pose, "/robot/handle_pose", sensor_data)
         self.marker_pubs = {
             name: self.create_publisher(pose, p["marker_topic_prefix"] + name, sensor_data)
             for name in self.simulator.marker_names
@@ -234,7 +250,10 @@ class CellSimulatorNode(RosNode):
         if self.duration_s and elapsed_s >= self.duration_s:
             now = min(now, self.start_wall_ns + int(self.duration_s * 1e9))
         stalled = bool(self.stall_at_s and elapsed_s >= self.stall_at_s)
-        for wrench, transform in self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench):
+        wrench_due = self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench)
+        for wrench, transform, handle in wrench_due:
+            if self.handle_pose_pub is not None:  # the robot's kinematics go on when the sensor stalls
+                self.handle_pose_pub.publish(build_pose_stamped(self.types, handle))
             if not stalled:
                 self.wrench_pub.publish(build_wrench_stamped(self.types, wrench))
             if self.tf_pub is not None:  # the robot still reports its flange when the sensor stalls
@@ -276,8 +295,17 @@ class CellSimulatorNode(RosNode):
                 TransformSample(int(t), "world", self.frame_id, np.zeros(3), quaternion_from_matrix(r))
                 for t, r in zip(tf_stamps.tolist(), rotations, strict=True)
             ]
+        handles: list[PoseSample | None] = [None] * stamps.size
+        if self.handle_pose_pub is not None:
+            pose_ns = self.simulator.orientation_stamps_ns(series.t_ns)  # on the marker clock, as the robot's
+            contact_m = self.simulator.handle_positions_m(self.simulator.seconds_since_start(pose_ns))
+            identity = np.array([0.0, 0.0, 0.0, 1.0])
+            handles = [
+                PoseSample(int(t), "world", c, identity)
+                for t, c in zip(self._stamp(pose_ns).tolist(), contact_m, strict=True)
+            ]
         # Messages are built when published.
-        return list(zip(t_ns.tolist(), zip(samples, transforms, strict=True), strict=True))
+        return list(zip(t_ns.tolist(), zip(samples, transforms, handles, strict=True), strict=True))
 
     def _simulate_markers(self, t_ns: np.ndarray) -> list[tuple[int, tuple[str, Any]]]:
         identity = np.array([0.0, 0.0, 0.0, 1.0])

@@ -117,16 +117,23 @@ def window_model_check(window: WindowSamples) -> list[str]:
 
 
 def recursive_estimate(
-    result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, stamp_ns: int
+    result: IdentificationResult,
+    lengths_m: np.ndarray,
+    options: IdentifyOptions,
+    stamp_ns: int,
+    contact_from_robot: bool = False,
 ) -> EstimateOutputs:
     """The estimate of a recursive filter state (its passive moments go out per sample, not here)."""
-    document = recursive_document(result, lengths_m, options)
+    document = recursive_document(result, lengths_m, options, contact_from_robot)
     document["mode"] = "recursive"
     return outputs_from_document(document, stamp_ns, with_passive=False)
 
 
-def recursive_document(result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions) -> dict[str, Any]:
-    """The estimate document of a recursive result (fused with the anthropometric prior when valid)."""
+def recursive_document(
+    result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, contact_from_robot: bool = False
+) -> dict[str, Any]:
+    """The estimate document of a recursive result (fused with the anthropometric prior when valid);
+    ``contact_from_robot``: the contact point came from the robot's handle pose (its placement sd)."""
     n = lengths_m.size
     data = IdentificationData(
         np.zeros(0, dtype=np.int64),
@@ -136,8 +143,8 @@ def recursive_document(result: IdentificationResult, lengths_m: np.ndarray, opti
         lengths_m,
         np.zeros(n),
         np.zeros(n),
+        contact_from_robot=contact_from_robot,
     )
     posterior = fuse(result, data, options.subject) if result.valid else None
-    return estimate_document(
-        result, data, posterior, options.subject, marker_placement_sd_m=options.marker_placement_sd_m
-    )
+    placement_sd_m = options.placement_sd_m(data)
+    return estimate_document(result, data, posterior, options.subject, marker_placement_sd_m=placement_sd_m)

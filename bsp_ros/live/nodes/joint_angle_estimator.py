@@ -1,4 +1,4 @@
-"""`joint_angle_estimator`: marker poses -> `arm/joint_states` with causal filters and a staleness watchdog."""
+"""`joint_angle_estimator`: marker poses (and the robot's handle pose) -> `arm/joint_states`, causal, watched."""
 
 from __future__ import annotations
 
@@ -8,8 +8,10 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
 from bsp_ros.core.streams import joints_for, markers_for, segments_for
 from bsp_ros.live.online.causal_angles import CausalAnglesConfig, CausalJointAngles
+from bsp_ros.live.online.contact_track import RobotContactTrack
 from bsp_ros.live.runtime.parameters import Param, declare_parameters
 from bsp_ros.live.runtime.qos import rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, message_class
@@ -36,7 +38,14 @@ PARAMETERS = (
     Param("max_gap_s", 0.1, "longer marker gaps restart the filters", "s", lo=0.0, hi=10.0),
     Param("stale_s", 0.5, "no frame for this long: stale", "s", lo=0.01, hi=60.0),
     Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
+    Param(
+        "handle_pose_topic",
+        "/robot/handle_pose",
+        "the robot's contact point (PoseStamped in world): once it streams, it stands for the hand marker ('': ignore)",
+    ),
 )
+# Complete frames waiting for the robot's pose after them: more than this many and the oldest is given up.
+_MAX_PENDING_FRAMES = 50
 
 
 class JointAngleEstimatorNode(RosNode):
@@ -48,6 +57,12 @@ class JointAngleEstimatorNode(RosNode):
     biases the Coulomb terms). `arm/joint_angles_raw` carries each frame's unfiltered angles at the frame
     stamp (the windowed identifier filters them with zero phase, as offline); `arm/segment_lengths` the
     running-median segment lengths (JointState with segment names, position = length in m).
+
+    Where the robot publishes its handle pose (``handle_pose_topic``), the contact point comes from it, as
+    offline: from its first pose on, a frame needs every marker but the hand's and waits for the robot pose
+    stamped after it, and the contact point is interpolated at the frame stamp. `arm/contact_point` (latched
+    String) says which source the angles use (``hand_marker`` or ``robot_handle_pose``); the identifier
+    takes the contact point's placement sd from it.
     """
 
     def __init__(self) -> None:
@@ -65,7 +80,10 @@ class JointAngleEstimatorNode(RosNode):
         self.frames: dict[int, dict[str, np.ndarray]] = {}
         self.last_frame_ns: int | None = None
         self.last_receive_wall_ns: int | None = None
-        self.counts = {"frames": 0, "incomplete_frames": 0, "refused": 0}
+        self.counts = {"frames": 0, "incomplete_frames": 0, "refused": 0, "frames_without_contact_point": 0}
+        self.robot: RobotContactTrack | None = RobotContactTrack() if p["handle_pose_topic"] else None
+        self.using_robot = False
+        self.last_robot_wall_ns: int | None = None
         self.types = message_class
         estimates = rclpy_qos("estimates")
         joint_state = message_class("sensor_msgs/msg/JointState")
@@ -75,7 +93,14 @@ class JointAngleEstimatorNode(RosNode):
         self.diag_pub = self.create_publisher(
             message_class("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics", rclpy_qos("default")
         )
+        self.contact_pub = self.create_publisher(
+            message_class("std_msgs/msg/String"), "arm/contact_point", rclpy_qos("tf_static")
+        )
+        self.contact_pub.publish(message_class("std_msgs/msg/String")(data=CONTACT_FROM_MARKER))
         pose = message_class("geometry_msgs/msg/PoseStamped")
+        if self.robot is not None:
+            topic = p["handle_pose_topic"]
+            self.create_subscription(pose, topic, self.on_robot_pose, rclpy_qos("sensor_input"))
         for name in self.names:
             self.create_subscription(
                 pose,
@@ -94,6 +119,8 @@ class JointAngleEstimatorNode(RosNode):
         """Store one marker; process the frame once complete."""
         pose = read_pose_stamped(msg)
         self.last_receive_wall_ns = self.now_ns()
+        if marker == "hand" and self.using_robot:  # the robot's contact point stands for it
+            return
         if not np.isfinite(pose.position_m).all() or pose.t_ns <= 0:
             self.counts["refused"] += 1
             return
@@ -105,17 +132,52 @@ class JointAngleEstimatorNode(RosNode):
             else:
                 self.counts["refused"] += 1
                 return
-        frame = self.frames.setdefault(pose.t_ns, {})
-        frame[marker] = pose.position_m
-        if len(frame) == len(self.names):
-            for stamp in [s for s in self.frames if s < pose.t_ns]:
+        self.frames.setdefault(pose.t_ns, {})[marker] = pose.position_m
+        self.drain()
+
+    def on_robot_pose(self, msg: Any) -> None:
+        """Store one robot handle pose; the first switches the contact point to the robot's."""
+        pose = read_pose_stamped(msg)
+        assert self.robot is not None  # subscribed only with a track
+        if not self.robot.add(pose.t_ns, pose.position_m):
+            return
+        self.last_robot_wall_ns = self.now_ns()
+        if not self.using_robot:
+            # The hand's segment length changes with the source: the filters and the length median start over.
+            self.using_robot = True
+            self.estimator = CausalJointAngles(self.n, self.estimator.config)
+            self.contact_pub.publish(self.types("std_msgs/msg/String")(data=CONTACT_FROM_ROBOT))
+            self.get_logger().info("the robot's handle pose streams: it is the contact point, not the hand marker")
+        self.drain()
+
+    def drain(self) -> None:
+        """Process the complete frames in time order, as far as their contact point is known."""
+        needed = set(self.names) - {"hand"} if self.using_robot else set(self.names)
+        while True:
+            complete = [t for t, frame in self.frames.items() if needed <= frame.keys()]
+            if not complete:
+                break
+            t_ns = min(complete)
+            contact = None
+            if self.using_robot:
+                assert self.robot is not None
+                if not self.robot.covers(t_ns):
+                    break
+                contact = self.robot.at(t_ns)
+            for stamp in [s for s in self.frames if s < t_ns]:
                 del self.frames[stamp]
                 self.counts["incomplete_frames"] += 1
-            del self.frames[pose.t_ns]
-            self.process(pose.t_ns, frame)
-        elif len(self.frames) > 50:  # bound memory under heavy occlusion
-            del self.frames[min(self.frames)]
-            self.counts["incomplete_frames"] += 1
+            frame = self.frames.pop(t_ns)
+            if not self.using_robot:
+                self.process(t_ns, frame)
+            elif contact is None:  # a gap in the robot's stream around this frame
+                self.counts["frames_without_contact_point"] += 1
+            else:
+                self.process(t_ns, {**frame, "hand": contact})
+        if len(self.frames) > _MAX_PENDING_FRAMES:  # bound memory under heavy occlusion or a silent robot
+            oldest = min(self.frames)
+            waiting = needed <= self.frames.pop(oldest).keys()
+            self.counts["frames_without_contact_point" if waiting else "incomplete_frames"] += 1
 
     def process(self, t_ns: int, frame: dict[str, np.ndarray]) -> None:
         """Causal angles of one complete frame -> `arm/joint_states`."""
@@ -143,8 +205,10 @@ class JointAngleEstimatorNode(RosNode):
             level, message = WARN, "waiting for markers"
         elif now - self.last_receive_wall_ns > self.stale_s * 1e9:
             level, message = ERROR, f"stale: no marker for {(now - self.last_receive_wall_ns) / 1e9:.1f} s"
+        elif self.using_robot and (robot_age_s := (now - (self.last_robot_wall_ns or now)) / 1e9) > self.stale_s:
+            level, message = ERROR, f"stale: no robot handle pose for {robot_age_s:.1f} s"
         else:
-            level, message = OK, "tracking"
+            level, message = OK, "tracking" + (" (contact point from the robot)" if self.using_robot else "")
         # Frames inconsistent with the rigid chain (a swapped marker, a jump no arm makes): counted, not used.
         values = {**self.counts, "rejected_frames": self.estimator.n_rejected}
         status = DiagnosticStatusData.with_values(level, f"{NAME}", message, "", values)

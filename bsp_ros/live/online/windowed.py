@@ -81,6 +81,7 @@ class WindowSamples:
     refused : refused samples by input and reason; clock_jumps : clock jumps seen so far.
     rotation_world_from_sensor : (3, 3) the wrench sensor's orientation, wrench_frame_id : its frame, when a
         tare was applied to the wrench (its uncertainty then joins the estimate's).
+    contact_from_robot : the angles' contact point is the robot's handle pose, not the hand's skin marker.
     """
 
     wrench_t_ns: np.ndarray
@@ -92,6 +93,7 @@ class WindowSamples:
     # The wrench sensor's orientation and frame, for a tare's uncertainty (set by the node when it applies one).
     rotation_world_from_sensor: np.ndarray | None = None
     wrench_frame_id: str = ""
+    contact_from_robot: bool = False
 
 
 def block_average(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -139,6 +141,8 @@ class WindowedIdentifier:
         self._updates = 0
         self._elastic_warnings: list[str] = []
         self.angle_guard = StreamGuard("joint_states")
+        # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
+        self.contact_from_robot = False
 
     def add_wrench(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
         """Add ``[F_y, F_z, M_x]`` in ``world`` at ``t_ns``; False if refused."""
@@ -209,6 +213,7 @@ class WindowedIdentifier:
             *self.angles.since(start - int(2e9)),
             refused,
             self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
+            contact_from_robot=self.contact_from_robot,
         )
 
     def _window_data(self, window: WindowSamples) -> IdentificationData | str:
@@ -236,6 +241,7 @@ class WindowedIdentifier:
             [],
             qd_rad_s=qd[valid],
             qdd_rad_s2=qdd[valid],
+            contact_from_robot=window.contact_from_robot,
         )
 
     def model_check(self, window: WindowSamples) -> list[str]:

@@ -50,3 +50,16 @@ def test_an_invalid_document_has_no_inertia_or_passive_outputs() -> None:
 
     outputs = jobs.outputs_from_document(invalid_document("joint", "stale input"), 7, with_passive=True)
     assert not outputs.valid and outputs.message == "stale input" and set(outputs.cdr) == {"estimate", "json"}
+
+
+def test_a_recursive_estimate_with_the_robot_contact_point_holds_the_robot_placement_sd() -> None:
+    result, lengths = _valid_recursive_result(), np.array([0.3, 0.27, 0.08])
+    by_marker = jobs.recursive_document(result, lengths, IdentifyOptions())
+    by_robot = jobs.recursive_document(result, lengths, IdentifyOptions(), contact_from_robot=True)
+    assert by_marker["quality"]["contact_point"] == "hand_marker"
+    assert by_robot["quality"]["contact_point"] == "robot_handle_pose"
+    # The hand's length spans the wrist marker (2 mm) and the contact point: 2 mm by marker, 0.5 mm by the robot.
+    hand_std = [d["segments"]["hand"]["length_m"]["std"] for d in (by_marker, by_robot)]
+    np.testing.assert_allclose(hand_std, [np.hypot(0.002, 0.002), np.hypot(0.002, 0.0005)], rtol=0.05)
+    forearm = [d["segments"]["forearm"]["length_m"]["std"] for d in (by_marker, by_robot)]
+    assert forearm[0] == forearm[1]

@@ -196,3 +196,20 @@ def test_recursive_mode_estimate_is_right_within_its_std(cell) -> None:
     for name, z in _z_scores(document, c.truth).items():
         if "static_moment" in name:  # (the recursive Coulomb terms scatter more: one run had shoulder z 4.9)
             assert abs(z) < 5, (name, z)
+
+
+def test_the_robot_handle_pose_stands_for_a_misplaced_hand_marker_live(cell) -> None:
+    # The hand marker on the back of the hand, 25 mm off the bearing's centre (offline this makes the estimate
+    # invalid or wrong, test_robot_contact.py); the robot publishes the contact point on /robot/handle_pose.
+    simulator = ["speed:=2.0", "seed:=12", "robot_handle_pose:=true", "hand_marker_offset_mm:=[0.0, 25.0]"]
+    c = cell(8, simulator)
+    assert c.spin_until(lambda: _valid(c), 60), c.latest()
+    c.spin_until(lambda: False, 10)
+    document = c.latest()
+    assert document["quality"]["valid"], document["quality"]
+    assert document["quality"]["contact_point"] == "robot_handle_pose"
+    for name, z in _z_scores(document, c.truth).items():
+        assert abs(z) < 3, (name, z)
+    # The hand's length runs from the wrist marker to the robot's contact point, not to the skin marker 25 mm off.
+    length = document["segments"]["hand"]["length_m"]["value"]
+    assert abs(length - c.truth["segments"]["hand"]["length_m"]) < 0.003, length
