@@ -187,7 +187,7 @@ class BspIdentifierNode(RosNode):
             elastic_fallback=False,
         )
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
-        self.recursive = RecursiveFeed(self.n, self.options.passive)
+        self.recursive = RecursiveFeed(self.n, self.options.passive, subject)
         self.lengths: np.ndarray | None = None
         self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
@@ -329,7 +329,7 @@ class BspIdentifierNode(RosNode):
         if self.mode != "recursive":
             return
         self.last_receive["joint_states"] = self.now_ns()
-        accepted = self.recursive.add_joint_state(sample.t_ns, sample.position, sample.velocity)
+        accepted = self.recursive.add_joint_state(sample.t_ns, sample.position, sample.velocity, self.lengths)
         self.counts["joint_states" if accepted else "refused"] += 1
 
     def on_wrench(self, msg: Any) -> None:
