@@ -1,6 +1,9 @@
-"""The recursive mode's per-sample path: guarded wrench samples and causal joint states into the recursive filter."""
+"""The recursive mode's per-sample path: guarded wrench samples and joint kinematics into the recursive filter."""
 
 from __future__ import annotations
+
+import bisect
+import collections
 
 import numpy as np
 
@@ -15,19 +18,27 @@ from bsp_ros.live.online.guard import StreamGuard
 
 __all__ = ["RecursiveFeed"]
 
+# A wrench between two joint states further apart than this (a marker dropout) gets no angles.
+MAX_STATE_GAP_NS = 200_000_000
+# Wrenches wait for the kinematics at their stamp at most this long (joint states stopped: they are dropped).
+MAX_WAIT_NS = 5_000_000_000
+
 
 class RecursiveFeed:
-    """Feeds :class:`RecursiveIdentifier` one wrench at a time, with angles interpolated to its stamp.
+    """Feeds :class:`RecursiveIdentifier` one wrench at a time, with the joint kinematics at its stamp.
 
     Non-finite, out-of-order and duplicate wrenches are refused (:class:`StreamGuard`); a backwards clock
     jump or a long gap restarts the filter.
 
+    Angles, velocities (for the direction of friction) and accelerations come from fits centred on each joint
+    state (:class:`AngleTrack`), so the filter runs half a fit window (0.5 s) behind the wrench stream: a
+    wrench waits until the kinematics around its stamp are known, then they are interpolated to it.
+
     The arm's inertial torque ``M(q) q'' + C(q, q') q'`` is taken off each wrench's torque, as the windowed and
-    offline fits model it: the static moments' share with the filter's current estimate, the perpendicular
-    moments and grouped inertias with their anthropometric prior means (the recursive filter identifies static
-    moments and passive terms only). Velocities and accelerations come from a quadratic fit over the last half
-    second of joint states (:meth:`AngleTrack.rates`); the torque is computed per joint state and interpolated
-    to the wrench stamps, since one regressor per 1 kHz wrench would cost more than the filter.
+    offline fits model it: the static moments' share with the filter's current estimate (the prior's until it is
+    plausible), the perpendicular moments and grouped inertias with their anthropometric prior means (the
+    recursive filter identifies static moments and passive terms only). It is computed per joint state and
+    interpolated, since one regressor per 1 kHz wrench would cost more than the filter.
 
     Parameters
     ----------
@@ -47,26 +58,38 @@ class RecursiveFeed:
         self.n = n_segments
         self.subject = subject or SubjectInfo()
         self.dynamics = dynamics
-        # The lengths the prior was made for, its static moments (kg m) and its perpendicular moments and inertias.
-        self._prior: tuple[np.ndarray, np.ndarray, BasePrior] | None = None
-        self._inertial: list[tuple[int, np.ndarray]] = []  # the two newest (stamp, inertial torque (n,) Nm)
         self.identifier = RecursiveIdentifier(n_segments, RecursiveConfig(passive=passive))
         self.guard = StreamGuard("wrench")
         self.angles = AngleTrack(n_segments)
         self._terms = len(passive.local)
         self.passive_joints: tuple[str, ...] = tuple(name for key, name in self.identifier.names if key == "coulomb_nm")
+        # The lengths the prior was made for, its static moments (kg m) and its perpendicular moments and inertias.
+        self._prior: tuple[np.ndarray, np.ndarray, BasePrior] | None = None
+        # Per joint state, oldest first: stamp (ns), and angles, velocities, inertial torques (n,) each.
+        self._stamps: collections.deque[int] = collections.deque()
+        self._rows: collections.deque[tuple[np.ndarray, np.ndarray, np.ndarray]] = collections.deque()
+        self._pending: collections.deque[tuple[int, np.ndarray, np.ndarray]] = collections.deque()
 
     def add_joint_state(
         self, t_ns: int, q_rad: np.ndarray, velocity_rad_s: np.ndarray, lengths_m: np.ndarray | None = None
     ) -> bool:
-        """A causally filtered joint state (with the segment lengths, m, for its inertial torque); False if refused."""
-        if not self.angles.add(t_ns, q_rad, velocity_rad_s):
+        """A causally filtered joint state (with the segment lengths, m, for its inertial torque); False if refused.
+        (The causal direction velocity is not used: the centred fits give a velocity without its lag.)"""
+        done = self.angles.add(t_ns, q_rad)
+        if done is None:
             return False
-        if self.dynamics and lengths_m is not None:
-            rates = self.angles.rates()
-            if rates is not None:
-                stamp, q, qd, qdd = rates
-                self._inertial = [*self._inertial[-1:], (stamp, self.inertial_torque_nm(q, qd, qdd, lengths_m))]
+        if self._stamps and t_ns <= self._stamps[-1]:  # the track restarted on a clock jump
+            self._stamps.clear()
+            self._rows.clear()
+        for stamp, q, qd, qdd in done:
+            inertial = np.zeros(self.n)
+            if self.dynamics and lengths_m is not None:
+                inertial = self.inertial_torque_nm(q, qd, qdd, lengths_m)
+            self._stamps.append(stamp)
+            self._rows.append((q, qd, inertial))
+        while self._stamps and self._stamps[0] < t_ns - MAX_WAIT_NS:
+            self._stamps.popleft()
+            self._rows.popleft()
         return True
 
     def inertial_torque_nm(
@@ -89,21 +112,26 @@ class RecursiveFeed:
         regressor = base_regressor(q_rad[None], qd_rad_s[None], qdd_rad_s2[None], lengths_m, gravity_m_s2=0.0)[0]
         return np.asarray(regressor @ parameters)
 
-    def _inertial_at(self, t_ns: int) -> np.ndarray | None:
-        """The inertial torque interpolated at ``t_ns`` between the two newest, held beyond them up to the angles'
-        reach; None when there is none near."""
-        if not self._inertial:
+    def kinematics_at(self, t_ns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Angles (rad), velocities (rad/s) and inertial torques (Nm), (n,) each, interpolated at ``t_ns`` between
+        the joint states around it; None outside them or across a gap."""
+        after = bisect.bisect_left(self._stamps, t_ns)
+        if after == len(self._stamps) or (after == 0 and self._stamps[0] != t_ns):
             return None
-        (t0, tau0), (t1, tau1) = self._inertial[0], self._inertial[-1]
-        if t_ns - t1 > self.angles.reach_ns or t_ns < t0 - self.angles.reach_ns:
+        if self._stamps[after] == t_ns:
+            return self._rows[after]
+        t0, t1 = self._stamps[after - 1], self._stamps[after]
+        if t1 - t0 > MAX_STATE_GAP_NS:
             return None
-        w = 0.0 if t1 == t0 else min(max((t_ns - t0) / (t1 - t0), 0.0), 1.0)
-        return (1 - w) * tau0 + w * tau1
+        w = (t_ns - t0) / (t1 - t0)
+        (q0, v0, i0), (q1, v1, i1) = self._rows[after - 1], self._rows[after]
+        return (1 - w) * q0 + w * q1, (1 - w) * v0 + w * v1, (1 - w) * i0 + w * i1
 
     def add_wrench(
         self, t_ns: int, wrench_yzx: np.ndarray, lengths_m: np.ndarray | None
     ) -> tuple[bool, np.ndarray | None]:
-        """One wrench ``[F_y, F_z, M_x]`` in world (N, Nm).
+        """One wrench ``[F_y, F_z, M_x]`` in world (N, Nm); it joins the filter once the kinematics at its stamp
+        are known, with the wrenches before it that waited.
 
         Returns
         -------
@@ -112,24 +140,30 @@ class RecursiveFeed:
         """
         verdict = self.guard.check(t_ns, wrench_yzx)
         if verdict in ("jump", "gap"):
-            self.reset()
+            self.identifier.reset()
+            self._pending.clear()
         if verdict == "refused":
             return False, None
-        if lengths_m is None:
-            return True, None
-        angles = self.angles.at(t_ns)
-        if angles is None:  # no angle near this wrench
-            return True, None
-        q, v = angles
-        tau = contact_torques_one_nm(q, lengths_m, wrench_yzx)
-        inertial = self._inertial_at(t_ns)
-        if inertial is not None:
+        if lengths_m is not None:
+            self._pending.append((t_ns, np.asarray(wrench_yzx, dtype=np.float64), lengths_m))
+        known_until = self._stamps[-1] if self._stamps else None
+        updated = False
+        while self._pending and (
+            self._pending[0][0] < t_ns - MAX_WAIT_NS or (known_until is not None and self._pending[0][0] <= known_until)
+        ):
+            stamp, wrench, lengths = self._pending.popleft()
+            kinematics = self.kinematics_at(stamp)
+            if kinematics is None:  # no joint state near it, or it waited too long
+                continue
+            q, velocity, inertial = kinematics
+            tau = contact_torques_one_nm(q, lengths, wrench)
             tau = [a - b for a, b in zip(tau, inertial.tolist(), strict=True)]
-        if not self.identifier.update(t_ns, q, v, tau):
+            updated |= self.identifier.update(stamp, q, velocity, tau)
+        if not updated:
             return True, None
         return True, np.asarray(self.identifier.theta[self.n :: self._terms], dtype=np.float64)
 
     def reset(self) -> None:
         """Restart the filter (e.g. the wrench frame's rotation changed)."""
         self.identifier.reset()
-        self._inertial = []
+        self._pending.clear()

@@ -193,9 +193,10 @@ def test_recursive_mode_estimate_is_right_within_its_std(cell) -> None:
     valid = [d for _, d in c.estimates if d["quality"]["valid"]]
     document = valid[-1]
     print("recursive: relative errors", _errors(document, c.truth), "z", _z_scores(document, c.truth))
+    # Every parameter (before the recursive filter took its direction of motion from fits centred on the joint
+    # states, its Coulomb terms lagged at reversals: shoulder z 4.9-5.2 in this test).
     for name, z in _z_scores(document, c.truth).items():
-        if "static_moment" in name:  # (the recursive Coulomb terms scatter more: one run had shoulder z 4.9)
-            assert abs(z) < 5, (name, z)
+        assert abs(z) < 3, (name, z)
 
 
 def test_the_robot_handle_pose_stands_for_a_misplaced_hand_marker_live(cell) -> None:
