@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
-from scipy import signal
 
+from bsp_ros.core.filters import butter_lowpass_sos, zero_phase_lowpass
 from bsp_ros.core.identification.robust import hampel_outliers, robust_sd
 from bsp_ros.core.streams import MarkerSeries, markers_for
 from bsp_ros.errors import DataError, InputError
@@ -174,13 +174,6 @@ def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
-@functools.lru_cache(maxsize=64)
-def _butter_sos(order: int, cutoff_hz: float, rate_hz: float) -> np.ndarray:
-    """Butterworth low-pass sections, cached: a live window redesigns the same filter 5 times a second."""
-    sos: np.ndarray = signal.butter(order, cutoff_hz, fs=rate_hz, output="sos")
-    return sos
-
-
 def _zero_phase_lowpass(values: np.ndarray, cutoff_hz: float, rate_hz: float, order: int) -> np.ndarray:
     """Butterworth low-pass run forwards and backwards (no phase lag), padded by odd extension.
 
@@ -190,9 +183,8 @@ def _zero_phase_lowpass(values: np.ndarray, cutoff_hz: float, rate_hz: float, or
     nyquist = rate_hz / 2.0
     if cutoff_hz >= nyquist:
         return values.copy()
-    sos = _butter_sos(order, cutoff_hz, rate_hz).copy()  # a copy: scipy's sosfilt wants a writable array
     padlen = min(values.shape[0] - 1, int(3.0 * rate_hz / cutoff_hz))
-    return signal.sosfiltfilt(sos, values, axis=0, padtype="odd", padlen=padlen)
+    return zero_phase_lowpass(values, butter_lowpass_sos(order, cutoff_hz, rate_hz), padlen)
 
 
 # Frames in the rolling median of a marker's positions: up to 4 consecutive bad frames are found.

@@ -1,0 +1,56 @@
+"""The numpy Butterworth design and zero-phase filter against scipy.signal (the implementation they replace)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from bsp_ros.core.filters import butter_lowpass_sos, zero_phase_lowpass
+
+CASES = [
+    (order, cutoff_hz, rate_hz)
+    for order in (1, 2, 3, 4, 6)
+    for cutoff_hz, rate_hz in ((0.5, 100.0), (5.0, 50.0), (1.0, 1000.0), (20.0, 50.0))
+]
+
+
+@pytest.mark.parametrize(("order", "cutoff_hz", "rate_hz"), CASES)
+def test_the_filter_is_scipys(order: int, cutoff_hz: float, rate_hz: float) -> None:
+    expected = signal.butter(order, cutoff_hz, fs=rate_hz, output="sos")
+    sos = butter_lowpass_sos(order, cutoff_hz, rate_hz)
+    if order % 2 == 0:  # odd orders may pair the single zero with another section: compare responses
+        np.testing.assert_allclose(sos, expected, rtol=1e-12, atol=1e-15)
+    _, response = signal.sosfreqz(sos, worN=256, fs=rate_hz)
+    _, reference = signal.sosfreqz(expected, worN=256, fs=rate_hz)
+    np.testing.assert_allclose(response, reference, rtol=1e-9, atol=1e-12)
+    rng = np.random.default_rng(order)
+    values = np.cumsum(rng.normal(size=(2000, 3)), axis=0)  # a random walk: slopes at the ends matter
+    padlen = min(values.shape[0] - 1, int(3.0 * rate_hz / cutoff_hz))
+    ours = zero_phase_lowpass(values, sos, padlen)
+    theirs = signal.sosfiltfilt(expected, values, axis=0, padtype="odd", padlen=padlen)
+    # Rounding only: a 6th order at 1/1000 of the rate has poles within 1e-2 of 1 and loses a few more digits.
+    np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-9 * np.abs(theirs).max())
+    one = zero_phase_lowpass(values[:, 0], sos, 0)
+    np.testing.assert_allclose(
+        one, signal.sosfiltfilt(expected, values[:, 0], padtype=None), atol=1e-11 * np.abs(theirs).max()
+    )
+
+
+def test_a_bad_design_is_refused() -> None:
+    for order, cutoff_hz in ((0, 1.0), (2, 0.0), (2, 50.0)):
+        with pytest.raises(ValueError, match="Butterworth"):
+            butter_lowpass_sos(order, cutoff_hz, 100.0)
+
+
+def test_bsp_identify_does_not_import_scipy_signal_or_stats() -> None:
+    # They cost `bsp identify` about 0.4 s of import on this machine (issue 23; bench/README "bsp identify").
+    code = (
+        "import sys, bsp_ros.cli.identify, bsp_ros.bag.offline; "
+        "print(sorted(m for m in sys.modules if m.startswith(('scipy.signal', 'scipy.stats'))))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
