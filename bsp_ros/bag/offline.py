@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import hashlib
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from bsp_ros.bag import TopicMap, read_session
 from bsp_ros.bag.fingerprint import content_sha256
 from bsp_ros.bag.reader import BagRead
-from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+from bsp_ros.core.pipeline import IdentifyOptions, identify_recordings, identify_session
 
 
 def identify_bag(
@@ -38,23 +39,32 @@ def estimate_from_read(
 ) -> dict[str, Any]:
     """:func:`identify_bag` on a bag already read (``read_session`` of ``path``): a caller that needs the streams
     too (the session store's within-session cycles) reads the bag once."""
-    report = read.report
     # The content hash lets the session store refuse this recording's result JSON once the bag is stored.
     document = identify_session(
         read.session, options, {"source": Path(path).name, "content_sha256": sha256 or content_sha256(path)}
     )
+    _attach_read(document, read)
+    return document
+
+
+def _attach_read(document: dict[str, Any], read: BagRead, recording: int | None = None) -> None:
+    """What the read of one bag found (damage, the rotation's source, implausible samples) into ``document``:
+    its ``bag`` section (appended to ``bags`` for ``recording`` k of several) and the warnings."""
+    report = read.report
+    prefix = "" if recording is None else f"recording {recording + 1}: "
     warnings = document["quality"]["warnings"]
     if report.damaged:
         warnings.insert(
             0,
-            f"bag damaged: {report.crc_errors} chunk CRC errors, truncated={report.truncated}, "
+            f"{prefix}bag damaged: {report.crc_errors} chunk CRC errors, truncated={report.truncated}, "
             f"{report.lost_messages if report.lost_messages is not None else 'unknown'} messages lost; "
             "identified from the intact part",
         )
-    warnings[1:1] = [w for w in report.warnings if w not in warnings]
+    warnings[1:1] = [prefix + w for w in report.warnings if prefix + w not in warnings]
     quality = document["quality"]
     if "rotation" in quality:  # where the bag's sensor orientation came from (the pipeline knows only its shape)
-        quality["rotation"]["source"] = report.rotation_source
+        sources = [] if not recording else str(quality["rotation"].get("source", "")).split(", ")
+        quality["rotation"]["source"] = ", ".join(dict.fromkeys([*sources, report.rotation_source]))
     if report.rotation_source == "assumed" and not quality["valid"]:
         frame = read.session.wrench.frame_id
         quality["message"] = (
@@ -68,10 +78,10 @@ def estimate_from_read(
         total = sum(implausible.values())
         warnings.insert(
             0,
-            f"possible undetected bag damage: chunks carry no CRC and {total} implausible samples were removed "
+            f"{prefix}possible undetected bag damage: chunks carry no CRC and {total} implausible samples were removed "
             f"({', '.join(f'{k} {v}' for k, v in implausible.items())})",
         )
-    document["bag"] = {
+    section = {
         "files": [Path(f).name for f in report.files],
         "messages": {topic: t.read for topic, t in report.topics.items()},
         "lost_messages": report.lost_messages,
@@ -82,4 +92,38 @@ def estimate_from_read(
         "damage": list(report.damage),
         "implausible_samples_removed": implausible,
     }
+    if recording is None:
+        document["bag"] = section
+    else:
+        document.setdefault("bags", []).append(section)
+
+
+def identify_bags(
+    paths: Sequence[str | Path],
+    options: IdentifyOptions | None = None,
+    topics: TopicMap | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    trunk_tilts_rad: Sequence[float] | None = None,
+) -> dict[str, Any]:
+    """The estimate of one arm from several recordings (bags) identified together, each with its trunk's tilt
+    (:func:`bsp_ros.core.pipeline.identify_recordings`); one bag without a tilt is :func:`identify_bag`.
+
+    The document's ``session.source`` joins the bags' names, ``session.content_sha256`` hashes their hashes in
+    order, ``session.recordings`` lists each, and ``bags`` holds each bag's ``bag`` section.
+
+    Raises
+    ------
+    BspError
+        Any bag fails as in :func:`identify_bag`; InputError for recordings that are not of one arm.
+    """
+    if len(paths) == 1 and not any(trunk_tilts_rad or ()):
+        return identify_bag(paths[0], options, topics, progress)
+    reads = [read_session(path, topics=topics, progress=progress) for path in paths]
+    hashes = [content_sha256(path) for path in paths]
+    combined = hashlib.sha256("".join(hashes).encode()).hexdigest()
+    info = {"source": " + ".join(Path(path).name for path in paths), "content_sha256": combined}
+    recordings = [{"source": Path(path).name, "content_sha256": sha} for path, sha in zip(paths, hashes, strict=True)]
+    document = identify_recordings([r.session for r in reads], options, trunk_tilts_rad, info, recordings)
+    for k, read in enumerate(reads):
+        _attach_read(document, read, k)
     return document

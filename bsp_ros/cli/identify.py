@@ -1,4 +1,4 @@
-"""`bsp identify BAG`: body segment parameters and passive moments of a recorded session."""
+"""`bsp identify BAG [BAG ...]`: body segment parameters and passive moments of recorded sessions."""
 
 from __future__ import annotations
 
@@ -33,7 +33,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="identify a recorded session (rosbag2 MCAP bag)",
         description="Identify static moments, masses, COMs and passive joint moments from a bag.",
     )
-    parser.add_argument("bag", type=Path, help="rosbag2 directory or .mcap file")
+    parser.add_argument(
+        "bag",
+        type=Path,
+        nargs="+",
+        help="rosbag2 directory or .mcap file; several: recordings of the same arm identified together",
+    )
+    parser.add_argument(
+        "--trunk-tilt-deg",
+        type=float,
+        nargs="+",
+        metavar="DEG",
+        help="the trunk's tilt in each recording, deg, in the sense of the shoulder angle (world +y towards +z; "
+        "default 0): a second posture turns gravity relative to the arm and separates elastic passive moments "
+        "from gravity",
+    )
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
     add_identify_arguments(parser)
     parser.add_argument(
@@ -149,15 +163,27 @@ def format_table(document: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Identify the bag; print the result; write the JSON."""
+    import math
+
     from bsp_ros.bag.errors import BagError
-    from bsp_ros.bag.offline import identify_bag
+    from bsp_ros.bag.offline import identify_bags
     from bsp_ros.validation import check_output_file
 
     # Before the identification: a result that cannot be written is not worth computing.
     json_path = None if args.json is None else check_output_file("--json", args.json)
     options = options_from_args(args)
+    tilts_deg = args.trunk_tilt_deg
+    if tilts_deg is not None and len(tilts_deg) != len(args.bag):
+        raise InputError(
+            f"--trunk-tilt-deg gives {len(tilts_deg)} tilts ({' '.join(f'{t:g}' for t in tilts_deg)}) for "
+            f"{len(args.bag)} recordings: give one per bag"
+        )
+    for tilt in tilts_deg or ():
+        if not (math.isfinite(tilt) and abs(tilt) <= 90.0):
+            raise InputError(f"--trunk-tilt-deg {tilt:g}: a tilt must be within -90..90 deg")
+    tilts_rad = None if tilts_deg is None else [math.radians(t) for t in tilts_deg]
     try:
-        document = identify_bag(args.bag, options, topics_from_args(args), _progress_bar())
+        document = identify_bags(args.bag, options, topics_from_args(args), _progress_bar(), tilts_rad)
     except BagError as error:
         print(f"bsp identify: error: {error}", file=sys.stderr)
         return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)

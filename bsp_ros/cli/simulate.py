@@ -158,6 +158,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="fraction of wrench samples that are force spikes (0-0.5) (default: 0)",
     )
     cell.add_argument("--spike-size", type=float, metavar="N", help="spike amplitude, N (default: 1000)")
+    cell.add_argument(
+        "--trunk-tilt-deg",
+        type=float,
+        metavar="DEG",
+        help="the patient's trunk tilted by this much (deg, in the sense of the shoulder angle: world +y towards +z; "
+        "-90..90): the shoulder's passive moment follows the angle to the trunk, and the built-in motion turns with "
+        "the trunk (a second posture; bsp identify BAG1 BAG2 --trunk-tilt-deg 0 DEG) (default: 0)",
+    )
+    cell.add_argument(
+        "--start-offset-s",
+        type=float,
+        metavar="S",
+        help="start this many seconds after the default start time (0-86400): a further recording of the same "
+        "session (default: 0)",
+    )
     sensor = parser.add_argument_group("F/T sensor mounting and timing")
     sensor.add_argument(
         "--sensor-turns",
@@ -339,6 +354,12 @@ def _spec(args: argparse.Namespace) -> Any:
                 )
             passive[field] = tuple(values)
     trajectory = _trajectory(args, spec)
+    tilt_deg = _check_option("--trunk-tilt-deg", args.trunk_tilt_deg, -90.0, 90.0) or 0.0
+    if tilt_deg and args.trajectory is None:  # the robot moves the arm through the same postures relative to the trunk
+        centre = list(trajectory.center_deg)
+        centre[0] += tilt_deg
+        trajectory = dataclasses.replace(trajectory, center_deg=tuple(centre))
+    start_offset_s = _check_option("--start-offset-s", args.start_offset_s, 0.0, 86_400.0) or 0.0
     duration = args.duration
     if duration is None:
         duration = trajectory.duration_s if args.trajectory is not None else 120.0
@@ -352,6 +373,8 @@ def _spec(args: argparse.Namespace) -> Any:
         seed=args.seed,
         inertia=args.inertia,
         robot_handle_pose=args.robot_handle_pose,
+        trunk_tilt_rad=math.radians(tilt_deg),
+        start_ns=spec.start_ns + round(start_offset_s * 1e9),
     )
 
 
@@ -370,7 +393,14 @@ def run(args: argparse.Namespace) -> int:
     if args.tare:
         session_only = [
             f"--{n.replace('_', '-')}"
-            for n in ("trajectory", "speed_scale", "sensor_turns", "skin_offset_mm", "robot_handle_pose")
+            for n in (
+                "trajectory",
+                "speed_scale",
+                "sensor_turns",
+                "skin_offset_mm",
+                "robot_handle_pose",
+                "trunk_tilt_deg",
+            )
             if getattr(args, n) is not None and getattr(args, n) is not False
         ]
         if session_only:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -21,6 +22,7 @@ from bsp_ros.core.identification.paper import PaperConfig, identify_paper
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.placement import chain_placement_sd_m
 from bsp_ros.core.identification.priors import base_prior_for_subject
+from bsp_ros.core.identification.recordings import combine_recordings
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import compensate_wrench_delay
@@ -28,7 +30,7 @@ from bsp_ros.core.joint_angles import KinematicsConfig
 from bsp_ros.core.sensor_rotation import rotation_quality
 from bsp_ros.core.streams import Session
 from bsp_ros.core.tare import Tare, corrected_session
-from bsp_ros.errors import BspError
+from bsp_ros.errors import BspError, InputError
 
 METHODS = ("joint", "paper")
 
@@ -139,19 +141,52 @@ def identify_session(
         The streams cannot give any estimate (no overlap, missing markers); poor excitation is not an
         error but ``quality.valid`` False.
     """
+    return identify_recordings([session], options, session_info=session_info)
+
+
+def identify_recordings(
+    sessions: Sequence[Session],
+    options: IdentifyOptions | None = None,
+    trunk_tilts_rad: Sequence[float] | None = None,
+    session_info: dict[str, Any] | None = None,
+    recording_info: Sequence[dict[str, Any]] | None = None,
+) -> dict[str, Any]:
+    """Identify one arm from one or more recordings, each with its trunk's tilt; the CONTRACT.md estimate.
+
+    Each recording is corrected (tare, stream delay) and turned into samples on its own; the samples are
+    then identified together (:func:`combine_recordings`). With several recordings the estimate's
+    ``session.recordings`` lists them (``recording_info`` adds to each entry) and ``quality.timing`` gives
+    each recording's stream timing.
+
+    Raises
+    ------
+    BspError
+        As :func:`identify_session`; InputError for recordings that are not of one arm and sensor.
+    """
     options = options or IdentifyOptions()
-    session = corrected_session(session, options.tare)
-    # --- stream timing (bsp_ros/core/identification/timing.py): the wrench stamps' delay, compensated ---
-    session, timing = compensate_wrench_delay(session, options.wrench_delay_s, options.kinematics, options.passive)
-    # --- end stream timing ---
-    data = identification_data_from_session(session, options.kinematics)
+    tilts = [0.0] * len(sessions) if trunk_tilts_rad is None else [float(t) for t in trunk_tilts_rad]
+    frames = sorted({s.wrench.frame_id for s in sessions})
+    if len(frames) > 1:
+        raise InputError(f"the recordings' wrenches are in different frames ({', '.join(frames)}): not one sensor")
+    prepared, timings, recordings = [], [], []
+    for session in sessions:
+        session = corrected_session(session, options.tare)
+        # --- stream timing (bsp_ros/core/identification/timing.py): the wrench stamps' delay, compensated ---
+        session, timing = compensate_wrench_delay(session, options.wrench_delay_s, options.kinematics, options.passive)
+        # --- end stream timing ---
+        prepared.append(session)
+        timings.append(timing)
+        recordings.append(identification_data_from_session(session, options.kinematics))
+    data = combine_recordings(recordings, tilts)
     result = identify_data(data, options)
     refit = refit_options(result, options)
+    rotations = [np.asarray(s.rotation_world_from_sensor, dtype=np.float64) for s in prepared]
+    rotation = rotations[0] if len(rotations) == 1 else np.concatenate([r.reshape(-1, 3, 3) for r in rotations])
     offsets = account_for_tare(
         result,
         data,
-        session.rotation_world_from_sensor,
-        session.wrench.frame_id,
+        rotation,
+        prepared[0].wrench.frame_id,
         options.tare,
         lambda d: identify_data(d, refit, check_elastic=False),
     )
@@ -165,16 +200,29 @@ def identify_session(
         "config": options.config(),
         **(session_info or {}),
     }
+    if len(sessions) > 1:
+        info["recordings"] = [
+            {
+                "start_time_ns": int(r.t_ns[0]),
+                "end_time_ns": int(r.t_ns[-1]),
+                "samples": int(r.t_ns.size),
+                "trunk_tilt_deg": float(np.degrees(tilt)),
+                **(recording_info[k] if recording_info else {}),
+            }
+            for k, (r, tilt) in enumerate(zip(recordings, tilts, strict=True))
+        ]
     document = estimate_document(
         result, data, posterior, options.subject, info, marker_placement_sd_m=options.placement_sd_m(data)
     )
     document["quality"].update(offsets)
     # --- stream timing and sensor rotation (timing.py, sensor_rotation.py) ---
-    document["quality"]["timing"] = timing.quality()
-    document["quality"]["warnings"].extend(w for w in timing.warnings if w not in document["quality"]["warnings"])
-    document["quality"]["rotation"] = rotation_quality(session.rotation_world_from_sensor, "session")
+    quality = document["quality"]
+    quality["timing"] = timings[0].quality() if len(timings) == 1 else {"recordings": [t.quality() for t in timings]}
+    for timing in timings:
+        quality["warnings"].extend(w for w in timing.warnings if w not in quality["warnings"])
+    quality["rotation"] = rotation_quality(rotation, "session")
     # --- end stream timing and sensor rotation ---
     return document
 
 
-__all__ = ["METHODS", "BspError", "IdentifyOptions", "fuse", "identify_data", "identify_session"]
+__all__ = ["METHODS", "BspError", "IdentifyOptions", "fuse", "identify_data", "identify_recordings", "identify_session"]

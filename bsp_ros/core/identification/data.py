@@ -34,6 +34,10 @@ class IdentificationData:
         terms' prior uncertainty cannot be propagated).
     contact_from_robot : True where the contact point came from the robot's handle pose, not a skin marker (its
         placement uncertainty is then the robot's registration to ``world``, not a marker's).
+    trunk_rad : (N,) the trunk's tilt in ``world`` per sample (rad, in the sense of ``q_1``), None: upright. A
+        recording with the trunk tilted turns gravity relative to the arm while the passive moments follow the
+        joint angles: the shoulder's passive angle is ``q_1 - trunk`` (:attr:`passive_q_rad`), gravity and
+        the geometry keep ``q_rad``.
     """
 
     t_ns: np.ndarray
@@ -49,11 +53,22 @@ class IdentificationData:
     qd_rad_s: np.ndarray | None = None
     qdd_rad_s2: np.ndarray | None = None
     contact_from_robot: bool = False
+    trunk_rad: np.ndarray | None = None
 
     @property
     def n_joints(self) -> int:
         """Number of joints (= segments)."""
         return int(self.q_rad.shape[1])
+
+    @property
+    def passive_q_rad(self) -> np.ndarray:
+        """(N, n) the angles the passive moments follow: the shoulder's relative to the trunk, the others as
+        ``q_rad``."""
+        if self.trunk_rad is None:
+            return self.q_rad
+        q = self.q_rad.copy()
+        q[:, 0] -= self.trunk_rad
+        return q
 
     def window(self, start: int, stop: int) -> IdentificationData:
         """Rows ``start:stop`` (a sliding window for online use)."""
@@ -71,6 +86,7 @@ class IdentificationData:
             None if self.qd_rad_s is None else self.qd_rad_s[start:stop],
             None if self.qdd_rad_s2 is None else self.qdd_rad_s2[start:stop],
             self.contact_from_robot,
+            None if self.trunk_rad is None else self.trunk_rad[start:stop],
         )
 
 

@@ -75,14 +75,15 @@ def build_problem(
     names = problem_names(passive, n, extras is not None)
     regressor = np.zeros((data.t_ns.size, n, n + n * k))
     regressor[:, :, :n] = gravity_regressor(data.q_rad) if extras is None else extras.base[:, :, :n]
+    passive_q = data.passive_q_rad  # the trunk's tilt turns gravity, not the passive moments
     for j in range(n):
-        regressor[:, j, n + j * k : n + (j + 1) * k] = passive.columns(data.q_rad, data.velocity_rad_s, j)
+        regressor[:, j, n + j * k : n + (j + 1) * k] = passive.columns(passive_q, data.velocity_rad_s, j)
         if widths is not None and widths[j] > 0 and "coulomb" in local:
             column = n + j * k + local.index("coulomb")
             regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
     if passive.elastic:
-        reference = ElasticReference.from_angles(data.q_rad)
-        regressor = np.concatenate((regressor, elastic_columns(data.q_rad, passive.elastic, reference)), axis=2)
+        reference = ElasticReference.from_angles(passive_q)
+        regressor = np.concatenate((regressor, elastic_columns(passive_q, passive.elastic, reference)), axis=2)
     p = regressor.shape[2]
     lower = [0.0] * n + [TERMS[term][2] for _ in range(n) for term in local] + [-np.inf] * (p - n - n * k)
     precision = elastic_prior_precision(names[:p])

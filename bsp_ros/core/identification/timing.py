@@ -145,7 +145,7 @@ def _regressor(data: IdentificationData, passive: PassiveModel) -> np.ndarray:
     columns = [gravity_regressor(data.q_rad)]
     for j in range(n):
         block = np.zeros((data.t_ns.size, n, len(passive.local)))
-        block[:, j, :] = passive.columns(data.q_rad, data.velocity_rad_s, j)
+        block[:, j, :] = passive.columns(data.passive_q_rad, data.velocity_rad_s, j)
         columns.append(block)
     return np.concatenate(columns, axis=2)
 

@@ -22,7 +22,7 @@ from bsp_ros.core.simulation.sensor import SensorSpec
 from bsp_ros.core.simulation.subject import PassiveTruth, SubjectTruth
 from bsp_ros.core.simulation.trajectory import JointTrajectory, TrajectorySpec
 from bsp_ros.errors import InputError
-from bsp_ros.validation import check_positive
+from bsp_ros.validation import check_finite_scalar, check_positive
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,8 @@ class CellSpec:
         (inertial terms are ~1e-4 of gravity at 0.03 rad/s).
     robot_handle_pose : True: the robot publishes the contact point from its kinematics (``Session.handle_pose``,
         ``/robot/handle_pose``), exact, at each wrench sample's instant on the marker clock.
+    trunk_tilt_rad : the patient's trunk tilted in ``world`` by this much (rad, in the sense of ``q_1``; within
+        +-pi/2): the shoulder's passive moment follows ``q_1 - trunk_tilt_rad``, gravity the world angles.
 
     Raises
     ------
@@ -64,6 +66,7 @@ class CellSpec:
     seed: int = 0
     inertia: bool = True
     robot_handle_pose: bool = False
+    trunk_tilt_rad: float = 0.0
 
     def __post_init__(self) -> None:
         for name, kind in (
@@ -88,6 +91,7 @@ class CellSpec:
         object.__setattr__(self, "start_ns", check_int("start_ns", self.start_ns, 1, 2**62))
         object.__setattr__(self, "seed", check_int("seed", self.seed, 0))
         check_bool("inertia", self.inertia)
+        check_finite_scalar("trunk_tilt_rad", self.trunk_tilt_rad, -np.pi / 2, np.pi / 2)
         if isinstance(self.trajectory, TrajectorySpec):
             centre, amp = self.trajectory.center_deg[1], self.trajectory.amplitude_deg[1]
             elbow = np.radians(np.linspace(centre - amp, centre + amp, 721))

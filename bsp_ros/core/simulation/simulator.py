@@ -235,6 +235,7 @@ class CellSimulator:
     def passive_torque_nm(self, t_s: npt.ArrayLike) -> np.ndarray:
         """True passive moments (the torque the driver must supply): (N,) s -> (N, n) Nm."""
         q = self.joint_angles_rad(t_s)
+        q[:, 0] -= self._spec.trunk_tilt_rad  # the shoulder's passive angle is relative to the trunk
         qdot = self.joint_velocities_rad_s(t_s)
         p = self._spec.passive
         return (

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -264,6 +265,7 @@ def simulation_settings(
         "gravity_m_s2": GRAVITY_M_S2,
         "inertia": spec.inertia,
         "robot_handle_pose": spec.robot_handle_pose,
+        "trunk_tilt_deg": math.degrees(spec.trunk_tilt_rad),
         "wrench_hz": s.wrench_hz,
         "wrench_phase_s": s.phase_s,
         "wrench_stamp_jitter_s": s.stamp_jitter_s,

@@ -199,7 +199,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 f"the {problem.names[index][1]} static moment depends on the passive model the data cannot choose "
                 f"between (they differ by up to {model_shift[index]:.1f} of its data std): that spread is in its std"
             )
-    reference = ElasticReference.from_angles(data.q_rad)
+    reference = ElasticReference.from_angles(data.passive_q_rad)
     curves = selection_curves(data, reference, fit, selection)
     noise, misfit = misfit_against_noise(fit, judged_residual)
     for j, joint in enumerate(joints):

@@ -1,0 +1,109 @@
+"""Several recordings of one arm identified as one: their samples stacked, each with its trunk's tilt."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+import numpy as np
+
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.errors import InputError
+
+# Segment lengths of the recordings further apart than this: the markers moved between them (2 sd of placement).
+MAX_LENGTH_SPREAD_M = 0.004
+
+
+def combine_recordings(
+    recordings: Sequence[IdentificationData], trunk_tilts_rad: Sequence[float]
+) -> IdentificationData:
+    """One identification input from recordings of the same arm, in time order, each with its trunk tilt.
+
+    Between recordings the patient may sit differently: with the trunk tilted by ``psi`` (rad, in the sense of
+    ``q_1``: from world +y towards +z), gravity turns relative to the arm while the passive moments follow the
+    joint angles. Their samples are stacked with ``trunk_rad = psi`` per sample, so that the shoulder's passive
+    angle is ``q_1 - psi`` (:attr:`IdentificationData.passive_q_rad`). Two recordings at different tilts
+    separate an elastic passive moment from gravity where one posture cannot (a smooth function of the joint
+    angles in both).
+
+    Parameters
+    ----------
+    recordings : one or more, from the same cell and markers, not overlapping in time.
+    trunk_tilts_rad : one tilt per recording (rad; 0: upright).
+
+    Returns
+    -------
+    IdentificationData
+        The recordings' samples in time order; segment lengths the sample-weighted mean (their std the larger
+        of the recordings' and the spread between them); ``trunk_rad`` None when every tilt is 0. One
+        recording with no tilt comes back unchanged.
+
+    Raises
+    ------
+    InputError
+        No recording, a tilt count that differs from the recordings', a tilt beyond 90 deg, different numbers
+        of segments, or recordings that overlap in time.
+    """
+    if not recordings:
+        raise InputError("no recording to identify")
+    if len(trunk_tilts_rad) != len(recordings):
+        raise InputError(f"{len(trunk_tilts_rad)} trunk tilts for {len(recordings)} recordings: give one per recording")
+    tilts = np.asarray(trunk_tilts_rad, dtype=np.float64)
+    if not (np.isfinite(tilts).all() and (np.abs(tilts) <= np.pi / 2).all()):
+        raise InputError(
+            f"trunk tilts must be finite and within +-90 deg, got {np.degrees(tilts).round(1).tolist()} deg"
+        )
+    if len(recordings) == 1 and tilts[0] == 0.0:
+        return recordings[0]
+    n = {r.n_joints for r in recordings}
+    if len(n) > 1:
+        raise InputError(f"the recordings have different numbers of segments ({sorted(n)}): they are not one arm")
+    order = np.argsort([int(r.t_ns[0]) for r in recordings], kind="stable")
+    ordered = [recordings[k] for k in order]
+    for k, (a, b) in enumerate(itertools.pairwise(ordered)):
+        if b.t_ns[0] <= a.t_ns[-1]:
+            raise InputError(
+                f"recordings {order[k] + 1} and {order[k + 1] + 1} overlap in time: recordings of one arm follow each "
+                "other (the same recording given twice?)"
+            )
+    counts = np.array([r.t_ns.size for r in ordered], dtype=np.float64)
+    lengths = np.array([r.lengths_m for r in ordered])
+    mean_lengths = counts @ lengths / counts.sum()
+    spread = lengths.max(axis=0) - lengths.min(axis=0)
+    warnings = []
+    for j in np.flatnonzero(spread > MAX_LENGTH_SPREAD_M).tolist():
+        warnings.append(
+            f"segment {j + 1}'s length differs by {1e3 * spread[j]:.1f} mm between the recordings: a marker moved "
+            "between them (the mean length is used; its std holds the difference)"
+        )
+    lengths_std = np.maximum(np.max([r.lengths_std_m for r in ordered], axis=0), spread / 2.0)
+    for k, r in zip(order.tolist(), ordered, strict=True):
+        warnings += [f"recording {k + 1}: {w}" for w in r.warnings]
+    removed: dict[str, int] = {}
+    for r in ordered:
+        for key, count in r.removed_samples.items():
+            removed[key] = removed.get(key, 0) + count
+    robot = {r.contact_from_robot for r in ordered}
+    if len(robot) > 1:
+        warnings.append(
+            "the contact point came from the robot's handle pose in some recordings only: the skin marker's "
+            "placement sd is used for all"
+        )
+    with_rates = all(r.qd_rad_s is not None and r.qdd_rad_s2 is not None for r in ordered)
+    trunk = np.concatenate([np.full(r.t_ns.size, tilts[k]) for k, r in zip(order.tolist(), ordered, strict=True)])
+    return IdentificationData(
+        np.concatenate([r.t_ns for r in ordered]),
+        np.concatenate([r.q_rad for r in ordered]),
+        np.concatenate([r.velocity_rad_s for r in ordered]),
+        np.concatenate([r.tau_nm for r in ordered]),
+        mean_lengths,
+        lengths_std,
+        np.max([r.velocity_noise_rad_s for r in ordered], axis=0),
+        sum(r.n_wrench_samples for r in ordered),
+        warnings,
+        removed,
+        np.concatenate([r.qd_rad_s for r in ordered]) if with_rates else None,
+        np.concatenate([r.qdd_rad_s2 for r in ordered]) if with_rates else None,
+        robot == {True},
+        trunk if tilts.any() else None,
+    )
