@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -121,6 +122,16 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="MODEL",
         help="passive model to identify: coulomb, coulomb+offset, coulomb+offset+stiffness "
         "(default coulomb+offset+stiffness)",
+    )
+    session.add_argument(
+        "--trunk-tilt-deg",
+        type=float_within(-90.0, 90.0),
+        nargs="+",
+        metavar="DEG",
+        default=[0.0],
+        help="record the plan once per trunk posture (the same motion relative to the trunk; deg, in the sense of "
+        "the shoulder angle) and identify the recordings together (bsp identify BAG1 BAG2 --trunk-tilt-deg ...): "
+        "a second posture separates elastic passive moments from gravity (default: 0, one upright recording)",
     )
     session.add_argument(
         "--target-std",
@@ -262,6 +273,7 @@ def _request(args: argparse.Namespace) -> Any:
         noise=NoiseSpec(args.force_noise, args.torque_noise, args.marker_noise, args.wrench_hz, args.marker_hz),
         objective=args.objective,
         max_evaluations=args.max_evaluations,
+        trunk_tilts_rad=tuple(math.radians(t) for t in args.trunk_tilt_deg),
     )
 
 
@@ -311,11 +323,10 @@ def precision_warning(plan: Any, target_percent: float, replan: Any) -> str | No
         return (
             f"{head}; no session up to {duration:.0f} s reaches it: with elastic passive moments (--passive "
             f"{passive.label}) the {owner}'s gravity torque is a smooth function of the joint angles in this plane, "
-            "as the elastic moment is, and no motion in the plane separates them. Widen the ranges, or change "
-            "gravity's direction relative to the arm between two recordings (trunk tilted, or the arm moved in a "
-            "horizontal plane, where gravity adds no torque about vertical joint axes and the robot measures the "
-            "passive moments alone), or identify with the Coulomb model, which assumes no elastic moment and says "
-            "when the data refute it"
+            "as the elastic moment is, and no motion in the plane separates them. Widen the ranges, or record the "
+            "plan a second time with the trunk tilted (--trunk-tilt-deg 0 25 predicts it; bsp identify UPRIGHT "
+            "TILTED --trunk-tilt-deg 0 25 identifies both), or identify with the Coulomb model, which assumes no "
+            "elastic moment and says when the data refute it"
         )
     return f"{head}; no session up to {duration:.0f} s reaches it: widen the ranges or reduce the sensor noise"
 
@@ -327,7 +338,13 @@ def format_plan(plan: Any) -> str:
     joints = joints_for(plan.request.nominal.n_joints)
     lines = [
         f"planned {plan.trajectory.duration_s:.0f} s, {plan.centres_deg.shape[0]} operating point(s), "
-        f"passive model {plan.request.passive.label}",
+        f"passive model {plan.request.passive.label}"
+        + (
+            f", recorded at trunk tilts {', '.join(f'{math.degrees(t):g}' for t in plan.request.trunk_tilts_rad)} deg "
+            f"({plan.trajectory.duration_s:.0f} s each)"
+            if len(plan.request.trunk_tilts_rad) > 1
+            else ""
+        ),
         "operating points (deg): " + "; ".join(", ".join(f"{v:.1f}" for v in row) for row in plan.centres_deg),
         "amplitudes (deg): " + ", ".join(f"{j} {a:.1f}" for j, a in zip(joints, plan.amplitudes_deg, strict=True)),
         "peak speed (rad/s): "

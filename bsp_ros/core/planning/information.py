@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -168,22 +169,26 @@ def parameter_names(n_joints: int, passive: PassiveModel) -> list[ParameterName]
     return problem_names(predicted_model(passive), n_joints, dynamics=False)
 
 
-def regressor(q_rad: np.ndarray, velocity_rad_s: np.ndarray, passive: PassiveModel) -> np.ndarray:
+def regressor(
+    q_rad: np.ndarray, velocity_rad_s: np.ndarray, passive: PassiveModel, passive_q_rad: np.ndarray | None = None
+) -> np.ndarray:
     """The stacked regressor the estimator builds (``identification.stacked``): (N, n, p).
 
-    Gravity columns from ``bsp_ros.core.model.gravity_regressor``, passive columns from ``PassiveModel.columns``,
-    elastic columns (nonlinear, coupling) from ``elastic_columns`` centred on these angles' range.
+    Gravity columns from ``bsp_ros.core.model.gravity_regressor`` on the world angles ``q_rad``, passive columns
+    from ``PassiveModel.columns`` and elastic columns (nonlinear, coupling) centred on their range, both on
+    ``passive_q_rad`` (the angles to the trunk; default ``q_rad``: an upright trunk).
     """
     model = predicted_model(passive)
+    passive_q = q_rad if passive_q_rad is None else passive_q_rad
     n = q_rad.shape[1]
     k = len(model.local)
     out = np.zeros((q_rad.shape[0], n, n + n * k))
     out[:, :, :n] = gravity_regressor(q_rad)
     for j in range(n):
-        out[:, j, n + j * k : n + (j + 1) * k] = model.columns(q_rad, velocity_rad_s, j)
+        out[:, j, n + j * k : n + (j + 1) * k] = model.columns(passive_q, velocity_rad_s, j)
     if model.elastic:
-        reference = ElasticReference.from_angles(q_rad)
-        out = np.concatenate((out, elastic_columns(q_rad, model.elastic, reference)), axis=2)
+        reference = ElasticReference.from_angles(passive_q)
+        out = np.concatenate((out, elastic_columns(passive_q, model.elastic, reference)), axis=2)
     return out
 
 
@@ -244,6 +249,7 @@ def predict_covariance(
     config: JointConfig | None = None,
     grid_hz: float = 10.0,
     kinematics: KinematicsConfig | None = None,
+    trunk_tilts_rad: Sequence[float] = (0.0,),
 ) -> Prediction:
     """Predict the covariance the stacked identification (``identify_joint``) will report for a session.
 
@@ -264,6 +270,8 @@ def predict_covariance(
     config : the estimator's settings (deadband), default ``JointConfig(passive=passive)``.
     grid_hz : evaluation grid, Hz; sums are scaled to the wrench and marker rates.
     kinematics : the angle filters the estimator uses (for the direction-velocity noise).
+    trunk_tilts_rad : one recording of ``trajectory`` per trunk posture (rad; the motion relative to the trunk,
+        gravity turned by the tilt), identified together (``bsp identify BAG1 BAG2 --trunk-tilt-deg ...``).
 
     Returns
     -------
@@ -282,7 +290,64 @@ def predict_covariance(
     t = np.arange(int(duration * grid)) / grid
     q = trajectory.angles_rad(t)
     velocity = trajectory.velocities_rad_s(t)
-    x = regressor(q, velocity, passive)
+    tilts = tuple(float(tilt) for tilt in trunk_tilts_rad)
+    if not tilts or not all(abs(tilt) <= np.pi / 2 for tilt in tilts):
+        raise InputError(f"trunk tilts must be one or more within +-90 deg, got {np.degrees(tilts).round(1).tolist()}")
+    postures = []
+    for tilt in tilts:
+        # The same motion relative to the trunk, recorded once per posture: gravity sees the world angles.
+        world = q.copy()
+        world[:, 0] += tilt
+        postures.append(
+            _posture_information(world, q, velocity, passive, lengths, beta, noise, config, kinematics, grid)
+        )
+    design = sum(posture[0] for posture in postures[1:]) + postures[0][0]
+    long_run = sum(posture[1] for posture in postures[1:]) + postures[0][1]
+    rows_total = sum(posture[2].sum(axis=0) for posture in postures)
+    names = parameter_names(n, passive)
+    # The elastic terms' priors are information the estimator adds (pseudo-observations of variance 1 / P).
+    precision = np.diag(elastic_prior_precision(names))
+    inverse = np.linalg.pinv(design + precision)
+    covariance = inverse @ (long_run + precision) @ inverse
+    covariance = 0.5 * (covariance + covariance.T)
+
+    # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
+    norms = np.sqrt(np.clip(np.diag(design), 0.0, None))
+    condition = float("inf")
+    if (norms > 0).all() and np.isfinite(design).all():  # a column without rows: nothing to condition
+        gram = design / np.outer(norms, norms)
+        eigen = np.linalg.eigvalsh(0.5 * (gram + gram.T))
+        condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
+    variances = np.diag(covariance)
+    correlation = covariance / np.sqrt(np.outer(variances, variances) + 1e-300)
+    max_corr = {
+        f"{key}/{owner}": float(np.max(np.abs(correlation[i, :n]))) for i, (key, owner) in enumerate(names) if i >= n
+    }
+    nominal_values = np.full(len(names), np.nan)
+    nominal_values[:n] = beta
+    for i, name in enumerate(names):
+        if name in nominal.passive:
+            nominal_values[i] = nominal.passive[name]
+    per_wrench = noise.wrench_hz / grid
+    rows_used = {joint: round(per_wrench * rows_total[j]) for j, joint in enumerate(joints_for(n))}
+    return Prediction(names, covariance, nominal_values, condition, max_corr, rows_used)
+
+
+def _posture_information(
+    q: np.ndarray,
+    passive_q: np.ndarray,
+    velocity: np.ndarray,
+    passive: PassiveModel,
+    lengths: np.ndarray,
+    beta: np.ndarray,
+    noise: NoiseSpec,
+    config: JointConfig,
+    kinematics: KinematicsConfig,
+    grid: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One recording's weighted information ``X^T W X`` (p, p), the long-run covariance of ``X^T W e`` (p, p) and
+    the rows the estimator keeps (N, n), for world angles ``q`` and passive angles ``passive_q`` on the grid."""
+    x = regressor(q, velocity, passive, passive_q)
 
     # rows the estimator keeps: above the direction deadband (Coulomb models only)
     angle_cov = _angle_noise_covariance(q, lengths, noise.marker_noise_m)
@@ -315,29 +380,4 @@ def predict_covariance(
     design = per_wrench * (x.reshape(-1, p).T @ flat)
     noise_cov = per_wrench * force_cov + noise.wrench_hz**2 / (noise.marker_hz * grid) * marker_cov
     long_run = flat.T @ (noise_cov @ wx).reshape(-1, p)
-    names = parameter_names(n, passive)
-    # The elastic terms' priors are information the estimator adds (pseudo-observations of variance 1 / P).
-    precision = np.diag(elastic_prior_precision(names))
-    inverse = np.linalg.pinv(design + precision)
-    covariance = inverse @ (long_run + precision) @ inverse
-    covariance = 0.5 * (covariance + covariance.T)
-
-    # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
-    norms = np.sqrt(np.clip(np.diag(design), 0.0, None))
-    condition = float("inf")
-    if (norms > 0).all() and np.isfinite(design).all():  # a column without rows: nothing to condition
-        gram = design / np.outer(norms, norms)
-        eigen = np.linalg.eigvalsh(0.5 * (gram + gram.T))
-        condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
-    variances = np.diag(covariance)
-    correlation = covariance / np.sqrt(np.outer(variances, variances) + 1e-300)
-    max_corr = {
-        f"{key}/{owner}": float(np.max(np.abs(correlation[i, :n]))) for i, (key, owner) in enumerate(names) if i >= n
-    }
-    nominal_values = np.full(len(names), np.nan)
-    nominal_values[:n] = beta
-    for i, name in enumerate(names):
-        if name in nominal.passive:
-            nominal_values[i] = nominal.passive[name]
-    rows_used = {joint: round(per_wrench * rows[:, j].sum()) for j, joint in enumerate(joints_for(n))}
-    return Prediction(names, covariance, nominal_values, condition, max_corr, rows_used)
+    return design, long_run, rows

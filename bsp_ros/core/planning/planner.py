@@ -61,6 +61,8 @@ class PlanRequest:
     objective : ``d-optimal`` (log-determinant of the predicted covariance: every parameter counts) or
         ``static`` (largest predicted relative std of the static moments).
     max_evaluations : budget of the optimiser (trajectory evaluations) per number of operating points.
+    trunk_tilts_rad : the plan is recorded once per trunk posture (rad; the same motion relative to the trunk)
+        and the recordings identified together: a second posture turns gravity relative to the arm.
     """
 
     nominal: NominalArm
@@ -73,6 +75,7 @@ class PlanRequest:
     noise: NoiseSpec = field(default_factory=NoiseSpec)
     objective: str = "d-optimal"
     max_evaluations: int = 400
+    trunk_tilts_rad: tuple[float, ...] = (0.0,)
 
     def __post_init__(self) -> None:
         n = self.nominal.n_joints
@@ -92,6 +95,10 @@ class PlanRequest:
             if (amplitude <= 0).any():
                 raise InputError(f"oscillation amplitudes must be positive, got {amplitude.tolist()} deg")
             object.__setattr__(self, "amplitude_deg", tuple(float(a) for a in amplitude))
+        tilts = check_finite_array("trunk tilts (rad)", self.trunk_tilts_rad, (len(self.trunk_tilts_rad),))
+        if not 1 <= tilts.size <= 5 or (np.abs(tilts) > np.pi / 2).any():
+            raise InputError(f"one to five trunk tilts within +-90 deg, got {np.degrees(tilts).round(1).tolist()} deg")
+        object.__setattr__(self, "trunk_tilts_rad", tuple(float(t) for t in tilts))
         if not 10 <= self.max_evaluations <= 100_000:
             raise InputError(f"max_evaluations must be within [10, 100000], got {self.max_evaluations!r}")
 
@@ -352,7 +359,13 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
         except InfeasiblePlanError as error:
             return _INFEASIBLE + error.excess_s
         prediction = predict_covariance(
-            trajectory, request.duration_s, request.nominal, request.passive, request.noise, grid_hz=grid_hz
+            trajectory,
+            request.duration_s,
+            request.nominal,
+            request.passive,
+            request.noise,
+            grid_hz=grid_hz,
+            trunk_tilts_rad=request.trunk_tilts_rad,
         )
         value = _objective_value(prediction, request.objective)
         return value if math.isfinite(value) else _INFEASIBLE
@@ -369,7 +382,14 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     check_trajectory_within(trajectory, request.limits)
     check_reachable(trajectory, request.nominal.lengths_m, request.shoulder_yz_m)
     centres, amplitudes = decode(best)
-    prediction = predict_covariance(trajectory, request.duration_s, request.nominal, request.passive, request.noise)
+    prediction = predict_covariance(
+        trajectory,
+        request.duration_s,
+        request.nominal,
+        request.passive,
+        request.noise,
+        trunk_tilts_rad=request.trunk_tilts_rad,
+    )
     ratio = inertial_torque_ratio(trajectory, request.nominal)
     for joint, share in zip(joints_for(n), ratio, strict=True):
         if share >= QUASI_STATIC_SHARE:

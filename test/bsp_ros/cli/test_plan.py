@@ -89,6 +89,7 @@ def _code(argv: list[str]) -> int:
         ("--amplitude", ["5"]),
         ("--passive", ["foo"]),
         ("--shoulder-range", ["10", "-10"]),
+        ("--trunk-tilt-deg", ["0", "95"]),
     ],
 )
 def test_a_value_out_of_range_is_refused_naming_the_option(option: str, values: list[str], capsys) -> None:
@@ -199,3 +200,19 @@ def test_publish_sends_latched_messages_a_late_subscriber_receives(tmp_path: Pat
     finally:
         publisher.terminate()
         publisher.wait(timeout=20)
+
+
+def test_two_trunk_postures_are_planned_and_said(capsys) -> None:
+    argv = ["plan", "--shoulder", "0", "1.2", "--shoulder-range", "-50", "-38", "--elbow-range", "26", "33"]
+    argv += ["--wrist-range", "-1", "1.5", "--max-evaluations", "60", "--operating-points", "1"]
+    assert main(argv) == 0
+    single = capsys.readouterr().out
+    assert main([*argv, "--trunk-tilt-deg", "0", "25"]) == 0
+    both = capsys.readouterr().out
+    assert "recorded at trunk tilts 0, 25 deg (120 s each)" in both and "trunk tilts" not in single
+
+    def upper_arm_percent(text: str) -> float:
+        line = next(x for x in text.splitlines() if x.startswith("static_moment_kgm/upper_arm"))
+        return float(line.split()[-1].rstrip("%"))
+
+    assert upper_arm_percent(both) < upper_arm_percent(single) / 10

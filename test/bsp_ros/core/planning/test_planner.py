@@ -57,3 +57,16 @@ def test_a_two_segment_chain_is_planned_within_its_limits() -> None:
     assert plan.trajectory.n_joints == 2
     check_trajectory_within(plan.trajectory, limits)
     assert [name for name, _ in plan.prediction.names].count("offset_nm") == 2
+
+
+def test_a_second_trunk_posture_is_predicted_as_a_second_recording_that_turns_gravity() -> None:
+    trajectory, model = sim.human_arm_cell().trajectory, PassiveModel.parse("coulomb+offset+stiffness")
+    one = predict_covariance(trajectory, 120.0, nominal_arm(), model)
+    # The same posture twice: twice the information, half the covariance, twice the rows.
+    twice = predict_covariance(trajectory, 120.0, nominal_arm(), model, trunk_tilts_rad=(0.0, 0.0))
+    np.testing.assert_allclose(twice.covariance, one.covariance / 2, rtol=1e-9, atol=1e-18)
+    assert twice.rows_used == {joint: 2 * rows for joint, rows in one.rows_used.items()}
+    # Tilted by 25 deg, gravity turns relative to the arm and no longer trades with the shoulder's spring.
+    tilted = predict_covariance(trajectory, 120.0, nominal_arm(), model, trunk_tilts_rad=(0.0, np.radians(25.0)))
+    for quantity, owner in (("static_moment_kgm", "upper_arm"), ("offset_nm", "shoulder")):
+        assert tilted.std_of(quantity, owner) < twice.std_of(quantity, owner) / 10, (quantity, owner)
