@@ -164,6 +164,7 @@ def _simulation(arm: ArmParams, options: CellOptions, run: EngineRun) -> dict[st
         "seed": options.seed,
         "duration_s": options.duration_s,
         "start_ns": options.start_ns,
+        "trunk_tilt_deg": float(np.degrees(options.trunk_tilt_rad)),
         "gravity_m_s2": GRAVITY_M_S2,
         "timestep_s": options.timestep_s,
         "solver": {

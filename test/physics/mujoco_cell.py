@@ -147,6 +147,8 @@ class CellOptions:
     marker_noise_m : white Gaussian marker noise per world axis (1 sd).
     skin_offset_m : 4 ``(along, normal)`` marker offsets from the joint centres (CONTRACT: fixed in the
         segment starting at that joint, the hand marker in the hand), m; empty: on the centres.
+    trunk_tilt_rad : the trunk (the shoulder joint's parent body) turned about world x by this much, rad: the
+        shoulder hinge, its spring and ``trajectory`` are relative to the trunk, gravity stays world -z.
     """
 
     trajectory: JointTrajectory
@@ -166,6 +168,7 @@ class CellOptions:
     lead_in_s: float = 1.0
     start_ns: int = DEFAULT_START_NS
     seed: int = 0
+    trunk_tilt_rad: float = 0.0
 
     def __post_init__(self) -> None:
         if self.sensor not in ("fixed", "turning"):
@@ -194,6 +197,8 @@ def mjcf_text(arm: ArmParams, options: CellOptions) -> str:
     """The MJCF of the cell: the arm (3 hinges about world x), the hand's contact body, the robot's mocap handle."""
     sy, sz = options.shoulder_m[1], options.shoulder_m[2]
     mount = _quat_wxyz(rotation_from_rpy_deg(*options.mount_rpy_deg))
+    half = options.trunk_tilt_rad / 2.0
+    trunk = f"{np.cos(half):.17g} {np.sin(half):.17g} 0 0"  # about world x
     offsets = options.skin_offset_m or ((0.0, 0.0),) * 4
     a1, a2, a3 = arm.lengths_m
 
@@ -223,7 +228,8 @@ def mjcf_text(arm: ArmParams, options: CellOptions) -> str:
     <flag contact="disable"/>
   </option>
   <worldbody>
-    <body name="upper_arm" pos="{options.shoulder_m[0]:.17g} {sy:.17g} {sz:.17g}">
+    <body name="trunk" pos="{options.shoulder_m[0]:.17g} {sy:.17g} {sz:.17g}" quat="{trunk}">
+    <body name="upper_arm" pos="0 0 0">
       {joint(0)}
       {inertial(0)}
       {marker(0)}
@@ -241,6 +247,7 @@ def mjcf_text(arm: ArmParams, options: CellOptions) -> str:
           </body>
         </body>
       </body>
+    </body>
     </body>
     <body name="robot_handle" mocap="true" pos="{options.shoulder_m[0]:.17g} {sy + a1 + a2 + a3:.17g} {sz:.17g}"/>
   </worldbody>
@@ -283,6 +290,7 @@ class EngineRun:
     weld_drift_m: np.ndarray
     weld_drift_rad: np.ndarray
     model: Any = field(repr=False)
+    trunk_tilt_rad: float = 0.0  # q_rad and q_command_rad are relative to the trunk, turned by this about world x
 
     def wrench_world(self) -> np.ndarray:
         """(N, 3) ``[F_y, F_z, M_x]`` in world: the engine's sensor rotated by the engine's site orientation."""
@@ -340,7 +348,9 @@ def run_engine(arm: ArmParams, options: CellOptions) -> EngineRun:
     n_rec = round(options.duration_s / dt)
     t_all = (np.arange(n_lead + n_rec) - n_lead) * dt
     q_cmd = options.trajectory.angles_rad(t_all)
-    pos, quat = _handle_poses(q_cmd, arm.lengths_m, options.shoulder_m)
+    q_world = q_cmd.copy()
+    q_world[:, 0] += options.trunk_tilt_rad  # the joint angles are the trunk's, the handle's pose the world's
+    pos, quat = _handle_poses(q_world, arm.lengths_m, options.shoulder_m)
     data.qpos[:] = q_cmd[0]
     data.qvel[:] = options.trajectory.velocities_rad_s(t_all[:1])[0]
     data.mocap_pos[0], data.mocap_quat[0] = pos[0], quat[0]
@@ -368,7 +378,7 @@ def run_engine(arm: ArmParams, options: CellOptions) -> EngineRun:
             drift_m[r] = np.linalg.norm(data.xpos[contact] - pos[k])
             contact_quat[r] = data.xquat[contact]
     pitch = 2.0 * np.arctan2(contact_quat[:, 1], contact_quat[:, 0])
-    drift_rad = np.angle(np.exp(1j * (pitch - np.cumsum(q_cmd[n_lead:], axis=1)[:, -1])))
+    drift_rad = np.angle(np.exp(1j * (pitch - np.cumsum(q_world[n_lead:], axis=1)[:, -1])))
     return EngineRun(
         t_s=t_all[n_lead:],
         q_rad=q,
@@ -382,6 +392,7 @@ def run_engine(arm: ArmParams, options: CellOptions) -> EngineRun:
         weld_drift_m=drift_m,
         weld_drift_rad=np.abs(drift_rad),
         model=model,
+        trunk_tilt_rad=options.trunk_tilt_rad,
     )
 
 
@@ -409,7 +420,7 @@ def degrees_range(run: EngineRun) -> list[tuple[float, float]]:
 
 def wrench_world_from_sensor_angle(run: EngineRun, mount: np.ndarray) -> np.ndarray:
     """(N, 3, 3) the turning sensor's orientation the robot knows: its commanded pitch, then the mount."""
-    pitch = np.cumsum(run.q_command_rad, axis=1)[:, -1]
+    pitch = np.cumsum(run.q_command_rad, axis=1)[:, -1] + run.trunk_tilt_rad
     c, s = np.cos(pitch), np.sin(pitch)
     rx = np.zeros((pitch.size, 3, 3))
     rx[:, 0, 0] = 1.0

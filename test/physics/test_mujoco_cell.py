@@ -195,3 +195,36 @@ def test_skin_marker_sites_sit_where_bsp_ros_puts_skin_markers_for_the_same_angl
     expected = CellSimulator(spec).marker_positions_m(run.t_s)
     for k, name in enumerate(("shoulder", "elbow", "wrist", "hand")):
         assert np.abs(run.markers_m[:, k] - expected[name]).max() < 1e-12, name
+
+
+def test_two_trunk_postures_in_the_engine_are_identified_together(tmp_path) -> None:
+    # Springs about the trunk, the paper's sine at 0.03 rad/s: upright, then with the trunk turned by 25 deg and the
+    # robot moving the arm through the same angles relative to it (MuJoCo's own dynamics, sensor and markers).
+    arm = draw_arm(2, springs=True)
+    bags = []
+    for k, tilt_deg in enumerate((0.0, 25.0)):
+        options = CellOptions(
+            trajectory=paper_sine(0.03),
+            duration_s=40.0,
+            wrench_hz=250.0,
+            seed=3 + k,
+            trunk_tilt_rad=np.radians(tilt_deg),
+            start_ns=1_700_000_000_000_000_000 + k * 300_000_000_000,
+        )
+        bags.append(write_bag(tmp_path / f"posture_{k}", record(arm, options)))
+    truth = json.loads((bags[0] / "truth.json").read_text())
+    model_args = ["--passive", "coulomb+offset+stiffness", "--format", "none"]
+    main(["identify", str(bags[0]), "--json", str(tmp_path / "one.json"), *model_args])
+    code = main(
+        ["identify", *map(str, bags), "--trunk-tilt-deg", "0", "25", "--json", str(tmp_path / "two.json"), *model_args]
+    )
+    one, two = (json.loads((tmp_path / f"{n}.json").read_text()) for n in ("one", "two"))
+    assert code == 0, two["quality"]["message"]
+    for segment in ("upper_arm", "forearm", "hand"):
+        q, true = two["segments"][segment]["static_moment_kgm"], truth["segments"][segment]["static_moment_kgm"]
+        assert abs(q["value"] - true) < 3.0 * q["std"], (segment, q, true)
+    std = [d["segments"]["upper_arm"]["static_moment_kgm"]["std"] for d in (one, two)]
+    assert std[1] < std[0] / 2, std
+    stiffness = two["joints"]["shoulder"]["stiffness_nm_per_rad"]
+    true_stiffness = truth["joints"]["shoulder"]["stiffness_nm_per_rad"]
+    assert abs(stiffness["value"] - true_stiffness) < 3.0 * stiffness["std"], (stiffness, true_stiffness)
