@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from bsp_ros.bag.errors import NotABagError
+from bsp_ros.bag.errors import NotABagError, UnsupportedBagError
 from bsp_ros.bag.layout import resolve_bag
 from bsp_ros.bag.mcap_scan import ChannelInfo, ScanResult, scan_mcap
 from bsp_ros.bag.metadata import METADATA_FILE, read_metadata
@@ -433,6 +433,10 @@ def play_bag(
     files, meta = bag_files(path)
     report = PlayReport(path=str(path))
     plans = _plan(files, meta, topics, report)
+    if not plans and report.skipped:
+        # Exiting 0 after publishing nothing would read as a successful replay.
+        reasons = "; ".join(f"{topic}: {why}" for topic, why in sorted(report.skipped.items()))
+        raise UnsupportedBagError(f"{path}: nothing to play, every topic is skipped ({reasons})")
 
     from bsp_ros.live.runtime.ros import Client, message_class
 
