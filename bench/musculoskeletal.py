@@ -16,7 +16,10 @@ moments, inertias and the joints' Coulomb level, whose truth is 0) and, where th
 ``joints.<joint>.passive_curve``, its points against the truth's curve. Per row: runs, valid, valid-and-wrong
 (some |z| > 3), invalid-and-right (every |z| <= 3), the worst |z| over valid runs and over all, the most common
 message of the invalid ones. ``--quick``: one seed, 60 s, rigid and three strengths, three models (and
-suggestions). ``--planar``: arm26 with both joint axes made exactly lateral.
+suggestions). ``--planar``: arm26 with both joint axes made exactly lateral. ``--trunk-tilt-deg DEG``: each
+session is also recorded with arm26's ground (the trunk, with the shoulder and the muscles' origins) turned by DEG
+about world x, the same motion relative to it, and both recordings are identified together (``bsp identify
+UPRIGHT TILTED --trunk-tilt-deg 0 DEG``): rows ``PROTOCOL+DEG``, scored against the upright session's truth.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from __future__ import annotations
 import argparse
 import collections
 import contextlib
+import dataclasses
 import io
 import itertools
 import json
@@ -80,9 +84,10 @@ def offered_models() -> list[str]:
     return models
 
 
-def identify(bag: Path, model: str, out: Path, extra: list[str]) -> dict[str, Any]:
-    """Run ``bsp identify BAG --json OUT`` in-process; the estimate, or ``{"error": message}``."""
-    argv = ["identify", str(bag), "--json", str(out), "--format", "none", *extra]
+def identify(bag: Path | list[Path], model: str, out: Path, extra: list[str]) -> dict[str, Any]:
+    """Run ``bsp identify BAG... --json OUT`` in-process; the estimate, or ``{"error": message}``."""
+    bags = bag if isinstance(bag, list) else [bag]
+    argv = ["identify", *map(str, bags), "--json", str(out), "--format", "none", *extra]
     if model != DEFAULT:
         argv += ["--passive", model]
     stderr = io.StringIO()
@@ -144,17 +149,32 @@ def _message(document: dict[str, Any]) -> str:
 
 
 def session_bag(
-    cell: Any, share: float, protocol: str, seed: int, duration_s: float, where: Path, planar: bool = False
+    cell: Any,
+    share: float,
+    protocol: str,
+    seed: int,
+    duration_s: float,
+    where: Path,
+    planar: bool = False,
+    tilt_deg: float = 0.0,
 ) -> Path:
-    """Simulate one arm26 session and write it (with truth.json) under ``where``; share 0: muscles off."""
+    """Simulate one arm26 session and write it (with truth.json) under ``where``; share 0: muscles off.
+    ``tilt_deg``: the trunk tilted, the same motion relative to it, recorded 10 minutes later."""
+    tilt = math.radians(tilt_deg)
     if share > 0:
-        options = cell.CellOptions(force_scale=cell.force_scale_for_share(share, planar), planar=planar)
+        scale = cell.force_scale_for_share(share, planar)
+        options = cell.CellOptions(force_scale=scale, planar=planar, trunk_tilt_rad=tilt)
     else:
-        options = cell.CellOptions(muscles=False, planar=planar)
+        options = cell.CellOptions(muscles=False, planar=planar, trunk_tilt_rad=tilt)
     arm = cell.Arm26(options)
     trajectory = cell.PAPER_PROTOCOL if protocol == "paper" else _planned(cell, duration_s)
-    run = cell.run_cell(arm, trajectory, cell.SessionOptions(duration_s=duration_s, seed=seed))
-    return Path(cell.write_bag(where / f"s{share:g}_{protocol}_{seed}", run, seed=seed))
+    if tilt_deg:
+        trajectory = cell.TrunkTilted(trajectory, tilt)
+    recording = cell.SessionOptions(duration_s=duration_s, seed=seed + (1000 if tilt_deg else 0))
+    if tilt_deg:
+        recording = dataclasses.replace(recording, start_ns=recording.start_ns + 600_000_000_000)
+    run = cell.run_cell(arm, trajectory, recording)
+    return Path(cell.write_bag(where / f"s{share:g}_{protocol}_{seed}_{tilt_deg:g}", run, seed=seed))
 
 
 _PLANS: dict[float, Any] = {}
@@ -180,7 +200,7 @@ def _row_text(key: tuple[float, str, str], runs: list[dict[str, Any]]) -> str:
 
     label = f"{100 * share:.3g}%" if share > 0 else "rigid"
     return (
-        f"{label:>7s} {protocol:8s} {model:34s} {len(runs):4d} {len(valid):5d} {len(wrong):11d} "
+        f"{label:>7s} {protocol:10s} {model:34s} {len(runs):4d} {len(valid):5d} {len(wrong):11d} "
         f"{len(right_invalid):13d} {worst(valid):>9s} {worst(runs):>7s}  {common}"
     )
 
@@ -199,6 +219,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--all-quantities", action="store_true", help="score every data-sourced quantity")
     parser.add_argument("--identify-args", default="", help="more `bsp identify` options, e.g. '--body-mass 70'")
     parser.add_argument("--planar", action="store_true", help="both joint axes exactly lateral (a planar arm26)")
+    parser.add_argument(
+        "--trunk-tilt-deg",
+        type=float,
+        default=0.0,
+        help="also record each session with the trunk tilted by this much and identify both together "
+        "(rows PROTOCOL+DEG)",
+    )
     parser.add_argument("--json", type=Path, help="write every run's scores here")
     args = parser.parse_args(argv)
     try:
@@ -218,26 +245,33 @@ def main(argv: list[str] | None = None) -> int:
         for share, protocol, seed in itertools.product(shares, args.protocols, range(seeds)):
             bag = session_bag(cell, share, protocol, seed, duration, where, args.planar)
             truth = json.loads((bag / "truth.json").read_text())
-            queue, done = list(base_models), set()
-            while queue:
-                model = queue.pop(0)
-                if model in done:
-                    continue
-                done.add(model)
-                document = identify(bag, model, where / "estimate.json", extra)
-                z = {} if "error" in document else score(document, truth, args.all_quantities)
-                valid = bool(document.get("quality", {}).get("valid", False))
-                warnings = document.get("quality", {}).get("warnings", [])
-                queue += [m for w in warnings for m in _SUGGESTION.findall(w) if m not in done]
-                rows[(share, protocol, model)].append(
-                    {
-                        "seed": seed,
-                        "valid": valid,
-                        "z": z,
-                        "worst_z": max(z.values(), default=math.nan),
-                        "message": "" if valid else _message(document),
-                    }
-                )
+            cases: list[tuple[str, Path | list[Path], list[str]]] = [(protocol, bag, extra)]
+            if args.trunk_tilt_deg:
+                tilted = session_bag(cell, share, protocol, seed, duration, where, args.planar, args.trunk_tilt_deg)
+                tilts = ["--trunk-tilt-deg", "0", f"{args.trunk_tilt_deg:g}"]
+                cases.append((f"{protocol}+{args.trunk_tilt_deg:g}", [bag, tilted], [*extra, *tilts]))
+            done: set[str] = set()
+            for label, bags, arguments in cases:
+                queue, done = list(base_models), set()
+                while queue:
+                    model = queue.pop(0)
+                    if model in done:
+                        continue
+                    done.add(model)
+                    document = identify(bags, model, where / "estimate.json", arguments)
+                    z = {} if "error" in document else score(document, truth, args.all_quantities)
+                    valid = bool(document.get("quality", {}).get("valid", False))
+                    warnings = document.get("quality", {}).get("warnings", [])
+                    queue += [m for w in warnings for m in _SUGGESTION.findall(w) if m not in done]
+                    rows[(share, label, model)].append(
+                        {
+                            "seed": seed,
+                            "valid": valid,
+                            "z": z,
+                            "worst_z": max(z.values(), default=math.nan),
+                            "message": "" if valid else _message(document),
+                        }
+                    )
             print(
                 f"  {share:g} {protocol} seed {seed}: {len(done)} models, {time.monotonic() - started:.0f} s",
                 file=sys.stderr,
@@ -246,7 +280,7 @@ def main(argv: list[str] | None = None) -> int:
     shape = "planar" if args.planar else "oblique axes"
     print(f"arm26 (OpenSim, {shape}), {duration:g} s sessions, {seeds} seed(s); |z| over {scored} and passive curves")
     print(
-        f"{'passive':>7s} {'protocol':8s} {'model':34s} {'runs':>4s} {'valid':>5s} {'valid+wrong':>11s} "
+        f"{'passive':>7s} {'protocol':10s} {'model':34s} {'runs':>4s} {'valid':>5s} {'valid+wrong':>11s} "
         f"{'invalid+right':>13s} {'worst|z|v':>9s} {'all':>7s}  most common invalid message"
     )
     for key in sorted(rows, key=lambda k: (k[0], k[1], k[2] != DEFAULT, len(k[2]), k[2])):

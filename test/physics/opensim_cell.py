@@ -110,6 +110,9 @@ class CellOptions:
     planar : True makes both joint axes exactly lateral (a planar arm); False keeps arm26's oblique axes.
     inertia : False holds the arm quasi-statically (speeds and accelerations 0 in the inverse dynamics).
     gravity_m_s2 : gravity (CONTRACT's 9.81; arm26 ships 9.8066).
+    trunk_tilt_rad : the trunk (arm26's ground, which carries the shoulder and the muscles' origins) turned about
+        world x by this much: gravity turns in ground, ``world`` keeps z up, and the CONTRACT angles ``q_rad``
+        stay world angles (the shoulder's is the angle to the trunk plus the tilt).
     """
 
     force_scale: float = 1.0
@@ -117,6 +120,7 @@ class CellOptions:
     planar: bool = False
     inertia: bool = True
     gravity_m_s2: float = GRAVITY_M_S2
+    trunk_tilt_rad: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.force_scale) and self.force_scale > 0):
@@ -138,7 +142,13 @@ class Arm26:
         osim.Logger.setLevelString("error")  # arm26's meshes are absent: drawing only
         self.options = options or CellOptions()
         model = osim.Model(str(path))
-        model.setGravity(osim.Vec3(0.0, -self.options.gravity_m_s2, 0.0))
+        #: (3, 3) rows: world x, y, z in ground axes (OpenSim's sagittal plane x-y is CONTRACT's y-z plane, turned
+        #: by the trunk's tilt about world x); world = R (ground - shoulder) + shoulder_m.
+        c, s = math.cos(self.options.trunk_tilt_rad), math.sin(self.options.trunk_tilt_rad)
+        tilt = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        self.rotation_world_from_ground = tilt @ np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+        gravity_ground = self.rotation_world_from_ground.T @ np.array([0.0, 0.0, -self.options.gravity_m_s2])
+        model.setGravity(osim.Vec3(*(float(g) for g in gravity_ground)))
         if self.options.planar:
             for name in OSIM_JOINTS:
                 transform = osim.CustomJoint.safeDownCast(model.getJointSet().get(name)).upd_SpatialTransform()
@@ -159,9 +169,6 @@ class Arm26:
         self._bodies = [model.getBodySet().get(name) for name in BODIES]
         self._contact = osim.Vec3(*CONTACT_IN_FOREARM_M)
         self._set_coordinates(np.zeros(2))
-        #: (3, 3) rows: world x, y, z in ground axes (OpenSim's sagittal plane x-y is CONTRACT's y-z plane);
-        #: world = R (ground - shoulder) + shoulder_m.
-        self.rotation_world_from_ground = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
         self.shoulder_ground_m = self._points_ground()[0]
         points = self._points_world(np.zeros(3))
         phi1 = math.atan2(*(points[1] - points[0])[[2, 1]])
@@ -393,6 +400,31 @@ def planned_protocol(arm: Arm26, duration_s: float = 120.0, optimise: bool = Tru
     return plan_protocol(request).trajectory
 
 
+@dataclass(frozen=True)
+class TrunkTilted:
+    """``trajectory`` (angles relative to an upright trunk) with the trunk tilted by ``tilt_rad``: the same joint
+    angles relative to the trunk, the shoulder's world angle turned by the tilt."""
+
+    trajectory: JointTrajectory
+    tilt_rad: float
+
+    @property
+    def n_joints(self) -> int:
+        return int(self.trajectory.n_joints)
+
+    @property
+    def peak_speed_rad_s(self) -> tuple[float, ...]:
+        return tuple(self.trajectory.peak_speed_rad_s)
+
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
+        q = np.array(self.trajectory.angles_rad(t_s), dtype=np.float64)
+        q[..., 0] += self.tilt_rad
+        return q
+
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray:
+        return np.asarray(self.trajectory.velocities_rad_s(t_s), dtype=np.float64)
+
+
 def accelerations_rad_s2(trajectory: JointTrajectory, t_s: np.ndarray, step_s: float = 1e-3) -> np.ndarray:
     """(N, n) joint accelerations by central differences of the trajectory's analytic velocities, rad/s^2."""
     return (trajectory.velocities_rad_s(t_s + step_s) - trajectory.velocities_rad_s(t_s - step_s)) / (2.0 * step_s)
@@ -532,8 +564,10 @@ def write_bag(out_dir: str | Path, run: CellRun, seed: int = 0) -> Path:
 
 
 def _passive_truth(arm: Arm26, q: np.ndarray) -> dict[str, dict[str, Any]]:
-    """Per joint: the passive curve over the path's range (the other joint at its mean) and its coupling."""
+    """Per joint: the passive curve over the path's range (the other joint at its mean) and its coupling; the
+    shoulder's angles relative to the trunk (CONTRACT world angle minus the trunk's tilt), as the estimate's."""
     mean, low, high = q.mean(axis=0), q.min(axis=0), q.max(axis=0)
+    relative = np.array([arm.options.trunk_tilt_rad, 0.0])
     out = {}
     for j, name in enumerate(JOINTS):
         other = 1 - j
@@ -549,10 +583,12 @@ def _passive_truth(arm: Arm26, q: np.ndarray) -> dict[str, dict[str, Any]]:
         around[1, other] += step
         slope = np.diff(arm.passive_moment_nm(around)[:, j])[0] / (2.0 * step)
         out[name] = {
-            "passive_curve": {"angle_deg": np.degrees(grid).tolist(), "moment_nm": curves[1].tolist()},
+            "passive_curve": {"angle_deg": np.degrees(grid - relative[j]).tolist(), "moment_nm": curves[1].tolist()},
             "passive_coupling": {
                 "other_joint": JOINTS[other],
-                "other_angle_deg": np.degrees([low[other], mean[other], high[other]]).tolist(),
+                "other_angle_deg": np.degrees(
+                    np.array([low[other], mean[other], high[other]]) - relative[other]
+                ).tolist(),
                 "moment_nm": [c.tolist() for c in curves],
                 "slope_nm_per_rad_of_other": float(slope),
             },
@@ -582,6 +618,7 @@ def truth_dict(
     simulation = {
         "cell": "opensim arm26 (test/physics/opensim_cell.py)",
         "gravity_m_s2": arm.options.gravity_m_s2,
+        "trunk_tilt_deg": math.degrees(arm.options.trunk_tilt_rad),
         **{k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(options).items()},
     }
     truth = SessionTruth(subject, PassiveTruth(coulomb_nm=(0.0, 0.0)), trajectory, simulation).to_dict()

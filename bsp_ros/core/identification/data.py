@@ -38,6 +38,7 @@ class IdentificationData:
         recording with the trunk tilted turns gravity relative to the arm while the passive moments follow the
         joint angles: the shoulder's passive angle is ``q_1 - trunk`` (:attr:`passive_q_rad`), gravity and
         the geometry keep ``q_rad``.
+    recording_index : (N,) which recording each sample came from (0, 1, ...), None: one recording.
     """
 
     t_ns: np.ndarray
@@ -54,6 +55,7 @@ class IdentificationData:
     qdd_rad_s2: np.ndarray | None = None
     contact_from_robot: bool = False
     trunk_rad: np.ndarray | None = None
+    recording_index: np.ndarray | None = None
 
     @property
     def n_joints(self) -> int:
@@ -87,6 +89,7 @@ class IdentificationData:
             None if self.qdd_rad_s2 is None else self.qdd_rad_s2[start:stop],
             self.contact_from_robot,
             None if self.trunk_rad is None else self.trunk_rad[start:stop],
+            None if self.recording_index is None else self.recording_index[start:stop],
         )
 
 

@@ -106,4 +106,5 @@ def combine_recordings(
         np.concatenate([r.qdd_rad_s2 for r in ordered]) if with_rates else None,
         robot == {True},
         trunk if tilts.any() else None,
+        np.concatenate([np.full(r.t_ns.size, k) for k, r in enumerate(ordered)]),
     )

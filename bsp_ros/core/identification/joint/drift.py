@@ -12,24 +12,41 @@ from bsp_ros.core.model import contact_jacobian
 
 
 def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> list[str]:
-    """A wrench offset that changes linearly over the session (an F/T sensor drifting with temperature):
-    the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x)."""
+    """A wrench offset that changes linearly over each recording (an F/T sensor drifting with temperature):
+    the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x), one set per
+    recording (recordings minutes apart are not one line: between them the sensor may have been re-tared, and a
+    second posture's different misfit would pass for a drift across the gap)."""
     n = data.n_joints
-    t_s = (data.t_ns - data.t_ns[data.t_ns.size // 2]) / 1e9
     jacobian = contact_jacobian(data.q_rad, data.lengths_m)  # (N, 3, n)
-    extra = -np.transpose(jacobian, (0, 2, 1)) * t_s[:, None, None]  # (N, n, 3)
-    axes = [k for k, axis in enumerate(("fy", "fz", "mx")) if np.linalg.norm(extra[:, :, k]) > 0]
-    names: list[ParameterName] = [(f"drift_{('fy', 'fz', 'mx')[k]}", "sensor") for k in axes]
-    p_value, shift, worst, wide = term_test(problem, fit, extra[:, :, axes], names, list(range(n)))
+    groups = (
+        [np.arange(data.t_ns.size)]
+        if data.recording_index is None
+        else [np.flatnonzero(data.recording_index == k) for k in np.unique(data.recording_index)]
+    )
+    t_s = np.zeros((len(groups), data.t_ns.size))
+    spans_s = np.zeros(len(groups))
+    for k, rows in enumerate(groups):
+        t_s[k, rows] = (data.t_ns[rows] - data.t_ns[rows[rows.size // 2]]) / 1e9
+        spans_s[k] = (data.t_ns[rows[-1]] - data.t_ns[rows[0]]) / 1e9
+    # (N, n, 3 K): per recording, the torques of a unit drift rate along world y, z and x.
+    extra = np.concatenate([-np.transpose(jacobian, (0, 2, 1)) * t[:, None, None] for t in t_s], axis=2)
+    columns = [c for c in range(extra.shape[2]) if np.linalg.norm(extra[:, :, c]) > 0]
+    label = ("fy", "fz", "mx")
+    names: list[ParameterName] = [
+        (f"drift_{label[c % 3]}" + (f"_{c // 3 + 1}" if len(groups) > 1 else ""), "sensor") for c in columns
+    ]
+    p_value, shift, worst, wide = term_test(problem, fit, extra[:, :, columns], names, list(range(n)))
     if p_value >= MODEL_CHECK_P:
         return []
-    rate = np.zeros(3)
-    rate[axes] = wide.values[len(problem.names) :]
-    span_s = float(t_s[-1] - t_s[0])
+    flat_rate = np.zeros(extra.shape[2])
+    flat_rate[columns] = wide.values[len(problem.names) :]
+    rate = flat_rate.reshape(len(groups), 3)  # per recording, along world y, z and x
     # A drifting sensor's offset at any moment is unknown (a tare holds at the moment it was taken): what the
-    # offset changes over the session alone moves the static moments by this much, as a constant offset would.
+    # offset changes over each recording alone moves the static moments by this much, as a constant offset would.
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    delta_torque = -np.einsum("tki,k->ti", jacobian, rate * span_s)
+    delta_torque = np.zeros_like(data.tau_nm)
+    for k, rows in enumerate(groups):
+        delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
     delta = np.linalg.lstsq(fit.design, np.einsum("tip,ti,ti->p", problem.regressor, w, delta_torque), rcond=None)[0]
     std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
     offset_shift = np.abs(delta[:n]) / std
@@ -37,9 +54,12 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> list[st
         return []
     if offset_shift.max() > shift:
         shift, worst = float(offset_shift.max()), int(np.argmax(offset_shift))
-    force_rate = float(np.hypot(rate[0], rate[1]))
+    force_rates = np.hypot(rate[:, 0], rate[:, 1])
+    k = int(np.argmax(force_rates))
+    where = f" in recording {k + 1}" if len(groups) > 1 else " during the session"
     return [
-        f"the wrench drifts during the session (an F/T sensor offset changing by about {1e3 * force_rate:.2g} mN/s, "
-        f"{force_rate * span_s:.2g} N over {span_s:.0f} s): that moves the {problem.names[worst][1]} static moment "
-        f"by {shift:.1f} std, and no tare holds for the whole session; let the sensor warm up, re-tare and record again"
+        f"the wrench drifts{where} (an F/T sensor offset changing by about {1e3 * force_rates[k]:.2g} mN/s, "
+        f"{force_rates[k] * spans_s[k]:.2g} N over {spans_s[k]:.0f} s): that moves the {problem.names[worst][1]} "
+        "static moment by {:.1f} std, and no tare holds for the whole session; let the sensor warm up, re-tare and "
+        "record again".format(shift)
     ]
