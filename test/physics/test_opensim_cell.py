@@ -195,17 +195,23 @@ def test_a_tilted_trunk_turns_only_gravity() -> None:
     assert np.abs(tilted.gravity_torque_nm(q_tilted) - upright.gravity_torque_nm(q)).max() > 0.5  # it did turn
 
 
-def test_two_postures_of_arm26_separate_its_two_joint_muscles_from_gravity(tmp_path: Path) -> None:
-    # Passive moments 10 % of gravity on arm26's planned ranges (elevation 42-70 deg): upright alone the shoulder's
-    # elastic terms are collinear with gravity (invalid, the upper arm "at its bound"); with the trunk tilted by
-    # 25 deg for a second recording, `bsp identify` gets both static moments. A drift check drawn across the
-    # gap between the recordings made this invalid ("the wrench drifts ... 0.76 N over 659 s").
+@pytest.mark.parametrize("protocol", ["planned", "paper"])
+def test_two_postures_of_arm26_separate_its_two_joint_muscles_from_gravity(tmp_path: Path, protocol: str) -> None:
+    # Passive moments 10 % of gravity. On arm26's planned ranges (elevation 42-70 deg) one posture leaves the
+    # shoulder's elastic terms collinear with gravity (invalid, the upper arm "at its bound"); with the trunk
+    # tilted by 25 deg for a second recording `bsp identify` gets both static moments. A drift check drawn across
+    # the gap between the recordings made this invalid ("the wrench drifts ... 0.76 N over 659 s"). On the
+    # paper's protocol the elbow's passive curve came out 7 % off at 5-9 of its std: the planar model's error of
+    # arm26's oblique arm, which the curves' std now holds (the markers' lateral excursion).
     bags = []
-    planned = cell.planned_protocol(cell.Arm26(), 60.0)  # bsp_ros.core.planning's plan (a few seconds)
+    if protocol == "planned":
+        motion = cell.planned_protocol(cell.Arm26(), 60.0)  # bsp_ros.core.planning's plan (a few seconds)
+    else:
+        motion = cell.PAPER_PROTOCOL
     for k, tilt_deg in enumerate((0.0, 25.0)):
         tilt = math.radians(tilt_deg)
         arm = cell.Arm26(cell.CellOptions(force_scale=cell.force_scale_for_share(0.1), trunk_tilt_rad=tilt))
-        trajectory = cell.TrunkTilted(planned, tilt) if tilt else planned
+        trajectory = cell.TrunkTilted(motion, tilt) if tilt else motion
         options = cell.SessionOptions(duration_s=60.0, seed=5 + k, start_ns=cell.DEFAULT_START_NS + k * 600 * 10**9)
         bags.append(cell.write_bag(tmp_path / f"posture_{k}", cell.run_cell(arm, trajectory, options), seed=5 + k))
     truth = json.loads((bags[0] / "truth.json").read_text())
@@ -219,3 +225,16 @@ def test_two_postures_of_arm26_separate_its_two_joint_muscles_from_gravity(tmp_p
         q, true = estimate["segments"][segment]["static_moment_kgm"], truth["segments"][segment]["static_moment_kgm"]
         assert abs(q["value"] - true) < 3.0 * q["std"], (segment, q, true)
         assert abs(q["value"] - true) < 0.03 * true, (segment, q, true)
+    curves = 0
+    for joint in cell.JOINTS:
+        curve = estimate["joints"][joint].get("passive_curve")
+        if not curve:
+            continue
+        true_curve = truth["joints"][joint]["passive_curve"]
+        angle = np.asarray(curve["angle_deg"])
+        inside = (angle >= min(true_curve["angle_deg"])) & (angle <= max(true_curve["angle_deg"]))
+        reference = np.interp(angle[inside], true_curve["angle_deg"], true_curve["moment_nm"])
+        z = np.abs(np.asarray(curve["moment_nm"])[inside] - reference) / np.asarray(curve["std_nm"])[inside]
+        assert z.max() < 3.0, (joint, z.max())
+        curves += 1
+    assert curves == 2  # the default model fell back to the elastic family, which reports the curves

@@ -7,9 +7,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
+from bsp_ros.core.identification.planarity import out_of_plane_fraction
 from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_markers, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
-from bsp_ros.core.streams import Session, WrenchSeries
+from bsp_ros.core.streams import Session, WrenchSeries, markers_for
 from bsp_ros.errors import DataError, InputError
 
 
@@ -39,6 +40,8 @@ class IdentificationData:
         joint angles: the shoulder's passive angle is ``q_1 - trunk`` (:attr:`passive_q_rad`), gravity and
         the geometry keep ``q_rad``.
     recording_index : (N,) which recording each sample came from (0, 1, ...), None: one recording.
+    out_of_plane : (n,) each segment's lateral excursion as a fraction of its length (the planar model's error
+        of its gravity torque), None where the markers' lateral coordinates are not known (live).
     """
 
     t_ns: np.ndarray
@@ -56,6 +59,7 @@ class IdentificationData:
     contact_from_robot: bool = False
     trunk_rad: np.ndarray | None = None
     recording_index: np.ndarray | None = None
+    out_of_plane: np.ndarray | None = None
 
     @property
     def n_joints(self) -> int:
@@ -90,6 +94,7 @@ class IdentificationData:
             self.contact_from_robot,
             None if self.trunk_rad is None else self.trunk_rad[start:stop],
             None if self.recording_index is None else self.recording_index[start:stop],
+            self.out_of_plane,
         )
 
 
@@ -179,7 +184,8 @@ def identification_data_from_session(
     n_wrench = int(np.asarray(session.wrench.t_ns).size)
     if n_wrench == 0:
         raise DataError("the session holds no wrench samples")
-    kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, kinematics_config)
+    chain = chain_markers(session)
+    kinematics = kinematics_from_markers(chain, session.n_segments, kinematics_config)
     rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
     keep, notes, removed = _clean_wrench(session.wrench)
     removed.update({f"marker_{name}": count for name, count in kinematics.n_frames_rejected.items()})
@@ -217,4 +223,5 @@ def identification_data_from_session(
         qd,
         qdd,
         session.handle_pose is not None,
+        out_of_plane=out_of_plane_fraction(chain, markers_for(session.n_segments)),
     )

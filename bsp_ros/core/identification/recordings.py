@@ -107,4 +107,5 @@ def combine_recordings(
         robot == {True},
         trunk if tilts.any() else None,
         np.concatenate([np.full(r.t_ns.size, k) for k, r in enumerate(ordered)]),
+        np.max([r.out_of_plane for r in ordered], axis=0) if all(r.out_of_plane is not None for r in ordered) else None,
     )
