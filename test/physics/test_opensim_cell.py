@@ -36,6 +36,14 @@ def _model_gravity_nm(truth: dict, q_rad: np.ndarray) -> np.ndarray:
     return gravity_regressor(q_rad) @ beta + gravity_regressor(q_rad + np.array([math.pi / 2, 0.0])) @ gamma
 
 
+def _curve_z(curve: dict, true_curve: dict) -> np.ndarray:
+    """|estimate - truth| / std at the estimated passive curve's points inside the truth curve's range."""
+    angle = np.asarray(curve["angle_deg"])
+    inside = (angle >= min(true_curve["angle_deg"])) & (angle <= max(true_curve["angle_deg"]))
+    reference = np.interp(angle[inside], true_curve["angle_deg"], true_curve["moment_nm"])
+    return np.abs(np.asarray(curve["moment_nm"])[inside] - reference) / np.asarray(curve["std_nm"])[inside]
+
+
 def test_planar_arm26_statics_match_our_model() -> None:
     arm = cell.Arm26(cell.CellOptions(muscles=False, planar=True, inertia=False))
     run = cell.run_cell(arm, cell.PAPER_PROTOCOL, cell.SessionOptions(duration_s=25.0, physics_hz=2.0))
@@ -171,11 +179,7 @@ def test_a_passive_curve_the_posture_cannot_identify_carries_that_in_its_std(tmp
         curve = estimate["joints"][joint].get("passive_curve")
         if not estimate["quality"]["valid"] or curve is None:
             continue
-        true_curve = truth["joints"][joint]["passive_curve"]
-        angle = np.asarray(curve["angle_deg"])
-        inside = (angle >= min(true_curve["angle_deg"])) & (angle <= max(true_curve["angle_deg"]))
-        reference = np.interp(angle[inside], true_curve["angle_deg"], true_curve["moment_nm"])
-        z = np.abs(np.asarray(curve["moment_nm"])[inside] - reference) / np.asarray(curve["std_nm"])[inside]
+        z = _curve_z(curve, truth["joints"][joint]["passive_curve"])
         assert z.max() < 3.0, (joint, z.round(2).tolist())
 
 
@@ -230,11 +234,7 @@ def test_two_postures_of_arm26_separate_its_two_joint_muscles_from_gravity(tmp_p
         curve = estimate["joints"][joint].get("passive_curve")
         if not curve:
             continue
-        true_curve = truth["joints"][joint]["passive_curve"]
-        angle = np.asarray(curve["angle_deg"])
-        inside = (angle >= min(true_curve["angle_deg"])) & (angle <= max(true_curve["angle_deg"]))
-        reference = np.interp(angle[inside], true_curve["angle_deg"], true_curve["moment_nm"])
-        z = np.abs(np.asarray(curve["moment_nm"])[inside] - reference) / np.asarray(curve["std_nm"])[inside]
+        z = _curve_z(curve, truth["joints"][joint]["passive_curve"])
         assert z.max() < 3.0, (joint, z.max())
         curves += 1
     assert curves == 2  # the default model fell back to the elastic family, which reports the curves

@@ -240,6 +240,10 @@ def _residual_gain(q_rad: np.ndarray, lengths: np.ndarray, beta: np.ndarray) -> 
     return gain
 
 
+# Evaluation grid of a reported prediction, Hz (sums are scaled to the wrench and marker rates).
+PREDICTION_GRID_HZ = 10.0
+
+
 def predict_covariance(
     trajectory: Trajectory,
     duration_s: float,
@@ -247,7 +251,7 @@ def predict_covariance(
     passive: PassiveModel,
     noise: NoiseSpec | None = None,
     config: JointConfig | None = None,
-    grid_hz: float = 10.0,
+    grid_hz: float = PREDICTION_GRID_HZ,
     kinematics: KinematicsConfig | None = None,
     trunk_tilts_rad: Sequence[float] = (0.0,),
 ) -> Prediction:
@@ -301,9 +305,9 @@ def predict_covariance(
         postures.append(
             _posture_information(world, q, velocity, passive, lengths, beta, noise, config, kinematics, grid)
         )
-    design = sum(posture[0] for posture in postures[1:]) + postures[0][0]
-    long_run = sum(posture[1] for posture in postures[1:]) + postures[0][1]
-    rows_total = sum(posture[2].sum(axis=0) for posture in postures)
+    design = np.sum([posture[0] for posture in postures], axis=0)
+    long_run = np.sum([posture[1] for posture in postures], axis=0)
+    rows_total = np.sum([posture[2].sum(axis=0) for posture in postures], axis=0)
     names = parameter_names(n, passive)
     # The elastic terms' priors are information the estimator adds (pseudo-observations of variance 1 / P).
     precision = np.diag(elastic_prior_precision(names))

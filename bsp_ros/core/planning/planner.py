@@ -12,7 +12,13 @@ from scipy.optimize import differential_evolution
 from bsp_ros.core.anthropometry import segment_norm
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import check_lengths_m, gravity_regressor, static_moments_kgm
-from bsp_ros.core.planning.information import NoiseSpec, NominalArm, Prediction, predict_covariance
+from bsp_ros.core.planning.information import (
+    PREDICTION_GRID_HZ,
+    NoiseSpec,
+    NominalArm,
+    Prediction,
+    predict_covariance,
+)
 from bsp_ros.core.planning.safety import JointLimits, check_reachable, check_trajectory_within, usable_elbow_range_deg
 from bsp_ros.core.planning.trajectory import PlannedTrajectory
 from bsp_ros.core.streams import joints_for, segments_for
@@ -316,6 +322,20 @@ def plan_protocol(request: PlanRequest, grid_hz: float = 2.0) -> Plan:
     return min(plans, key=lambda plan: _objective_value(plan.prediction, request.objective))
 
 
+def _predict(request: PlanRequest, trajectory: PlannedTrajectory, grid_hz: float = PREDICTION_GRID_HZ) -> Prediction:
+    """:func:`predict_covariance` of ``trajectory`` for the request's session, arm, model, noise and postures
+    (``grid_hz``: the optimiser's coarser grid, or the reported prediction's)."""
+    return predict_covariance(
+        trajectory,
+        request.duration_s,
+        request.nominal,
+        request.passive,
+        request.noise,
+        grid_hz=grid_hz,
+        trunk_tilts_rad=request.trunk_tilts_rad,
+    )
+
+
 def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     """One plan with ``k_points`` operating points.
 
@@ -358,15 +378,7 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
             trajectory = build(unit)
         except InfeasiblePlanError as error:
             return _INFEASIBLE + error.excess_s
-        prediction = predict_covariance(
-            trajectory,
-            request.duration_s,
-            request.nominal,
-            request.passive,
-            request.noise,
-            grid_hz=grid_hz,
-            trunk_tilts_rad=request.trunk_tilts_rad,
-        )
+        prediction = _predict(request, trajectory, grid_hz)
         value = _objective_value(prediction, request.objective)
         return value if math.isfinite(value) else _INFEASIBLE
 
@@ -382,14 +394,7 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     check_trajectory_within(trajectory, request.limits)
     check_reachable(trajectory, request.nominal.lengths_m, request.shoulder_yz_m)
     centres, amplitudes = decode(best)
-    prediction = predict_covariance(
-        trajectory,
-        request.duration_s,
-        request.nominal,
-        request.passive,
-        request.noise,
-        trunk_tilts_rad=request.trunk_tilts_rad,
-    )
+    prediction = _predict(request, trajectory)
     ratio = inertial_torque_ratio(trajectory, request.nominal)
     for joint, share in zip(joints_for(n), ratio, strict=True):
         if share >= QUASI_STATIC_SHARE:

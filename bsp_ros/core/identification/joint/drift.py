@@ -60,6 +60,6 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> list[st
     return [
         f"the wrench drifts{where} (an F/T sensor offset changing by about {1e3 * force_rates[k]:.2g} mN/s, "
         f"{force_rates[k] * spans_s[k]:.2g} N over {spans_s[k]:.0f} s): that moves the {problem.names[worst][1]} "
-        "static moment by {:.1f} std, and no tare holds for the whole session; let the sensor warm up, re-tare and "
-        "record again".format(shift)
+        f"static moment by {shift:.1f} std, and no tare holds for the whole session; let the sensor warm up, re-tare "
+        "and record again"
     ]
