@@ -150,6 +150,10 @@ def test_turning_sensor_timing_and_skin_options_reach_the_bag_and_the_truth(tmp_
         (["--skin-offset", "0.01"], "--skin-offset-mm MM"),
         (["--trajectory", "/nonexistent/plan.json"], "/nonexistent/plan.json"),
         (["--tare", "--sensor-turns"], "--sensor-turns"),
+        (["--trunk-tilt-deg", "95"], "--trunk-tilt-deg"),
+        (["--trunk-tilt-deg", "nan"], "--trunk-tilt-deg"),
+        (["--start-offset-s", "-1"], "--start-offset-s"),
+        (["--tare", "--trunk-tilt-deg", "20"], "--trunk-tilt-deg"),
     ],
 )
 def test_bad_new_options_end_in_one_line_naming_the_option_and_exit_2(

@@ -87,9 +87,13 @@ def test_an_integer_for_a_float_parameter_is_refused_with_a_hint(ros_domain: int
 
 @pytest.mark.parametrize(
     ("param", "needle"),
-    [("marker_jump_name:=knee", "marker_jump_name 'knee'"), ("marker_jump_m:=[0.1, 0.2]", "marker_jump_m")],
+    [
+        ("marker_jump_name:=knee", "marker_jump_name 'knee'"),
+        ("marker_jump_m:=[0.1, 0.2]", "marker_jump_m"),
+        ("hand_marker_offset_mm:=[25.0]", "hand_marker_offset_mm needs 2 offsets"),
+    ],
 )
-def test_a_bad_marker_jump_is_refused_naming_it(param: str, needle: str, ros_domain: int) -> None:
+def test_a_bad_marker_fault_is_refused_naming_it(param: str, needle: str, ros_domain: int) -> None:
     out = subprocess.run(
         [sys.executable, "-m", "bsp_ros.live.nodes.cell_simulator", "--ros-args", "-p", param],
         env=_env(ros_domain),
