@@ -21,7 +21,7 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         "--passive",
         default=None,
         metavar="MODEL",
-        help="passive model: terms joined by + out of coulomb, viscous, offset, stiffness, nonlinear, coupling "
+        help="passive model: terms joined by + out of coulomb, viscous, offset, stiffness, nonlinear, coupling, higher "
         "(e.g. coulomb+offset+stiffness), or auto: the data choose the elastic terms and the std holds the spread "
         "of the models they cannot reject. Default: coulomb, and auto where the data show an elastic passive "
         "moment (a model given here is kept: such data then make the estimate invalid)",

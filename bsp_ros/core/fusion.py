@@ -174,7 +174,11 @@ PLAUSIBLE_FACTOR = 4.0
 
 
 def implausible_static_moments(
-    subject: SubjectInfo, lengths_m: np.ndarray, beta_kgm: np.ndarray, factor: float = PLAUSIBLE_FACTOR
+    subject: SubjectInfo,
+    lengths_m: np.ndarray,
+    beta_kgm: np.ndarray,
+    factor: float = PLAUSIBLE_FACTOR,
+    beta_std_kgm: np.ndarray | None = None,
 ) -> list[str]:
     """What is physically implausible in identified static moments, judged against the anthropometric prior.
 
@@ -184,6 +188,8 @@ def implausible_static_moments(
     lengths_m : (n,) segment lengths (m).
     beta_kgm : (n,) identified static moments (kg m).
     factor : a static moment below ``1/factor`` or above ``factor`` times the prior's is implausible.
+    beta_std_kgm : (n,) their std (kg m): a value whose 3 std reach into the plausible range is not implausible
+        (an honest, wide estimate is no evidence of a fault: one posture with the full elastic family).
 
     Returns
     -------
@@ -193,9 +199,12 @@ def implausible_static_moments(
     prior = anthropometric_prior(subject, lengths)
     n = lengths.size
     expected = static_moments_kgm(lengths, prior.mean[:n], prior.mean[n:])
+    std = np.zeros(n) if beta_std_kgm is None else np.nan_to_num(np.asarray(beta_std_kgm, dtype=np.float64))
     problems = []
-    for segment, value, typical in zip(segments_for(n), np.asarray(beta_kgm, dtype=np.float64), expected, strict=True):
-        if not (np.isfinite(value) and typical / factor <= value <= typical * factor):
+    for segment, value, typical, margin in zip(
+        segments_for(n), np.asarray(beta_kgm, dtype=np.float64), expected, 3.0 * std, strict=True
+    ):
+        if not (np.isfinite(value) and typical / factor <= value + margin and value - margin <= typical * factor):
             problems.append(
                 f"implausible {segment} static moment {value:.3g} kgm: the anthropometric prior expects about "
                 f"{typical:.3g} kgm (plausible {typical / factor:.2g} to {typical * factor:.2g})"

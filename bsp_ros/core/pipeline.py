@@ -101,8 +101,9 @@ def identify_data(
         )
         result = identify_joint(data, config)
     if result.valid:
-        _, beta, _ = result.block("static_moment_kgm")
-        implausible = implausible_static_moments(options.subject, data.lengths_m, beta)
+        _, beta, beta_cov = result.block("static_moment_kgm")
+        std = np.sqrt(np.clip(np.diag(beta_cov), 0.0, None))
+        implausible = implausible_static_moments(options.subject, data.lengths_m, beta, beta_std_kgm=std)
         if implausible:
             result.valid = False
             result.message = "; ".join(implausible)

@@ -17,6 +17,11 @@ from bsp_ros.core.streams import joints_for
 # a symmetric stiffness, which is what two-joint muscles crossing both joints give).
 QUADRATIC_KEY = "elastic_quadratic_nm"
 CUBIC_KEY = "elastic_cubic_nm"
+# The elastic potential's next order (``higher``, the shape probe of a nonlinear model, selection.shape_probe):
+# per joint an x^4 moment, per adjacent pair the gradients of x_a^3 x_b, x_a^2 x_b^2 and x_a x_b^3 (Nm at the
+# range edges, in the distal joint's row for the first two, the proximal's for the last).
+QUARTIC_KEY = "elastic_quartic_nm"
+COUPLING_HIGHER_KEYS = ("coupling_31_nm", "coupling_22_nm", "coupling_13_nm")
 COUPLING_KEY = "coupling_nm_per_rad"
 # With both terms, the two-joint moments also bend: potential terms x_{j-1}^2 x_j and x_{j-1} x_j^2, keyed by the
 # moment they add in joint j's row (resp. joint j-1's) at the range edges (Nm).
@@ -30,6 +35,8 @@ COUPLING_DISTAL_KEY = "coupling_distal_nm"
 ELASTIC_PRIOR_SD = {
     QUADRATIC_KEY: 1.0,
     CUBIC_KEY: 1.0,
+    QUARTIC_KEY: 1.0,
+    **dict.fromkeys(COUPLING_HIGHER_KEYS, 1.0),
     COUPLING_KEY: 2.0,
     COUPLING_PROXIMAL_KEY: 1.0,
     COUPLING_DISTAL_KEY: 1.0,
@@ -82,6 +89,10 @@ def elastic_names(terms: tuple[str, ...], n: int) -> list[ParameterName]:
     if "coupling" in terms and "nonlinear" in terms:
         for joint in joints[1:]:
             names += [(COUPLING_PROXIMAL_KEY, joint), (COUPLING_DISTAL_KEY, joint)]
+    if "higher" in terms:
+        names += [(QUARTIC_KEY, joint) for joint in joints]
+        if "coupling" in terms:
+            names += [(key, joint) for joint in joints[1:] for key in COUPLING_HIGHER_KEYS]
     return names
 
 
@@ -91,8 +102,10 @@ def elastic_columns(q_rad: np.ndarray, terms: tuple[str, ...], reference: Elasti
     Parameters
     ----------
     q_rad : (N, n) joint angles, rad.
-    terms : out of ``nonlinear`` (per joint: ``x^2``, ``x^3`` in its own row) and ``coupling`` (per adjacent
-        pair: ``q_j - c_j`` in row ``j - 1`` and ``q_{j-1} - c_{j-1}`` in row ``j``).
+    terms : out of ``nonlinear`` (per joint: ``x^2``, ``x^3`` in its own row), ``coupling`` (per adjacent
+        pair: ``q_j - c_j`` in row ``j - 1`` and ``q_{j-1} - c_{j-1}`` in row ``j``) and ``higher`` (per joint:
+        ``x^4`` in its own row; with ``coupling``, per adjacent pair the gradients of the potentials
+        ``x_a^3 x_b``, ``x_a^2 x_b^2``, ``x_a x_b^3``).
     reference : centres and half ranges of the normalised angles ``x``.
     """
     n = q_rad.shape[1]
@@ -121,6 +134,21 @@ def elastic_columns(q_rad: np.ndarray, terms: tuple[str, ...], reference: Elasti
             block[:, a, 2 * a] = 2.0 * x[:, a] * x[:, b] * h[b] / h[a]
             block[:, a, 2 * a + 1] = x[:, b] ** 2
             block[:, b, 2 * a + 1] = 2.0 * x[:, a] * x[:, b] * h[a] / h[b]
+        blocks.append(block)
+    if "higher" in terms:
+        block = np.zeros((q_rad.shape[0], n, n))
+        for j in range(n):
+            block[:, j, j] = x[:, j] ** 4
+        blocks.append(block)
+    if "higher" in terms and "coupling" in terms:
+        h = reference.half_range_rad
+        block = np.zeros((q_rad.shape[0], n, 3 * (n - 1)))
+        for j in range(1, n):
+            a, b, c = j - 1, j, 3 * (j - 1)
+            xa, xb = x[:, a], x[:, b]
+            block[:, b, c], block[:, a, c] = xa**3, 3.0 * xa**2 * xb * h[b] / h[a]  # x_a^3 x_b
+            block[:, b, c + 1], block[:, a, c + 1] = xa**2 * xb, xa * xb**2 * h[b] / h[a]  # x_a^2 x_b^2 / 2
+            block[:, a, c + 2], block[:, b, c + 2] = xb**3, 3.0 * xa * xb**2 * h[a] / h[b]  # x_a x_b^3
         blocks.append(block)
     if not blocks:
         return np.zeros((q_rad.shape[0], n, 0))

@@ -18,7 +18,9 @@ TERMS = {
 }
 # Elastic terms beyond a linear spring (bsp_ros.core.identification.elastic): a moment nonlinear in the joint's
 # own angle, and the stiffness shared with the proximal joint (two-joint muscles). Both need the linear spring.
-ELASTIC_TERMS = ("nonlinear", "coupling")
+# ``higher`` extends ``nonlinear`` (and ``coupling``) by the elastic potential's next order: not chosen by
+# ``auto``, it probes how far a nonlinear model's estimate hangs on the assumed shape (selection.shape_probe).
+ELASTIC_TERMS = ("nonlinear", "coupling", "higher")
 # What `--passive auto` chooses among, beside the base terms: the elastic family, nested.
 AUTO = "auto"
 AUTO_FAMILY = (
@@ -53,6 +55,8 @@ class PassiveModel:
         for term in ELASTIC_TERMS:
             if term in self.terms and "stiffness" not in self.terms:
                 raise InputError(f"a {term} term extends the linear spring: it needs 'offset+stiffness' too")
+        if "higher" in self.terms and "nonlinear" not in self.terms:
+            raise InputError("a higher term extends the nonlinear one: it needs 'nonlinear' too")
         if not any(term in ("coulomb", "viscous", "offset") for term in self.terms):
             raise InputError(f"a passive model needs 'coulomb', 'viscous' or 'offset', got {'+'.join(self.terms)}")
 

@@ -36,10 +36,11 @@ class Candidate:
 
 @dataclass(frozen=True)
 class Selection:
-    """The chosen model (smallest criterion) and every candidate."""
+    """The chosen model (smallest criterion), every candidate, and the chosen model's shape probe (if any)."""
 
     chosen: Candidate
     candidates: list[Candidate]
+    probe: Candidate | None = None
 
     def to_dict(self) -> dict[str, dict[str, float]]:
         """``{label: {"criterion", "weight", "p_value", "rejected"}}`` for ``diagnostics.passive_selection``."""
@@ -47,6 +48,13 @@ class Selection:
             c.model.label: {"criterion": c.criterion, "weight": c.weight, "p_value": c.p_value, "rejected": c.rejected}
             for c in self.candidates
         }
+
+    @property
+    def open_models(self) -> list[Candidate]:
+        """The models whose estimates the chosen one's std must cover: the candidates the data cannot reject, and
+        the shape probe."""
+        others = [c for c in self.candidates if c is not self.chosen and not c.rejected and c.fit is not None]
+        return others + ([self.probe] if self.probe is not None else [])
 
 
 def select_passive(
@@ -102,12 +110,32 @@ def select_passive(
             problem = build_problem(data, candidate, rows, widths, extras)
             fit = fit_problem(problem)
         candidates.append(Candidate(candidate, problem, fit, float(criterion[i]), float(weight[i]), p_values[i]))
-    return Selection(candidates[best], candidates)
+    chosen = candidates[best]
+    return Selection(chosen, candidates, shape_probe(data, chosen, rows, widths, extras))
+
+
+def shape_probe(
+    data: IdentificationData, chosen: Candidate, rows: np.ndarray, widths: np.ndarray | None, extras: Extras | None
+) -> Candidate | None:
+    """The chosen nonlinear model with the elastic potential's next order (``higher``), fitted: nothing above
+    the richest candidate tests how far its estimate hangs on the assumed shape of the passive curves.
+
+    Around one posture a polynomial in the joint angles mimics gravity's cosine, so the static moments are told
+    from the passive moments by curvature alone; a true curve (a muscle's exponential) that the polynomial
+    follows closely but not exactly then moves them by several of their std (arm26 at 10 % of gravity, one
+    posture: forearm +116 % at 4 std). The probe's shift joins the std; with a second posture it is small.
+    """
+    if "nonlinear" not in chosen.model.terms or "higher" in chosen.model.terms:
+        return None
+    model = chosen.model.with_terms(("higher",))
+    problem = build_problem(data, model, rows, widths, extras)
+    return Candidate(model, problem, fit_problem(problem), 0.0, 0.0, 1.0)
 
 
 def spread_covariance(selection: Selection) -> tuple[np.ndarray, np.ndarray]:
     """What the model choice leaves uncertain: per parameter of the chosen model, the largest squared difference
-    to the estimate of any candidate the data cannot reject (the richest one included), as a diagonal
+    to the estimate of any candidate the data cannot reject (the richest one included) or of the shape probe
+    (with the probe's variance beyond the chosen fit's), as a diagonal
     covariance (p, p), and that difference in units of the chosen fit's std (p,), for the warnings.
 
     A static moment is trusted only as far as it is stable across the passive models the data leave open:
@@ -120,12 +148,17 @@ def spread_covariance(selection: Selection) -> tuple[np.ndarray, np.ndarray]:
     p = len(names)
     spread = np.zeros(p)
     std = np.sqrt(np.clip(np.diag(chosen.fit.covariance), 1e-300, None))
-    for candidate in selection.candidates:
-        if candidate is chosen or candidate.rejected or candidate.fit is None or candidate.problem is None:
-            continue
+    for candidate in selection.open_models:
+        assert candidate.fit is not None and candidate.problem is not None
         theirs = {name: i for i, name in enumerate(candidate.problem.names)}
         shared = [i for i, name in enumerate(names) if name in theirs]
         d = np.zeros(p)
-        d[shared] = candidate.fit.values[[theirs[names[i]] for i in shared]] - chosen.fit.values[shared]
+        picks = [theirs[names[i]] for i in shared]
+        d[shared] = candidate.fit.values[picks] - chosen.fit.values[shared]
+        if candidate is selection.probe:
+            # The probe's own std too, where larger: with the next order free, the curvature that told the static
+            # moments from the passive moments may be gone (one posture), and the std says so.
+            excess = np.diag(candidate.fit.covariance)[picks] - np.diag(chosen.fit.covariance)[shared]
+            d[shared] = np.sqrt(d[shared] ** 2 + np.clip(excess, 0.0, None))
         spread = np.maximum(spread, d**2)
     return np.diag(spread), np.sqrt(spread) / std

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior, fuse_static_moments
+from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior, fuse_static_moments, implausible_static_moments
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.errors import InputError
 
@@ -77,3 +77,17 @@ def test_without_body_mass_the_prior_is_population_wide_and_says_so() -> None:
 def test_absurd_subject_data_is_refused_with_the_value_named(kwargs, named) -> None:
     with pytest.raises(InputError, match=named):
         SubjectInfo(**kwargs)
+
+
+def test_a_static_moment_is_implausible_only_beyond_its_std() -> None:
+    """Far above the prior's static moment with a small std is a fault (a lost transform); the same value whose
+    3 std reach back into the plausible range is an honest, wide estimate (one posture, full elastic family)."""
+    subject = SubjectInfo(body_mass_kg=70.0, sex="male")
+    lengths = np.array([0.30, 0.27])
+    assert implausible_static_moments(subject, lengths, np.array([1.0, 0.3])) == []
+    high = implausible_static_moments(subject, lengths, np.array([1.0, 3.0]))
+    assert len(high) == 1 and "forearm" in high[0]
+    limit = float(high[0].split(" to ")[1].rstrip(")"))  # the plausible upper limit the message names
+    wide, narrow = (3.0 - limit) / 2.9, (3.0 - limit) / 3.1  # 3 std reach into the range / stop short of it
+    assert implausible_static_moments(subject, lengths, np.array([1.0, 3.0]), beta_std_kgm=np.array([0.0, wide])) == []
+    assert implausible_static_moments(subject, lengths, np.array([1.0, 3.0]), beta_std_kgm=np.array([0.0, narrow]))

@@ -31,9 +31,8 @@ def selection_curves(
     gradients = curve_of(selection.chosen)
     chosen = gradients @ fit.values  # (n, K + 1)
     spread = np.zeros_like(chosen)
-    for candidate in selection.candidates:
-        if candidate.fit is None or candidate is selection.chosen or candidate.rejected:
-            continue
+    for candidate in selection.open_models:
+        assert candidate.fit is not None
         theirs = curve_of(candidate)
         # The candidate's own variance too: a chosen model without elastic terms has a curve of 0 with no variance
         # by assumption, and at one posture a richer candidate's curve level is as uncertain as its confounding

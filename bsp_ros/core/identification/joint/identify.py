@@ -29,7 +29,7 @@ from bsp_ros.core.identification.joint.stribeck import stribeck_check
 from bsp_ros.core.identification.joint.transition import transition_widths
 from bsp_ros.core.identification.priors import implausible_perpendicular_moments
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
-from bsp_ros.core.identification.selection import select_passive, spread_covariance
+from bsp_ros.core.identification.selection import Candidate, Selection, select_passive, shape_probe, spread_covariance
 from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
@@ -138,6 +138,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         assert selection.chosen.problem is not None and selection.chosen.fit is not None
         config = dataclasses.replace(config, passive=selection.chosen.model)
         problem, fit = selection.chosen.problem, selection.chosen.fit
+    chose = selection is not None
+    if selection is None and "nonlinear" in config.passive.terms:
+        # A fixed nonlinear model is probed like a chosen one: its static moments may hang on its assumed shape.
+        fixed = Candidate(config.passive, problem, fit, 0.0, 1.0, 1.0)
+        selection = Selection(fixed, [fixed], shape_probe(data, fixed, rows, widths if widths.any() else None, extras))
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
     n_removed = 0
@@ -197,7 +202,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         for index in np.flatnonzero(model_shift[:n] > 0.5).tolist():
             warnings.append(
                 f"the {problem.names[index][1]} static moment depends on the passive model the data cannot choose "
-                f"between (they differ by up to {model_shift[index]:.1f} of its data std): that spread is in its std"
+                f"between or on the passive curves' assumed shape (they differ by up to {model_shift[index]:.1f} of "
+                "its data std): that spread is in its std"
             )
     reference = ElasticReference.from_angles(data.passive_q_rad)
     curves = selection_curves(data, reference, fit, selection)
@@ -252,7 +258,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             # Which friction law holds at low speed is open; the amplitudes of both join the Coulomb variance.
             covariance[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
         fit = dataclasses.replace(fit, covariance=covariance)
-    if config.check_elastic and selection is None and not problems:
+    if config.check_elastic and not chose and not problems:
         elastic = elastic_check(data, config, problem.rows, fit, widths, extras)
         if elastic and config.elastic_fallback:
             # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
@@ -299,7 +305,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "hac_lags": fit.lags,
             "max_corr_with_gravity": max_corr_with_gravity,
             "passive_model": config.passive.label,
-            "passive_selection": {} if selection is None else selection.to_dict(),
+            "passive_selection": selection.to_dict() if chose and selection is not None else {},
             "passive_curves": curves,
             "elastic_reference": reference.to_dict(),
             "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
