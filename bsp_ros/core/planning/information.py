@@ -297,23 +297,30 @@ def predict_covariance(
     tilts = tuple(float(tilt) for tilt in trunk_tilts_rad)
     if not tilts or not all(abs(tilt) <= np.pi / 2 for tilt in tilts):
         raise InputError(f"trunk tilts must be one or more within +-90 deg, got {np.degrees(tilts).round(1).tolist()}")
+    model = predicted_model(passive)
+    # A nonlinear model's estimate also carries its shape probe's std (identification.selection.shape_probe):
+    # the probe's columns extend the model's, so one pass gives both.
+    probe = model.with_terms(("higher",)) if "nonlinear" in model.terms and "higher" not in model.terms else None
     postures = []
     for tilt in tilts:
         # The same motion relative to the trunk, recorded once per posture: gravity sees the world angles.
         world = q.copy()
         world[:, 0] += tilt
         postures.append(
-            _posture_information(world, q, velocity, passive, lengths, beta, noise, config, kinematics, grid)
+            _posture_information(world, q, velocity, probe or model, lengths, beta, noise, config, kinematics, grid)
         )
-    design = np.sum([posture[0] for posture in postures], axis=0)
-    long_run = np.sum([posture[1] for posture in postures], axis=0)
-    rows_total = np.sum([posture[2].sum(axis=0) for posture in postures], axis=0)
     names = parameter_names(n, passive)
-    # The elastic terms' priors are information the estimator adds (pseudo-observations of variance 1 / P).
-    precision = np.diag(elastic_prior_precision(names))
-    inverse = np.linalg.pinv(design + precision)
-    covariance = inverse @ (long_run + precision) @ inverse
-    covariance = 0.5 * (covariance + covariance.T)
+    p = len(names)
+    design_all = np.sum([posture[0] for posture in postures], axis=0)
+    long_run_all = np.sum([posture[1] for posture in postures], axis=0)
+    rows_total = np.sum([posture[2].sum(axis=0) for posture in postures], axis=0)
+    design, long_run = design_all[:p, :p], long_run_all[:p, :p]
+    covariance = _sandwich(design, long_run, names)
+    if probe is not None:
+        # The estimator adds the probe's std where larger and its shift squared; under the model the shift's
+        # expected square is that same excess variance (nested fits, Hausman 1978): twice the excess in all.
+        wide = _sandwich(design_all, long_run_all, problem_names(probe, n, dynamics=False))[:p, :p]
+        covariance = covariance + np.diag(2.0 * np.clip(np.diag(wide) - np.diag(covariance), 0.0, None))
 
     # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
     norms = np.sqrt(np.clip(np.diag(design), 0.0, None))
@@ -335,6 +342,15 @@ def predict_covariance(
     per_wrench = noise.wrench_hz / grid
     rows_used = {joint: round(per_wrench * rows_total[j]) for j, joint in enumerate(joints_for(n))}
     return Prediction(names, covariance, nominal_values, condition, max_corr, rows_used)
+
+
+def _sandwich(design: np.ndarray, long_run: np.ndarray, names: list[ParameterName]) -> np.ndarray:
+    """The estimator's covariance ``(A + P)^-1 (S + P) (A + P)^-1`` (p, p): the elastic terms' priors are
+    information it adds (pseudo-observations of variance 1 / P)."""
+    precision = np.diag(elastic_prior_precision(names))
+    inverse = np.linalg.pinv(design + precision)
+    covariance = inverse @ (long_run + precision) @ inverse
+    return np.asarray(0.5 * (covariance + covariance.T))
 
 
 def _posture_information(

@@ -120,6 +120,17 @@ def test_predicted_std_matches_the_reported_std_with_every_elastic_term(plan: Pl
     result, _ = _identify(plan.trajectory, seed=3, config=config)
     rows = compare_with_result(prediction, result)
     assert len(rows) == len(result.names) > 20
+    identified = 0
     for row in rows:
-        if row["quantity"] == "static_moment_kgm":
+        if row["quantity"] != "static_moment_kgm":
+            continue
+        predicted, value = float(row["predicted_std"]), abs(float(row["value"]))
+        if predicted < 0.5 * value:
             assert 1 / 1.5 < float(row["ratio"]) < 1.5, row
+            identified += 1
+        else:
+            # Left open by one posture (the upper arm here, 270 % predicted): the size of so wide a std hangs on
+            # the shape probe's fit, within a factor 2.5 of the prediction; both must call it not identified.
+            assert float(row["ratio"]) * predicted > 0.5 * value, row
+            assert 1 / 2.5 < float(row["ratio"]) < 2.5, row
+    assert identified == 2
