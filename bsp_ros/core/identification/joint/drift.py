@@ -1,6 +1,9 @@
-"""Model check: a wrench offset that drifts over the session (an F/T sensor warming up)."""
+"""Model check: a wrench offset that drifts over the session (an F/T sensor warming up), and its model."""
 
 from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -11,11 +14,25 @@ from bsp_ros.core.identification.stacked import Fit, Problem
 from bsp_ros.core.model import contact_jacobian
 
 
-def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> list[str]:
+@dataclass(frozen=True)
+class Drift:
+    """A drift the data show: what to tell the user, and the fit that models it (the problem's parameters only;
+    the drift rates' uncertainty and the unknown offset level's effect in its covariance)."""
+
+    note: str
+    fit: Fit
+
+
+def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift | None:
     """A wrench offset that changes linearly over each recording (an F/T sensor drifting with temperature):
     the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x), one set per
     recording (recordings minutes apart are not one line: between them the sensor may have been re-tared, and a
-    second posture's different misfit would pass for a drift across the gap)."""
+    second posture's different misfit would pass for a drift across the gap).
+
+    A drift that moves the static moments is modelled, not thrown away: the fit with the drift columns
+    replaces ``fit``. Its rate is identified; its level at any moment is not (a tare holds when it was taken,
+    and an offset is collinear with gravity at one posture), so the static moments' shift under an offset as
+    large as the drift over each recording joins their covariance."""
     n = data.n_joints
     jacobian = contact_jacobian(data.q_rad, data.lengths_m)  # (N, 3, n)
     groups = (
@@ -37,7 +54,7 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> list[st
     ]
     p_value, shift, worst, wide = term_test(problem, fit, extra[:, :, columns], names, list(range(n)))
     if p_value >= MODEL_CHECK_P:
-        return []
+        return None
     flat_rate = np.zeros(extra.shape[2])
     flat_rate[columns] = wide.values[len(problem.names) :]
     rate = flat_rate.reshape(len(groups), 3)  # per recording, along world y, z and x
@@ -51,15 +68,19 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> list[st
     std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
     offset_shift = np.abs(delta[:n]) / std
     if max(shift, float(offset_shift.max())) <= MODEL_CHECK_SHIFT_SD:
-        return []
+        return None
     if offset_shift.max() > shift:
         shift, worst = float(offset_shift.max()), int(np.argmax(offset_shift))
     force_rates = np.hypot(rate[:, 0], rate[:, 1])
     k = int(np.argmax(force_rates))
     where = f" in recording {k + 1}" if len(groups) > 1 else " during the session"
-    return [
+    p = len(problem.names)
+    covariance = wide.covariance[:p, :p] + np.outer(delta, delta)
+    modelled = dataclasses.replace(wide, values=wide.values[:p], covariance=covariance, design=wide.design[:p, :p])
+    note = (
         f"the wrench drifts{where} (an F/T sensor offset changing by about {1e3 * force_rates[k]:.2g} mN/s, "
-        f"{force_rates[k] * spans_s[k]:.2g} N over {spans_s[k]:.0f} s): that moves the {problem.names[worst][1]} "
-        f"static moment by {shift:.1f} std, and no tare holds for the whole session; let the sensor warm up, re-tare "
-        "and record again"
-    ]
+        f"{force_rates[k] * spans_s[k]:.2g} N over {spans_s[k]:.0f} s; it would move the {problem.names[worst][1]} "
+        f"static moment by {shift:.1f} std): modelled as a linear drift, with what its unknown level leaves open in "
+        "the std; let the sensor warm up and re-tare for a precise session"
+    )
+    return Drift(note, modelled)

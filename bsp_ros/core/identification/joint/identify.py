@@ -267,7 +267,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
     if config.check_elastic and not problems:
         stribeck = stribeck_check(data, problem, fit, config, widths)
-        unmodelled = drift_check(data, problem, fit) + [f.note for f in stribeck if f.biases_estimate]
+        drift = drift_check(data, problem, fit)
+        if drift is not None:
+            fit = drift.fit
+            warnings.append(drift.note)
+        unmodelled = [f.note for f in stribeck if f.biases_estimate]
         warnings += unmodelled + [f.note for f in stribeck if not f.biases_estimate]
         if unmodelled:
             problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
