@@ -27,12 +27,15 @@ def _reference(rng: np.random.Generator, n: int = 3) -> ElasticReference:
     return ElasticReference.from_angles(q)
 
 
-def test_the_elastic_moments_are_the_gradient_of_a_potential() -> None:
+@pytest.mark.parametrize("terms", [TERMS, (*TERMS, "higher")])
+def test_the_elastic_moments_are_the_gradient_of_a_potential(terms: tuple[str, ...]) -> None:
     """A passive elastic field (muscles, tendons, skin) is conservative: its stiffness matrix d tau_i / d q_j is
-    symmetric. Checked by central differences at random postures for random coefficients."""
+    symmetric. Checked by central differences at random postures for random coefficients; ``higher`` (the shape
+    probe's next order) too."""
     rng = np.random.default_rng(7)
     reference = _reference(rng)
-    theta = rng.normal(size=len(elastic_names(TERMS, 3)))
+    theta = rng.normal(size=len(elastic_names(terms, 3)))
+    assert elastic_columns(reference.centre_rad[None, :], terms, reference).shape[2] == theta.size
     step = 1e-6
     for _ in range(5):
         q = rng.uniform(-1.0, 1.0, size=3)
@@ -40,8 +43,8 @@ def test_the_elastic_moments_are_the_gradient_of_a_potential() -> None:
         for j in range(3):
             dq = np.zeros(3)
             dq[j] = step
-            plus = elastic_columns((q + dq)[None, :], TERMS, reference)[0] @ theta
-            minus = elastic_columns((q - dq)[None, :], TERMS, reference)[0] @ theta
+            plus = elastic_columns((q + dq)[None, :], terms, reference)[0] @ theta
+            minus = elastic_columns((q - dq)[None, :], terms, reference)[0] @ theta
             jacobian[:, j] = (plus - minus) / (2 * step)
         np.testing.assert_allclose(jacobian, jacobian.T, atol=1e-6)
         assert np.abs(jacobian[0, 1]) > 1e-3  # the coupling is really there
