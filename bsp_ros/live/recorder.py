@@ -16,14 +16,12 @@ from bsp_ros import __version__
 from bsp_ros.bag.errors import BagWriteError
 from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, dump_metadata, dump_qos
 from bsp_ros.errors import DataError, InputError, RuntimeBackendError
+from bsp_ros.live.sensor_topics import is_sensor_topic
 
 __all__ = ["RecordReport", "TopicSpec", "offered_profile", "parse_topic_specs", "record", "subscription_qos"]
 
 _LOG = logging.getLogger("bsp_ros.live.recorder")
 
-#: Topics (exact names, or prefixes ending in ``/``) subscribed best effort, so reliable and best-effort
-#: publishers both match.
-SENSOR_TOPIC_PREFIXES: tuple[str, ...] = ("/ft_sensor/wrench", "/mocap/", "/robot/handle_pose")
 DEFAULT_CHUNK_BYTES = 48 * 1024
 DEFAULT_FLUSH_S = 0.25
 _TAKE_N = 256
@@ -63,10 +61,6 @@ def parse_topic_specs(specs: Sequence[str]) -> list[TopicSpec]:
     return out
 
 
-def _is_sensor(topic: str) -> bool:
-    return any(topic == p or (p.endswith("/") and topic.startswith(p)) for p in SENSOR_TOPIC_PREFIXES)
-
-
 def subscription_qos(topic: str, offered: Sequence[tuple[bool, bool]]) -> tuple[bool, bool]:
     """``(reliable, transient_local)`` of the subscription for a topic, as rosbag2 adapts it to publishers.
 
@@ -82,10 +76,10 @@ def subscription_qos(topic: str, offered: Sequence[tuple[bool, bool]]) -> tuple[
         only if every publisher is (``/tf_static`` with no publisher yet: transient-local).
     """
     if offered:
-        reliable = all(r for r, _ in offered) and not _is_sensor(topic)
+        reliable = all(r for r, _ in offered) and not is_sensor_topic(topic)
         durable = all(d for _, d in offered)
     else:
-        reliable = not _is_sensor(topic)
+        reliable = not is_sensor_topic(topic)
         durable = topic == "/tf_static"
     return reliable, durable
 

@@ -20,6 +20,7 @@ from bsp_ros.bag.mcap_scan import ChannelInfo, ScanResult, scan_mcap
 from bsp_ros.bag.metadata import METADATA_FILE, read_metadata
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.runtime.qos import QosSpec
+from bsp_ros.live.sensor_topics import SENSOR_TOPIC_PREFIXES, is_sensor_topic
 
 __all__ = [
     "SENSOR_TOPIC_PREFIXES",
@@ -32,8 +33,6 @@ __all__ = [
 
 _LOG = logging.getLogger("bsp_ros.live.replay")
 
-#: Topics (exact names, or prefixes ending in ``/``) published best effort with the ``sensor_data`` profile.
-SENSOR_TOPIC_PREFIXES: tuple[str, ...] = ("/ft_sensor/wrench", "/mocap/", "/robot/handle_pose")
 #: Writer history of reliable volatile topics: deep, so a fast replay does not overwrite unacknowledged samples.
 RELIABLE_DEPTH = 1000
 _LATCHED_DEPTH_MAX = 1000
@@ -158,7 +157,7 @@ def playback_qos(topic: str, latched: bool, latched_count: int = 1) -> QosSpec:
     """
     if latched:
         return QosSpec(reliable=True, depth=min(max(1, latched_count), _LATCHED_DEPTH_MAX), transient_local=True)
-    if any(topic == p or (p.endswith("/") and topic.startswith(p)) for p in SENSOR_TOPIC_PREFIXES):
+    if is_sensor_topic(topic):
         return QosSpec(reliable=False, depth=5)
     return QosSpec(reliable=True, depth=RELIABLE_DEPTH)
 

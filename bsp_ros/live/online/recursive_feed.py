@@ -7,12 +7,12 @@ import collections
 
 import numpy as np
 
-from bsp_ros.core.dynamics import base_parameters, base_regressor
+from bsp_ros.core.dynamics import base_regressor
 from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.priors import BasePrior, base_prior_for_subject
 from bsp_ros.core.identification.recursive import RecursiveConfig, RecursiveIdentifier
-from bsp_ros.core.model import contact_torques_one_nm
+from bsp_ros.core.model import contact_torques_one_nm, static_moments_kgm
 from bsp_ros.live.online.angle_track import AngleTrack
 from bsp_ros.live.online.guard import StreamGuard
 
@@ -100,7 +100,7 @@ class RecursiveFeed:
         if self._prior is None or np.abs(self._prior[0] - lengths_m).max() > 0.005:
             anthropometric = anthropometric_prior(self.subject, lengths_m)
             masses_kg, com_m = anthropometric.mean[: self.n], anthropometric.mean[self.n :]
-            static_kgm = base_parameters(lengths_m, masses_kg, com_m, np.zeros(self.n))[: self.n]
+            static_kgm = static_moments_kgm(lengths_m, masses_kg, com_m)
             self._prior = (lengths_m.copy(), static_kgm, base_prior_for_subject(self.subject, lengths_m))
         _, prior_static_kgm, prior = self._prior
         # The filter's static moments once they are plausible (an early, unconverged filter can be far off, and

@@ -134,6 +134,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                     f"widths): its Coulomb amplitude is weakly identified, and its std says by how much"
                 )
     selection = None
+    fitted_widths = widths if widths.any() else None
     if config.passive.select:
 
         def with_placement(candidate: Problem, candidate_fit: Fit) -> np.ndarray:
@@ -141,15 +142,16 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 return candidate_fit.covariance
             return candidate_fit.covariance + placement_covariance(data, candidate, candidate_fit, placement_sd_m)
 
-        selection = select_passive(data, config.passive, rows, widths if widths.any() else None, extras, with_placement)
+        selection = select_passive(data, config.passive, rows, fitted_widths, extras, with_placement)
         assert selection.chosen.problem is not None and selection.chosen.fit is not None
         config = dataclasses.replace(config, passive=selection.chosen.model)
         problem, fit = selection.chosen.problem, selection.chosen.fit
-    chose = selection is not None
+    # The models the estimate's std must cover: the data's choice, or a fixed nonlinear model probed like a chosen
+    # one (its static moments may hang on its assumed shape).
+    probed = selection
     if selection is None and "nonlinear" in config.passive.terms:
-        # A fixed nonlinear model is probed like a chosen one: its static moments may hang on its assumed shape.
         fixed = Candidate(config.passive, problem, fit, 0.0, 1.0, 1.0)
-        selection = Selection(fixed, [fixed], shape_probe(data, fixed, rows, widths if widths.any() else None, extras))
+        probed = Selection(fixed, [fixed], shape_probe(data, fixed, rows, fitted_widths, extras))
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
     n_removed = 0
@@ -202,9 +204,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         judged_residual = placement.residual
         placement_sd = np.sqrt(np.clip(np.diag(placement.covariance), 0.0, None))
     model_spread = np.zeros_like(fit.covariance)
-    if selection is not None:
+    if probed is not None:
         # What the choice of passive model leaves open belongs in the std (model-averaged variance).
-        model_spread, model_shift = spread_covariance(selection)
+        model_spread, model_shift = spread_covariance(probed)
         fit = dataclasses.replace(fit, covariance=fit.covariance + model_spread)
         for index in np.flatnonzero(model_shift[:n] > 0.5).tolist():
             warnings.append(
@@ -213,7 +215,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "its data std): that spread is in its std"
             )
     reference = ElasticReference.from_angles(data.passive_q_rad)
-    curves = selection_curves(data, reference, fit, selection)
+    curves = selection_curves(data, reference, fit, probed)
     noise, misfit = misfit_against_noise(fit, judged_residual)
     for j, joint in enumerate(joints):
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
@@ -233,7 +235,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     correlation = correlation_from_covariance(fit.covariance)
     all_std = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
     max_corr_with_gravity = {}
-    unbounded_static_moments: dict[int, np.ndarray] = {}  # fitted once, on the first static moment at its bound
+    unbounded: np.ndarray | None = None  # fitted on the first static moment at its bound, once
     for i, (key, owner) in enumerate(problem.names[: problem.passive_end]):
         if i >= n:
             partner = int(np.argmax(np.abs(correlation[i, :n])))
@@ -251,7 +253,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         std = all_std[i]
         at_bound = np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12
         if at_bound and i < n:
-            own = unbounded_static_moments.setdefault(0, _unbounded_static_moments(problem))[i]
+            if unbounded is None:
+                unbounded = _unbounded_static_moments(problem)
+            own = unbounded[i]
             if own + 3.0 * std < 0.0:
                 problems.append(f"the {owner} static moment sits at its bound 0: the data do not support it")
             else:
@@ -280,7 +284,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             # Which friction law holds at low speed is open; the amplitudes of both join the Coulomb variance.
             covariance[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
         fit = dataclasses.replace(fit, covariance=covariance)
-    if config.check_elastic and not chose and not problems:
+    if config.check_elastic and selection is None and not problems:
         elastic = elastic_check(data, config, problem.rows, fit, widths, extras)
         if elastic and config.elastic_fallback:
             # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
@@ -327,7 +331,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "hac_lags": fit.lags,
             "max_corr_with_gravity": max_corr_with_gravity,
             "passive_model": config.passive.label,
-            "passive_selection": selection.to_dict() if chose and selection is not None else {},
+            "passive_selection": {} if selection is None else selection.to_dict(),
             "passive_curves": curves,
             "elastic_reference": reference.to_dict(),
             "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
