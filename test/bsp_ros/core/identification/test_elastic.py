@@ -70,6 +70,10 @@ def test_elastic_terms_extend_a_linear_spring_only() -> None:
         PassiveModel.parse("automatic")
     assert PassiveModel.parse("auto").select
     assert PassiveModel.parse("auto").candidates()[-1].label == "coulomb+offset+stiffness+nonlinear+coupling"
+    # The shape probe's next order extends the nonlinear terms, never a linear spring alone.
+    with pytest.raises(InputError, match="a higher term extends the nonlinear one: it needs 'nonlinear' too"):
+        PassiveModel.parse("coulomb+offset+stiffness+higher")
+    assert "higher" in PassiveModel.parse("coulomb+offset+stiffness+nonlinear+higher").elastic
 
 
 @pytest.fixture(scope="module")
