@@ -240,18 +240,24 @@ def test_two_postures_of_arm26_separate_its_two_joint_muscles_from_gravity(tmp_p
     assert curves == 2  # the default model fell back to the elastic family, which reports the curves
 
 
+@pytest.fixture(scope="module")
+def planned_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """120 s of one posture's planned protocol, passive moments 10 % of gravity (seed 2), as a bag."""
+    motion = cell.planned_protocol(cell.Arm26(), 120.0)
+    arm = cell.Arm26(cell.CellOptions(force_scale=cell.force_scale_for_share(0.1)))
+    run = cell.run_cell(arm, motion, cell.SessionOptions(duration_s=120.0, seed=2))
+    return cell.write_bag(tmp_path_factory.mktemp("arm26_planned") / "session", run, seed=2)
+
+
 @pytest.mark.parametrize("passive", ["auto", "coulomb+offset+stiffness+nonlinear+coupling"])
 def test_static_moments_that_hang_on_the_passive_curves_shape_carry_it_in_their_std(
-    tmp_path: Path, passive: str
+    planned_bag: Path, tmp_path: Path, passive: str
 ) -> None:
     """One posture, a planned protocol, passive moments 10 % of gravity. The full elastic family (a complete cubic
     potential) follows gravity's potential to third order, so the data tell the forearm's static moment from the
     two-joint muscles only by the curves' assumed shape: before the shape probe it was +116 % at 4.2-4.7 std and
     marked valid (seeds 1 and 2 of bench/musculoskeletal.py). A valid estimate must hold the truth within 3 std."""
-    motion = cell.planned_protocol(cell.Arm26(), 120.0)
-    arm = cell.Arm26(cell.CellOptions(force_scale=cell.force_scale_for_share(0.1)))
-    run = cell.run_cell(arm, motion, cell.SessionOptions(duration_s=120.0, seed=2))
-    bag = cell.write_bag(tmp_path / "session", run, seed=2)
+    bag = planned_bag
     out = tmp_path / "estimate.json"
     bsp_main(["identify", str(bag), "--json", str(out), "--format", "none", "--passive", passive])
     estimate, truth = json.loads(out.read_text()), json.loads((bag / "truth.json").read_text())
