@@ -193,7 +193,11 @@ def _page_css(footer: str) -> str:
 
 
 def render_html(
-    analysis: Analysis, first_png: bytes | None, detail_pngs: Sequence[tuple[str, bytes]], generated: dt.datetime
+    analysis: Analysis,
+    first_png: bytes | None,
+    detail_pngs: Sequence[tuple[str, bytes]],
+    generated: dt.datetime,
+    curves_png: bytes | None = None,
 ) -> str:
     """The report page.
 
@@ -203,7 +207,10 @@ def render_html(
     first_png : the passive-moment trend panels of the first page, None if there are none.
     detail_pngs : ``(title, png)`` of the detail trend groups.
     generated : when the report is made (printed on every page).
+    curves_png : the torque-angle panels (first and latest usable session per joint), None if no curves.
     """
+    from bsp_ros.clinic.report.curve_views import CURVES_CAPTION, CURVES_TITLE
+
     stamp = generated.strftime("%Y-%m-%d %H:%M UTC")
     footer = f"Subject {analysis.subject} · arm assessment · made {stamp}"
     parts = [
@@ -226,6 +233,11 @@ def render_html(
     parts.append(_session_table(analysis, FIRST_PAGE_ROWS, "sessions"))
     parts.append("</section>")
     parts.append("<section id='detail'><h2>Detail: every parameter</h2>")
+    if curves_png is not None:
+        parts.append(
+            f"<h3>{escape(CURVES_TITLE)}</h3><figure id='passive-curves'>{_png(curves_png, CURVES_TITLE)}"
+            f"<figcaption>{escape(CURVES_CAPTION)}</figcaption></figure>"
+        )
     parts.append(_changes_table(analysis))
     for title, png in detail_pngs:
         parts.append(f"<h3>{escape(title)}</h3><figure>{_png(png, title)}</figure>")

@@ -18,6 +18,8 @@ from matplotlib.patches import Rectangle
 from bsp_ros import __version__
 from bsp_ros.clinic.mdc import RETEST_METHOD
 from bsp_ros.clinic.report.analysis import Analysis, Change
+from bsp_ros.clinic.report.curve_plots import curve_panels, draw_curves
+from bsp_ros.clinic.report.curve_views import CURVES_CAPTION, CURVES_TITLE
 from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
 from bsp_ros.clinic.report.panels import arm_names, detail_groups, first_page_panels
 from bsp_ros.clinic.report.plots import Panel, draw_panels
@@ -151,9 +153,26 @@ def _change_text(change: Change | None, unit: str) -> str:
     )
 
 
+def _curves(flow: _Flow, analysis: Analysis) -> None:
+    """The torque-angle panels, three to a row, with their caption."""
+    views, colours, titles = curve_panels(analysis)
+    if not views:
+        return
+    flow.heading(CURVES_TITLE)
+    for start in range(0, len(views), 3):
+        height = 0.235
+        flow.room(height)
+        rect = (LEFT + 0.03, flow.y - height + 0.03, RIGHT - LEFT - 0.03, height - 0.05)
+        part = slice(start, start + 3)
+        draw_curves(flow.page, rect, views[part], colours[part], titles[part])
+        flow.y -= height
+    flow.paragraph(CURVES_CAPTION, 7.5, GREY)
+
+
 def _detail(flow: _Flow, analysis: Analysis) -> None:
     flow.new_page()
     flow.heading("Detail: every parameter", 13.0)
+    _curves(flow, analysis)
     for series in analysis.series:
         latest = series.latest
         if latest is None or series.key[2] == "length_m":

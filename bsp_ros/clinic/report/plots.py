@@ -121,20 +121,13 @@ def draw_panel(axes: Axes, panel: Panel, arm_names: Sequence[str], *, compact: b
         axes.set_xlim(min(times) - pad, max(times) + pad)
 
 
-def draw_panels(
-    figure: Figure,
-    rect: tuple[float, float, float, float],
-    panels: Sequence[Panel],
-    arm_names: Sequence[str],
-    ncols: int = 3,
-) -> None:
-    """Lay ``panels`` out in a grid inside ``rect`` (left, bottom, width, height, figure fractions)."""
-    if not panels:
-        return
-    ncols = min(ncols, len(panels))
-    nrows = -(-len(panels) // ncols)
+def panel_grid(figure: Figure, rect: tuple[float, float, float, float], count: int, ncols: int = 3) -> list[Axes]:
+    """``count`` axes in a grid of ``ncols`` columns inside ``rect`` (left, bottom, width, height, figure
+    fractions), 0.5 in left free under it for tick labels and a legend."""
+    ncols = min(ncols, count)
+    nrows = -(-count // ncols)
     left, bottom, width, height = rect
-    below = 0.5 / figure.get_figheight()  # tick labels and the legend under the grid, 0.5 in
+    below = 0.5 / figure.get_figheight()
     grid = figure.add_gridspec(
         nrows,
         ncols,
@@ -145,13 +138,26 @@ def draw_panels(
         wspace=0.32,
         hspace=0.5,
     )
+    return [figure.add_subplot(grid[i // ncols, i % ncols]) for i in range(count)]
+
+
+def draw_panels(
+    figure: Figure,
+    rect: tuple[float, float, float, float],
+    panels: Sequence[Panel],
+    arm_names: Sequence[str],
+    ncols: int = 3,
+) -> None:
+    """Lay ``panels`` out in a grid inside ``rect`` (left, bottom, width, height, figure fractions)."""
+    if not panels:
+        return
     legend: dict[str, Artist] = {}
-    for i, panel in enumerate(panels):
-        axes = figure.add_subplot(grid[i // ncols, i % ncols])
+    for axes, panel in zip(panel_grid(figure, rect, len(panels), ncols), panels, strict=True):
         draw_panel(axes, panel, arm_names, compact=True)
         handles, labels = axes.get_legend_handles_labels()
         for handle, text in zip(handles, labels, strict=True):
             legend.setdefault(text, handle)
+    left, bottom, width, _ = rect
     if legend:
         figure.legend(
             list(legend.values()),
