@@ -96,7 +96,9 @@ def tare_line(quality: dict[str, Any]) -> str:
         return f"tare: {tare.get('file')} applied (its uncertainty is in the std)"
     percent = [p for p in (quality.get("offset_sensitivity") or {}).get("static_moment_percent", {}).values() if p]
     worst = f": 0.1 N of sensor offset moves a static moment by up to {max(percent):.2g}%" if percent else ""
-    return f"tare: none applied{worst} (bsp tare, then --tare FILE)"
+    zero = tare.get("zero_sd") or {}
+    assumed = f"; the std assumes the sensor's zero within {zero['force_n']:g} N" if zero.get("force_n") else ""
+    return f"tare: none applied{worst}{assumed} (bsp tare, then --tare FILE)"
 
 
 # Problems that mean the recording cannot be used at all (exit 3), as opposed to an estimate of doubtful quality.

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from bsp_ros.cli.argtypes import float_within, positive_float
+from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.errors import InputError
 
 # bsp_ros.core.pipeline.METHODS, spelled out here so the parser needs no scipy.
@@ -63,6 +64,22 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         type=Path,
         metavar="FILE",
         help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
+    )
+    parser.add_argument(
+        "--zero-sd-n",
+        type=float_within(0.0, 100.0),
+        default=ZERO_SD_N,
+        metavar="N",
+        help="without --tare, how far (1 sd per sensor axis) the sensor's zero may be off: the data cannot tell a "
+        "force offset from arm weight, so it is in the std (e.g. 0.2 for a sensor zeroed with the handle on just "
+        f"before the arm was strapped in) (default: {ZERO_SD_N:g})",
+    )
+    parser.add_argument(
+        "--zero-sd-nm",
+        type=float_within(0.0, 10.0),
+        default=ZERO_SD_NM,
+        metavar="NM",
+        help=f"the same for the sensor's moment zero, N m (default: {ZERO_SD_NM:g})",
     )
     parser.add_argument(
         "--wrench-delay-s",
@@ -147,6 +164,8 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
         tare=read_tare(args.tare),
         wrench_delay_s=args.wrench_delay_s,
         handle_pose_sd_m=args.handle_pose_sd_mm / 1000.0,
+        zero_sd_n=args.zero_sd_n,
+        zero_sd_nm=args.zero_sd_nm,
     )
 
 

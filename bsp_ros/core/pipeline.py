@@ -28,6 +28,7 @@ from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import compensate_wrench_delay
 from bsp_ros.core.joint_angles import KinematicsConfig
 from bsp_ros.core.sensor_rotation import rotation_quality
+from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import Session
 from bsp_ros.core.tare import Tare, corrected_session
 from bsp_ros.errors import BspError, InputError
@@ -52,6 +53,9 @@ class IdentifyOptions:
     # Where the data show an elastic passive moment the model lacks, let the data choose the elastic terms
     # (`--passive auto`) instead of returning an invalid estimate: the default when no model was asked for.
     elastic_fallback: bool = True
+    # Without a tare, the sensor's zero is assumed within these (1 SD per sensor axis): in the std (sensitivity.py).
+    zero_sd_n: float = ZERO_SD_N
+    zero_sd_nm: float = ZERO_SD_NM
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -70,6 +74,8 @@ class IdentifyOptions:
             "max_gap_s": self.kinematics.max_gap_s,
             "marker_placement_sd_m": self.marker_placement_sd_m,
             "handle_pose_sd_m": self.handle_pose_sd_m,
+            "zero_sd_n": self.zero_sd_n,
+            "zero_sd_nm": self.zero_sd_nm,
         }
 
     def placement_sd_m(self, data: IdentificationData) -> np.ndarray:
@@ -183,13 +189,14 @@ def identify_recordings(
     refit = refit_options(result, options)
     rotations = [np.asarray(s.rotation_world_from_sensor, dtype=np.float64) for s in prepared]
     rotation = rotations[0] if len(rotations) == 1 else np.concatenate([r.reshape(-1, 3, 3) for r in rotations])
-    offsets = account_for_tare(
+    offsets, _ = account_for_tare(
         result,
         data,
         rotation,
         prepared[0].wrench.frame_id,
         options.tare,
         lambda d: identify_data(d, refit, check_elastic=False),
+        (options.zero_sd_n, options.zero_sd_nm),
     )
     posterior = fuse(result, data, options.subject) if result.valid else None
     info = {

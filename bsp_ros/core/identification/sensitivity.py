@@ -12,17 +12,21 @@ import numpy.typing as npt
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.model import contact_torques_nm
+from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import segments_for
 
 __all__ = [
     "FORCE_STEP_N",
     "REPORTED_OFFSET_N",
     "TORQUE_STEP_NM",
+    "ZERO_SD_N",
+    "ZERO_SD_NM",
     "account_for_tare",
     "add_tare_covariance",
     "offset_sensitivity",
     "offset_torques_nm",
     "tare_quality",
+    "zero_covariance",
 ]
 
 # Finite-difference steps: small enough to stay linear (and off the bounds), far above round-off.
@@ -125,18 +129,26 @@ def add_tare_covariance(result: IdentificationResult, g: np.ndarray, wrench_cova
     return added
 
 
+def zero_covariance(zero_sd_n: float, zero_sd_nm: float) -> np.ndarray:
+    """(6, 6) covariance of an untared sensor's zero: ``zero_sd_n`` (N) per force axis, ``zero_sd_nm`` (Nm) per
+    moment axis, independent."""
+    return np.diag([zero_sd_n**2] * 3 + [zero_sd_nm**2] * 3)
+
+
 def tare_quality(
     result: IdentificationResult,
     g: np.ndarray | None,
     frame_id: str,
     tare_file: str | None,
     added: np.ndarray | None = None,
+    zero_sd: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
     """The ``quality.tare`` and ``quality.offset_sensitivity`` blocks of the estimate document.
 
     ``offset_sensitivity.static_moment_kgm[segment]`` is how much a 0.1 N force offset along the sensor's
     x, y, z moves that static moment (kg m), ``static_moment_percent`` the largest of the three in % of the
-    estimate; ``null`` where the estimate could not be differentiated.
+    estimate; ``null`` where the estimate could not be differentiated. Without a tare, ``tare.zero_sd`` is
+    the assumed zero (``{"force_n", "moment_nm"}``, 1 SD per axis) whose share of the std is ``std_added``.
     """
     n = sum(1 for key, _ in result.names if key == "static_moment_kgm")
     block: dict[str, Any] = {
@@ -158,6 +170,8 @@ def tare_quality(
             float(100.0 * np.abs(change).max() / value) if value > 0 and np.isfinite(value) else None
         )
     tare: dict[str, Any] = {"applied": tare_file is not None, "file": tare_file}
+    if tare_file is None and zero_sd is not None:
+        tare["zero_sd"] = {"force_n": zero_sd[0], "moment_nm": zero_sd[1]}
     if added is not None:
         tare["std_added"] = {
             f"{key}/{owner}": float(np.sqrt(max(added[i, i], 0.0))) for i, (key, owner) in enumerate(result.names)
@@ -172,8 +186,13 @@ def account_for_tare(
     frame_id: str,
     tare: Any,
     refit: Refit,
-) -> dict[str, Any]:
-    """Sensitivity to a sensor offset, and (with a tare) its uncertainty added to ``result`` (in place).
+    zero_sd: tuple[float, float] | None = (ZERO_SD_N, ZERO_SD_NM),
+    g: np.ndarray | None = None,
+) -> tuple[dict[str, Any], np.ndarray | None]:
+    """Sensitivity to a sensor offset, and the uncertainty of the wrench's zero added to ``result`` (in place).
+
+    With a tare, its own uncertainty; without, the assumed ``zero_sd`` (force N, moment Nm; 1 SD per sensor
+    axis; None or zeros: none).
 
     Parameters
     ----------
@@ -183,21 +202,30 @@ def account_for_tare(
     frame_id : the wrench frame.
     tare : the :class:`bsp_ros.core.tare.Tare` applied, or None.
     refit : the estimator, re-run for the finite differences.
+    zero_sd : the untared zero's (force N, moment Nm) 1 SD, see :data:`ZERO_SD_N`.
+    g : (p, 6) the sensitivity, if known (e.g. from an earlier window); computed here when None.
 
     Returns
     -------
-    ``{"tare": {...}, "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
+    quality : ``{"tare": {...}, "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
+    g : the sensitivity used (None if the estimate could not be differentiated).
     """
     from bsp_ros.core.tare import recording_warnings, tare_warnings
 
     rotation = _mean_rotation(np.asarray(rotation_world_from_sensor, dtype=np.float64))
-    g = None
-    if result.valid and np.isfinite(result.values).all():
+    usable = result.valid and np.isfinite(result.values).all()
+    if g is not None and g.shape != (result.values.size, 6):
+        g = None
+    if g is None and usable:
         g, _ = offset_sensitivity(data, rotation, refit)
     added = None
     if tare is not None:
         result.warnings.extend(recording_warnings(tare) + tare_warnings(tare, rotation))
-        if g is not None:
+        if g is not None and usable:
             h = tare.wrench_jacobian(rotation)
             added = add_tare_covariance(result, g, h @ tare.covariance @ h.T)
-    return tare_quality(result, g, frame_id, (tare.file or tare.source or "tare") if tare is not None else None, added)
+    elif g is not None and usable and zero_sd is not None and max(zero_sd) > 0.0:
+        added = add_tare_covariance(result, g, zero_covariance(*zero_sd))
+    source = (tare.file or tare.source or "tare") if tare is not None else None
+    g = g if usable else None
+    return tare_quality(result, g, frame_id, source, added, zero_sd), g

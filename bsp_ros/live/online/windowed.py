@@ -140,6 +140,7 @@ class WindowedIdentifier:
         self.wrench_guard = StreamGuard("wrench")
         self._updates = 0
         self._elastic_warnings: list[str] = []
+        self._zero_g: np.ndarray | None = None
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False
@@ -292,15 +293,22 @@ class WindowedIdentifier:
                         else "the data show an effect the model lacks that biases the estimate (see warnings; "
                         "checked every few updates)"
                     )
-            if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
-                refit = refit_options(result, self.config.options)
-                quality = account_for_tare(
+            quality = None
+            if window.rotation_world_from_sensor is not None:
+                # The sensor zero's share of the std (the tare's, or the assumed zero's): its sensitivity costs
+                # three refits, and over a sliding window it changes slowly, so it is refreshed with the checks.
+                options = self.config.options
+                refit = refit_options(result, options)
+                fresh = self._zero_g is None or (self._updates - 1) % self.config.elastic_check_every == 0
+                quality, self._zero_g = account_for_tare(
                     result,
                     data,
                     window.rotation_world_from_sensor,
                     window.wrench_frame_id,
-                    self.config.options.tare,
+                    options.tare,
                     lambda d: identify_data(d, refit, check_elastic=False),
+                    (options.zero_sd_n, options.zero_sd_nm),
+                    None if fresh else self._zero_g,
                 )
         except BspError as error:
             return self._invalid(str(error), last_wrench)
@@ -322,6 +330,6 @@ class WindowedIdentifier:
             marker_placement_sd_m=self.config.options.placement_sd_m(data),
         )
         document["quality"]["timing"] = parameter_timing(self.config.options.wrench_delay_s)  # the node shifts stamps
-        if self.config.options.tare is not None and window.rotation_world_from_sensor is not None:
+        if quality is not None:
             document["quality"].update(quality)
         return WindowEstimate(document, result.valid, last_wrench)
