@@ -67,12 +67,37 @@ def test_identify_with_a_tare_is_within_half_a_percent(bags, tmp_path) -> None:
 
 
 def test_identify_without_a_tare_says_so_with_the_sensitivity(bags, tmp_path) -> None:
-    out = tmp_path / "e.json"
+    """Untared, the std holds the assumed zero (1 N, 0.02 Nm per axis): its share is G Sigma G^T, at least the
+    force part the sensitivity block shows, and the std without it (--zero-sd-n 0 --zero-sd-nm 0) adds up."""
+    out, bare = tmp_path / "e.json", tmp_path / "bare.json"
     main(["identify", str(bags["session"]), "--json", str(out), "--format", "none"])
-    quality = json.loads(out.read_text())["quality"]
-    assert quality["tare"] == {"applied": False, "file": None}
+    main(
+        [
+            "identify",
+            str(bags["session"]),
+            "--json",
+            str(bare),
+            "--format",
+            "none",
+            "--zero-sd-n",
+            "0",
+            "--zero-sd-nm",
+            "0",
+        ]
+    )
+    estimate, without = json.loads(out.read_text()), json.loads(bare.read_text())
+    quality = estimate["quality"]
+    assert quality["tare"]["applied"] is False and quality["tare"]["file"] is None
+    assert quality["tare"]["zero_sd"] == {"force_n": 1.0, "moment_nm": 0.02}
+    assert "std_added" not in without["quality"]["tare"]
     sensitivity = quality["offset_sensitivity"]
     assert sensitivity["offset_n"] == 0.1 and set(sensitivity["static_moment_kgm"]) == {"upper_arm", "forearm", "hand"}
+    for segment, per_tenth in sensitivity["static_moment_kgm"].items():
+        added = quality["tare"]["std_added"][f"static_moment_kgm/{segment}"]
+        force_part = 10.0 * float(np.linalg.norm(per_tenth))  # 1 N on each sensor axis
+        assert added >= force_part * (1 - 1e-6)
+        std, std_bare = (e["segments"][segment]["static_moment_kgm"]["std"] for e in (estimate, without))
+        assert std**2 == pytest.approx(std_bare**2 + added**2, rel=1e-6), segment
 
 
 def test_tare_of_another_sensor_frame_is_refused(bags, tmp_path, capsys) -> None:

@@ -16,7 +16,7 @@ from bsp_ros.core.identification.sensitivity import (
     tare_quality,
 )
 from bsp_ros.core.model import gravity_regressor
-from bsp_ros.core.pipeline import identify_session
+from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.core.simulation import SensorSpec, human_arm_cell, simulate_cell
 
 
@@ -62,11 +62,29 @@ def test_reported_sensitivity_predicts_what_a_real_offset_does() -> None:
     offset = simulate_cell(human_arm_cell(duration_s=60.0, seed=5, sensor=SensorSpec(force_bias_n=(0.0, 0.0, 0.2))))
     spoiled = identify_session(offset.session)
     block = clean["quality"]["offset_sensitivity"]
-    assert clean["quality"]["tare"] == {"applied": False, "file": None}
+    assert clean["quality"]["tare"]["applied"] is False and clean["quality"]["tare"]["file"] is None
     for segment, entry in clean["segments"].items():
         moved = spoiled["segments"][segment]["static_moment_kgm"]["value"] - entry["static_moment_kgm"]["value"]
         predicted = 2.0 * block["static_moment_kgm"][segment][2]  # per 0.1 N -> 0.2 N along sensor z
         assert moved == pytest.approx(predicted, rel=0.05, abs=1e-5), segment
+
+
+def test_an_untared_handle_is_held_by_the_std_of_the_assumed_zero() -> None:
+    """A 0.3 kg handle left on an untared sensor weighs 2.9 N at the contact point: exactly a point mass there,
+    which no motion tells from the arm (every static moment +0.3 kg x its lever, 27-67 %). Before the zero's
+    assumption (1 N per axis) was in the std, this estimate was valid at |z| 7-9 (bench/realism.py)."""
+    sensor = SensorSpec(handle_mass_kg=0.3, handle_com_m=(0.0, 0.02, 0.05))
+    simulated = simulate_cell(human_arm_cell(duration_s=60.0, seed=0, sensor=sensor))
+    truth = simulated.truth.to_dict()
+    stated = identify_session(simulated.session)
+    bare = identify_session(simulated.session, IdentifyOptions(zero_sd_n=0.0, zero_sd_nm=0.0))
+    z_stated, z_bare = [], []
+    for document, found in ((stated, z_stated), (bare, z_bare)):
+        for segment, entry in document["segments"].items():
+            q = entry["static_moment_kgm"]
+            found.append(abs(q["value"] - truth["segments"][segment]["static_moment_kgm"]) / q["std"])
+    assert stated["quality"]["valid"] and max(z_stated) < 3.0, z_stated
+    assert max(z_bare) > 5.0, z_bare  # the case: without the assumption, far outside its std
 
 
 def test_tare_covariance_adds_g_sigma_g_transpose() -> None:
