@@ -17,6 +17,7 @@ from bsp_ros.core.estimate import invalid_document
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import segments_for
 from bsp_ros.core.tare import Tare, read_tare_file
 from bsp_ros.core.weight_support import live_support
@@ -92,6 +93,16 @@ PARAMETERS = (
         "a `bsp tare` file (bsp_ros/core/tare/1) of this sensor: its offset and handle load are removed from every "
         "wrench and its uncertainty joins the windowed estimate's ('': none, and the estimate says so)",
     ),
+    Param(
+        "zero_sd_n",
+        ZERO_SD_N,
+        "without a tare, how far (1 sd per sensor axis) the sensor's force zero may be off: the data cannot tell a "
+        "force offset from arm weight, so it is in the std (`bsp identify --zero-sd-n`)",
+        "N",
+        lo=0.0,
+        hi=100.0,
+    ),
+    Param("zero_sd_nm", ZERO_SD_NM, "the same for the sensor's moment zero", "N m", lo=0.0, hi=10.0),
     Param(
         "support_fraction",
         0.0,
@@ -185,6 +196,8 @@ class BspIdentifierNode(RosNode):
             tare=self.tare,
             wrench_delay_s=p["wrench_delay_s"],
             elastic_fallback=False,
+            zero_sd_n=p["zero_sd_n"],
+            zero_sd_nm=p["zero_sd_nm"],
         )
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
         self.recursive = RecursiveFeed(self.n, self.options.passive, subject)
