@@ -11,6 +11,7 @@ import numpy.typing as npt
 
 from bsp_ros.core.filters import butter_lowpass_sos, zero_phase_lowpass
 from bsp_ros.core.identification.robust import hampel_outliers, robust_sd
+from bsp_ros.core.motion_band import config_for_motion
 from bsp_ros.core.streams import MarkerSeries, markers_for
 from bsp_ros.errors import DataError, InputError
 from bsp_ros.validation import check_finite_scalar, check_positive
@@ -394,7 +395,9 @@ def kinematics_from_angles(
     step_ns = round(float(np.median(np.diff(stamps))))
     grid_ns = stamps[0] + step_ns * np.arange((stamps[-1] - stamps[0]) // step_ns + 1, dtype=np.int64)
     gridded, _ = _grid_values(grid_ns, stamps, angles, int(config.max_gap_s * 1e9) + step_ns // 2)
+    config, widened = config_for_motion(config, gridded, 1e9 / step_ns)
     q_grid, velocity, noise, notes = _filtered_runs(gridded, 1e9 / step_ns, config, angle_filter)
+    notes = widened + notes
     lengths = np.asarray(lengths_m, dtype=np.float64)
     invalid = int((~np.isfinite(q_grid).all(axis=1)).sum())
     qd, qdd = _motion_runs(gridded, q_grid, 1e9 / step_ns, config.dynamics_cutoff_hz)
@@ -455,8 +458,9 @@ def kinematics_from_markers(
         gridded, bridged[name] = _grid_values(grid_ns, t_ns, sagittal_from_world(position), max_gap_ns)
         points[:, k] = gridded
     raw_q = joint_angles_from_positions(points)
+    config, widened = config_for_motion(config, raw_q, 1e9 / step_ns)
     q_rad, velocity, noise, notes = _filtered_runs(raw_q, 1e9 / step_ns, config, trim_edges=True)
-    warnings += notes
+    warnings += widened + notes
     n_invalid = int((~np.isfinite(q_rad).all(axis=1)).sum())
     if n_invalid:
         warnings.append(

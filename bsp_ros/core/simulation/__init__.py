@@ -13,7 +13,12 @@ from bsp_ros.core.simulation.sensor import FILTER_KINDS, SensorSpec
 from bsp_ros.core.simulation.simulator import CellSimulator, SimulatedSession, simulate_cell
 from bsp_ros.core.simulation.subject import PAPER_ARM_INERTIA_ASSUMPTION, PassiveTruth, SubjectTruth
 from bsp_ros.core.simulation.tare import SimulatedTare, TareSpec, simulate_tare, tare_rotations
-from bsp_ros.core.simulation.trajectory import JointTrajectory, TrajectorySpec, joint_accelerations_rad_s2
+from bsp_ros.core.simulation.trajectory import (
+    JointTrajectory,
+    MultiSineTrajectory,
+    TrajectorySpec,
+    joint_accelerations_rad_s2,
+)
 from bsp_ros.core.simulation.truth import SessionTruth
 
 __all__ = [
@@ -26,6 +31,7 @@ __all__ = [
     "CellSpec",
     "JointTrajectory",
     "MarkerSpec",
+    "MultiSineTrajectory",
     "PassiveTruth",
     "PlanarChain",
     "SensorSpec",

@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from bsp_ros.core.simulation.checks import check_n_segments, float_tuple
+from bsp_ros.errors import InputError
 from bsp_ros.validation import check_positive
 
 # Step of the central difference that gives the acceleration of a trajectory without an analytic one, s.
@@ -114,3 +115,95 @@ def joint_accelerations_rad_s2(trajectory: TrajectorySpec | JointTrajectory, t_s
     t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
     h = _ACCELERATION_STEP_S
     return (trajectory.velocities_rad_s(t + h) - trajectory.velocities_rad_s(t - h)) / (2.0 * h)
+
+
+@dataclass(frozen=True)
+class MultiSineTrajectory:
+    """Per joint a sum of sines, ``q_j(t) = centre_j + sum_k amp_jk sin(2 pi t / period_jk + phase_jk)``.
+
+    Short periods accelerate the arm at a given peak speed (the acceleration of a sine is its speed times its
+    angular frequency), and two or more incommensurate periods per joint keep the acceleration from being
+    proportional to the angle's deviation, as a single sine's is: there the inertial torque looks like a stiffness
+    or a gravity term, here it does not. Build one with :meth:`within_speed`.
+
+    Attributes
+    ----------
+    center_deg : (n,) operating point, deg.
+    amplitude_deg, period_s, phase_rad : (n, k) the sines of each joint, deg, s, rad.
+    """
+
+    center_deg: tuple[float, ...]
+    amplitude_deg: tuple[tuple[float, ...], ...]
+    period_s: tuple[tuple[float, ...], ...]
+    phase_rad: tuple[tuple[float, ...], ...]
+
+    def __post_init__(self) -> None:
+        centre = float_tuple("center_deg", self.center_deg, None, -180.0, 180.0)
+        n = check_n_segments(len(centre), "the number of joints (entries of center_deg)")
+        object.__setattr__(self, "center_deg", centre)
+        if {len(self.amplitude_deg), len(self.period_s), len(self.phase_rad)} != {n}:
+            raise InputError(f"amplitude_deg, period_s and phase_rad need one row per joint ({n})")
+        periods = tuple(
+            float_tuple(f"period_s[{j}]", row, None, hi=1e5, positive=True) for j, row in enumerate(self.period_s)
+        )
+        object.__setattr__(self, "period_s", periods)
+        for name, rows, lo, hi in (
+            ("amplitude_deg", self.amplitude_deg, 0.0, 90.0),
+            ("phase_rad", self.phase_rad, -100.0, 100.0),
+        ):
+            checked = tuple(float_tuple(f"{name}[{j}]", row, len(periods[j]), lo, hi) for j, row in enumerate(rows))
+            object.__setattr__(self, name, checked)
+
+    @classmethod
+    def within_speed(
+        cls,
+        center_deg: tuple[float, ...],
+        period_s: tuple[tuple[float, ...], ...],
+        peak_speed_rad_s: float,
+        phase_rad: tuple[tuple[float, ...], ...],
+    ) -> MultiSineTrajectory:
+        """Each joint's sines sharing its speed equally, scaled so that its peak speed is ``peak_speed_rad_s``."""
+        check_positive("peak speed (rad/s)", peak_speed_rad_s, 10.0)
+        # Amplitudes giving each sine the same peak speed, small enough for any period, then scaled to the peak.
+        small = tuple(tuple(1e-3 * p for p in row) for row in period_s)
+        unit = cls(center_deg, small, period_s, phase_rad)
+        scale = peak_speed_rad_s / np.asarray(unit.peak_speed_rad_s)
+        amplitudes = tuple(tuple(a * s for a in row) for row, s in zip(small, scale, strict=True))
+        return cls(center_deg, amplitudes, period_s, phase_rad)
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints (2 or 3)."""
+        return len(self.center_deg)
+
+    @property
+    def peak_speed_rad_s(self) -> tuple[float, ...]:
+        """(n,) peak joint speeds over the sines' common cycle (sampled at 20 Hz over 2000 s), rad/s."""
+        t = np.arange(0.0, 2000.0, 0.05)
+        return tuple(float(v) for v in np.abs(self.velocities_rad_s(t)).max(axis=0))
+
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint angles at ``t_s`` (s since the session start): (N,) -> (N, n) rad."""
+        amp, omega, phase, t = self._arrays(t_s)
+        return np.radians(np.asarray(self.center_deg)) + (amp * np.sin(omega * t + phase)).sum(axis=-1)
+
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Analytic joint velocities at ``t_s``: (N,) -> (N, n) rad/s."""
+        amp, omega, phase, t = self._arrays(t_s)
+        return (amp * omega * np.cos(omega * t + phase)).sum(axis=-1)
+
+    def accelerations_rad_s2(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Analytic joint accelerations at ``t_s``: (N,) -> (N, n) rad/s^2."""
+        amp, omega, phase, t = self._arrays(t_s)
+        return (-amp * omega * omega * np.sin(omega * t + phase)).sum(axis=-1)
+
+    def _arrays(self, t_s: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        width = max(len(row) for row in self.period_s)
+
+        def padded(rows: tuple[tuple[float, ...], ...], fill: float) -> np.ndarray:
+            return np.array([list(row) + [fill] * (width - len(row)) for row in rows], dtype=np.float64)
+
+        amp = np.radians(padded(self.amplitude_deg, 0.0))
+        omega = 2.0 * np.pi / padded(self.period_s, 1.0)
+        t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))[:, None, None]
+        return amp, omega, padded(self.phase_rad, 0.0), t
