@@ -21,6 +21,7 @@ from bsp_ros.core.simulation import (
     GRAVITY_M_S2,
     CellSimulator,
     MarkerSpec,
+    MultiSineTrajectory,
     SessionTruth,
     SubjectTruth,
     TrajectorySpec,
@@ -149,6 +150,34 @@ def test_a_paper_session_from_the_engine_is_identified_near_the_truth(tmp_path) 
         assert quantities["length_m"]["value"] == pytest.approx(truth["segments"][segment]["length_m"], abs=2e-4)
     for joint, quantities in estimate["joints"].items():
         assert quantities["coulomb_nm"]["value"] == pytest.approx(truth["joints"][joint]["coulomb_nm"], rel=0.02)
+
+
+def test_two_sines_per_joint_in_the_engine_identify_its_inertias(tmp_path) -> None:
+    """A faster protocol, two sines per joint within 0.15 rad/s (periods 2-11 s), on the engine's arm (its own
+    inertias, friction and sensor), tared (--zero-sd-n 0): the upper arm's and forearm's grouped inertias come
+    from the data, within 3 std and 5 % (measured 0.1-0.8 % over seeds 1-3)."""
+    motion = MultiSineTrajectory.within_speed(
+        (-43.3, 45.0, 0.2), ((2.1, 7.9), (2.7, 9.3), (3.3, 11.1)), 0.15, ((0.0, 1.3), (1.0, 2.9), (2.0, 0.4))
+    )
+    arm = draw_arm(3)
+    bag = write_bag(
+        tmp_path / "fast", record(arm, CellOptions(trajectory=motion, duration_s=60.0, wrench_hz=250.0, seed=3))
+    )
+    out = tmp_path / "e.json"
+    code = main(["identify", str(bag), "--json", str(out), "--format", "none", "--zero-sd-n", "0", "--zero-sd-nm", "0"])
+    estimate, truth = json.loads(out.read_text()), json.loads((bag / "truth.json").read_text())
+    assert code == 0, estimate["quality"]["message"]
+    for segment in ("upper_arm", "forearm"):
+        q, true = (
+            estimate["segments"][segment]["grouped_inertia_kgm2"],
+            truth["segments"][segment]["grouped_inertia_kgm2"],
+        )
+        assert q["source"] == "data", (segment, q)
+        assert abs(q["value"] - true) < min(3.0 * q["std"], 0.05 * true), (segment, q, true)
+        assert q["std"] < 0.1 * true, (segment, q)  # from the data: the prior alone is 15 %
+    for segment, quantities in estimate["segments"].items():
+        q, true = quantities["static_moment_kgm"], truth["segments"][segment]["static_moment_kgm"]
+        assert abs(q["value"] - true) < 3.0 * q["std"], segment
 
 
 def test_the_engine_follows_a_planned_trajectory_and_its_handle_is_the_planner_s_handle_pose() -> None:
