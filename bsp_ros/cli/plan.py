@@ -24,6 +24,7 @@ MAX_SPEED_RAD_S = 0.5
 MAX_DURATION_S = 86_400.0
 NOISE_LIMITS = {"--force-noise": 100.0, "--torque-noise": 10.0, "--marker-noise": 0.1}
 MAX_RATE_HZ = 5000.0
+MAX_ACCELERATION_RAD_S2 = 5.0
 
 # A static moment predicted less precise than this (relative std, %) makes a session of little use: the report
 # could not show a change of a few percent between sessions (its MDC95 is about 2.8 std).
@@ -160,6 +161,20 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default="d-optimal",
         help="d-optimal: log-determinant of the predicted covariance; static: largest predicted "
         "relative std of the static moments (default d-optimal)",
+    )
+    session.add_argument(
+        "--excite-inertia",
+        action="store_true",
+        help="plan a faster motion that excites the arm's inertia (two sines per joint at the speed limit, the "
+        "fastest period from --max-acceleration, at least 2 s): the grouped segment inertias are identified from "
+        "the data; their std is predicted from one simulated session (give --max-speed, e.g. 0.15)",
+    )
+    session.add_argument(
+        "--max-acceleration",
+        type=positive_at_most(MAX_ACCELERATION_RAD_S2),
+        default=0.3,
+        metavar="RAD_S2",
+        help="largest joint acceleration with --excite-inertia, rad/s^2 (default 0.3)",
     )
     session.add_argument(
         "--max-evaluations",
@@ -362,15 +377,37 @@ def format_plan(plan: Any) -> str:
     return "\n".join(lines)
 
 
+def inertia_lines(plan: Any, args: argparse.Namespace) -> str:
+    """The grouped inertias' std one simulated session of ``plan`` reports (the table arm of --height, tared)."""
+    from bsp_ros.core.planning import simulated_inertia_std
+    from bsp_ros.core.simulation import SubjectTruth
+
+    n = plan.request.nominal.n_joints
+    subject = SubjectTruth.from_anthropometry(args.sex, args.body_mass, args.height, n)
+    found = simulated_inertia_std(plan, subject)
+    lines = ["grouped inertia, std of one simulated session (table arm, tared sensor, skin markers 2 mm):"]
+    for segment, (value, std, source) in found.items():
+        lines.append(f"  {segment:10s} {value:.4g} kg m^2 +- {100 * std / abs(value):.2g}% ({source})")
+    return "\n".join(lines)
+
+
 def run(args: argparse.Namespace) -> int:
     """Plan, write the files, print the predicted stds; publish on request."""
-    from bsp_ros.core.planning import plan_protocol, write_plan_csv, write_plan_json
+    from bsp_ros.core.planning import plan_inertia_protocol, plan_protocol, write_plan_csv, write_plan_json
 
     request = _request(args)
-    plan = plan_protocol(request)
+    if args.excite_inertia and (args.amplitude or args.operating_points):
+        raise InputError("--excite-inertia designs its own motion: leave out --amplitude and --operating-points")
+
+    def planner(req: Any) -> Any:
+        return plan_inertia_protocol(req, args.max_acceleration) if args.excite_inertia else plan_protocol(req)
+
+    plan = planner(request)
     print(format_plan(plan))
+    if args.excite_inertia:
+        print(inertia_lines(plan, args))
     warning = precision_warning(
-        plan, args.target_std, lambda duration_s: plan_protocol(dataclasses.replace(request, duration_s=duration_s))
+        plan, args.target_std, lambda duration_s: planner(dataclasses.replace(request, duration_s=duration_s))
     )
     if warning is not None:
         sys.stdout.flush()  # the table first, then the warning, when both go to a terminal

@@ -8,6 +8,7 @@ from bsp_ros.core.planning.files import (
     write_plan_csv,
     write_plan_json,
 )
+from bsp_ros.core.planning.inertia import plan_inertia_protocol, simulated_inertia_std
 from bsp_ros.core.planning.information import NoiseSpec, NominalArm, Prediction, predict_covariance
 from bsp_ros.core.planning.planner import InfeasiblePlanError, Plan, PlanRequest, plan_protocol, trajectory_from_points
 from bsp_ros.core.planning.safety import (
@@ -34,10 +35,12 @@ __all__ = [
     "compare_with_scatter",
     "handle_poses_world",
     "joint_angles_from_handle_poses",
+    "plan_inertia_protocol",
     "plan_protocol",
     "plan_to_dict",
     "planned_trajectory_from_file",
     "predict_covariance",
+    "simulated_inertia_std",
     "trajectory_from_points",
     "write_plan_csv",
     "write_plan_json",

@@ -105,9 +105,10 @@ def test_a_value_out_of_range_is_refused_naming_the_option(option: str, values: 
 
 def test_the_cli_limits_are_the_planners(capsys) -> None:
     from bsp_ros.cli import plan
-    from bsp_ros.core.planning import NoiseSpec, safety
+    from bsp_ros.core.planning import NoiseSpec, inertia, safety
 
     assert plan.MAX_SPEED_RAD_S == safety.MAX_SPEED_LIMIT_RAD_S
+    assert plan.MAX_ACCELERATION_RAD_S2 == inertia.MAX_ACCELERATION_RAD_S2
     noise = {"--force-noise": "force_noise_n", "--torque-noise": "torque_noise_nm", "--marker-noise": "marker_noise_m"}
     for option, field in noise.items():
         NoiseSpec(**{field: plan.NOISE_LIMITS[option]})  # the limit itself is accepted by the planner...
@@ -216,3 +217,34 @@ def test_two_trunk_postures_are_planned_and_said(capsys) -> None:
         return float(line.split()[-1].rstrip("%"))
 
     assert upper_arm_percent(both) < upper_arm_percent(single) / 10
+
+
+def test_an_inertia_exciting_plan_is_written_and_its_inertia_std_said(tmp_path: Path, capsys) -> None:
+    out_json = tmp_path / "fast.json"
+    args = [*LIMITS, "--wrist-range", "-20", "20", "--max-speed", "0.15", "--excite-inertia", "--json", str(out_json)]
+    assert main(["plan", *args]) == 0
+    printed = capsys.readouterr().out
+    assert "two sines per joint" in printed and "grouped inertia, std of one simulated session" in printed
+    rows = [
+        line.split()
+        for line in printed.splitlines()
+        if line.startswith("  upper_arm ") or line.startswith("  forearm ")
+    ]
+    assert [row[-1] for row in rows] == ["(data)", "(data)"]  # identified from the data, as planned
+    trajectory = planned_trajectory_from_file(out_json)
+    assert max(trajectory.peak_speed_rad_s) <= 0.15 and trajectory.duration_s == 120.0
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--duration", "20"], "--duration"),
+        (["--operating-points", "2"], "--excite-inertia designs its own motion"),
+        (["--max-acceleration", "9"], "--max-acceleration"),
+    ],
+)
+def test_an_inertia_plan_it_cannot_honour_is_refused(extra: list[str], message: str, capsys) -> None:
+    args = [*LIMITS, "--wrist-range", "-20", "20", "--max-speed", "0.15", "--excite-inertia", *extra]
+    assert _code(["plan", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("bsp plan: error: ") and message in err
