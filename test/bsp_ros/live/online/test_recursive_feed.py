@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.identification.data import wrench_world_yzx
@@ -34,11 +35,13 @@ def test_takes_a_wrench_but_does_not_update_without_lengths_or_angles_near_it() 
     assert feed.add_wrench(900_000_000, np.array([0.0, -5.0, 0.1]), LENGTHS_M) == (True, None)  # 0.9 s away
 
 
-def _fast_session(seed: int, duration_s: float) -> tuple[sim.CellSimulator, sim.SimulatedSession, list]:
-    """A 0.12 rad/s session (4x the built-in motion: inertia about 1 % of gravity, reversals 4x as frequent) and
-    its causal joint states, stamped by the filter's group delay as the live node publishes them."""
+def _fast_session(
+    seed: int, duration_s: float, motion: sim.JointTrajectory | None = None
+) -> tuple[sim.CellSimulator, sim.SimulatedSession, list]:
+    """A 0.12 rad/s session (4x the built-in motion: inertia about 1 % of gravity, reversals 4x as frequent; or
+    ``motion``) and its causal joint states, stamped by the filter's group delay as the live node publishes them."""
     spec = sim.human_arm_cell(seed=seed, duration_s=duration_s)
-    spec = dataclasses.replace(spec, trajectory=spec.trajectory.speed_scaled(4.0))
+    spec = dataclasses.replace(spec, trajectory=motion or spec.trajectory.speed_scaled(4.0))
     simulated = sim.simulate_cell(spec)
     frames: dict[int, dict[str, np.ndarray]] = {}
     for name, series in simulated.session.markers.items():
@@ -75,10 +78,17 @@ def test_the_inertial_torque_taken_off_follows_the_simulated_arm() -> None:
     assert (error_rms < 0.3 * true_rms).all(), (error_rms, true_rms)
 
 
-def test_friction_amplitudes_of_a_fast_session_are_not_lagged_low() -> None:
+TWO_SINES = sim.MultiSineTrajectory.within_speed(
+    (-43.3, 45.0, 0.2), ((2.1, 7.9), (2.7, 9.3), (3.3, 11.1)), 0.15, ((0.0, 1.3), (1.0, 2.9), (2.0, 0.4))
+)
+
+
+@pytest.mark.parametrize("motion", [None, TWO_SINES], ids=["one sine x4", "two sines 0.15 rad/s"])
+def test_friction_amplitudes_of_a_fast_session_are_not_lagged_low(motion: sim.JointTrajectory | None) -> None:
     # The causal direction velocity keeps the old sign for about 0.3 s after each reversal: fed on it, the
-    # Coulomb amplitudes of this session came out 19-32 % low at 10-12 std, marked valid.
-    _, simulated, states = _fast_session(6, 120.0)
+    # Coulomb amplitudes of this session came out 19-32 % low at 10-12 std, marked valid. The inertia-exciting
+    # two sines per joint (bsp plan --excite-inertia; periods from 2.1 s) reverse faster still.
+    _, simulated, states = _fast_session(6, 120.0, motion)
     wrench = wrench_world_yzx(simulated.session.wrench, simulated.session.rotation_world_from_sensor)
     feed = RecursiveFeed(3, PassiveModel.parse("coulomb"))
     k = 0
