@@ -388,6 +388,11 @@ def inertia_lines(plan: Any, args: argparse.Namespace) -> str:
     lines = ["grouped inertia, std of one simulated session (table arm, tared sensor, skin markers 2 mm):"]
     for segment, (value, std, source) in found.items():
         lines.append(f"  {segment:10s} {value:.4g} kg m^2 +- {100 * std / abs(value):.2g}% ({source})")
+    # The plan file carries it too (its notes), for the cell that loads the plan rather than reading the console.
+    plan.notes.append(
+        "grouped inertia std predicted by one simulated session: "
+        + ", ".join(f"{s} {100 * std / abs(v):.2g}% ({source})" for s, (v, std, source) in found.items())
+    )
     return "\n".join(lines)
 
 

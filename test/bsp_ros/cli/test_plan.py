@@ -233,6 +233,8 @@ def test_an_inertia_exciting_plan_is_written_and_its_inertia_std_said(tmp_path: 
     assert [row[-1] for row in rows] == ["(data)", "(data)"]  # identified from the data, as planned
     trajectory = planned_trajectory_from_file(out_json)
     assert max(trajectory.peak_speed_rad_s) <= 0.15 and trajectory.duration_s == 120.0
+    notes = json.loads(out_json.read_text())["notes"]
+    assert any(note.startswith("grouped inertia std predicted") for note in notes)
 
 
 @pytest.mark.parametrize(
