@@ -13,7 +13,9 @@ Scenarios: clean; elastic (0.2 Nm passive offset per joint) and elastic_small (0
 elbow frame off by ~0.3 m and ten 1 kN wrench spikes); transition_1mrad / transition_2mrad (Coulomb
 friction as c tanh(v / w), added to the torques of a friction-free session); skin_3mm (every marker re-placed
 within +-3 mm of its joint centre per axis, drawn anew per session) and skin_3mm_planned (the same on the
-planner's protocol for shoulder -70..-10, elbow 10..100, wrist -20..20 deg, in place of the sines).
+planner's protocol for shoulder -70..-10, elbow 10..100, wrist -20..20 deg, in place of the sines);
+fast_inertia_plan (the same re-placed markers on ``bsp plan --excite-inertia --max-speed 0.15``'s two sines per
+joint for those ranges: inertial torques 1.5-2.5 % of gravity, grouped inertias identified from the data).
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ SCENARIOS = (
     "transition_2mrad",
     "skin_3mm",
     "skin_3mm_planned",
+    "fast_inertia_plan",
 )
 SKIN_BOUND_M = 0.003  # issue 19: markers re-placed within +-3 mm of the joint centres, anew every session
 COULOMB_NM = np.array([0.5, 0.28, 0.06])
@@ -68,6 +71,12 @@ def _spec(scenario: str, seed: int, duration_s: float) -> sim.CellSpec:
         spec = dataclasses.replace(spec, markers=dataclasses.replace(spec.markers, skin_offset_bound_m=SKIN_BOUND_M))
     if scenario.endswith("planned"):
         spec = dataclasses.replace(spec, trajectory=_plan().trajectory)
+    if scenario == "fast_inertia_plan":
+        spec = dataclasses.replace(
+            spec,
+            trajectory=_inertia_plan().trajectory,
+            markers=dataclasses.replace(spec.markers, skin_offset_bound_m=SKIN_BOUND_M),
+        )
     if scenario.startswith("elastic"):
         offset = 0.2 if scenario == "elastic" else 0.05
         passive = dataclasses.replace(spec.passive, offset_nm=(offset, offset, offset))
@@ -83,6 +92,16 @@ def _plan() -> Any:
     nominal = NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
     limits = JointLimits(((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0)))
     return plan_protocol(PlanRequest(nominal, (0.0, 1.2), limits))
+
+
+@functools.cache
+def _inertia_plan() -> Any:
+    """`bsp plan --excite-inertia --max-speed 0.15`'s protocol for the same ranges (two sines per joint)."""
+    from bsp_ros.core.planning import JointLimits, NominalArm, PlanRequest, plan_inertia_protocol
+
+    nominal = NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
+    limits = JointLimits(((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0)), 0.15)
+    return plan_inertia_protocol(PlanRequest(nominal, (0.0, 1.2), limits), 0.3)
 
 
 def _transition_document(spec: sim.CellSpec, simulated: sim.SimulatedSession, width_rad_s: float) -> dict[str, Any]:
