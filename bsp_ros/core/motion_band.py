@@ -13,13 +13,18 @@ if TYPE_CHECKING:
 # The share of the angles' (detrended) power below the motion's top frequency.
 POWER_SHARE = 0.99
 # A bin counts as motion only where its power is this many times the noise floor (the median bin of
-# NOISE_BAND_HZ, where no arm moved by a rehabilitation robot has content).
-FLOOR_FACTOR = 10.0
+# NOISE_BAND_HZ, where no arm moved by a rehabilitation robot has content): a white-noise bin's power is
+# exponential, so one beyond 30 times the median comes about once in 10^9 bins (at 10 times, once in 1000:
+# with marker noise above a slow wrist's motion that was enough to widen the filters).
+FLOOR_FACTOR = 30.0
 NOISE_BAND_HZ = (2.0, 4.0)
 # Cutoffs at these multiples of the top frequency: the direction velocity's second-order zero-phase filter then
 # passes it at 99.4 % (at 0.5 Hz, a 0.48 Hz component kept 95 %, and a multi-sine's velocity changed sign off
 # its true reversals: Coulomb's sign wrong for hundreds of samples, the fit 9 times the noise).
 DIRECTION_FACTOR = 2.5
+# The estimate needs most of a session of at least this span (a shorter one cannot resolve 0.1-0.2 Hz).
+MIN_FINITE_SHARE = 0.8
+MIN_SPAN_S = 20.0
 DYNAMICS_FACTOR = 2.0
 
 
@@ -28,21 +33,21 @@ def motion_top_hz(q_rad: np.ndarray, rate_hz: float) -> float:
 
     Parameters
     ----------
-    q_rad : (N, n) joint angles on a uniform grid (NaN frames allowed: the longest finite run is used), rad.
+    q_rad : (N, n) joint angles on a uniform grid (NaN frames allowed, bridged here; with under 80 % of the
+        frames finite or under 20 s in all, 0), rad.
     rate_hz : the grid's rate, Hz.
     """
     finite = np.isfinite(q_rad).all(axis=1)
-    best, begin = (0, 0), None
-    for k, ok in enumerate(np.append(finite, False)):
-        if ok and begin is None:
-            begin = k
-        elif not ok and begin is not None:
-            best = max(best, (k - begin, begin))
-            begin = None
-    length, start = best
-    if length < 64:
+    # The spectrum needs the whole session: a run between dropouts seconds long would put the slow motion's
+    # leakage at its own lowest bins (a 4 s run: 0.33 Hz) and widen the filters for nothing. Gaps are bridged
+    # linearly for this estimate only (their kinks carry no power that matters against the motion's).
+    if finite.sum() < MIN_FINITE_SHARE * finite.size or finite.sum() < 64:
         return 0.0
-    run = q_rad[start : start + length]
+    index = np.arange(finite.size)
+    run = np.column_stack([np.interp(index, index[finite], q_rad[finite, j]) for j in range(q_rad.shape[1])])
+    length = run.shape[0]
+    if length / rate_hz < MIN_SPAN_S:
+        return 0.0
     run = run - _linear_trend(run)
     power = np.abs(np.fft.rfft(run * np.hanning(length)[:, None], axis=0)) ** 2
     freqs = np.fft.rfftfreq(length, 1.0 / rate_hz)
