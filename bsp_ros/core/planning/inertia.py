@@ -10,6 +10,7 @@ import numpy as np
 from bsp_ros.core.planning.planner import Plan, PlanRequest, _predict, inertial_torque_ratio
 from bsp_ros.core.planning.safety import check_reachable, check_trajectory_within
 from bsp_ros.core.planning.trajectory import PlannedTrajectory
+from bsp_ros.core.simulation.trajectory import MultiSineTrajectory
 from bsp_ros.core.streams import joints_for
 from bsp_ros.errors import InputError
 from bsp_ros.validation import check_positive
@@ -43,8 +44,8 @@ def _envelope(t: np.ndarray, duration_s: float) -> tuple[np.ndarray, np.ndarray]
     return value, derivative
 
 
-def inertia_sines(request: PlanRequest, max_acceleration_rad_s2: float) -> dict[str, Any]:
-    """The sines of each joint: ``centre_rad`` (n,), ``amplitude_rad``, ``omega_rad_s``, ``phase_rad`` (n, 2).
+def inertia_sines(request: PlanRequest, max_acceleration_rad_s2: float) -> MultiSineTrajectory:
+    """The sines of each joint (two per joint, about the middle of its range), before the ramps.
 
     Each joint's two sines share its speed equally; the fastest joint's fast period follows from the
     acceleration limit (never below :data:`FAST_PERIOD_MIN_S`), the others run at their own pace
@@ -58,7 +59,6 @@ def inertia_sines(request: PlanRequest, max_acceleration_rad_s2: float) -> dict[
     accel = check_positive("largest joint acceleration (rad/s^2)", max_acceleration_rad_s2, MAX_ACCELERATION_RAD_S2)
     n = request.nominal.n_joints
     ranges = np.radians(request.usable_range_deg())
-    centre = ranges.mean(axis=1)
     half = 0.5 * RANGE_SHARE * (ranges[:, 1] - ranges[:, 0])
     speed = SPEED_SHARE * request.limits.max_speed_rad_s
     omega_fast = min(2.0 * accel / (speed * (1.0 + 1.0 / PERIOD_RATIO)), 2.0 * math.pi / FAST_PERIOD_MIN_S)
@@ -73,21 +73,22 @@ def inertia_sines(request: PlanRequest, max_acceleration_rad_s2: float) -> dict[
     reach = (1.0 / omega).sum(axis=1)  # excursion per unit speed share: amp_k = (v / 2) / omega_k
     joint_speed = np.minimum(speed, 2.0 * half / reach)
     amplitude = 0.5 * joint_speed[:, None] / omega
-    phase = np.array(PHASES_RAD[:n])
-    return {"centre_rad": centre, "amplitude_rad": amplitude, "omega_rad_s": omega, "phase_rad": phase}
+    return MultiSineTrajectory(
+        tuple(np.degrees(ranges.mean(axis=1)).tolist()),
+        tuple(tuple(row) for row in np.degrees(amplitude).tolist()),
+        tuple(tuple(row) for row in (2.0 * math.pi / omega).tolist()),
+        PHASES_RAD[:n],
+    )
 
 
-def inertia_trajectory(request: PlanRequest, max_acceleration_rad_s2: float) -> PlannedTrajectory:
-    """The two-sine motion as knots every :data:`KNOT_STEP_S` (exact angles and velocities), ramped in and out."""
-    sines = inertia_sines(request, max_acceleration_rad_s2)
-    duration = request.duration_s
-    t = np.append(np.arange(0.0, duration, KNOT_STEP_S), duration)
-    phase = sines["omega_rad_s"][None] * t[:, None, None] + sines["phase_rad"][None]
-    wave = (sines["amplitude_rad"][None] * np.sin(phase)).sum(axis=-1)
-    wave_rate = (sines["amplitude_rad"][None] * sines["omega_rad_s"][None] * np.cos(phase)).sum(axis=-1)
-    envelope, envelope_rate = _envelope(t, duration)
-    q = sines["centre_rad"][None] + envelope[:, None] * wave
-    qdot = envelope_rate[:, None] * wave + envelope[:, None] * wave_rate
+def inertia_trajectory(sines: MultiSineTrajectory, duration_s: float) -> PlannedTrajectory:
+    """``sines`` ramped in and out, as knots every :data:`KNOT_STEP_S` (exact angles and velocities)."""
+    t = np.append(np.arange(0.0, duration_s, KNOT_STEP_S), duration_s)
+    centre = np.radians(np.asarray(sines.center_deg))
+    envelope, envelope_rate = _envelope(t, duration_s)
+    wave = sines.angles_rad(t) - centre
+    q = centre + envelope[:, None] * wave
+    qdot = envelope_rate[:, None] * wave + envelope[:, None] * sines.velocities_rad_s(t)
     qdot[0] = 0.0
     qdot[-1] = 0.0
     return PlannedTrajectory(t, q, qdot)
@@ -101,22 +102,23 @@ def plan_inertia_protocol(request: PlanRequest, max_acceleration_rad_s2: float) 
     hold the inertial columns yet.
     """
     sines = inertia_sines(request, max_acceleration_rad_s2)
-    trajectory = inertia_trajectory(request, max_acceleration_rad_s2)
+    trajectory = inertia_trajectory(sines, request.duration_s)
     check_trajectory_within(trajectory, request.limits)
     check_reachable(trajectory, request.nominal.lengths_m, request.shoulder_yz_m)
-    periods = 2.0 * math.pi / sines["omega_rad_s"]
+    periods = np.array(sines.period_s)
+    amplitudes_rad = np.radians(np.array(sines.amplitude_deg))
     grid = np.linspace(0.0, request.duration_s, int(request.duration_s * 20) + 1)
     speed = np.abs(trajectory.velocities_rad_s(grid)).max(axis=0)
+    accelerations = (amplitudes_rad * (2.0 * math.pi / periods) ** 2).sum(axis=1)
     notes = [
         "inertia-exciting: two sines per joint ("
         + ", ".join(f"{j} {p[0]:.1f} and {p[1]:.1f} s" for j, p in zip(joints_for(len(periods)), periods, strict=True))
         + f"), peak speeds {np.round(speed, 3).tolist()} rad/s, peak accelerations "
-        f"{np.round((sines['amplitude_rad'] * sines['omega_rad_s'] ** 2).sum(axis=1), 3).tolist()} rad/s^2; "
-        "the stds above are the quasi-static model's"
+        f"{np.round(accelerations, 3).tolist()} rad/s^2; the stds above are the quasi-static model's"
     ]
     ratio = inertial_torque_ratio(trajectory, request.nominal)
-    amplitudes = np.degrees(sines["amplitude_rad"].sum(axis=1))
-    centres = np.degrees(sines["centre_rad"])[None]
+    amplitudes = np.array(sines.amplitude_deg).sum(axis=1)
+    centres = np.array(sines.center_deg)[None]
     return Plan(request, trajectory, centres, amplitudes, _predict(request, trajectory), ratio, notes)
 
 
