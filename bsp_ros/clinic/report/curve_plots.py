@@ -17,13 +17,7 @@ from bsp_ros.clinic.report.curve_views import CurveSession, CurveView, curve_vie
 from bsp_ros.clinic.report.labels import plain_number
 from bsp_ros.clinic.report.plots import ARM_COLOURS, FLAG_COLOUR, GAP_COLOUR, panel_grid
 from bsp_ros.clinic.report.summary import arm_title, day
-
-
-def _interpolated(session: CurveSession, angle_deg: float) -> float:
-    angles, moments = session.angle_deg, session.moment_nm
-    k = next(i for i in range(1, len(angles)) if angles[i] >= angle_deg)
-    w = (angle_deg - angles[k - 1]) / (angles[k] - angles[k - 1])
-    return moments[k - 1] * (1.0 - w) + moments[k] * w
+from bsp_ros.clinic.store.curves import sample_curve
 
 
 def _draw_session(axes: Axes, session: CurveSession, colour: str, style: str, label: str) -> None:
@@ -39,8 +33,12 @@ def draw_curve(axes: Axes, view: CurveView, colour: str, title: str) -> None:
     _draw_session(axes, first, GAP_COLOUR, "--", f"first usable (no. {first.number}, {day(first.time_ns)})")
     if latest is not None:
         _draw_session(axes, latest, colour, "-", f"latest usable (no. {latest.number}, {day(latest.time_ns)})")
+        # The changed angles are the store's sampled ones (multiples of 5 deg): the same interpolation gives them.
+        sampled = sample_curve(
+            {"angle_deg": list(latest.angle_deg), "moment_nm": list(latest.moment_nm), "std_nm": list(latest.std_nm)}
+        )
         for angle in view.changed_deg:
-            axes.plot([angle], [_interpolated(latest, angle)], "o", ms=7, mfc="none", mec=FLAG_COLOUR, mew=1.6)
+            axes.plot([angle], [sampled[angle][0]], "o", ms=7, mfc="none", mec=FLAG_COLOUR, mew=1.6)
     axes.axhline(0.0, color="#bbbbbb", lw=0.6, zorder=0)
     axes.set_title(title, loc="left", fontsize=8)
     axes.set_xlabel("angle [°]", fontsize=7)

@@ -62,17 +62,11 @@ def _changed_angles(analysis: Analysis, arm: str | None, joint: str, first: int,
         angle = angle_of(quantity)
         if group != "joints" or part != joint or angle is None or not series.judged:
             continue
-        for change in series.changes:
-            if change.before.number == first and change.after.number == latest and change.beyond_mdc:
-                found.append(angle)
-        since_first = series.since_first
-        if (
-            since_first is not None
-            and since_first.before.number == first
-            and since_first.after.number == latest
-            and since_first.beyond_mdc
-        ):
-            found.append(angle)
+        # Two usable sessions compare in their one step; more, in the comparison since the first.
+        for change in (*series.steps, series.since_first):
+            if change is not None and (change.before.number, change.after.number) == (first, latest):
+                if change.beyond_mdc:
+                    found.append(angle)
     return tuple(sorted(set(found)))
 
 
