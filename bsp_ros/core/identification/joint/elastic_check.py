@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (~0.5 s)
 
@@ -9,7 +11,7 @@ from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_SHIFT_SD
-from bsp_ros.core.identification.stacked import Extras, Fit, build_problem, fit_problem, problem_names
+from bsp_ros.core.identification.stacked import Extras, Fit, Problem, build_problem, fit_problem, problem_names
 from bsp_ros.core.streams import joints_for
 
 
@@ -20,10 +22,14 @@ def elastic_check(
     base: Fit,
     widths: np.ndarray,
     extras: Extras | None = None,
+    covariance_of: Callable[[Problem, Fit], np.ndarray] | None = None,
 ) -> list[str]:
     """Warn when a linear spring (offset, stiffness) the model lacks is supported by the data and moves the static
     moments: the fixed model would then be valid and wrong (with ``config.elastic_fallback`` the warning says the
-    estimate uses the elastic terms the data choose instead)."""
+    estimate uses the elastic terms the data choose instead). ``covariance_of`` gives the wider fit's covariance
+    for the test (the marker placement's share included, as in ``select_passive``: a skin marker off its joint
+    centre bends the torques like a spring, and a test on the sensor noise alone finds one in sessions with
+    re-placed markers)."""
     # A linear spring only. Polynomial terms tested against a model without a spring fit the smallest systematic
     # errors (of the angle filters, on noise-free data) against a gravity torque they can mimic; tested against a
     # fixed spring model, on our own simulator's linear springs with the dynamics, they were "supported" (chi2
@@ -35,19 +41,20 @@ def elastic_check(
     kinds = " and ".join(term for term in wider.terms if term not in config.passive.terms)
     problem = build_problem(data, wider, rows, widths, extras)
     fit = fit_problem(problem)
+    covariance = fit.covariance if covariance_of is None else covariance_of(problem, fit)
     n = data.n_joints
     notes = []
     base_beta, wide_beta = base.values[:n], fit.values[:n]
     change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
     # Against the base fit's std (marker placement included): a shift well inside it cannot make it wrong.
     shift_sd = np.abs(wide_beta - base_beta) / np.sqrt(np.clip(np.diag(base.covariance)[:n], 1e-300, None))
-    correlation = correlation_from_covariance(fit.covariance)
+    correlation = correlation_from_covariance(covariance)
     have = set(problem_names(config.passive, n, extras is not None))
     for joint in joints_for(n):
         picks = [i for i, name in enumerate(problem.names) if name[1] == joint and name not in have and i >= n]
         if not picks:
             continue
-        sub = fit.covariance[np.ix_(picks, picks)]
+        sub = covariance[np.ix_(picks, picks)]
         theta = fit.values[picks]
         statistic = float(theta @ np.linalg.pinv(sub) @ theta)
         if chdtrc(len(picks), statistic) < 1e-4 and change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD:

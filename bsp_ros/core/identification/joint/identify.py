@@ -135,13 +135,13 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 )
     selection = None
     fitted_widths = widths if widths.any() else None
+
+    def with_placement(candidate: Problem, candidate_fit: Fit) -> np.ndarray:
+        if not placement_sd_m.any():
+            return candidate_fit.covariance
+        return candidate_fit.covariance + placement_covariance(data, candidate, candidate_fit, placement_sd_m)
+
     if config.passive.select:
-
-        def with_placement(candidate: Problem, candidate_fit: Fit) -> np.ndarray:
-            if not placement_sd_m.any():
-                return candidate_fit.covariance
-            return candidate_fit.covariance + placement_covariance(data, candidate, candidate_fit, placement_sd_m)
-
         selection = select_passive(data, config.passive, rows, fitted_widths, extras, with_placement)
         assert selection.chosen.problem is not None and selection.chosen.fit is not None
         config = dataclasses.replace(config, passive=selection.chosen.model)
@@ -285,7 +285,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             covariance[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
         fit = dataclasses.replace(fit, covariance=covariance)
     if config.check_elastic and selection is None and not problems:
-        elastic = elastic_check(data, config, problem.rows, fit, widths, extras)
+        elastic = elastic_check(data, config, problem.rows, fit, widths, extras, with_placement)
         if elastic and config.elastic_fallback:
             # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
             chosen = dataclasses.replace(config.passive, select=True)
