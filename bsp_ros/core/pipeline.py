@@ -86,12 +86,14 @@ class IdentifyOptions:
 
 
 def identify_data(
-    data: IdentificationData, options: IdentifyOptions, check_elastic: bool = True
+    data: IdentificationData, options: IdentifyOptions, check_elastic: bool = True, check_drift: bool = False
 ) -> IdentificationResult:
     """Run the chosen identification method on prepared samples.
 
-    ``check_elastic`` runs the test for an unmodelled elastic passive term (a second fit): a live window
-    may run it on only some updates. A valid result whose static moments are implausible for a human arm
+    ``check_elastic`` runs the model checks (an unmodelled elastic passive term, friction at low speed, a
+    drifting sensor; several fits): a live window may run them on only some updates. ``check_drift`` runs
+    the drift check (one fit) without the others: a live window models a drift on every update. A valid
+    result whose static moments are implausible for a human arm
     (:func:`bsp_ros.core.fusion.implausible_static_moments`) is made invalid.
     """
     if options.method == "paper":
@@ -100,6 +102,7 @@ def identify_data(
         config = JointConfig(
             passive=options.passive,
             check_elastic=check_elastic,
+            check_drift=check_drift,
             base_prior=base_prior_for_subject(options.subject, data.lengths_m),
             marker_placement_sd_m=options.marker_placement_sd_m,
             handle_pose_sd_m=options.handle_pose_sd_m,

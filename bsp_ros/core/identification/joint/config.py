@@ -26,7 +26,10 @@ class JointConfig:
     min_range_deg : a joint moving less than this has no excitation (invalid).
     min_direction_share : each direction of motion must hold this share of a joint's rows (Coulomb).
     max_condition : a larger column-scaled condition number makes the estimate invalid.
-    check_elastic : test whether an elastic term the model lacks would change the static moments.
+    check_elastic : test whether an elastic term the model lacks would change the static moments (with the
+        other model checks: friction at low speed, a drifting sensor).
+    check_drift : run the drift check (and model a drift it finds) also when ``check_elastic`` is False: one
+        wider fit, cheap enough for every live update, so a live window models a drift as `bsp identify` does.
     outlier_sd : torque samples further than this many robust standard deviations from the rolling median
         of their neighbours (wrench spikes), or from the fit, are removed.
     spike_window : samples in that rolling median.
@@ -61,6 +64,7 @@ class JointConfig:
     min_direction_share: float = 0.05
     max_condition: float = 1e4
     check_elastic: bool = True
+    check_drift: bool = False
     outlier_sd: float = 8.0
     spike_window: int = 11
     max_misfit: float = 4.0

@@ -284,6 +284,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             # Which friction law holds at low speed is open; the amplitudes of both join the Coulomb variance.
             covariance[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
         fit = dataclasses.replace(fit, covariance=covariance)
+    elif config.check_drift and not problems:
+        drift = drift_check(data, problem, fit)
+        if drift is not None:
+            fit = drift.fit
+            warnings.append(drift.note)
     if config.check_elastic and selection is None and not problems:
         elastic = elastic_check(data, config, problem.rows, fit, widths, extras, with_placement)
         if elastic and config.elastic_fallback:

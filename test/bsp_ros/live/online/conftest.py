@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -14,7 +16,19 @@ from bsp_ros.live.online.causal_angles import CausalJointAngles
 def live_streams():
     """(simulated session, wrench stamps, world wrench (N,3), causal angle samples stamped by group delay,
     unfiltered angles (t_ns, q_rad, lengths_m) per accepted frame)."""
-    simulated = sim.simulate_cell(sim.human_arm_cell(seed=13, duration_s=60.0))
+    return _streams(sim.human_arm_cell(seed=13, duration_s=60.0))
+
+
+@pytest.fixture(scope="session")
+def elastic_live_streams():
+    """:func:`live_streams` of an arm with an elastic passive offset of 0.2 Nm at every joint."""
+    spec = sim.human_arm_cell(seed=14, duration_s=60.0)
+    passive = dataclasses.replace(spec.passive, offset_nm=(0.2, 0.2, 0.2))
+    return _streams(dataclasses.replace(spec, passive=passive))
+
+
+def _streams(spec: sim.CellSpec):
+    simulated = sim.simulate_cell(spec)
     session = simulated.session
     frames: dict[int, dict[str, np.ndarray]] = {}
     for name, series in session.markers.items():

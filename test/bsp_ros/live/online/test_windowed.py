@@ -122,10 +122,34 @@ def test_model_check_of_a_clean_window_passes(live_streams) -> None:
     assert identifier.model_check(window) == []
 
 
-def test_model_check_names_a_drifting_sensor(live_streams) -> None:
+def test_a_drifting_sensor_is_modelled_on_every_update_as_bsp_identify_does(live_streams) -> None:
+    """A drift is no verdict that holds between the model checks: every update tests for it and models it, with
+    the same numbers as the offline estimator on the same samples."""
+    from bsp_ros.core.pipeline import identify_data
+
+    simulated, *_ = live_streams
     identifier, window = _window(live_streams, drift_n_per_s=0.01)
+    assert identifier.model_check(window) == []
+    estimate = identifier.estimate_window(window, [])
+    quality = estimate.document["quality"]
+    assert estimate.valid, quality["message"]
+    assert any("the wrench drifts" in w and "modelled" in w for w in quality["warnings"]), quality["warnings"]
+    data = identifier._window_data(window)
+    assert not isinstance(data, str)
+    offline = identify_data(data, identifier.config.options)
+    assert offline.valid
+    _, beta, _ = offline.block("static_moment_kgm")
+    truth = simulated.truth.to_dict()["segments"]
+    for k, (segment, q) in enumerate(estimate.document["segments"].items()):
+        assert q["static_moment_kgm"]["value"] == pytest.approx(beta[k], rel=1e-9)
+        z = abs(q["static_moment_kgm"]["value"] - truth[segment]["static_moment_kgm"]) / q["static_moment_kgm"]["std"]
+        assert z < 3.0, (segment, z)
+
+
+def test_model_check_names_an_elastic_moment_the_model_lacks(elastic_live_streams) -> None:
+    identifier, window = _window(elastic_live_streams)
     verdict = identifier.model_check(window)
-    assert any("the wrench drifts" in w for w in verdict), verdict
+    assert any("elastic passive moment" in w for w in verdict), verdict
 
 
 def test_estimate_is_invalid_until_the_first_model_check_is_back(live_streams) -> None:
@@ -135,9 +159,10 @@ def test_estimate_is_invalid_until_the_first_model_check_is_back(live_streams) -
     assert identifier.estimate_window(window, []).valid
 
 
-def test_a_failed_model_check_holds_for_the_updates_given_it(live_streams) -> None:
-    identifier, window = _window(live_streams, drift_n_per_s=0.01)
+def test_a_failed_model_check_holds_for_the_updates_given_it(elastic_live_streams) -> None:
+    identifier, window = _window(elastic_live_streams)
     verdict = identifier.model_check(window)
+    assert verdict
     estimate = identifier.estimate_window(window, verdict)
     assert not estimate.valid and "effect the model lacks" in estimate.document["quality"]["message"]
     assert all(w in estimate.document["quality"]["warnings"] for w in verdict)
