@@ -192,7 +192,7 @@ def identify_recordings(
     refit = refit_options(result, options)
     rotations = [np.asarray(s.rotation_world_from_sensor, dtype=np.float64) for s in prepared]
     rotation = rotations[0] if len(rotations) == 1 else np.concatenate([r.reshape(-1, 3, 3) for r in rotations])
-    offsets, _ = account_for_tare(
+    offsets = account_for_tare(
         result,
         data,
         rotation,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,6 +29,8 @@ class IdentificationResult:
     residual_rms_nm : joint -> RMS of the torque residual (Nm).
     n_samples : samples (time instants) used.
     diagnostics : further figures (per-parameter max correlation with gravity terms, HAC lags, ...).
+    torque_response : the estimate's first-order change (p,) for a change (N, n) of the measured torques (Nm),
+        where the method provides it (a sensor offset's effect without re-running the estimator).
     """
 
     method: str
@@ -41,6 +44,7 @@ class IdentificationResult:
     residual_rms_nm: dict[str, float] = field(default_factory=dict)
     n_samples: int = 0
     diagnostics: dict[str, object] = field(default_factory=dict)
+    torque_response: Callable[[np.ndarray], np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     @property
     def std(self) -> np.ndarray:

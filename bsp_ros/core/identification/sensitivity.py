@@ -25,6 +25,7 @@ __all__ = [
     "add_tare_covariance",
     "offset_sensitivity",
     "offset_torques_nm",
+    "response_sensitivity",
     "tare_quality",
     "zero_covariance",
 ]
@@ -114,6 +115,29 @@ def offset_sensitivity(
     return g_world @ _world_from_sensor_offsets(rotation_world_from_sensor), base
 
 
+def response_sensitivity(
+    result: IdentificationResult, data: IdentificationData, rotation_world_from_sensor: npt.ArrayLike
+) -> np.ndarray | None:
+    """``G`` of :func:`offset_sensitivity` from the estimate's own ``torque_response`` (no re-run of the
+    estimator: milliseconds, where the re-runs take seconds on a long session); None where the method has none.
+
+    Parameters
+    ----------
+    result : the identification of ``data``.
+    data : the samples identified.
+    rotation_world_from_sensor : (3, 3) sensor orientation of the session ((N, 3, 3): their mean).
+
+    Returns
+    -------
+    (p, 6) parameter change per N of force offset (sensor x, y, z) and per Nm of moment offset, or None.
+    """
+    if result.torque_response is None:
+        return None
+    unit = _world_unit_torques(data)
+    g_world = np.column_stack([result.torque_response(unit[k]) for k in range(3)])
+    return g_world @ _world_from_sensor_offsets(rotation_world_from_sensor)
+
+
 def add_tare_covariance(result: IdentificationResult, g: np.ndarray, wrench_covariance: np.ndarray) -> np.ndarray:
     """Add the tare's uncertainty ``G Sigma G^T`` to ``result.covariance`` (in place); return the added term.
 
@@ -187,12 +211,11 @@ def account_for_tare(
     tare: Any,
     refit: Refit,
     zero_sd: tuple[float, float] | None = (ZERO_SD_N, ZERO_SD_NM),
-    g: np.ndarray | None = None,
-) -> tuple[dict[str, Any], np.ndarray | None]:
+) -> dict[str, Any]:
     """Sensitivity to a sensor offset, and the uncertainty of the wrench's zero added to ``result`` (in place).
 
     With a tare, its own uncertainty; without, the assumed ``zero_sd`` (force N, moment Nm; 1 SD per sensor
-    axis; None or zeros: none).
+    axis; None or zeros: none). The sensitivity is the estimate's own ``torque_response`` where it has one.
 
     Parameters
     ----------
@@ -201,31 +224,29 @@ def account_for_tare(
     rotation_world_from_sensor : (3, 3) the sensor's orientation in the session.
     frame_id : the wrench frame.
     tare : the :class:`bsp_ros.core.tare.Tare` applied, or None.
-    refit : the estimator, re-run for the finite differences.
+    refit : the estimator, re-run for the finite differences where ``result`` has no ``torque_response``.
     zero_sd : the untared zero's (force N, moment Nm) 1 SD, see :data:`ZERO_SD_N`.
-    g : (p, 6) the sensitivity, if known (e.g. from an earlier window); computed here when None.
 
     Returns
     -------
-    quality : ``{"tare": {...}, "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
-    g : the sensitivity used (None if the estimate could not be differentiated).
+    ``{"tare": {...}, "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
     """
     from bsp_ros.core.tare import recording_warnings, tare_warnings
 
     rotation = _mean_rotation(np.asarray(rotation_world_from_sensor, dtype=np.float64))
     usable = result.valid and np.isfinite(result.values).all()
-    if g is not None and g.shape != (result.values.size, 6):
-        g = None
-    if g is None and usable:
-        g, _ = offset_sensitivity(data, rotation, refit)
+    g = None
+    if usable:
+        g = response_sensitivity(result, data, rotation)
+        if g is None:
+            g, _ = offset_sensitivity(data, rotation, refit)
     added = None
     if tare is not None:
         result.warnings.extend(recording_warnings(tare) + tare_warnings(tare, rotation))
-        if g is not None and usable:
+        if g is not None:
             h = tare.wrench_jacobian(rotation)
             added = add_tare_covariance(result, g, h @ tare.covariance @ h.T)
-    elif g is not None and usable and zero_sd is not None and max(zero_sd) > 0.0:
+    elif g is not None and zero_sd is not None and max(zero_sd) > 0.0:
         added = add_tare_covariance(result, g, zero_covariance(*zero_sd))
     source = (tare.file or tare.source or "tare") if tare is not None else None
-    g = g if usable else None
-    return tare_quality(result, g, frame_id, source, added, zero_sd), g
+    return tare_quality(result, g, frame_id, source, added, zero_sd)

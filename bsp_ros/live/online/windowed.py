@@ -141,7 +141,6 @@ class WindowedIdentifier:
         self.wrench_guard = StreamGuard("wrench")
         self._updates = 0
         self._elastic_warnings: list[str] = []
-        self._zero_g: np.ndarray | None = None
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False
@@ -296,12 +295,11 @@ class WindowedIdentifier:
                     )
             quality = None
             if window.rotation_world_from_sensor is not None:
-                # The sensor zero's share of the std (the tare's, or the assumed zero's): its sensitivity costs
-                # three refits, and over a sliding window it changes slowly, so it is refreshed with the checks.
+                # The sensor zero's share of the std (the tare's, or the assumed zero's), from the estimate's own
+                # response to a torque change (no refits).
                 options = self.config.options
                 refit = refit_options(result, options)
-                fresh = self._zero_g is None or (self._updates - 1) % self.config.elastic_check_every == 0
-                quality, self._zero_g = account_for_tare(
+                quality = account_for_tare(
                     result,
                     data,
                     window.rotation_world_from_sensor,
@@ -309,7 +307,6 @@ class WindowedIdentifier:
                     options.tare,
                     lambda d: identify_data(d, refit, check_elastic=False),
                     (options.zero_sd_n, options.zero_sd_nm),
-                    None if fresh else self._zero_g,
                 )
         except BspError as error:
             return self._invalid(str(error), last_wrench)

@@ -26,6 +26,7 @@ from bsp_ros.core.identification.joint.outliers import (
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
 from bsp_ros.core.identification.joint.placement_covariance import placement_covariance, placement_effect
 from bsp_ros.core.identification.joint.stribeck import stribeck_check
+from bsp_ros.core.identification.joint.torque_response import TorqueResponse
 from bsp_ros.core.identification.joint.transition import transition_widths
 from bsp_ros.core.identification.priors import implausible_perpendicular_moments
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
@@ -348,4 +349,5 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
             "prior_share": prior_share,
         },
+        torque_response=TorqueResponse.of(problem, fit),
     )

@@ -13,10 +13,11 @@ from bsp_ros.core.identification.sensitivity import (
     add_tare_covariance,
     offset_sensitivity,
     offset_torques_nm,
+    response_sensitivity,
     tare_quality,
 )
 from bsp_ros.core.model import gravity_regressor
-from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+from bsp_ros.core.pipeline import IdentifyOptions, identify_data, identify_session, refit_options
 from bsp_ros.core.simulation import SensorSpec, human_arm_cell, simulate_cell
 
 
@@ -46,6 +47,23 @@ def test_finite_differences_equal_the_least_squares_closed_form(data: Identifica
     unit = offset_torques_nm(data, rotation).reshape(6, -1).T  # (N n, 6)
     closed = np.linalg.pinv(_regressor(data)) @ unit  # (A^T A)^-1 A^T D
     np.testing.assert_allclose(g, closed, rtol=1e-6, atol=1e-9)
+
+
+def test_the_estimate_s_own_response_equals_re_running_the_estimator(data: IdentificationData) -> None:
+    """The sensitivity from the final fit's solve (no re-runs) against finite differences of the whole estimator
+    (outliers, friction transitions, reweighting, priors, bounds): the same to a thousandth of each std."""
+    rotation = SensorSpec().rotation_world_from_sensor
+    options = IdentifyOptions()
+    result = identify_data(data, options)
+    assert result.valid and result.torque_response is not None
+    refit = refit_options(result, options)
+    by_refits, _ = offset_sensitivity(data, rotation, lambda d: identify_data(d, refit, check_elastic=False))
+    response = response_sensitivity(result, data, rotation)
+    assert response is not None
+    offset = np.array([1.0, 1.0, 1.0, 0.02, 0.02, 0.02])  # the assumed untared zero's size: N, Nm
+    shift_in_std = np.abs((response - by_refits) * offset) / result.std[:, None]
+    assert shift_in_std.max() < 1e-3, result.names[int(np.argmax(shift_in_std.max(axis=1)))]
+    assert np.abs(response[:3, :3]).max() > 1e-3  # a force offset moves the static moments: not a vacuous match
 
 
 def test_offset_torques_are_minus_j_transpose_of_the_rotated_offset(data: IdentificationData) -> None:

@@ -1,0 +1,37 @@
+"""The estimate's first-order response to a change of the measured torques: the final fit's solve, held."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bsp_ros.core.identification.stacked import Fit, Problem
+
+
+@dataclass(frozen=True)
+class TorqueResponse:
+    """``d(parameters) = (A + P)^-1 X^T W d(tau)`` over the final fit's rows and per-joint weights, with the
+    parameters at a bound held there (a small change does not free them): what re-running the estimator on
+    torques changed by a little gives, without re-running it (its discrete choices, outliers, friction
+    transitions and passive model, are those of the estimate)."""
+
+    regressor: np.ndarray  # (N, n, p) the final problem's columns
+    row_weights: np.ndarray  # (N, n) the fit's weight of every used row, 0 elsewhere
+    design: np.ndarray  # (p, p) A + P
+    free: np.ndarray  # (p,) bool: parameters off their bounds
+
+    @classmethod
+    def of(cls, problem: Problem, fit: Fit) -> TorqueResponse:
+        """The response of ``fit``, the weighted bounded fit of ``problem``."""
+        at_bound = (fit.values <= problem.lower + 1e-12) | (fit.values >= problem.upper - 1e-12)
+        row_weights = np.where(problem.rows, fit.weights[None, :], 0.0)
+        return cls(problem.regressor, row_weights, fit.design, ~at_bound)
+
+    def __call__(self, delta_tau_nm: np.ndarray) -> np.ndarray:
+        """(p,) parameter change for a torque change ``delta_tau_nm`` (N, n) Nm at the fit's samples."""
+        rhs = np.einsum("tip,ti,ti->p", self.regressor, self.row_weights, delta_tau_nm)
+        out = np.zeros(rhs.size)
+        free = self.free
+        out[free] = np.linalg.lstsq(self.design[np.ix_(free, free)], rhs[free], rcond=None)[0]
+        return out
