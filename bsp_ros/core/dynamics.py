@@ -98,6 +98,47 @@ def base_regressor(
     return regressor
 
 
+def base_torques_nm(
+    q_rad: np.ndarray,
+    qd_rad_s: np.ndarray,
+    qdd_rad_s2: np.ndarray,
+    lengths_m: np.ndarray,
+    base_values: np.ndarray,
+    gravity_m_s2: float = GRAVITY_M_S2,
+) -> np.ndarray:
+    """``base_regressor(...) @ base_values`` (N, n) Nm without the regressor: each segment's two first moments
+    act as one vector, so a chain's torques cost a third of its regressor (the marker placement's finite
+    differences evaluate them many times).
+
+    Parameters
+    ----------
+    q_rad, qd_rad_s, qdd_rad_s2 : (N, n) joint angles (rad), velocities (rad/s), accelerations (rad/s^2).
+    lengths_m : (n,) segment lengths (m).
+    base_values : (3n,) ``[beta, gamma, zeta]`` (kg m, kg m, kg m^2).
+    gravity_m_s2 : g (m/s^2), acting along -z.
+    """
+    n = q_rad.shape[1]
+    phi, omega, alpha = np.cumsum(q_rad, axis=1), np.cumsum(qd_rad_s, axis=1), np.cumsum(qdd_rad_s2, axis=1)
+    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)
+    normal = _perp(axis)
+    points = np.zeros((q_rad.shape[0], n, 2))
+    accel = np.zeros((q_rad.shape[0], n, 2))
+    for j in range(1, n):
+        step = lengths_m[j - 1]
+        points[:, j] = points[:, j - 1] + step * axis[:, j - 1]
+        accel[:, j] = accel[:, j - 1] + step * (
+            alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1]
+        )
+    torque = np.zeros((q_rad.shape[0], n))
+    for j in range(n):
+        h = base_values[j] * axis[:, j] + base_values[n + j] * normal[:, j]  # the segment's first moment vector
+        force = alpha[:, j, None] * _perp(h) - omega[:, j, None] ** 2 * h
+        own = _cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0] + base_values[2 * n + j] * alpha[:, j]
+        for i in range(j + 1):
+            torque[:, i] += _cross(points[:, j] - points[:, i], force) + own
+    return torque
+
+
 def base_parameters(
     lengths_m: npt.ArrayLike,
     masses_kg: npt.ArrayLike,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsp_ros.core.dynamics import base_regressor
+from bsp_ros.core.dynamics import base_torques_nm
 from bsp_ros.core.model import contact_jacobian, joint_positions_m
 
 # Finite-difference step of a marker offset (m): the torques are smooth in it over millimetres.
@@ -72,7 +72,7 @@ def placement_columns(
     points = joint_positions_m(q_rad, lengths_m)  # (N, n + 1, 2) the marker chain
     phi = np.cumsum(q_rad, axis=1)
     frame_of = [*range(n), n - 1]
-    model = base_regressor(q_rad, qd_rad_s, qdd_rad_s2, lengths_m) @ base_values
+    model = base_torques_nm(q_rad, qd_rad_s, qdd_rad_s2, lengths_m, base_values)
     columns = np.zeros((q_rad.shape[0], n, 2 * (n + 1)))
     for k in range(n + 1):
         angle = phi[:, frame_of[k]]
@@ -83,7 +83,7 @@ def placement_columns(
             q_true = _angles_from_points(moved)
             lever = moved[:, -1:, :] - moved[:, :n, :]  # (N, n, 2) contact point from each joint
             tau_true = -(lever[..., 0] * wrench[:, None, 1] - lever[..., 1] * wrench[:, None, 0] + wrench[:, None, 2])
-            model_true = base_regressor(q_true, qd_rad_s, qdd_rad_s2, lengths_m) @ base_values
+            model_true = base_torques_nm(q_true, qd_rad_s, qdd_rad_s2, lengths_m, base_values)
             # tau_meas = Y theta + [d(Y theta)/do - d tau/do] o
             columns[:, :, 2 * k + c] = ((model_true - model) - (tau_true - tau_nm)) / _STEP_M
     return columns

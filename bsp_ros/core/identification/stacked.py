@@ -135,45 +135,93 @@ def prior_rows(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
     return rows, root * problem.prior_mean[picks]
 
 
-def normal_equations(problem: Problem, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """``A + P``, ``X^T W y + P theta_0`` and ``y^T W y + theta_0^T P theta_0`` over the used rows."""
-    w = np.where(problem.rows, weights[None, :], 0.0)
-    design = np.einsum("tip,ti,tiq->pq", problem.regressor, w, problem.regressor) + np.diag(problem.prior_precision)
-    moment = np.einsum("tip,ti,ti->p", problem.regressor, w, problem.torque)
-    moment += problem.prior_precision * problem.prior_mean
-    total = float((w * problem.torque**2).sum() + (problem.prior_precision * problem.prior_mean**2).sum())
+Statistics = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def joint_statistics(problem: Problem) -> Statistics:
+    """Per joint ``j`` over its used rows: ``X_j^T X_j`` (n, p, p), ``X_j^T y_j`` (n, p) and ``y_j^T y_j`` (n,).
+
+    The weights of the fit are per joint, so these give the normal equations of every reweighting at p x p
+    cost (one pass over the samples, BLAS products)."""
+    n, p = problem.torque.shape[1], problem.regressor.shape[2]
+    grams, moments, totals = np.empty((n, p, p)), np.empty((n, p)), np.empty(n)
+    for j in range(n):
+        x = problem.regressor[problem.rows[:, j], j, :]
+        y = problem.torque[problem.rows[:, j], j]
+        grams[j], moments[j], totals[j] = x.T @ x, x.T @ y, y @ y
+    return grams, moments, totals
+
+
+def normal_equations(
+    problem: Problem, weights: np.ndarray, statistics: Statistics | None = None
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """``A + P``, ``X^T W y + P theta_0`` and ``y^T W y + theta_0^T P theta_0`` over the used rows (from
+    ``statistics``, :func:`joint_statistics`, when given)."""
+    grams, moments, totals = joint_statistics(problem) if statistics is None else statistics
+    design = np.tensordot(weights, grams, axes=1) + np.diag(problem.prior_precision)
+    moment = weights @ moments + problem.prior_precision * problem.prior_mean
+    total = float(weights @ totals + (problem.prior_precision * problem.prior_mean**2).sum())
     return design, moment, total
 
 
-def weighted_solve(problem: Problem, weights: np.ndarray) -> np.ndarray:
+def _scaled_cholesky(design: np.ndarray, moment: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``R, c, scale`` of :func:`triangular` for the column-scaled problem, from its normal equations (p x p);
+    None where they are too ill-conditioned for Cholesky (then the tall matrix's QR is needed)."""
+    scale = np.sqrt(np.clip(np.diag(design), 0.0, None))
+    scale[scale == 0] = 1.0
+    try:
+        lower = np.linalg.cholesky(design / np.outer(scale, scale))
+    except np.linalg.LinAlgError:
+        return None
+    if not np.linalg.cond(lower) < 1e6:
+        return None
+    return lower.T, np.linalg.solve(lower, moment / scale), scale
+
+
+def _tall(problem: Problem, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The weighted used rows and the prior rows as one tall system ``a x ~ b``."""
     root = np.sqrt(weights)[None, :, None]
     prior_a, prior_b = prior_rows(problem)
     a = np.vstack(((problem.regressor * root)[problem.rows], prior_a))
     b = np.concatenate(((problem.torque * root[..., 0])[problem.rows], prior_b))
-    # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
-    scale = np.linalg.norm(a, axis=0)
-    scale[scale == 0] = 1.0
-    r_factor, rhs = triangular(a / scale, b)
+    return a, b
+
+
+def _bounded(problem: Problem, r_factor: np.ndarray, rhs: np.ndarray, scale: np.ndarray) -> np.ndarray:
     solution = lsq_linear(
         r_factor, rhs, bounds=(problem.lower * scale, problem.upper * scale), method="bvls", tol=1e-12
     )
     return np.asarray(solution.x / scale)
 
 
+def weighted_solve(problem: Problem, weights: np.ndarray, statistics: Statistics | None = None) -> np.ndarray:
+    # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
+    design, moment, _ = normal_equations(problem, weights, statistics)
+    factor = _scaled_cholesky(design, moment)
+    if factor is not None:
+        return _bounded(problem, *factor)
+    a, b = _tall(problem, weights)
+    scale = np.linalg.norm(a, axis=0)
+    scale[scale == 0] = 1.0
+    r_factor, rhs = triangular(a / scale, b)
+    return _bounded(problem, r_factor, rhs, scale)
+
+
 def fit_problem(problem: Problem) -> Fit:
     n = problem.torque.shape[1]
     weights = np.ones(n)
-    values = weighted_solve(problem, weights)
+    statistics = joint_statistics(problem)
+    values = weighted_solve(problem, weights, statistics)
     for _ in range(2):  # reweight by per-joint residual variance (Gautier and Poignet 2001)
-        residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+        residual = problem.torque - problem.regressor @ values
         counts = problem.rows.sum(axis=0)
         sigma = np.sqrt(np.where(problem.rows, residual**2, 0.0).sum(axis=0) / np.maximum(counts, 1))
         sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(problem.torque).max()), 1e-9))
         weights = 1.0 / sigma**2
-        values = weighted_solve(problem, weights)
-    residual = problem.torque - np.einsum("tip,p->ti", problem.regressor, values)
+        values = weighted_solve(problem, weights, statistics)
+    residual = problem.torque - problem.regressor @ values
     w = np.where(problem.rows, weights[None, :], 0.0)
-    design, _, _ = normal_equations(problem, weights)
+    design, moment, _ = normal_equations(problem, weights, statistics)
     scores = np.einsum("tip,ti->tp", problem.regressor, w * np.where(problem.rows, residual, 0.0))
     used_samples = problem.rows.any(axis=1)
     covariance, lags = hac_covariance(design, scores[used_samples])
@@ -182,10 +230,15 @@ def fit_problem(problem: Problem) -> Fit:
         inverse = np.linalg.pinv(design)
         covariance = covariance + inverse @ np.diag(problem.prior_precision) @ inverse
         covariance = 0.5 * (covariance + covariance.T)
-    a = np.vstack(((problem.regressor * np.sqrt(weights)[None, :, None])[problem.rows], prior_rows(problem)[0]))
-    norms = np.linalg.norm(a, axis=0)
     # Singular values of the column-scaled matrix are those of its triangular factor.
-    singular = np.linalg.svd(triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0], compute_uv=False)
+    factor = _scaled_cholesky(design, moment)
+    if factor is not None:
+        r_factor = factor[0]
+    else:
+        a, _ = _tall(problem, weights)
+        norms = np.linalg.norm(a, axis=0)
+        r_factor = triangular(a / np.where(norms > 0, norms, 1.0), a[:, 0])[0]
+    singular = np.linalg.svd(r_factor, compute_uv=False)
     condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
     residual_used = np.where(problem.rows, residual, np.nan)
     return Fit(values, covariance, residual_used, sigma, condition, lags, design, weights)
