@@ -109,8 +109,8 @@ def implausible_perpendicular_moments(
             problems.append(
                 f"the {name}'s centre of mass would sit {abs(value - mean) / sd:.1f} prior sd off its axis "
                 f"(perpendicular moment {value:.3g} kg m): an angle-dependent moment the model lacks (a two-joint "
-                "muscle?) looks like gravity on an off-axis mass on this trajectory: --passive auto chooses the coupled "
-                "and nonlinear passive terms, and a protocol that moves the shoulder and the elbow independently "
-                "(bsp plan) separates them"
+                "muscle?) looks like gravity on an off-axis mass on this trajectory: --passive auto chooses the "
+                "coupled and nonlinear passive terms, and a protocol that moves the shoulder and the elbow "
+                "independently (bsp plan) separates them"
             )
     return problems

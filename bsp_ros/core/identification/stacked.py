@@ -207,21 +207,39 @@ def weighted_solve(problem: Problem, weights: np.ndarray, statistics: Statistics
     return _bounded(problem, r_factor, rhs, scale)
 
 
-def fit_problem(problem: Problem) -> Fit:
+@dataclass(frozen=True)
+class Reweighted:
+    """The values of the per-joint reweighted fit, without its covariance: what a residual needs."""
+
+    values: np.ndarray  # (p,)
+    weights: np.ndarray  # (n,) 1 / sigma^2
+    sigma: np.ndarray  # (n,) residual sd per joint at the previous values
+    residual: np.ndarray  # (N, n) on every row
+    statistics: Statistics
+
+
+def reweighted_values(problem: Problem) -> Reweighted:
+    """Solve, then reweight twice by per-joint residual variance (Gautier and Poignet 2001)."""
     n = problem.torque.shape[1]
     weights = np.ones(n)
     statistics = joint_statistics(problem)
     values = weighted_solve(problem, weights, statistics)
-    for _ in range(2):  # reweight by per-joint residual variance (Gautier and Poignet 2001)
+    sigma = np.ones(n)
+    for _ in range(2):
         residual = problem.torque - problem.regressor @ values
         counts = problem.rows.sum(axis=0)
         sigma = np.sqrt(np.where(problem.rows, residual**2, 0.0).sum(axis=0) / np.maximum(counts, 1))
         sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(problem.torque).max()), 1e-9))
         weights = 1.0 / sigma**2
         values = weighted_solve(problem, weights, statistics)
-    residual = problem.torque - problem.regressor @ values
+    return Reweighted(values, weights, sigma, problem.torque - problem.regressor @ values, statistics)
+
+
+def fit_problem(problem: Problem) -> Fit:
+    solved = reweighted_values(problem)
+    values, weights, residual = solved.values, solved.weights, solved.residual
     w = np.where(problem.rows, weights[None, :], 0.0)
-    design, moment, _ = normal_equations(problem, weights, statistics)
+    design, moment, _ = normal_equations(problem, weights, solved.statistics)
     scores = np.einsum("tip,ti->tp", problem.regressor, w * np.where(problem.rows, residual, 0.0))
     used_samples = problem.rows.any(axis=1)
     covariance, lags = hac_covariance(design, scores[used_samples])
@@ -241,7 +259,7 @@ def fit_problem(problem: Problem) -> Fit:
     singular = np.linalg.svd(r_factor, compute_uv=False)
     condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
     residual_used = np.where(problem.rows, residual, np.nan)
-    return Fit(values, covariance, residual_used, sigma, condition, lags, design, weights)
+    return Fit(values, covariance, residual_used, solved.sigma, condition, lags, design, weights)
 
 
 def augmented(

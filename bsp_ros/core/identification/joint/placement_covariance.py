@@ -9,7 +9,7 @@ import numpy as np
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.result import ParameterName
-from bsp_ros.core.identification.stacked import Fit, Problem, augmented, fit_problem
+from bsp_ros.core.identification.stacked import Fit, Problem, augmented, reweighted_values
 
 
 @dataclass(frozen=True)
@@ -75,4 +75,5 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     ]
     # Offsets in units of their sd (the columns are scaled): each with the prior N(0, 1).
     with_offsets = augmented(problem, columns, names, np.zeros(m), np.ones(m))
-    return PlacementEffect(_covariance(problem, fit, columns), fit_problem(with_offsets).residual)
+    residual = np.where(problem.rows, reweighted_values(with_offsets).residual, np.nan)
+    return PlacementEffect(_covariance(problem, fit, columns), residual)
