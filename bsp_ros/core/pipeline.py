@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.estimate import estimate_document
 from bsp_ros.core.fusion import (
     Posterior,
@@ -26,7 +28,7 @@ from bsp_ros.core.identification.recordings import combine_recordings
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import compensate_wrench_delay
-from bsp_ros.core.joint_angles import KinematicsConfig
+from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_markers
 from bsp_ros.core.sensor_rotation import rotation_quality
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import Session
@@ -182,11 +184,18 @@ def identify_recordings(
     for session in sessions:
         session = corrected_session(session, options.tare)
         # --- stream timing (bsp_ros/core/identification/timing.py): the wrench stamps' delay, compensated ---
-        session, timing = compensate_wrench_delay(session, options.wrench_delay_s, options.kinematics, options.passive)
+        # The markers' angles once: the delay search and the identification data share them (where they fail,
+        # the identification data says why, in its own order of checks).
+        kinematics: MarkerKinematics | None = None
+        with contextlib.suppress(BspError):
+            kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, options.kinematics)
+        session, timing = compensate_wrench_delay(
+            session, options.wrench_delay_s, options.kinematics, options.passive, kinematics=kinematics
+        )
         # --- end stream timing ---
         prepared.append(session)
         timings.append(timing)
-        recordings.append(identification_data_from_session(session, options.kinematics))
+        recordings.append(identification_data_from_session(session, options.kinematics, kinematics))
     data = combine_recordings(recordings, tilts)
     result = identify_data(data, options)
     refit = refit_options(result, options)

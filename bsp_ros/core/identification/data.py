@@ -8,7 +8,12 @@ import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.identification.planarity import out_of_plane_fraction
-from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_markers, resample_with_motion
+from bsp_ros.core.joint_angles import (
+    KinematicsConfig,
+    MarkerKinematics,
+    kinematics_from_markers,
+    resample_with_motion,
+)
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.streams import Session, WrenchSeries, markers_for
 from bsp_ros.errors import DataError, InputError
@@ -172,9 +177,11 @@ def _clean_wrench(wrench: WrenchSeries) -> tuple[np.ndarray, list[str], dict[str
 
 
 def identification_data_from_session(
-    session: Session, kinematics_config: KinematicsConfig | None = None
+    session: Session, kinematics_config: KinematicsConfig | None = None, kinematics: MarkerKinematics | None = None
 ) -> IdentificationData:
     """Angles from the markers, resampled onto the wrench stamps, with the contact torques.
+
+    ``kinematics``: the session markers' angles, when already computed (the wrench-delay search needs them too).
 
     Raises
     ------
@@ -185,7 +192,8 @@ def identification_data_from_session(
     if n_wrench == 0:
         raise DataError("the session holds no wrench samples")
     chain = chain_markers(session)
-    kinematics = kinematics_from_markers(chain, session.n_segments, kinematics_config)
+    if kinematics is None:
+        kinematics = kinematics_from_markers(chain, session.n_segments, kinematics_config)
     rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
     keep, notes, removed = _clean_wrench(session.wrench)
     removed.update({f"marker_{name}": count for name, count in kinematics.n_frames_rejected.items()})

@@ -126,8 +126,11 @@ class DelayProblem:
         return data, valid
 
 
-def delay_problem(session: Session, kinematics_config: KinematicsConfig | None = None) -> DelayProblem:
-    """Prepare a session for :func:`estimate_wrench_delay` (marker angles once, the wrench in ``world``)."""
+def delay_problem(
+    session: Session, kinematics_config: KinematicsConfig | None = None, kinematics: MarkerKinematics | None = None
+) -> DelayProblem:
+    """Prepare a session for :func:`estimate_wrench_delay` (marker angles once, the wrench in ``world``);
+    ``kinematics``: the markers' angles, when already computed."""
     keep, _, _ = _clean_wrench(session.wrench)
     rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
     if rotation.ndim == 3:
@@ -135,7 +138,8 @@ def delay_problem(session: Session, kinematics_config: KinematicsConfig | None =
     wrench = WrenchSeries(
         session.wrench.t_ns[keep], session.wrench.force_n[keep], session.wrench.torque_nm[keep], session.wrench.frame_id
     )
-    kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, kinematics_config)
+    if kinematics is None:
+        kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, kinematics_config)
     return DelayProblem(kinematics, np.asarray(wrench.t_ns, dtype=np.int64), wrench_world_yzx(wrench, rotation))
 
 
@@ -352,6 +356,7 @@ def compensate_wrench_delay(
     kinematics_config: KinematicsConfig | None = None,
     passive: PassiveModel | None = None,
     fit_rss: Callable[[IdentificationData], float] | None = None,
+    kinematics: MarkerKinematics | None = None,
 ) -> tuple[Session, WrenchDelay]:
     """The session with its wrench delay compensated, and what was done.
 
@@ -361,6 +366,7 @@ def compensate_wrench_delay(
     wrench_delay_s : a delay the cell knows (s, ``source`` ``"parameter"``), or None to estimate it
         (:func:`estimate_wrench_delay`), applied only when resolved.
     kinematics_config, passive, fit_rss : as for :func:`estimate_wrench_delay`.
+    kinematics : the session markers' angles, when already computed.
 
     Raises
     ------
@@ -371,7 +377,8 @@ def compensate_wrench_delay(
         check_finite_scalar("wrench_delay_s", wrench_delay_s, -10.0, 10.0)
         return shifted_session(session, wrench_delay_s), WrenchDelay(float(wrench_delay_s), 0.0, "parameter")
     try:
-        delay = estimate_wrench_delay(session, fit_rss, passive=passive, kinematics_config=kinematics_config)
+        problem = delay_problem(session, kinematics_config, kinematics)
+        delay = estimate_wrench_delay(problem, fit_rss, passive=passive)
     except (DataError, InputError, np.linalg.LinAlgError) as error:
         # The identification itself reports what is wrong with such a session; timing just stays uncompensated.
         return session, WrenchDelay(
