@@ -8,30 +8,13 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from msg_adapters.rotation import matrices_from_quaternions
 from msg_adapters.tf import TransformSample
 
 __all__ = ["RotationTrack", "TransformBuffer", "matrices_from_quaternions", "slerp_quaternions"]
 
 # Two rotations of a /tf link closer than this (rad) are the same one republished: the link does not turn.
 SAME_ROTATION_RAD = 1e-9
-
-
-def matrices_from_quaternions(quaternions_xyzw: np.ndarray) -> np.ndarray:
-    """(N, 4) unit quaternions ``(x, y, z, w)`` -> (N, 3, 3) rotation matrices (normalised first)."""
-    q = np.asarray(quaternions_xyzw, dtype=np.float64)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    out = np.empty((*q.shape[:-1], 3, 3))
-    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
-    out[..., 0, 1] = 2 * (x * y - z * w)
-    out[..., 0, 2] = 2 * (x * z + y * w)
-    out[..., 1, 0] = 2 * (x * y + z * w)
-    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
-    out[..., 1, 2] = 2 * (y * z - x * w)
-    out[..., 2, 0] = 2 * (x * z - y * w)
-    out[..., 2, 1] = 2 * (y * z + x * w)
-    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
-    return out
 
 
 def slerp_quaternions(stamps_ns: np.ndarray, quaternions_xyzw: np.ndarray, t_ns: np.ndarray) -> np.ndarray:

@@ -128,6 +128,14 @@ def test_rotation_helpers() -> None:
         ma.quaternion_from_matrix(np.diag([1.0, 1.0, -1.0]))
 
 
+def test_matrix_from_quaternion_equals_scipy_rotation() -> None:
+    from scipy.spatial.transform import Rotation
+
+    quaternions = np.random.default_rng(11).normal(size=(50, 4)) * 3.0  # not normalised: both normalise
+    for q in quaternions:
+        np.testing.assert_allclose(ma.matrix_from_quaternion(q), Rotation.from_quat(q).as_matrix(), atol=1e-12)
+
+
 def test_joint_state_roundtrip() -> None:
     sample = ma.JointStateSample(
         9, "arm", ("shoulder", "elbow"), np.array([0.1, 0.2]), np.array([]), np.array([1.0, 2.0])
