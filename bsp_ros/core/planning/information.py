@@ -15,7 +15,7 @@ from bsp_ros.core.identification.joint import JointConfig
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import problem_names
-from bsp_ros.core.joint_angles import KinematicsConfig, _direction_noise_gain
+from bsp_ros.core.joint_angles import KinematicsConfig, direction_noise_gain
 from bsp_ros.core.model import (
     absolute_angles_rad,
     check_lengths_m,
@@ -374,7 +374,7 @@ def _posture_information(
     speed = np.abs(velocity)
     if "coulomb" in passive.terms:
         angle_sd = np.sqrt(np.einsum("nii->ni", angle_cov).mean(axis=0))
-        velocity_noise = angle_sd * _direction_noise_gain(kinematics.direction_cutoff_hz, noise.marker_hz)
+        velocity_noise = angle_sd * direction_noise_gain(kinematics.direction_cutoff_hz, noise.marker_hz)
         deadband = np.maximum(
             config.deadband_fraction * np.percentile(speed, 95, axis=0), config.deadband_noise_sd * velocity_noise
         )
