@@ -65,51 +65,58 @@ def select_passive(
     extras: Extras | None,
     covariance_of: Callable[[Problem, Fit], np.ndarray] | None = None,
 ) -> Selection:
-    """Choose among ``model.candidates()`` by a Wald-form BIC on the richest candidate's fit.
+    """Choose among ``model.candidates()`` by a Wald-form BIC, each model tested inside the richer ones.
 
-    The richest model is fitted once; a candidate that leaves out terms is scored by the HAC Wald statistic of
-    those terms (autocorrelation-robust, unlike a likelihood ratio on correlated residuals) minus ``ln N`` per
-    term left out, N the used torque rows (Schwarz 1978; the Wald form as in Kass and Raftery 1995). Weights
-    ``exp(-criterion / 2)`` are reported; the models the data cannot reject (:data:`REJECT_P`) are fitted for
-    :func:`spread_covariance`. ``covariance_of`` gives the richest fit's full covariance for the tests (the
-    marker placement's share included: offsets of skin markers bend the torques like elastic terms, and a test
-    on the sensor noise alone would reject every simple model of a precise session).
+    Every candidate is fitted. A candidate that leaves out terms of a richer one is scored in that richer model's
+    fit: the HAC Wald statistic of the terms it leaves out (autocorrelation-robust, unlike a likelihood ratio on
+    correlated residuals) minus ``ln N`` per term, N the used torque rows (Schwarz 1978; the Wald form as in Kass
+    and Raftery 1995), plus the richer model's own criterion: the criterion relative to the richest model along
+    the least favourable chain of nested models. Testing inside each richer model, not only inside the richest,
+    keeps the tests' power where the richest model cannot tell its terms from gravity (its covariance, right, is
+    then too wide to reject anything, and the simplest model would win however strong a spring). A candidate is
+    rejected when any of its tests rejects at :data:`REJECT_P`; the choice is the smallest criterion among the
+    models not rejected. Weights ``exp(-criterion / 2)`` are reported;
+    the models the data cannot reject enter :func:`spread_covariance`. ``covariance_of`` gives a fit's full
+    covariance for the tests (the marker placement's share included: offsets of skin markers bend the torques
+    like elastic terms, and a test on the sensor noise alone would reject every simple model of a precise
+    session).
     """
     models = model.candidates()
-    rich_problem = build_problem(data, models[-1], rows, widths, extras)
-    rich_fit = fit_problem(rich_problem)
-    rich_covariance = rich_fit.covariance if covariance_of is None else covariance_of(rich_problem, rich_fit)
+    n = data.n_joints
+    problems = [build_problem(data, m, rows, widths, extras) for m in models]
+    fits = [fit_problem(problem) for problem in problems]
+    covariances = [
+        f.covariance if covariance_of is None else covariance_of(p, f) for p, f in zip(problems, fits, strict=True)
+    ]
+    names = [set(problem_names(m, n, extras is not None)) for m in models]
     penalty = float(np.log(max(int(rows.sum()), 2)))
-    index = {name: i for i, name in enumerate(rich_problem.names)}
-    criteria, p_values = [], []
-    for candidate in models:
-        kept = set(problem_names(candidate, data.n_joints, extras is not None))
-        left_out = [i for name, i in index.items() if name not in kept]
-        if not left_out:
-            criteria.append(0.0)
-            p_values.append(1.0)
-            continue
-        theta = rich_fit.values[left_out]
-        sub = rich_covariance[np.ix_(left_out, left_out)]
-        # Directions the data cannot test (terms confounded with gravity, held by their priors) carry no evidence:
-        # a relative cut keeps their near-zero eigenvalues from turning rounding into significance.
-        statistic = float(theta @ np.linalg.pinv(sub, rcond=1e-6, hermitian=True) @ theta)
-        criteria.append(statistic - penalty * len(left_out))
-        p_values.append(float(chdtrc(len(left_out), statistic)))
+    criteria = [0.0] * len(models)
+    p_values = [1.0] * len(models)
+    # From the richest down: every richer model's criterion is known when a simpler one is scored against it.
+    for i in range(len(models) - 2, -1, -1):
+        scores = []
+        for j in range(i + 1, len(models)):
+            if not names[i] < names[j]:
+                continue
+            left_out = [k for k, name in enumerate(problems[j].names) if name not in names[i]]
+            theta = fits[j].values[left_out]
+            sub = covariances[j][np.ix_(left_out, left_out)]
+            # Directions the data cannot test (terms confounded with gravity, held by their priors) carry no
+            # evidence: a relative cut keeps their near-zero eigenvalues from turning rounding into significance.
+            statistic = float(theta @ np.linalg.pinv(sub, rcond=1e-6, hermitian=True) @ theta)
+            scores.append(statistic - penalty * len(left_out) + criteria[j])
+            p_values[i] = min(p_values[i], float(chdtrc(len(left_out), statistic)))
+        criteria[i] = max(scores) if scores else 0.0
     criterion = np.array(criteria)
     weight = np.exp(-0.5 * (criterion - criterion.min()))
     weight /= weight.sum()
-    best = int(np.argmin(criterion))
-    candidates = []
-    for i, candidate in enumerate(models):
-        problem: Problem | None = None
-        fit: Fit | None = None
-        if i == len(models) - 1:
-            problem, fit = rich_problem, rich_fit
-        elif p_values[i] >= REJECT_P or i == best:
-            problem = build_problem(data, candidate, rows, widths, extras)
-            fit = fit_problem(problem)
-        candidates.append(Candidate(candidate, problem, fit, float(criterion[i]), float(weight[i]), p_values[i]))
+    # The smallest criterion among the models the data do not reject (all, if every one is rejected).
+    open_ = np.array([p >= REJECT_P for p in p_values])
+    best = int(np.argmin(np.where(open_, criterion, np.inf))) if open_.any() else int(np.argmin(criterion))
+    candidates = [
+        Candidate(m, problems[i], fits[i], float(criterion[i]), float(weight[i]), p_values[i])
+        for i, m in enumerate(models)
+    ]
     chosen = candidates[best]
     return Selection(chosen, candidates, shape_probe(data, chosen, rows, widths, extras))
 

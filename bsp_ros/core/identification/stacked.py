@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from bsp_ros.core.identification.covariance import hac_covariance
+from bsp_ros.core.identification.covariance import design_inverse, hac_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.elastic import (
     ElasticReference,
@@ -245,7 +245,7 @@ def fit_problem(problem: Problem) -> Fit:
     covariance, lags = hac_covariance(design, scores[used_samples])
     if problem.prior_precision.any():
         # The prior is an independent source of information: (A + P)^-1 (S + P) (A + P)^-1.
-        inverse = np.linalg.pinv(design)
+        inverse = design_inverse(design)
         covariance = covariance + inverse @ np.diag(problem.prior_precision) @ inverse
         covariance = 0.5 * (covariance + covariance.T)
     # Singular values of the column-scaled matrix are those of its triangular factor.

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, term_test
 from bsp_ros.core.identification.result import ParameterName
@@ -64,7 +65,7 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
     delta_torque = np.zeros_like(data.tau_nm)
     for k, rows in enumerate(groups):
         delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
-    delta = np.linalg.lstsq(fit.design, np.einsum("tip,ti,ti->p", problem.regressor, w, delta_torque), rcond=None)[0]
+    delta = design_inverse(fit.design) @ np.einsum("tip,ti,ti->p", problem.regressor, w, delta_torque)
     std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
     offset_shift = np.abs(delta[:n]) / std
     if max(shift, float(offset_shift.max())) <= MODEL_CHECK_SHIFT_SD:

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.result import ParameterName
@@ -45,7 +46,7 @@ def _columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndar
 def _covariance(problem: Problem, fit: Fit, columns: np.ndarray) -> np.ndarray:
     """Covariance of the estimate from offsets of unit variance along ``columns``."""
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    response = np.linalg.lstsq(fit.design, np.einsum("tip,ti,tim->pm", problem.regressor, w, columns), rcond=None)[0]
+    response = design_inverse(fit.design) @ np.einsum("tip,ti,tim->pm", problem.regressor, w, columns)
     return np.asarray(response @ response.T)
 
 

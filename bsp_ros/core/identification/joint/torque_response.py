@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.stacked import Fit, Problem
 
 
@@ -33,5 +34,5 @@ class TorqueResponse:
         rhs = np.einsum("tip,ti,ti->p", self.regressor, self.row_weights, delta_tau_nm)
         out = np.zeros(rhs.size)
         free = self.free
-        out[free] = np.linalg.lstsq(self.design[np.ix_(free, free)], rhs[free], rcond=None)[0]
+        out[free] = design_inverse(self.design[np.ix_(free, free)]) @ rhs[free]
         return out
