@@ -270,8 +270,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
-    if config.check_elastic and not problems:
-        stribeck = stribeck_check(data, problem, fit, config, widths)
+    if (config.check_elastic or config.check_drift) and not problems:
+        # The drift check alone (check_drift) is one refit: a live window runs it on every update.
+        stribeck = stribeck_check(data, problem, fit, config, widths) if config.check_elastic else []
         drift = drift_check(data, problem, fit)
         if drift is not None:
             fit = drift.fit
@@ -285,11 +286,6 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             # Which friction law holds at low speed is open; the amplitudes of both join the Coulomb variance.
             covariance[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
         fit = dataclasses.replace(fit, covariance=covariance)
-    elif config.check_drift and not problems:
-        drift = drift_check(data, problem, fit)
-        if drift is not None:
-            fit = drift.fit
-            warnings.append(drift.note)
     if config.check_elastic and selection is None and not problems:
         elastic = elastic_check(data, config, problem.rows, fit, widths, extras, with_placement)
         if elastic and config.elastic_fallback:
