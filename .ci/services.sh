@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Install the services the store/report tests use (PostgreSQL server binaries, headless Chromium).
+# Install the services the store/report tests use (PostgreSQL server binaries, headless Chromium, poppler-utils
+# to read the PDF report back).
 # Fresh Debian 12, run as root, non-interactive; idempotent (re-running installs nothing new).
 # The tests start their own throwaway PostgreSQL cluster (initdb/pg_ctl as user `postgres`), so no
 # system cluster needs to run; the default one Debian creates is stopped to free resources.
@@ -11,7 +12,7 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 
 export DEBIAN_FRONTEND=noninteractive
-packages=(postgresql chromium fonts-dejavu-core)
+packages=(postgresql chromium fonts-dejavu-core poppler-utils)
 
 missing=()
 for package in "${packages[@]}"; do
@@ -28,6 +29,7 @@ fi
 # Check what the tests look for.
 ls /usr/lib/postgresql/*/bin/initdb /usr/lib/postgresql/*/bin/pg_ctl >/dev/null
 test -x /usr/bin/chromium
+command -v pdftotext pdftoppm pdfinfo >/dev/null
 id postgres >/dev/null
 
 # The tests bring their own cluster; a running default cluster is not needed.

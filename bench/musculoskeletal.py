@@ -14,12 +14,15 @@ data-sourced quantity (source ``data`` / ``data+prior``) that the truth has is s
 ``|z| = |value - truth| / std``: the static moments (with ``--all-quantities`` also lengths, masses, COMs, first
 moments, inertias and the joints' Coulomb level, whose truth is 0) and, where the estimate has
 ``joints.<joint>.passive_curve``, its points against the truth's curve. Per row: runs, valid, valid-and-wrong
-(some |z| > 3), invalid-and-right (every |z| <= 3), the worst |z| over valid runs and over all, the most common
-message of the invalid ones. ``--quick``: one seed, 60 s, rigid and three strengths, three models (and
-suggestions). ``--planar``: arm26 with both joint axes made exactly lateral. ``--trunk-tilt-deg DEG``: each
-session is also recorded with arm26's ground (the trunk, with the shoulder and the muscles' origins) turned by DEG
-about world x, the same motion relative to it, and both recordings are identified together (``bsp identify
-UPRIGHT TILTED --trunk-tilt-deg 0 DEG``): rows ``PROTOCOL+DEG``, scored against the upright session's truth.
+(some |z| > 3), invalid-and-right (every |z| <= 3), the worst |z| over valid runs and over all, the median over
+valid runs of the largest static-moment error (% of the truth) and of the largest passive-curve error (RMS over
+the truth curve's range, % of its RMS), how many runs are "accurate" (issue 20's target: valid, static moments
+within 3 % and 3 std, curves within 10 % RMS), the most common message of the invalid ones.
+``--quick``: one seed, 60 s, rigid and three strengths, three models (and suggestions). ``--planar``: arm26 with
+both joint axes made exactly lateral. ``--trunk-tilt-deg DEG``: each session is also recorded with arm26's ground
+(the trunk, with the shoulder and the muscles' origins) turned by DEG about world x, the same motion relative to it,
+and both recordings are identified together (``bsp identify UPRIGHT TILTED --trunk-tilt-deg 0 DEG``): rows
+``PROTOCOL+DEG``, scored against the upright session's truth.
 """
 
 from __future__ import annotations
@@ -143,6 +146,32 @@ def score(document: dict[str, Any], truth: dict[str, Any], all_quantities: bool)
     return z
 
 
+def accuracy(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, float]:
+    """Issue 20's accuracy target, per run: the largest static-moment error (% of the truth) and the largest
+    passive-curve error (RMS over the truth curve's range, % of the truth curve's RMS)."""
+    static = [
+        100.0
+        * abs(q["value"] - truth["segments"][name]["static_moment_kgm"])
+        / abs(truth["segments"][name]["static_moment_kgm"])
+        for name, quantities in document.get("segments", {}).items()
+        if isinstance(q := quantities.get("static_moment_kgm"), dict)
+        and q.get("value") is not None
+        and name in truth["segments"]
+    ]
+    curves = []
+    for joint, quantities in document.get("joints", {}).items():
+        curve, true_curve = quantities.get("passive_curve"), truth["joints"].get(joint, {}).get("passive_curve")
+        if not (isinstance(curve, dict) and true_curve):
+            continue
+        true_angle, true_moment = np.asarray(true_curve["angle_deg"]), np.asarray(true_curve["moment_nm"])
+        angle, moment = np.asarray(curve["angle_deg"], dtype=float), np.asarray(curve["moment_nm"], dtype=float)
+        inside = (angle >= true_angle.min()) & (angle <= true_angle.max())
+        reference = np.interp(angle[inside], true_angle, true_moment)
+        if inside.sum() >= 2 and np.any(reference):
+            curves.append(100.0 * math.sqrt(np.mean((moment[inside] - reference) ** 2) / np.mean(reference**2)))
+    return {"static_pct": max(static, default=math.nan), "curve_rms_pct": max(curves, default=math.nan)}
+
+
 def _message(document: dict[str, Any]) -> str:
     text = document.get("error") or document.get("quality", {}).get("message") or "invalid (no message)"
     return _NUMBER.sub("#", str(text))[:70]
@@ -194,6 +223,15 @@ def _row_text(key: tuple[float, str, str], runs: list[dict[str, Any]]) -> str:
     messages = collections.Counter(r["message"] for r in runs if not r["valid"])
     common = f"{messages.most_common(1)[0][0]} ({messages.most_common(1)[0][1]})" if messages else "-"
 
+    # Issue 20: valid, static moments within 3 % and 3 std, passive curves within 10 % RMS.
+    accurate = [
+        r for r in valid if r["worst_z"] <= WRONG_Z and r["static_pct"] <= 3.0 and not r["curve_rms_pct"] > 10.0
+    ]
+
+    def median(rows: list[dict[str, Any]], key: str) -> str:
+        values = [r[key] for r in rows if math.isfinite(r[key])]
+        return f"{np.median(values):.1f}" if values else "-"
+
     def worst(rows: list[dict[str, Any]]) -> str:
         values = [r["worst_z"] for r in rows if r["z"]]
         return f"{max(values):.1f}" if values else "-"
@@ -201,7 +239,8 @@ def _row_text(key: tuple[float, str, str], runs: list[dict[str, Any]]) -> str:
     label = f"{100 * share:.3g}%" if share > 0 else "rigid"
     return (
         f"{label:>7s} {protocol:10s} {model:34s} {len(runs):4d} {len(valid):5d} {len(wrong):11d} "
-        f"{len(right_invalid):13d} {worst(valid):>9s} {worst(runs):>7s}  {common}"
+        f"{len(right_invalid):13d} {worst(valid):>9s} {worst(runs):>7s} {median(valid, 'static_pct'):>8s} "
+        f"{median(valid, 'curve_rms_pct'):>8s} {len(accurate):8d}  {common}"
     )
 
 
@@ -261,6 +300,9 @@ def main(argv: list[str] | None = None) -> int:
                     document = identify(bags, model, where / "estimate.json", arguments)
                     z = {} if "error" in document else score(document, truth, args.all_quantities)
                     valid = bool(document.get("quality", {}).get("valid", False))
+                    errors = {"static_pct": math.nan, "curve_rms_pct": math.nan}
+                    if "error" not in document:
+                        errors = accuracy(document, truth)
                     warnings = document.get("quality", {}).get("warnings", [])
                     queue += [m for w in warnings for m in _SUGGESTION.findall(w) if m not in done]
                     rows[(share, label, model)].append(
@@ -270,6 +312,7 @@ def main(argv: list[str] | None = None) -> int:
                             "z": z,
                             "worst_z": max(z.values(), default=math.nan),
                             "message": "" if valid else _message(document),
+                            **errors,
                         }
                     )
             print(
@@ -281,7 +324,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"arm26 (OpenSim, {shape}), {duration:g} s sessions, {seeds} seed(s); |z| over {scored} and passive curves")
     print(
         f"{'passive':>7s} {'protocol':10s} {'model':34s} {'runs':>4s} {'valid':>5s} {'valid+wrong':>11s} "
-        f"{'invalid+right':>13s} {'worst|z|v':>9s} {'all':>7s}  most common invalid message"
+        f"{'invalid+right':>13s} {'worst|z|v':>9s} {'all':>7s} {'static%':>8s} {'curve%':>8s} {'accurate':>8s}  "
+        "most common invalid message"
     )
     for key in sorted(rows, key=lambda k: (k[0], k[1], k[2] != DEFAULT, len(k[2]), k[2])):
         print(_row_text(key, rows[key]))

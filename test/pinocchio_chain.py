@@ -18,7 +18,7 @@ def planar_chain(
     base_m: Sequence[float] = (0.0, 0.0, 0.0),
     gravity_m_s2: float = 9.81,
 ) -> Any:
-    """Revolute joints about world x, each segment along its parent's +y at q = 0 (CONTRACT.md's sagittal plane).
+    """Revolute joints about world x, each segment along its parent's +y at q = 0 (docs/contract.md's sagittal plane).
 
     Segment frames: y along the segment, z its counter-clockwise normal, x the joint axis; only the inertia
     about x acts in the plane (the others are set to something plausible and unused).

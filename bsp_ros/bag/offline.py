@@ -20,7 +20,7 @@ def identify_bag(
     progress: Callable[[int, int], None] | None = None,
     sha256: str | None = None,
 ) -> dict[str, Any]:
-    """The CONTRACT.md estimate of a rosbag2 MCAP bag, with a ``bag`` section on what was read and lost.
+    """The docs/contract.md estimate of a rosbag2 MCAP bag, with a ``bag`` section on what was read and lost.
 
     Damage (CRC errors, truncation) does not stop the identification of what is intact; it is reported in
     ``bag`` and as a warning in ``quality.warnings``. ``sha256``: the bag's :func:`content_sha256` if the

@@ -313,7 +313,7 @@ def read_session(
     Parameters
     ----------
     path : bag directory, its ``metadata.yaml``, or an ``.mcap`` file.
-    topics : topic names (default: CONTRACT.md's).
+    topics : topic names (default: docs/contract.md's).
     world_frame : name of the ``world`` frame.
     frame_aliases : frame id -> frame it coincides with (no rotation), used when TF does not connect
         the wrench frame to ``world_frame`` (e.g. ``{"ft_link": "world"}`` silences the warning).

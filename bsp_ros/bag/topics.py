@@ -1,4 +1,4 @@
-"""The topic names a cell records (each a parameter) and the message types CONTRACT.md fixes for them."""
+"""The topic names a cell records (each a parameter) and the message types docs/contract.md fixes for them."""
 
 from __future__ import annotations
 

@@ -69,7 +69,7 @@ def write_session_bag(
 ) -> Path:
     """Write ``session`` as a rosbag2 (Jazzy, metadata version 9) bag directory with one MCAP file.
 
-    Topics and types are CONTRACT.md's: the wrench in its sensor frame, markers in ``world_frame``,
+    Topics and types are docs/contract.md's: the wrench in its sensor frame, markers in ``world_frame``,
     and ``/tf_static`` (offered transient-local, so ``ros2 bag play`` republishes it latched) with the
     ``world_frame -> sensor`` transform from ``session.rotation_world_from_sensor``. Chunks are
     ``chunk_bytes`` long, uncompressed, each with a CRC. Receive (log) times are the header stamps plus
@@ -82,7 +82,7 @@ def write_session_bag(
         never put a subject identifier in it.
     session : the streams to write.
     truth_dict : JSON-ready ground truth, written to ``truth.json`` inside ``out_dir``.
-    topics : topic names (default: CONTRACT.md's).
+    topics : topic names (default: docs/contract.md's).
     world_frame : the ``world`` frame id.
     sensor_translation_m : (3,) sensor origin in ``world`` for ``/tf_static``, m.
     transport_delay_ns, delay_jitter_ns : receive delay after the header stamp, ns (>= 0).

@@ -121,8 +121,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--passive",
         default="coulomb+offset+stiffness",
         metavar="MODEL",
-        help="passive model to identify: coulomb, coulomb+offset, coulomb+offset+stiffness "
-        "(default coulomb+offset+stiffness)",
+        help="passive model to identify: coulomb, coulomb+offset, coulomb+offset+stiffness, auto (the data choose "
+        "nonlinear and two-joint elastic terms, as bsp identify --passive auto) or any bsp identify --passive model; "
+        "with elastic terms one simulated session of the plan says how closely it follows each joint's passive "
+        "curve (default coulomb+offset+stiffness)",
     )
     session.add_argument(
         "--trunk-tilt-deg",
@@ -411,12 +413,21 @@ def run(args: argparse.Namespace) -> int:
     print(format_plan(plan))
     if args.excite_inertia:
         print(inertia_lines(plan, args))
+    warnings = []
+    if request.passive.select or "stiffness" in request.passive.terms:
+        from bsp_ros.cli.plan_passive import passive_check_lines
+
+        text, curve_warning = passive_check_lines(plan, args)
+        print(text)
+        warnings += [curve_warning] if curve_warning else []
     warning = precision_warning(
         plan, args.target_std, lambda duration_s: planner(dataclasses.replace(request, duration_s=duration_s))
     )
-    if warning is not None:
-        sys.stdout.flush()  # the table first, then the warning, when both go to a terminal
-        print(f"warning: {warning}", file=sys.stderr)
+    warnings = ([warning] if warning is not None else []) + warnings
+    if warnings:
+        sys.stdout.flush()  # the table first, then the warnings, when both go to a terminal
+        for text in warnings:
+            print(f"warning: {text}", file=sys.stderr)
     if args.json:
         write_plan_json(args.json, plan, args.rate)
         print(f"wrote {args.json}")

@@ -28,6 +28,12 @@ RETEST_METHOD = (
     "cycles within one session leaves out everything that differs between days and never judges a change."
 )
 
+#: Where a reader of the report finds what its numbers mean (files of the bsp_ros repository).
+READING_GUIDE = (
+    "What each number means, how to record a retest and what to do about an unusable session: docs/clinic.md "
+    "of bsp_ros; the measurement itself: docs/method.md."
+)
+
 
 def mdc95_from_sem(sem: float) -> float:
     """MDC95 = 1.96 x sqrt(2) x SEM: the smallest change between two measurements beyond their 95 % noise."""

@@ -55,7 +55,7 @@ def base_regressor(
     """Joint torques of gravity and inertia, linear in the base parameters.
 
     ``M(q) q'' + C(q, q') q' + tau_G(q) = Y @ [beta_1..beta_n, gamma_1..gamma_n, zeta_1..zeta_n]``: the
-    left-hand side of ``M q'' + C q' + tau_G + tau_p = -J^T F`` (CONTRACT.md, extended to dynamics). With
+    left-hand side of ``M q'' + C q' + tau_G + tau_p = -J^T F`` (docs/contract.md, extended to dynamics). With
     ``q' = q'' = 0`` the beta columns are :func:`bsp_ros.core.model.gravity_regressor`.
 
     Parameters

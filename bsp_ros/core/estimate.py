@@ -1,4 +1,4 @@
-"""The `bsp_ros/core/estimate/1` document of CONTRACT.md, built from an identification and a fused prior."""
+"""The `bsp_ros/core/estimate/1` document of docs/contract.md, built from an identification and a fused prior."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ SCHEMA = "bsp_ros/core/estimate/1"
 
 
 def quantity(value: float, std: float, source: str) -> dict[str, Any]:
-    """One CONTRACT.md quantity; a value that could not be computed is ``null``, never NaN."""
+    """One docs/contract.md quantity; a value that could not be computed is ``null``, never NaN."""
 
     def clean(number: float) -> float | None:
         return float(number) if math.isfinite(number) else None
@@ -54,7 +54,7 @@ def estimate_document(
     session: dict[str, Any] | None = None,
     marker_placement_sd_m: float | np.ndarray = 0.0,
 ) -> dict[str, Any]:
-    """Build the estimate JSON (as a dict) of CONTRACT.md.
+    """Build the estimate JSON (as a dict) of docs/contract.md.
 
     ``static_moment_kgm`` is the grouped, identifiable static moment ``beta_j``; ``first_moment_kgm`` is the
     segment's own ``m_j l_j``, which like ``mass_kg`` and ``com_m`` needs the anthropometric prior.

@@ -1,4 +1,4 @@
-"""The planar arm chain of CONTRACT.md: kinematics, contact-point Jacobian and gravity regressor."""
+"""The planar arm chain of docs/contract.md: kinematics, contact-point Jacobian and gravity regressor."""
 
 from __future__ import annotations
 
@@ -140,7 +140,7 @@ def gravity_regressor_one(q_rad: FloatVector) -> list[list[float]]:
 
 
 def gravity_regressor(q_rad: npt.ArrayLike) -> np.ndarray:
-    """Regressor of gravity torques in the grouped static moments ``beta`` (CONTRACT.md).
+    """Regressor of gravity torques in the grouped static moments ``beta`` (docs/contract.md).
 
     Parameters
     ----------
@@ -157,7 +157,7 @@ def gravity_regressor(q_rad: npt.ArrayLike) -> np.ndarray:
 
 
 def static_moments_kgm(lengths_m: npt.ArrayLike, masses_kg: npt.ArrayLike, com_m: npt.ArrayLike) -> np.ndarray:
-    """Grouped static moments from masses and centres of mass (CONTRACT.md).
+    """Grouped static moments from masses and centres of mass (docs/contract.md).
 
     ``beta_j = m_j l_j + a_j * sum_{k > j} m_k`` (kg m): the first moment about joint j of segment j and
     everything distal to it, with the distal mass lumped at the next joint.

@@ -145,7 +145,7 @@ def fuse(result: IdentificationResult, data: IdentificationData, subject: Subjec
 def identify_session(
     session: Session, options: IdentifyOptions | None = None, session_info: dict[str, Any] | None = None
 ) -> dict[str, Any]:
-    """Identify a whole session; return the CONTRACT.md estimate document.
+    """Identify a whole session; return the docs/contract.md estimate document.
 
     Raises
     ------
@@ -163,7 +163,7 @@ def identify_recordings(
     session_info: dict[str, Any] | None = None,
     recording_info: Sequence[dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
-    """Identify one arm from one or more recordings, each with its trunk's tilt; the CONTRACT.md estimate.
+    """Identify one arm from one or more recordings, each with its trunk's tilt; the docs/contract.md estimate.
 
     Each recording is corrected (tare, stream delay) and turned into samples on its own; the samples are
     then identified together (:func:`combine_recordings`). With several recordings the estimate's

@@ -91,11 +91,11 @@ def support_wrench(
     support_fraction: float,
     static_moments_covariance: npt.ArrayLike | None = None,
 ) -> SupportWrench:
-    """The hand wrench with ``J(q)^T F_support = s tau_G(q)`` (CONTRACT.md "Weight support").
+    """The hand wrench with ``J(q)^T F_support = s tau_G(q)`` (docs/contract.md "Weight support").
 
     Parameters
     ----------
-    q_rad : (n,) joint angles (rad), CONTRACT conventions, n = 2 or 3.
+    q_rad : (n,) joint angles (rad), docs/contract.md conventions, n = 2 or 3.
     lengths_m : (n,) segment lengths (m).
     static_moments_kgm : (n,) grouped static moments ``beta`` (kg m).
     support_fraction : ``s`` in [0, 1] of the gravity torques to carry.
@@ -164,7 +164,7 @@ def estimate_from_result(result: Any) -> dict[str, Any]:
 
 
 def estimate_from_document(document: Mapping[str, Any]) -> dict[str, Any] | None:
-    """The ``estimate`` argument of :func:`live_support` from an estimate document (CONTRACT.md schema).
+    """The ``estimate`` argument of :func:`live_support` from an estimate document (docs/contract.md schema).
 
     The static moments' covariance is rebuilt from their std and the document's ``diagnostics.correlation``
     (over ``diagnostics.parameters``); without those, their std alone (no correlation). None when the

@@ -6,8 +6,8 @@ wrench written to a bag is what MuJoCo's own ``force``/``torque`` sensors report
 value of ``bsp_ros``'s model. ``mujoco_session`` turns a run into a bag (``bsp_ros.bag.writer``) with a
 ``bsp_ros/truth/1`` truth.json.
 
-Frames (CONTRACT.md): world x lateral, y anterior, z up; hinges about world +x; all joint angles zero is the
-arm straight along +y, so MuJoCo's hinge angles are CONTRACT's q1 (absolute), q2, q3 (relative). Each
+Frames (docs/contract.md): world x lateral, y anterior, z up; hinges about world +x; all joint angles zero is the
+arm straight along +y, so MuJoCo's hinge angles are docs/contract.md's q1 (absolute), q2, q3 (relative). Each
 segment body's frame has its axis along local +y and its origin at the proximal joint. The hand carries a
 massless body ``hand_contact`` at the contact point, welded to the mocap body ``robot_handle``; the sensor
 site sits on ``hand_contact``, so MuJoCo's ``cfrc_int`` of that body is the wrench the hand assembly exerts

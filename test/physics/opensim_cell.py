@@ -5,17 +5,17 @@ Test support (not part of the installed package): ``test/physics/test_opensim_ce
 ``test/data/arm26.osim`` (see ``test/data/arm26.README.md``); gravity, inertial and muscle torques come from
 OpenSim's inverse dynamics, never from ``bsp_ros``'s model.
 
-The arm is CONTRACT.md's 2-segment chain: ``upper_arm`` = ``r_humerus`` (shoulder centre -> elbow centre),
+The arm is docs/contract.md's 2-segment chain: ``upper_arm`` = ``r_humerus`` (shoulder centre -> elbow centre),
 ``forearm`` = ``r_ulna_radius_hand`` (elbow centre -> contact point). The contact point is the centre of the
 handle bearing in the fist, :data:`CONTACT_IN_FOREARM_M` in the forearm body's frame: on the forearm's long
 axis (which passes through the forearm-and-hand COM), 0.31 m from the elbow centre, about 7.5 cm distal of the
 radial styloid's level (mid-palm). A bearing transmits no moment: the robot pushes in the y-z plane (F_x = 0,
 M = 0) with the force that, with OpenSim's joint torques ``tau``, satisfies ``-J^T F_end = tau``.
 
-Frames: OpenSim's ground has x anterior, y up, z lateral (right arm): its sagittal plane x-y is CONTRACT's
+Frames: OpenSim's ground has x anterior, y up, z lateral (right arm): its sagittal plane x-y is docs/contract.md's
 y-z plane, so ``world`` = (ground z, ground x, ground y), shifted so that the shoulder centre sits at
-``SessionOptions.shoulder_m``. A rotation about +z (ground) from anterior toward up is CONTRACT's positive
-rotation about +x from +y toward +z, so CONTRACT's angles are ``q1 = r_shoulder_elev + offset_1`` (the upper arm
+``SessionOptions.shoulder_m``. A rotation about +z (ground) from anterior toward up is docs/contract.md's positive
+rotation about +x from +y toward +z, so docs/contract.md's angles are ``q1 = r_shoulder_elev + offset_1`` (the upper arm
 hangs at elevation 0: ``q1 ~ -88.8 deg``) and ``q2 = r_elbow_flex + offset_2``, the offsets measured once in the
 y-z plane at coordinates 0 (:attr:`Arm26.offsets_rad`). arm26's joint axes are 3.4 deg (shoulder) and 3.5 deg
 (elbow, at elevation 0) oblique to world x, tilted opposite ways: the arm is not planar, and the contact point
@@ -89,7 +89,7 @@ CONTACT_IN_FOREARM_M = (0.0, -0.31, 0.0)
 WRONG_WRAP_ELEVATION_DEG = (29.0, 31.6)
 #: The paper's 2-segment sine protocol (bsp_ros.core.simulation.paper_mechanical_arm_cell).
 PAPER_PROTOCOL = paper_mechanical_arm_cell().trajectory
-#: Planned-protocol ranges (CONTRACT angles, deg): elevation 43-67 deg, between TRIlong's wrap switches.
+#: Planned-protocol ranges (docs/contract.md angles, deg): elevation 43-67 deg, between TRIlong's wrap switches.
 PLANNED_LIMITS_DEG = ((-46.0, -22.0), (20.0, 80.0))
 PASSIVE_CURVE_POINTS = 25
 _FD_STEP_RAD = 1e-6  # central differences of the contact point: error ~1e-10 m/rad
@@ -109,9 +109,9 @@ class CellOptions:
     muscles : False leaves the muscles out (rigid arm: gravity and inertia only).
     planar : True makes both joint axes exactly lateral (a planar arm); False keeps arm26's oblique axes.
     inertia : False holds the arm quasi-statically (speeds and accelerations 0 in the inverse dynamics).
-    gravity_m_s2 : gravity (CONTRACT's 9.81; arm26 ships 9.8066).
+    gravity_m_s2 : gravity (docs/contract.md's 9.81; arm26 ships 9.8066).
     trunk_tilt_rad : the trunk (arm26's ground, which carries the shoulder and the muscles' origins) turned about
-        world x by this much: gravity turns in ground, ``world`` keeps z up, and the CONTRACT angles ``q_rad``
+        world x by this much: gravity turns in ground, ``world`` keeps z up, and the docs/contract.md angles ``q_rad``
         stay world angles (the shoulder's is the angle to the trunk plus the tilt).
     """
 
@@ -128,9 +128,9 @@ class CellOptions:
 
 
 class Arm26:
-    """arm26 in CONTRACT's frames and angles: kinematics, inverse dynamics, passive muscle moments.
+    """arm26 in docs/contract.md's frames and angles: kinematics, inverse dynamics, passive muscle moments.
 
-    Angles ``q_rad`` are (N, 2) CONTRACT angles (q1 absolute from +y, q2 relative), rad.
+    Angles ``q_rad`` are (N, 2) docs/contract.md angles (q1 absolute from +y, q2 relative), rad.
 
     Parameters
     ----------
@@ -142,7 +142,7 @@ class Arm26:
         osim.Logger.setLevelString("error")  # arm26's meshes are absent: drawing only
         self.options = options or CellOptions()
         model = osim.Model(str(path))
-        #: (3, 3) rows: world x, y, z in ground axes (OpenSim's sagittal plane x-y is CONTRACT's y-z plane, turned
+        #: (3, 3) rows: world x, y, z in ground axes (sagittal plane x-y is docs/contract.md's y-z plane, turned
         #: by the trunk's tilt about world x); world = R (ground - shoulder) + shoulder_m.
         c, s = math.cos(self.options.trunk_tilt_rad), math.sin(self.options.trunk_tilt_rad)
         tilt = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
@@ -197,7 +197,7 @@ class Arm26:
         self._model.realizePosition(self._state)
 
     def coordinates_rad(self, q_rad: npt.ArrayLike) -> np.ndarray:
-        """(N, 2) OpenSim coordinates (elevation, flexion) of CONTRACT angles, rad; refuses the wrong-wrap band."""
+        """(N, 2) OpenSim coordinates (elevation, flexion) of docs/contract.md angles; refuses the wrong-wrap band."""
         coords = np.atleast_2d(np.asarray(q_rad, dtype=np.float64)) - self.offsets_rad
         elevation_deg = np.degrees(coords[:, 0])
         bad = (elevation_deg >= WRONG_WRAP_ELEVATION_DEG[0]) & (elevation_deg <= WRONG_WRAP_ELEVATION_DEG[1])
@@ -477,7 +477,7 @@ class CellRun:
     session : wrench (sensor frame) and markers (``world``), as a bag holds them.
     truth : ``bsp_ros/truth/1`` dict (see :func:`truth_dict`).
     t_s : (K,) physics grid, s since the start.
-    q_rad : (K, 2) prescribed CONTRACT angles.
+    q_rad : (K, 2) prescribed docs/contract.md angles.
     torque_nm : (K, 2) the driver's torques (OpenSim inverse dynamics).
     passive_nm : (K, 2) the muscles' share of them.
     wrench_world : (K, 3) ``[F_y, F_z, M_x]`` the hand exerts on the sensor, ``world``, noise-free.
@@ -516,7 +516,7 @@ def run_cell(arm: Arm26, trajectory: JointTrajectory, options: SessionOptions | 
     Parameters
     ----------
     arm : the OpenSim arm.
-    trajectory : the prescribed CONTRACT angles (a ``TrajectorySpec`` or a ``PlannedTrajectory``).
+    trajectory : the prescribed docs/contract.md angles (a ``TrajectorySpec`` or a ``PlannedTrajectory``).
     options : the recording.
 
     Returns
@@ -602,7 +602,7 @@ def truth_dict(
     """The session's ``bsp_ros/truth/1`` truth.
 
     Segments: OpenSim's masses, COMs and inertias projected on the ``world`` y-z plane at the session's mean
-    posture (``segment_properties``); ``static_moment_kgm`` is CONTRACT's grouped ``m_j l_j + a_j sum m_k``,
+    posture (``segment_properties``); ``static_moment_kgm`` is docs/contract.md's grouped ``m_j l_j + a_j sum m_k``,
     plus ``perpendicular_moment_kgm``, the inertia keys and ``length_range_m`` (the in-plane length over the
     session: it varies on the oblique arm). Joints: ``coulomb_nm`` 0 (arm26 has no dry friction), no elastic
     parameters (the muscles are not a linear spring), and ``passive_curve`` / ``passive_coupling``

@@ -21,7 +21,7 @@ from bsp_ros.core.simulation import SessionTruth
 
 
 def _angles_and_lengths(run: cell.CellRun) -> tuple[np.ndarray, np.ndarray]:
-    """CONTRACT angles and in-plane lengths of the noise-free joint centres (x projected away)."""
+    """docs/contract.md angles and in-plane lengths of the noise-free joint centres (x projected away)."""
     steps = np.diff(run.points_m[:, :, 1:], axis=1)  # (K, 2 segments, [y, z])
     phi = np.arctan2(steps[..., 1], steps[..., 0])
     return np.column_stack((phi[:, 0], phi[:, 1] - phi[:, 0])), np.linalg.norm(steps, axis=2).mean(axis=0)

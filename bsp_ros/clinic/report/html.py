@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from html import escape
 
 from bsp_ros import __version__
-from bsp_ros.clinic.mdc import RETEST_METHOD
+from bsp_ros.clinic.mdc import READING_GUIDE, RETEST_METHOD
 from bsp_ros.clinic.report.analysis import Analysis, Change, Series
 from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
 from bsp_ros.clinic.report.summary import (
@@ -246,6 +246,7 @@ def render_html(
     parts.extend(_support(analysis))
     parts.extend(_quality(analysis))
     parts.append(f"<h2>Method</h2><p class='note'>{escape(RETEST_METHOD)}</p>")
+    parts.append(f"<p class='note' id='reading-guide'>{escape(READING_GUIDE)}</p>")
     parts.append("</section>")
     parts.append(f"<footer>{escape(footer)} by bsp_ros {escape(__version__)}.</footer></body></html>")
     return "\n".join(parts)

@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from bsp_ros import __version__
-from bsp_ros.clinic.mdc import RETEST_METHOD
+from bsp_ros.clinic.mdc import READING_GUIDE, RETEST_METHOD
 from bsp_ros.clinic.report.analysis import Analysis, Change
 from bsp_ros.clinic.report.curve_plots import curve_panels, draw_curves
 from bsp_ros.clinic.report.curve_views import CURVES_CAPTION, CURVES_TITLE
@@ -233,6 +233,7 @@ def _detail(flow: _Flow, analysis: Analysis) -> None:
             flow.paragraph(f"Session {record.number}: " + " | ".join(lines), 7.0, GREY)
     flow.heading("Method")
     flow.paragraph(RETEST_METHOD, 8.0, GREY)
+    flow.paragraph(READING_GUIDE, 8.0, GREY)
 
 
 def report_pages(analysis: Analysis, generated: dt.datetime) -> list[Figure]:

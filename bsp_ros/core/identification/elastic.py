@@ -11,7 +11,7 @@ import numpy as np
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.streams import joints_for
 
-# Parameter keys (CONTRACT.md, joints.<joint>): the x^2 and x^3 moments at the edge of the measured range
+# Parameter keys (docs/contract.md, joints.<joint>): the x^2 and x^3 moments at the edge of the measured range
 # (x = (q - centre) / half range, so the value is the moment the term adds there, Nm), and the stiffness shared
 # with the proximal joint, d tau_j / d q_{j-1} = d tau_{j-1} / d q_j (Nm/rad; a conservative elastic field has
 # a symmetric stiffness, which is what two-joint muscles crossing both joints give).

@@ -49,7 +49,7 @@ def identify_paper(data: IdentificationData, config: PaperConfig | None = None) 
     ``pi_1 = [m1 l1, m2, tau_p1]`` are solved joint by joint from the wrist, each step using the previous
     results. ``m2`` and ``m3`` are not identifiable from gravity (their columns are proportional to the
     static-moment columns), so the bounded solver's split is arbitrary: only the grouped static moments of
-    CONTRACT.md are reported as data. Standard deviations are classical per-joint least-squares errors,
+    docs/contract.md are reported as data. Standard deviations are classical per-joint least-squares errors,
     ignoring the error carried down the chain and residual autocorrelation, as the paper does.
 
     Parameters

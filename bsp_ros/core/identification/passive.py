@@ -9,7 +9,7 @@ import numpy as np
 from bsp_ros.errors import InputError
 
 # Term -> (parameter key in the estimate, unit, lower bound). The passive moment is what the driver must
-# supply beside gravity (CONTRACT.md): Coulomb c sign(qdot), viscous b qdot, elastic k q + offset.
+# supply beside gravity (docs/contract.md): Coulomb c sign(qdot), viscous b qdot, elastic k q + offset.
 TERMS = {
     "coulomb": ("coulomb_nm", "Nm", 0.0),
     "viscous": ("viscous_nms", "Nm s/rad", 0.0),

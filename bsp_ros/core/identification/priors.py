@@ -87,7 +87,11 @@ PERPENDICULAR_MAX_PRIOR_SD = 4.0
 
 
 def implausible_perpendicular_moments(
-    segments: list[str], values_kgm: np.ndarray, prior: BasePrior, model_sd_kgm: np.ndarray | None = None
+    segments: list[str],
+    values_kgm: np.ndarray,
+    prior: BasePrior,
+    model_sd_kgm: np.ndarray | None = None,
+    family_chosen: bool = False,
 ) -> list[str]:
     """Why the identified perpendicular moments (kg m, (n,)) cannot be a real COM offset; empty when they can.
 
@@ -99,6 +103,8 @@ def implausible_perpendicular_moments(
     model_sd_kgm : (n,) how far what the data cannot tell moves each value (kg m): the passive models the data
         cannot choose between (``--passive auto``), skin markers off their joint centres; a value these alone
         could move back into the prior's range is no evidence.
+    family_chosen : the data already chose among the coupled and nonlinear passive terms (``--passive auto``):
+        the advice is then not to choose them.
     """
     problems = []
     spread = np.zeros(len(segments)) if model_sd_kgm is None else np.asarray(model_sd_kgm, dtype=np.float64)
@@ -108,9 +114,17 @@ def implausible_perpendicular_moments(
         if sd > 0 and abs(value - mean) > PERPENDICULAR_MAX_PRIOR_SD * math.hypot(sd, extra):
             problems.append(
                 f"the {name}'s centre of mass would sit {abs(value - mean) / sd:.1f} prior sd off its axis "
-                f"(perpendicular moment {value:.3g} kg m): an angle-dependent moment the model lacks (a two-joint "
-                "muscle?) looks like gravity on an off-axis mass on this trajectory: --passive auto chooses the "
-                "coupled and nonlinear passive terms, and a protocol that moves the shoulder and the elbow "
-                "independently (bsp plan) separates them"
+                f"(perpendicular moment {value:.3g} kg m): "
+                + (
+                    "an angle-dependent moment that even the coupled, nonlinear passive terms (up to cubic) do not "
+                    "follow over these ranges looks like gravity on an off-axis mass: the arm's passive moments are "
+                    "more nonlinear than the model over this motion; narrower ranges, where the terms follow them, "
+                    "keep the estimate valid"
+                    if family_chosen
+                    else "an angle-dependent moment the model lacks (a two-joint muscle?) looks like gravity on an "
+                    "off-axis mass on this trajectory: --passive auto chooses the coupled and nonlinear passive "
+                    "terms, and a protocol that moves the shoulder and the elbow independently (bsp plan) separates "
+                    "them"
+                )
             )
     return problems

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 # A parameter is named by (quantity key, segment or joint name), e.g. ("static_moment_kgm", "forearm")
-# or ("coulomb_nm", "elbow"): the same keys as the estimate JSON of CONTRACT.md.
+# or ("coulomb_nm", "elbow"): the same keys as the estimate JSON of docs/contract.md.
 ParameterName = tuple[str, str]
 
 

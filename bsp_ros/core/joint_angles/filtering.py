@@ -175,7 +175,7 @@ def kinematics_from_markers(
 
     Parameters
     ----------
-    markers : marker name -> series in ``world`` (m); names per CONTRACT.md (``wrist`` only for 3 segments).
+    markers : marker name -> series in ``world`` (m); names per docs/contract.md (``wrist`` only for 3 segments).
     n_segments : 2 or 3.
     config : filter and gap settings.
 

@@ -133,10 +133,13 @@ def simulated_inertia_std(
     """
     from bsp_ros.core import simulation as sim
     from bsp_ros.core.pipeline import IdentifyOptions, identify_session
+    from bsp_ros.core.planning.simulated import NOMINAL_COULOMB_NM
 
     noise = plan.request.noise
-    spec = sim.human_arm_cell(
+    # A CellSpec of its own: the human cell's defaults are a 3-segment arm, and a plan may be for 2.
+    spec = sim.CellSpec(
         subject=subject,
+        passive=sim.PassiveTruth(coulomb_nm=NOMINAL_COULOMB_NM[: plan.request.nominal.n_joints]),
         trajectory=plan.trajectory,
         duration_s=plan.request.duration_s,
         seed=seed,

@@ -76,7 +76,7 @@ class NominalArm:
     Attributes
     ----------
     lengths_m : (n,) segment lengths, m.
-    static_moments_kgm : (n,) grouped static moments, kg m (CONTRACT.md).
+    static_moments_kgm : (n,) grouped static moments, kg m (docs/contract.md).
     passive : parameter name -> nominal value (e.g. ``("offset_nm", "elbow"): 0.2``) for relative stds.
     """
 

@@ -133,7 +133,7 @@ def joint_angles_from_handle_poses(
     poses_yzp : (N, 3) handle ``[y (m), z (m), pitch (rad)]`` in ``world`` (pitch unused for 2 segments).
     lengths_m : (n,) segment lengths (m).
     shoulder_yz_m : (2,) shoulder ``[y, z]`` in ``world`` (m).
-    elbow_sign : +1 for a flexed elbow with q2 > 0 (CONTRACT), -1 for q2 < 0.
+    elbow_sign : +1 for a flexed elbow with q2 > 0 (docs/contract.md), -1 for q2 < 0.
 
     Returns
     -------

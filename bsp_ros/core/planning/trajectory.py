@@ -26,7 +26,7 @@ class PlannedTrajectory:
     Parameters
     ----------
     t_s : (K,) knot times (s since the session start), strictly increasing, the first 0.
-    q_rad : (K, n) joint angles at the knots (rad, CONTRACT conventions: q1 absolute, q2, q3 relative).
+    q_rad : (K, n) joint angles at the knots (rad, docs/contract.md conventions: q1 absolute, q2, q3 relative).
     qdot_rad_s : (K, n) joint velocities at the knots (rad/s); the first and last must be 0 (start and
         end at rest).
 
@@ -156,7 +156,7 @@ def handle_poses_world(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike, shoulder_
     Returns
     -------
     (N, 3) ``[y (m), z (m), pitch (rad)]``: the contact point and the angle of the last segment from +y
-    (positive about +x, CONTRACT conventions).
+    (positive about +x, docs/contract.md conventions).
     """
     q = np.atleast_2d(np.asarray(q_rad, dtype=np.float64))
     points = joint_positions_m(q, lengths_m)[:, -1, :] + np.asarray(shoulder_yz_m, dtype=np.float64)[None, :]

@@ -17,6 +17,7 @@ from bsp_ros.core.simulation.trajectory import (
     JointTrajectory,
     MultiSineTrajectory,
     TrajectorySpec,
+    TrunkTiltedTrajectory,
     joint_accelerations_rad_s2,
 )
 from bsp_ros.core.simulation.truth import SessionTruth
@@ -41,6 +42,7 @@ __all__ = [
     "SubjectTruth",
     "TareSpec",
     "TrajectorySpec",
+    "TrunkTiltedTrajectory",
     "human_arm_cell",
     "inverse_dynamics_nm",
     "joint_accelerations_rad_s2",

@@ -12,7 +12,7 @@ from bsp_ros.core.simulation.checks import GRAVITY_M_S2
 
 @dataclass(frozen=True)
 class PlanarChain:
-    """A planar serial chain in the world y-z plane, rotating about x (CONTRACT angle conventions).
+    """A planar serial chain in the world y-z plane, rotating about x (docs/contract.md angle conventions).
 
     Attributes
     ----------

@@ -42,7 +42,7 @@ class SimulatedSession:
 class CellSimulator:
     """The simulated cell, usable sample by sample (a real-time publisher) or for a whole session.
 
-    Physics (CONTRACT.md): a planar chain in the world y-z plane moved along ``spec.trajectory`` so that
+    Physics (docs/contract.md): a planar chain in the world y-z plane moved along ``spec.trajectory`` so that
     ``M(q) q'' + C(q, q') q' + tau_G(q) + tau_p = -J(q)^T F_end`` (``spec.inertia``; otherwise the
     quasi-static ``tau_G(q) + tau_p = -J^T F_end``), the left side from a Newton-Euler recursion over each
     segment's mass, COM (on or off the axis) and inertia (:mod:`.dynamics`), with the trajectory's analytic
@@ -238,12 +238,7 @@ class CellSimulator:
         q[:, 0] -= self._spec.trunk_tilt_rad  # the shoulder's passive angle is relative to the trunk
         qdot = self.joint_velocities_rad_s(t_s)
         p = self._spec.passive
-        return (
-            p.friction_nm(qdot)
-            + np.asarray(p.viscous_nms) * qdot
-            + np.asarray(p.stiffness_nm_per_rad) * (q - np.asarray(p.neutral_rad))
-            + np.asarray(p.offset_nm)
-        )
+        return p.friction_nm(qdot) + np.asarray(p.viscous_nms) * qdot + p.elastic_nm(q)
 
     def contact_jacobian(self, t_s: npt.ArrayLike) -> np.ndarray:
         """Planar Jacobian of the contact point: (N,) s -> (N, 3, n), rows y, z, phi = q1 + ... + qn."""

@@ -127,7 +127,7 @@ class SubjectTruth:
 
     @property
     def static_moments_kgm(self) -> tuple[float, ...]:
-        """(n,) grouped static moments ``beta_j = m_j l_j + a_j * sum_{k>j} m_k`` (CONTRACT.md), kg m."""
+        """(n,) grouped static moments ``beta_j = m_j l_j + a_j * sum_{k>j} m_k`` (docs/contract.md), kg m."""
         out = []
         for j in range(self.n_segments):
             distal_mass = sum(self.masses_kg[j + 1 :])
@@ -257,6 +257,13 @@ class PassiveTruth:
     friction_transition_rad_s : width of the tanh direction transition, rad/s (0: a sign step).
     stribeck_ratio : friction level at zero speed over ``c_j`` (>= 0; 1: no Stribeck effect).
     stribeck_speed_rad_s : speed scale of the Stribeck decay, rad/s (> 0).
+    stiffening_nm : (n,) a stiffening elastic moment ``e_j sinh((q_j - q0_j) / w)`` per joint, Nm (the double
+        exponential of Riener and Edrich's passive joint moments, centred on the neutral angle; 0: none).
+    biarticular_nm : a two-joint muscle across the shoulder and the elbow, Nm: the potential
+        ``b w exp((q_1 + q_2 - q_b) / w)`` (``q_1`` to the trunk) gives both joints ``b exp((q_1 + q_2 - q_b) / w)``,
+        so the elbow's passive moment depends on the shoulder angle as the method paper says (0: none).
+    biarticular_neutral_rad : ``q_b``, rad.
+    stiffening_width_rad : ``w`` of both, rad (> 0).
     """
 
     coulomb_nm: tuple[float, ...]
@@ -267,6 +274,10 @@ class PassiveTruth:
     friction_transition_rad_s: float = 0.0
     stribeck_ratio: float = 1.0
     stribeck_speed_rad_s: float = 0.01
+    stiffening_nm: tuple[float, ...] = ()
+    biarticular_nm: float = 0.0
+    biarticular_neutral_rad: float = 0.0
+    stiffening_width_rad: float = 0.5
 
     def __post_init__(self) -> None:
         coulomb = float_tuple("coulomb_nm", self.coulomb_nm, None, 0.0, MAX_COULOMB_NM)
@@ -276,6 +287,7 @@ class PassiveTruth:
             "stiffness_nm_per_rad": (0.0, MAX_STIFFNESS_NM_PER_RAD),
             "neutral_rad": (-2.0 * math.pi, 2.0 * math.pi),
             "offset_nm": (-MAX_OFFSET_NM, MAX_OFFSET_NM),
+            "stiffening_nm": (-MAX_OFFSET_NM, MAX_OFFSET_NM),
         }
         object.__setattr__(self, "coulomb_nm", coulomb)
         for name, (lo, hi) in bounds.items():
@@ -294,11 +306,34 @@ class PassiveTruth:
         object.__setattr__(
             self, "stribeck_speed_rad_s", check_positive("stribeck_speed_rad_s", self.stribeck_speed_rad_s, 10.0)
         )
+        for name, (lo, hi) in (
+            ("biarticular_nm", (-MAX_OFFSET_NM, MAX_OFFSET_NM)),
+            ("biarticular_neutral_rad", (-2.0 * math.pi, 2.0 * math.pi)),
+        ):
+            object.__setattr__(self, name, check_finite_scalar(name, getattr(self, name), lo, hi))
+        object.__setattr__(
+            self, "stiffening_width_rad", check_positive("stiffening_width_rad", self.stiffening_width_rad, 10.0)
+        )
 
     @property
     def n_joints(self) -> int:
         """Number of joints (2 or 3)."""
         return len(self.coulomb_nm)
+
+    def elastic_nm(self, q_rad: npt.ArrayLike) -> np.ndarray:
+        """Elastic part of the passive moment (offset, stiffness, stiffening, the two-joint muscle): (N, n) joint
+        angles, the shoulder's to the trunk, rad -> (N, n) Nm."""
+        q = np.atleast_2d(np.asarray(q_rad, dtype=np.float64))
+        deviation = q - np.asarray(self.neutral_rad)
+        out = (
+            np.asarray(self.stiffness_nm_per_rad) * deviation
+            + np.asarray(self.offset_nm)
+            + np.asarray(self.stiffening_nm) * np.sinh(deviation / self.stiffening_width_rad)
+        )
+        if self.biarticular_nm:
+            stretch = (q[:, 0] + q[:, 1] - self.biarticular_neutral_rad) / self.stiffening_width_rad
+            out[:, :2] += self.biarticular_nm * np.exp(stretch)[:, None]
+        return out
 
     def friction_nm(self, qdot_rad_s: npt.ArrayLike) -> np.ndarray:
         """Friction part ``c_j s(qdot_j) h(qdot_j)`` of the passive moment: (N, n) rad/s -> (N, n) Nm."""

@@ -207,3 +207,34 @@ class MultiSineTrajectory:
         omega = 2.0 * np.pi / padded(self.period_s, 1.0)
         t = np.atleast_1d(np.asarray(t_s, dtype=np.float64))[:, None, None]
         return amp, omega, padded(self.phase_rad, 0.0), t
+
+
+@dataclass(frozen=True)
+class TrunkTiltedTrajectory:
+    """``trajectory`` (angles relative to an upright trunk) recorded with the trunk tilted by ``tilt_rad``: the same
+    angles relative to the trunk, so the shoulder's world angle turns by the tilt (a second posture of a plan)."""
+
+    trajectory: JointTrajectory
+    tilt_rad: float
+
+    @property
+    def n_joints(self) -> int:
+        return int(self.trajectory.n_joints)
+
+    @property
+    def peak_speed_rad_s(self) -> tuple[float, ...]:
+        return tuple(self.trajectory.peak_speed_rad_s)
+
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint angles (N, n), rad: the trunk-relative ones with the shoulder turned by the tilt."""
+        q = np.array(self.trajectory.angles_rad(t_s), dtype=np.float64)
+        q[..., 0] += self.tilt_rad
+        return q
+
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint velocities (N, n), rad/s: a constant tilt leaves them as they are."""
+        return np.asarray(self.trajectory.velocities_rad_s(t_s), dtype=np.float64)
+
+    def accelerations_rad_s2(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint accelerations (N, n), rad/s^2, the trajectory's own."""
+        return joint_accelerations_rad_s2(self.trajectory, t_s)

@@ -75,7 +75,7 @@ class SessionTruth:
 
     @property
     def static_moments_kgm(self) -> tuple[float, ...]:
-        """(n,) grouped static moments beta_j (CONTRACT.md), kg m."""
+        """(n,) grouped static moments beta_j (docs/contract.md), kg m."""
         return self.subject.static_moments_kgm
 
     @property
@@ -107,8 +107,9 @@ class SessionTruth:
             ``{"schema", "segments": {name: {length_m, static_moment_kgm, mass_kg, com_m,
             first_moment_kgm, inertia_com_kgm2, inertia_kgm2, grouped_inertia_kgm2,
             perpendicular_moment_kgm, com_perpendicular_m}}, "joints": {name: {coulomb_nm, viscous_nms,
-            stiffness_nm_per_rad, neutral_rad, offset_nm}}, "friction": {transition_rad_s, stribeck_ratio,
-            stribeck_speed_rad_s}, "trajectory": {joint: {center_deg, amplitude_deg, period_s,
+            stiffness_nm_per_rad, neutral_rad, offset_nm, stiffening_nm}}, "friction": {transition_rad_s,
+            stribeck_ratio, stribeck_speed_rad_s}, "elastic": {biarticular_nm, biarticular_neutral_rad,
+            stiffening_width_rad}, "trajectory": {joint: {center_deg, amplitude_deg, period_s,
             phase_rad}}, "simulation": {...}}``; ``simulation`` holds every sensor and marker nuisance
             (offsets and drift, handle payload, ``tf_static``, skin marker offsets).
         """
@@ -135,6 +136,7 @@ class SessionTruth:
                 "stiffness_nm_per_rad": p.stiffness_nm_per_rad[j],
                 "neutral_rad": p.neutral_rad[j],
                 "offset_nm": p.offset_nm[j],
+                "stiffening_nm": p.stiffening_nm[j],
             }
             for j, name in enumerate(self.joint_names)
         }
@@ -160,6 +162,11 @@ class SessionTruth:
             "segments": segments,
             "joints": joints,
             "friction": friction,
+            "elastic": {
+                "biarticular_nm": p.biarticular_nm,
+                "biarticular_neutral_rad": p.biarticular_neutral_rad,
+                "stiffening_width_rad": p.stiffening_width_rad,
+            },
             "trajectory": trajectory,
             "simulation": dict(self.simulation),
         }
@@ -206,7 +213,9 @@ class SessionTruth:
             stiffness_nm_per_rad=tuple(x.get("stiffness_nm_per_rad", 0.0) for x in jnt),
             neutral_rad=tuple(x.get("neutral_rad", 0.0) for x in jnt),
             offset_nm=tuple(x.get("offset_nm", 0.0) for x in jnt),
+            stiffening_nm=tuple(x.get("stiffening_nm", 0.0) for x in jnt),
             **_friction_fields(data.get("friction", {})),
+            **_elastic_fields(data.get("elastic", {})),
         )
         traj = _require(data, "trajectory", "")
         if isinstance(traj, Mapping) and "planned" in traj:
@@ -237,6 +246,14 @@ def _friction_fields(friction: Any) -> dict[str, Any]:
         "stribeck_speed_rad_s": "stribeck_speed_rad_s",
     }
     return {name: friction[key] for key, name in keys.items() if key in friction}
+
+
+def _elastic_fields(elastic: Any) -> dict[str, Any]:
+    """PassiveTruth two-joint and stiffening keywords from a truth dict's ``elastic`` block (absent: none)."""
+    if not isinstance(elastic, Mapping):
+        raise InputError(f"truth dict: elastic must be a mapping, got {elastic!r}")
+    keys = ("biarticular_nm", "biarticular_neutral_rad", "stiffening_width_rad")
+    return {key: elastic[key] for key in keys if key in elastic}
 
 
 def _inertias(segments: list[Any]) -> tuple[float, ...]:

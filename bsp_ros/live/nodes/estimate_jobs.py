@@ -74,7 +74,7 @@ class EstimateOutputs:
 
 
 def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive: bool) -> EstimateOutputs:
-    """Serialise an estimate document (CONTRACT.md schema) for ``bsp/estimate``, ``bsp/estimate_json``,
+    """Serialise an estimate document (docs/contract.md schema) for ``bsp/estimate``, ``bsp/estimate_json``,
     ``bsp/<segment>/inertia`` and, when ``with_passive``, ``bsp/passive_moments``."""
     store = _typestore()
 

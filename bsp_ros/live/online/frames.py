@@ -40,7 +40,7 @@ class WrenchFrames:
     links turn (a sensor on the robot's flange turning with the handle) is slerped at each wrench stamp
     between its /tf samples; a wrench newer than the newest /tf sample holds that one (the next transform
     has not come yet: :class:`WrenchQueue` makes it wait instead). A fixed chain (/tf_static) gives one
-    rotation. A frame without a transform after ``tf_wait_s`` is taken as world (CONTRACT.md). Without TF
+    rotation. A frame without a transform after ``tf_wait_s`` is taken as world (docs/contract.md). Without TF
     (no tf2_msgs installed) the fixed ``parameter_rotation`` applies to every frame other than world.
 
     Parameters

@@ -43,13 +43,15 @@ class WindowConfig:
         clock) makes the estimate invalid.
     options : method, passive model and subject, as for `bsp identify`.
     max_rate_hz : faster wrench streams are block-averaged down to this rate before identifying, so an
-        update at 1 kHz costs what one at 200 Hz does; the angles (50-100 Hz) carry no more information.
+        update at 1 kHz costs what one at 50 Hz does. The model's torques change below 2 Hz, and a block mean
+        keeps a white noise's information about them; measured on a 30 s window of 1 kHz wrench and 100 Hz
+        markers, 200, 100 and 50 Hz give the same estimates and std to 3 digits, at 92, 52 and 36 ms.
     """
 
     window_s: float = 30.0
     stale_s: float = 0.5
     options: IdentifyOptions = field(default_factory=IdentifyOptions)
-    max_rate_hz: float = 200.0
+    max_rate_hz: float = 50.0
     # The model checks (elastic, drift, Stribeck) refit the window several times; at 5 Hz every 25th update
     # (5 s) keeps an update well inside its period, and their verdict holds in between.
     elastic_check_every: int = 25
@@ -63,7 +65,7 @@ class WindowConfig:
 
 @dataclass(frozen=True)
 class WindowEstimate:
-    """One update: the estimate document (CONTRACT.md schema) and the newest wrench stamp it used."""
+    """One update: the estimate document (docs/contract.md schema) and the newest wrench stamp it used."""
 
     document: dict[str, Any]
     valid: bool

@@ -186,6 +186,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 f"{shift[worst]:.1f} std"
             )
         problem, fit, n_removed = kept, refit, n_far
+    # The fit's own covariance: what is added to it below (friction shape, placement, model choice) must survive
+    # a refit that models a drift.
+    own_covariance = fit.covariance
     if spread.any():
         # Whether friction steps or changes smoothly at low speed is itself uncertain: its effect on each
         # Coulomb amplitude joins that amplitude's variance (independent of the other parameters).
@@ -215,6 +218,16 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 f"between or on the passive curves' assumed shape (they differ by up to {model_shift[index]:.1f} of "
                 "its data std): that spread is in its std"
             )
+    if (config.check_elastic or config.check_drift) and not problems:
+        # Before the fit is judged: a drifting sensor leaves a slow residual that would otherwise read as a model
+        # that does not fit (the quieter the sensor, the sooner). One refit: a live window runs it on every update.
+        drift = drift_check(data, problem, fit)
+        if drift is not None:
+            if judged_residual is not None:
+                judged_residual = judged_residual - (fit.residual - drift.fit.residual)
+            added = fit.covariance - own_covariance
+            fit = dataclasses.replace(drift.fit, covariance=drift.fit.covariance + added)
+            warnings.append(drift.note)
     reference = ElasticReference.from_angles(data.passive_q_rad)
     curves = selection_curves(data, reference, fit, probed)
     noise, misfit = misfit_against_noise(fit, judged_residual)
@@ -270,13 +283,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
-    if (config.check_elastic or config.check_drift) and not problems:
-        # The drift check alone (check_drift) is one refit: a live window runs it on every update.
-        stribeck = stribeck_check(data, problem, fit, config, widths) if config.check_elastic else []
-        drift = drift_check(data, problem, fit)
-        if drift is not None:
-            fit = drift.fit
-            warnings.append(drift.note)
+    if config.check_elastic and not problems:
+        stribeck = stribeck_check(data, problem, fit, config, widths)
         unmodelled = [f.note for f in stribeck if f.biases_estimate]
         warnings += unmodelled + [f.note for f in stribeck if not f.biases_estimate]
         if unmodelled:
@@ -311,6 +319,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             # A marker off its joint centre, normal to the segment, tilts the segment's angle: an apparent
             # off-axis moment as large as the placement std says, no evidence of a missing moment.
             np.hypot(np.sqrt(np.clip(np.diag(model_spread)[perpendicular], 0.0, None)), placement_sd[perpendicular]),
+            family_chosen=config.passive.select,
         )
     sensitivity = passive_offset_sensitivity(problem, fit, n)
     valid = not problems and bool(np.isfinite(fit.values).all())

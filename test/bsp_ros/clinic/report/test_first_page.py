@@ -116,6 +116,9 @@ def test_html_first_page_in_chromium_and_printed(written: dict[str, Path], histo
     _check_first_page(page1, history)
     assert f"Page 1 of {len(sizes)}" in page1 and "made 20" in page1
     assert _pdf_page_text(printed, 2).startswith("Detail: every parameter")
+    # The detail names the documents that explain it, which a clone of the repository has (test_docs.py).
+    last = _pdf_page_text(printed, len(sizes))
+    assert "docs/clinic.md" in last and "docs/method.md" in last
 
 
 @pytest.mark.skipif(not POPPLER, reason="needs poppler-utils (pdftoppm, pdftotext, pdfinfo; .ci/services.sh)")
@@ -128,6 +131,7 @@ def test_pdf_is_a4_with_a_standalone_first_page(written: dict[str, Path], histor
     for page in range(1, len(sizes) + 1):
         text = _pdf_page_text(pdf, page)
         assert f"Page {page} of {len(sizes)}" in text and "made 20" in text and FRICTION in text
+    assert "docs/clinic.md" in _pdf_page_text(pdf, len(sizes)) and "docs/clinic.md" not in _pdf_page_text(pdf, 1)
     _run("pdftoppm", "-png", "-r", "60", "-f", "1", "-l", "1", str(pdf), str(tmp_path / "page"))
     (png,) = tmp_path.glob("page*.png")
     assert _red_pixels(png) > 100, "the planted change is not marked in red on the first page"

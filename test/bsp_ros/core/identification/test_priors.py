@@ -31,3 +31,6 @@ def test_an_off_axis_moment_beyond_the_prior_is_named_and_one_within_is_not() ->
     beyond[1] = -1.2 * PERPENDICULAR_MAX_PRIOR_SD * sd[1]
     problems = implausible_perpendicular_moments(SEGMENTS, beyond, prior)
     assert len(problems) == 1 and problems[0].startswith("the forearm's centre of mass") and "two-joint" in problems[0]
+    # Where the data already chose among the coupled and nonlinear terms (--passive auto), choosing them is no advice.
+    (chosen,) = implausible_perpendicular_moments(SEGMENTS, beyond, prior, family_chosen=True)
+    assert "--passive auto chooses" not in chosen and "more nonlinear than the model" in chosen

@@ -288,7 +288,7 @@ def test_mechanical_arm_truth_matches_paper_table_1() -> None:
     assert d["segments"]["upper_arm"]["first_moment_kgm"] == pytest.approx(0.260)
     assert d["joints"]["elbow"]["coulomb_nm"] == pytest.approx(0.161)
     assert d["joints"]["shoulder"]["coulomb_nm"] == pytest.approx(0.139)
-    # Grouped static moments (CONTRACT.md) with the assumed a1 = 0.30 m: 0.260 + 0.30 * 1.160.
+    # Grouped static moments (docs/contract.md) with the assumed a1 = 0.30 m: 0.260 + 0.30 * 1.160.
     assert d["segments"]["forearm"]["static_moment_kgm"] == pytest.approx(0.130)
     assert d["segments"]["upper_arm"]["static_moment_kgm"] == pytest.approx(0.608)
     assert set(d["segments"]) == {"upper_arm", "forearm"}

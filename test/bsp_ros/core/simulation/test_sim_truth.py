@@ -43,6 +43,7 @@ def test_truth_round_trips_through_json() -> None:
         "stiffness_nm_per_rad",
         "neutral_rad",
         "offset_nm",
+        "stiffening_nm",
     }
     assert d["simulation"]["wrench_hz"] == 100.0 and d["simulation"]["marker_hz"] == 50.0
     assert d["simulation"]["seed"] == 0 and d["simulation"]["force_noise_n"] == 0.05

@@ -1,6 +1,6 @@
 """The plain-rclpy cell's arm (numpy only, no bsp_ros code): its truth, motion and wrench.
 
-The arm moves in the sagittal plane y-z (CONTRACT.md), without friction, at up to about 1 rad/s^2: the wrench
+The arm moves in the sagittal plane y-z (docs/contract.md), without friction, at up to about 1 rad/s^2: the wrench
 the hand exerts on the sensor balances the arm's weight and its rigid-body inertia,
 ``J(q)^T w = -dV/dq - Q(q, q', q'')`` with ``V = g sum_k S_k sin(phi_k)``, ``S`` the grouped static moments,
 ``phi`` the absolute segment angles and ``Q`` the generalized inertial forces of the segments' masses and

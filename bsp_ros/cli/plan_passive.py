@@ -1,0 +1,72 @@
+"""`bsp plan`'s passive-curve check: what one simulated session of the plan tells of the passive curves."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+
+def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str | None]:
+    """The lines printed for the plan's simulated passive-curve check, and a warning where curves stay unresolved.
+
+    One simulated session of ``plan`` per trunk posture (the table arm of ``--sex``, ``--body-mass``,
+    ``--height``, with nonlinear two-joint passive moments; tared; markers re-placed within 3 mm) is identified with
+    the plan's passive model. Per joint: the passive curve's std (RMS over the planned range) and the smallest
+    passive moment the plan follows within 10 %, also as a share of the joint's gravity torque.
+    """
+    from bsp_ros.core.planning.simulated import (
+        CURVE_TARGET,
+        REALISTIC_PASSIVE_SHARE,
+        SKIN_BOUND_M,
+        simulated_plan_check,
+    )
+    from bsp_ros.core.simulation import SubjectTruth
+
+    n = plan.request.nominal.n_joints
+    subject = SubjectTruth.from_anthropometry(args.sex, args.body_mass, args.height, n)
+    check = simulated_plan_check(plan, subject)
+    postures = len(plan.request.trunk_tilts_rad)
+    lines = [
+        f"passive curves, one simulated session ({postures} posture{'s' if postures > 1 else ''}; table arm with "
+        f"nonlinear two-joint passive moments, tared sensor, markers re-placed within {1e3 * SKIN_BOUND_M:g} mm; "
+        f"--passive {check.model}):"
+    ]
+    notes = []
+    for joint, std in check.curve_rms_std_nm.items():
+        gravity = check.gravity_rms_nm[joint]
+        if not math.isfinite(std):
+            lines.append(f"  {joint:8s} curve not identified by the simulated session")
+            notes.append(f"{joint} not identified")
+            continue
+        smallest = check.smallest_followed_nm(joint)
+        share = 100.0 * smallest / gravity
+        lines.append(
+            f"  {joint:8s} curve std {std:.2g} Nm (RMS): followed within {100 * CURVE_TARGET:g} % where its passive "
+            f"moment is at least {smallest:.2g} Nm, {share:.2g} % of its gravity torque ({gravity:.2g} Nm RMS)"
+        )
+        notes.append(f"{joint} {smallest:.2g} Nm ({share:.2g} % of gravity)")
+    lines.append(
+        "  static moments of the simulated session: "
+        + ", ".join(f"{s} +- {100 * sd / abs(v):.2g} %" for s, (v, sd) in check.static_moments.items())
+    )
+    if not check.valid:
+        lines.append(f"  the simulated session was not valid: {check.message}")
+    # The plan file carries it too, for the cell that loads the plan rather than reading the console.
+    plan.notes.append(
+        f"smallest passive moment followed within {100 * CURVE_TARGET:g} % (one simulated session): " + ", ".join(notes)
+    )
+    unresolved = check.unresolved_joints()
+    if not unresolved:
+        return "\n".join(lines), None
+    hints = []
+    if postures < 2:
+        hints.append("record it at a second trunk posture (--trunk-tilt-deg 0 25)")
+    hints += ["widen the therapist's ranges where the patient allows", "lengthen the session (--duration)"]
+    warning = (
+        f"this plan cannot follow the passive curve of the {' and the '.join(unresolved)} within "
+        f"{100 * CURVE_TARGET:g} % for a passive moment up to {100 * REALISTIC_PASSIVE_SHARE:g} % of gravity, what "
+        "relaxed arms show (one simulated session, above): its curve will be reported with that std. To follow it: "
+        + ", or ".join(hints)
+    )
+    return "\n".join(lines), warning

@@ -1,0 +1,147 @@
+"""What a plan's sessions will report, by simulation: the static moments' and passive curves' std, skin markers."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.planning.planner import Plan
+from bsp_ros.core.streams import joints_for
+
+#: The simulated arm's dry friction (shoulder, elbow, wrist), Nm: the simulated cell's (the paper's human results).
+NOMINAL_COULOMB_NM = (0.5, 0.28, 0.06)
+#: The simulated arm's joint springs (shoulder, elbow, wrist), Nm/rad: relaxed-arm values of the order the
+#: literature reports and the MuJoCo benchmark cell uses.
+NOMINAL_STIFFNESS_NM_PER_RAD = (0.30, 0.50, 0.15)
+#: Its stiffening (``sinh`` about the neutral angle over 0.5 rad), Nm, and a two-joint muscle across shoulder and
+#: elbow, Nm: a real arm's passive moments are nonlinear and coupled, and the curves' std must carry the shape
+#: uncertainty that follows (the estimator's shape probe), which a linear spring would not show.
+NOMINAL_STIFFENING_NM = (0.10, 0.05, 0.01)
+NOMINAL_BIARTICULAR_NM = 0.05
+#: Markers re-placed within this much of the joint centres per recording (uniform per axis), m: a day's placement.
+SKIN_BOUND_M = 0.003
+#: A passive curve is "followed" when its error is within this share of the curve (RMS over the range).
+CURVE_TARGET = 0.10
+#: Passive moments of a relaxed arm up to this share of the gravity torque are what a plan must resolve.
+REALISTIC_PASSIVE_SHARE = 0.10
+#: Recordings of one plan at several trunk tilts are this far apart in time (ns): distinct, as in a cell.
+_RECORDING_GAP_NS = 600_000_000_000
+
+
+@dataclass(frozen=True)
+class SimulatedPlanCheck:
+    """One simulated session of a plan (one recording per trunk posture), identified as a user would.
+
+    Attributes
+    ----------
+    model : the passive model identified (the plan's: with ``auto`` the data choose, and the std holds the choice).
+    static_moments : segment -> (value, std), kg m.
+    curve_rms_std_nm : joint -> RMS over the planned range of the passive curve's std, Nm.
+    gravity_rms_nm : joint -> RMS of the gravity torque along the plan (first posture), Nm.
+    valid : the simulated estimate's verdict; ``message`` its message.
+    """
+
+    model: str
+    static_moments: dict[str, tuple[float, float]]
+    curve_rms_std_nm: dict[str, float]
+    gravity_rms_nm: dict[str, float]
+    valid: bool
+    message: str
+
+    def smallest_followed_nm(self, joint: str) -> float:
+        """The smallest passive moment (RMS, Nm) whose curve the plan follows within :data:`CURVE_TARGET` (1 std)."""
+        return self.curve_rms_std_nm[joint] / CURVE_TARGET
+
+    def unresolved_joints(self) -> list[str]:
+        """Joints where a passive moment of :data:`REALISTIC_PASSIVE_SHARE` of gravity is not followed."""
+        return [
+            joint
+            for joint, std in self.curve_rms_std_nm.items()
+            if not self.smallest_followed_nm(joint) <= REALISTIC_PASSIVE_SHARE * self.gravity_rms_nm[joint]
+            or not math.isfinite(std)
+        ]
+
+
+def simulated_plan_check(
+    plan: Plan,
+    subject: Any,
+    *,
+    seed: int = 0,
+    skin_bound_m: float = SKIN_BOUND_M,
+) -> SimulatedPlanCheck:
+    """Simulate ``plan`` once per trunk posture on ``subject`` and identify the recordings together.
+
+    Parameters
+    ----------
+    plan : the plan (its request gives the noise, the passive model and the trunk tilts).
+    subject : the :class:`~bsp_ros.core.simulation.SubjectTruth` simulated (the table arm).
+    seed : seed of the simulated sessions (each posture ``seed + k``).
+    skin_bound_m : markers re-placed within this much per recording, m.
+
+    The sensor is taken as tared; the simulated arm has the cell's Coulomb friction and nonlinear, coupled elastic
+    moments (:data:`NOMINAL_STIFFNESS_NM_PER_RAD`, :data:`NOMINAL_STIFFENING_NM`, :data:`NOMINAL_BIARTICULAR_NM`)
+    about the middle of the planned motion. The passive model identified is the plan's own.
+    """
+    from bsp_ros.core import simulation as sim
+    from bsp_ros.core.model import gravity_regressor
+    from bsp_ros.core.pipeline import IdentifyOptions, identify_recordings
+
+    request = plan.request
+    n = request.nominal.n_joints
+    model = request.passive
+    t = np.linspace(0.0, plan.trajectory.duration_s, 2001)
+    q = plan.trajectory.angles_rad(t)
+    noise = request.noise
+    passive = sim.PassiveTruth(
+        coulomb_nm=NOMINAL_COULOMB_NM[:n],
+        stiffness_nm_per_rad=NOMINAL_STIFFNESS_NM_PER_RAD[:n],
+        neutral_rad=tuple(float(v) for v in np.median(q, axis=0)),
+        stiffening_nm=NOMINAL_STIFFENING_NM[:n],
+        biarticular_nm=NOMINAL_BIARTICULAR_NM,
+        biarticular_neutral_rad=float(np.median(q[:, 0] + q[:, 1])),
+    )
+    sessions = []
+    for k, tilt in enumerate(request.trunk_tilts_rad):
+        trajectory = sim.TrunkTiltedTrajectory(plan.trajectory, tilt) if tilt else plan.trajectory
+        spec = sim.CellSpec(
+            subject=subject,
+            passive=passive,
+            trajectory=trajectory,
+            trunk_tilt_rad=tilt,
+            duration_s=plan.trajectory.duration_s,
+            seed=seed + k,
+            start_ns=sim.DEFAULT_START_NS + k * (round(plan.trajectory.duration_s * 1e9) + _RECORDING_GAP_NS),
+            sensor=sim.SensorSpec(
+                force_noise_n=noise.force_noise_n, torque_noise_nm=noise.torque_noise_nm, wrench_hz=noise.wrench_hz
+            ),
+            markers=sim.MarkerSpec(
+                noise_m=noise.marker_noise_m, marker_hz=noise.marker_hz, skin_offset_bound_m=skin_bound_m
+            ),
+        )
+        sessions.append(sim.simulate_cell(spec).session)
+    options = IdentifyOptions(passive=model, zero_sd_n=0.0, zero_sd_nm=0.0)
+    document = identify_recordings(sessions, options, trunk_tilts_rad=request.trunk_tilts_rad)
+    static = {
+        segment: (float(q_["static_moment_kgm"]["value"]), float(q_["static_moment_kgm"]["std"]))
+        for segment, q_ in document["segments"].items()
+    }
+    beta = np.asarray(subject.static_moments_kgm, dtype=float)
+    gravity = np.einsum("kij,j->ki", gravity_regressor(q), beta)
+    curves, gravity_rms = {}, {}
+    for j, joint in enumerate(joints_for(n)):
+        curve = document["joints"].get(joint, {}).get("passive_curve")
+        std = np.asarray(curve["std_nm"], dtype=float) if isinstance(curve, dict) else np.array([math.inf])
+        curves[joint] = float(np.sqrt(np.mean(std**2)))
+        gravity_rms[joint] = float(np.sqrt(np.mean(gravity[:, j] ** 2)))
+    quality = document["quality"]
+    return SimulatedPlanCheck(
+        model=model.label,
+        static_moments=static,
+        curve_rms_std_nm=curves,
+        gravity_rms_nm=gravity_rms,
+        valid=bool(quality["valid"]),
+        message=str(quality.get("message", "")),
+    )
