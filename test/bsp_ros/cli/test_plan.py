@@ -254,3 +254,21 @@ def test_an_inertia_plan_it_cannot_honour_is_refused(extra: list[str], message: 
     assert _code(["plan", *args]) == 2
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert err.startswith("bsp plan: error: ") and message in err
+
+
+def test_a_plan_with_elastic_terms_says_which_passive_curves_it_follows(tmp_path: Path, capsys) -> None:
+    narrow = ["--shoulder", "0", "1.2", "--shoulder-range", "-46", "-22", "--elbow-range", "30", "60"]
+    out_json = tmp_path / "plan.json"
+    common = ["plan", *narrow, "--segments", "2", "--passive", "auto", "--max-evaluations", "40"]
+    assert main([*common, "--trunk-tilt-deg", "0", "25", "--json", str(out_json)]) == 0
+    captured = capsys.readouterr()
+    assert "passive curves, one simulated session (2 postures" in captured.out
+    (curve_warning,) = [line for line in captured.err.splitlines() if "passive curve of the" in line]
+    assert "of the elbow within 10 %" in curve_warning and "shoulder" not in curve_warning
+    assert "--trunk-tilt-deg" not in curve_warning  # it has two postures already
+    notes = json.loads(out_json.read_text())["notes"]
+    assert any(note.startswith("smallest passive moment followed within 10 %") for note in notes)
+    # One posture: neither curve, and the warning names the second posture that would help.
+    assert main(common) == 0
+    (curve_warning,) = [line for line in capsys.readouterr().err.splitlines() if "passive curve of the" in line]
+    assert "shoulder and the elbow" in curve_warning and "--trunk-tilt-deg 0 25" in curve_warning
