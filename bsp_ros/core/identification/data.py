@@ -47,6 +47,8 @@ class IdentificationData:
     recording_index : (N,) which recording each sample came from (0, 1, ...), None: one recording.
     out_of_plane : (n,) each segment's lateral excursion as a fraction of its length (the planar model's error
         of its gravity torque), None where the markers' lateral coordinates are not known (live).
+    markers_moved : the recordings' segment lengths differ beyond their noise: a marker was re-attached between
+        them, so each recording has its own placement (``recording_index``), not one shared by all.
     """
 
     t_ns: np.ndarray
@@ -65,6 +67,7 @@ class IdentificationData:
     trunk_rad: np.ndarray | None = None
     recording_index: np.ndarray | None = None
     out_of_plane: np.ndarray | None = None
+    markers_moved: bool = False
 
     @property
     def n_joints(self) -> int:
@@ -100,6 +103,7 @@ class IdentificationData:
             None if self.trunk_rad is None else self.trunk_rad[start:stop],
             None if self.recording_index is None else self.recording_index[start:stop],
             self.out_of_plane,
+            self.markers_moved,
         )
 
 

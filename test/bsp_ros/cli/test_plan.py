@@ -264,7 +264,7 @@ def test_a_plan_with_elastic_terms_says_which_passive_curves_it_follows(tmp_path
     captured = capsys.readouterr()
     assert "passive curves, one simulated session (2 postures" in captured.out
     (curve_warning,) = [line for line in captured.err.splitlines() if "passive curve of the" in line]
-    assert "of the elbow within 10 %" in curve_warning and "shoulder" not in curve_warning
+    assert "of the shoulder and the elbow within 10 %" in curve_warning
     assert "--trunk-tilt-deg" not in curve_warning  # it has two postures already
     notes = json.loads(out_json.read_text())["notes"]
     assert any(note.startswith("smallest passive moment followed within 10 %") for note in notes)
