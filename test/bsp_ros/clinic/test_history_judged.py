@@ -32,18 +32,7 @@ def _analysis(history: History, subject: str) -> Analysis:
     ("subject", "which"),
     [
         (FRICTION, "coulomb"),
-        pytest.param(
-            STIFFNESS,
-            "stiffness",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="the stiffness MDC95 from retest pairs is 0.43 Nm/rad (0.17 before the dynamic model), so "
-                "the planted 0.5 Nm/rad step is not twice the MDC (it is still flagged). The day-to-day error is the "
-                "markers' re-placement over the paper's small ranges: over 12 unchanged sessions the elbow "
-                "stiffness scatters by SD 0.10 Nm/rad with +-3 mm re-placement, 0.03 without, and the same with "
-                "the perpendicular prior at 3 % or 1 % (each estimate's std, 0.09, holds that scatter)",
-            ),
-        ),
+        (STIFFNESS, "stiffness"),
     ],
 )
 def test_planted_steps_are_flagged_exactly_where_beyond_the_mdc(history: History, subject: str, which: str) -> None:
