@@ -29,8 +29,8 @@ def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str |
     postures = len(plan.request.trunk_tilts_rad)
     lines = [
         f"passive curves, one simulated session ({postures} posture{'s' if postures > 1 else ''}; table arm with "
-        f"nonlinear two-joint passive moments, tared sensor, markers placed within {1e3 * SKIN_BOUND_M:g} mm of the joint centres; "
-        f"--passive {check.model}):"
+        f"nonlinear two-joint passive moments, tared sensor, markers placed within {1e3 * SKIN_BOUND_M:g} mm of the "
+        f"joint centres; --passive {check.model}):"
     ]
     notes = []
     for joint, std in check.curve_rms_std_nm.items():
