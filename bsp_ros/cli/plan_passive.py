@@ -60,13 +60,22 @@ def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str |
     if not unresolved:
         return "\n".join(lines), None
     hints = []
+    if not check.valid and check.model != "auto":
+        hints.append("plan for --passive auto (the coupled and nonlinear terms a real arm's passive moments need)")
     if postures < 2:
         hints.append("record it at a second trunk posture (--trunk-tilt-deg 0 25)")
     hints += ["widen the therapist's ranges where the patient allows", "lengthen the session (--duration)"]
-    warning = (
-        f"this plan cannot follow the passive curve of the {' and the '.join(unresolved)} within "
-        f"{100 * CURVE_TARGET:g} % for a passive moment up to {100 * REALISTIC_PASSIVE_SHARE:g} % of gravity, what "
-        "relaxed arms show (one simulated session, above): its curve will be reported with that std. To follow it: "
-        + ", or ".join(hints)
-    )
-    return "\n".join(lines), warning
+    joints = [f"the {joint}" for joint in unresolved]
+    named = joints[0] if len(joints) == 1 else ", ".join(joints[:-1]) + " and " + joints[-1]
+    if check.valid:
+        head = (
+            f"this plan cannot follow the passive curve of {named} within {100 * CURVE_TARGET:g} % for a passive "
+            f"moment up to {100 * REALISTIC_PASSIVE_SHARE:g} % of gravity, what relaxed arms show (one simulated "
+            "session, above): its curve will be reported with that std"
+        )
+    else:
+        head = (
+            f"one simulated session of this plan with --passive {check.model} was not valid (above), so the passive "
+            f"curves of {named} are not followed"
+        )
+    return "\n".join(lines), f"{head}. To follow them: " + ", or ".join(hints)
