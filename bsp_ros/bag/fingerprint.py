@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Sequence
 from pathlib import Path
 
 BAG_SUFFIXES = (".mcap", ".db3", ".bag")
@@ -22,3 +23,9 @@ def content_sha256(path: str | Path) -> str:
             for block in iter(lambda: stream.read(1 << 20), b""):
                 digest.update(block)
     return digest.hexdigest()
+
+
+def recordings_sha256(paths: Sequence[str | Path]) -> tuple[str, list[str]]:
+    """The fingerprint of several recordings identified together (their hashes hashed in order), and each one's."""
+    hashes = [content_sha256(path) for path in paths]
+    return hashlib.sha256("".join(hashes).encode()).hexdigest(), hashes

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from bsp_ros.bag import TopicMap, read_session
-from bsp_ros.bag.fingerprint import content_sha256
+from bsp_ros.bag.fingerprint import content_sha256, recordings_sha256
 from bsp_ros.bag.reader import BagRead
 from bsp_ros.core.pipeline import IdentifyOptions, identify_recordings, identify_session
 
@@ -119,8 +118,7 @@ def identify_bags(
     if len(paths) == 1 and not any(trunk_tilts_rad or ()):
         return identify_bag(paths[0], options, topics, progress)
     reads = [read_session(path, topics=topics, progress=progress) for path in paths]
-    hashes = [content_sha256(path) for path in paths]
-    combined = hashlib.sha256("".join(hashes).encode()).hexdigest()
+    combined, hashes = recordings_sha256(paths)
     info = {"source": " + ".join(Path(path).name for path in paths), "content_sha256": combined}
     recordings = [{"source": Path(path).name, "content_sha256": sha} for path, sha in zip(paths, hashes, strict=True)]
     document = identify_recordings([r.session for r in reads], options, trunk_tilts_rad, info, recordings)

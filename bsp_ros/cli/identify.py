@@ -9,7 +9,14 @@ from pathlib import Path
 from typing import Any
 
 # METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
-from bsp_ros.cli.identify_options import METHODS, add_identify_arguments, options_from_args, topics_from_args  # noqa: F401
+from bsp_ros.cli.identify_options import (  # noqa: F401
+    METHODS,
+    add_identify_arguments,
+    add_trunk_tilt_argument,
+    options_from_args,
+    topics_from_args,
+    trunk_tilts_rad,
+)
 from bsp_ros.core.quantities import passive_curves_of, quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
 
@@ -39,15 +46,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         nargs="+",
         help="rosbag2 directory or .mcap file; several: recordings of the same arm identified together",
     )
-    parser.add_argument(
-        "--trunk-tilt-deg",
-        type=float,
-        nargs="+",
-        metavar="DEG",
-        help="the trunk's tilt in each recording, deg, in the sense of the shoulder angle (world +y towards +z; "
-        "default 0): a second posture turns gravity relative to the arm and separates elastic passive moments "
-        "from gravity",
-    )
+    add_trunk_tilt_argument(parser)
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
     add_identify_arguments(parser)
     parser.add_argument(
@@ -165,7 +164,6 @@ def format_table(document: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Identify the bag; print the result; write the JSON."""
-    import math
 
     from bsp_ros.bag.errors import BagError
     from bsp_ros.bag.offline import identify_bags
@@ -174,16 +172,7 @@ def run(args: argparse.Namespace) -> int:
     # Before the identification: a result that cannot be written is not worth computing.
     json_path = None if args.json is None else check_output_file("--json", args.json)
     options = options_from_args(args)
-    tilts_deg = args.trunk_tilt_deg
-    if tilts_deg is not None and len(tilts_deg) != len(args.bag):
-        raise InputError(
-            f"--trunk-tilt-deg gives {len(tilts_deg)} tilts ({' '.join(f'{t:g}' for t in tilts_deg)}) for "
-            f"{len(args.bag)} recordings: give one per bag"
-        )
-    for tilt in tilts_deg or ():
-        if not (math.isfinite(tilt) and abs(tilt) <= 90.0):
-            raise InputError(f"--trunk-tilt-deg {tilt:g}: a tilt must be within -90..90 deg")
-    tilts_rad = None if tilts_deg is None else [math.radians(t) for t in tilts_deg]
+    tilts_rad = trunk_tilts_rad(args.trunk_tilt_deg, len(args.bag))
     try:
         document = identify_bags(args.bag, options, topics_from_args(args), _progress_bar(), tilts_rad)
     except BagError as error:

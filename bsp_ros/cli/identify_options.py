@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
@@ -184,3 +185,31 @@ def options_record(args: argparse.Namespace, options: Any) -> dict[str, Any]:
         }
     )
     return config
+
+
+def add_trunk_tilt_argument(parser: argparse.ArgumentParser | Any) -> None:
+    """``--trunk-tilt-deg DEG...``: one tilt per recording identified together."""
+    parser.add_argument(
+        "--trunk-tilt-deg",
+        type=float,
+        nargs="+",
+        metavar="DEG",
+        help="the trunk's tilt in each recording, deg, in the sense of the shoulder angle (world +y towards +z; "
+        "default 0): a second posture turns gravity relative to the arm and separates elastic passive moments "
+        "from gravity",
+    )
+
+
+def trunk_tilts_rad(tilts_deg: list[float] | None, n_recordings: int) -> list[float] | None:
+    """The checked ``--trunk-tilt-deg`` values in rad (None when not given): one per recording, within +-90 deg."""
+    if tilts_deg is None:
+        return None
+    if len(tilts_deg) != n_recordings:
+        raise InputError(
+            f"--trunk-tilt-deg gives {len(tilts_deg)} tilts ({' '.join(f'{t:g}' for t in tilts_deg)}) for "
+            f"{n_recordings} recordings: give one per bag"
+        )
+    for tilt in tilts_deg:
+        if not (math.isfinite(tilt) and abs(tilt) <= 90.0):
+            raise InputError(f"--trunk-tilt-deg {tilt:g}: a tilt must be within -90..90 deg")
+    return [math.radians(t) for t in tilts_deg]

@@ -37,7 +37,7 @@ def add_store_option(parser: argparse.ArgumentParser, *, sub: bool) -> None:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register `bsp sessions` and its actions."""
-    from bsp_ros.cli.identify_options import add_identify_arguments
+    from bsp_ros.cli.identify_options import add_identify_arguments, add_trunk_tilt_argument
 
     common = argparse.ArgumentParser(add_help=False)
     add_store_option(common, sub=True)
@@ -58,7 +58,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "a result JSON keeps the options it was made with. The same recording is stored once; a session time in "
         "the future is refused.",
     )
-    add.add_argument("input", metavar="RESULT.json|BAG", help="a `bsp identify --json` result or a bag")
+    add.add_argument(
+        "input",
+        nargs="+",
+        metavar="RESULT.json|BAG",
+        help="a `bsp identify --json` result, a bag, or several bags of one session identified together (one per "
+        "trunk posture, with --trunk-tilt-deg)",
+    )
     add.add_argument("--subject", required=True, metavar="ID", help="pseudonymous subject id [A-Za-z0-9_-]{1,64}")
     add.add_argument(
         "--time",
@@ -82,7 +88,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         action="store_true",
         help="store a subject id even though it looks like a person's name or a birth date",
     )
-    add_identify_arguments(add.add_argument_group("identification of a bag (as `bsp identify`)"))
+    identification = add.add_argument_group("identification of a bag (as `bsp identify`)")
+    add_identify_arguments(identification)
+    add_trunk_tilt_argument(identification)
     actions.add_parser("list", parents=[common], help="list subjects and their session counts")
     show = actions.add_parser("show", parents=[common], help="show a subject's sessions and parameters")
     show.add_argument("subject", metavar="SUBJECT")
@@ -173,24 +181,33 @@ def is_bag(path: Path) -> bool:
 
 
 def identify_bag_for_store(
-    path: Path, args: argparse.Namespace, body: dict[str, Any], sha256: str | None = None
+    path: Path | list[Path], args: argparse.Namespace, body: dict[str, Any], sha256: str | None = None
 ) -> dict[str, Any]:
-    """The estimate of a bag identified with the `bsp identify` options of ``args`` (body data default to
-    ``body``), with its within-session repeatability, the options and the content hash (``sha256`` if given)."""
+    """The estimate of a bag (or of several bags of one session, ``args.trunk_tilt_deg`` one tilt each) identified
+    with the `bsp identify` options of ``args`` (body data default to ``body``), with its within-session
+    repeatability (of the first recording), the options and the content hash (``sha256`` if given)."""
     from bsp_ros.bag import read_session
-    from bsp_ros.bag.offline import estimate_from_read
-    from bsp_ros.cli.identify_options import options_from_args, options_record, topics_from_args
+    from bsp_ros.bag.offline import estimate_from_read, identify_bags
+    from bsp_ros.cli.identify_options import options_from_args, options_record, topics_from_args, trunk_tilts_rad
     from bsp_ros.clinic.cycles import cycle_repeatability
 
+    paths = path if isinstance(path, list) else [path]
+    tilts_rad = trunk_tilts_rad(getattr(args, "trunk_tilt_deg", None), len(paths))
     options = options_from_args(args, body)
-    read = read_session(path, topics=topics_from_args(args))  # once: the estimate and the cycles share it
-    estimate = estimate_from_read(read, path, options, sha256=sha256)
+    read = read_session(paths[0], topics=topics_from_args(args))  # once: the estimate and the cycles share it
+    if len(paths) == 1 and not any(tilts_rad or ()):
+        estimate = estimate_from_read(read, paths[0], options, sha256=sha256)
+    else:
+        estimate = identify_bags(paths, options, topics_from_args(args), None, tilts_rad)
     found = cycle_repeatability(read.session, options)
     if found.message:
-        print(f"note: no within-session repeatability for {path.name}: {found.message}")
+        print(f"note: no within-session repeatability for {paths[0].name}: {found.message}")
     estimate["repeatability"] = found.to_json()
-    # identify_bag put the recording's content_sha256 in the session block: the store's duplicate check.
-    estimate.setdefault("session", {})["config"] = options_record(args, options)
+    # identify_bag(s) put the recordings' content_sha256 in the session block: the store's duplicate check.
+    config = options_record(args, options)
+    if tilts_rad is not None:
+        config["trunk_tilt_deg"] = list(args.trunk_tilt_deg)
+    estimate.setdefault("session", {})["config"] = config
     return estimate
 
 
@@ -241,20 +258,28 @@ def _session_time_ns(args: argparse.Namespace, path: Path, estimate: dict[str, A
 def _add(store: Store, args: argparse.Namespace) -> int:
     # Before any slow identification.
     subject = check_pseudonymous_id(args.subject, allow_identifying=args.allow_identifying_id)
-    path = Path(args.input)
-    if not path.exists():
-        raise InputError(f"{path} does not exist")
+    paths = [Path(p) for p in args.input]
+    for path in paths:
+        if not path.exists():
+            raise InputError(f"{path} does not exist")
+    path = paths[0]
+    if len(paths) > 1 and not all(is_bag(p) for p in paths):
+        raise InputError("several inputs are the recordings of one session: give bags only (or one result JSON)")
+    if args.trunk_tilt_deg is not None and not is_bag(path):
+        raise InputError("--trunk-tilt-deg applies to bags; a result JSON keeps the tilts it was made with")
     time_ns = None if args.time is None else parse_time_ns(args.time)
     if time_ns is not None:
         check_future(time_ns, time.time_ns(), "--time")
     known = store.subject_record(subject)
     if is_bag(path):
-        from bsp_ros.bag.fingerprint import content_sha256
+        from bsp_ros.bag.fingerprint import content_sha256, recordings_sha256
 
         # A stored recording is refused before it is identified (the same check runs again on adding).
-        sha256 = content_sha256(path)
+        several = len(paths) > 1 or any(args.trunk_tilt_deg or ())
+        sha256 = recordings_sha256(paths)[0] if several else content_sha256(path)
         store.refuse_stored_content(sha256)
-        estimate = identify_bag_for_store(path, args, known.body() if known is not None else {}, sha256)
+        body = known.body() if known is not None else {}
+        estimate = identify_bag_for_store(paths if several else path, args, body, sha256)
     else:
         estimate = load_estimate_file(path)
     session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}

@@ -149,3 +149,45 @@ def test_invalid_estimate_is_stored_as_not_valid(tmp_path: Path, capsys: pytest.
     (record,) = _stored(store)
     assert record.quality.valid is False
     assert record.parameters[("joints", "elbow", "coulomb_nm")].value is None
+
+
+def _posture_bags(tmp_path: Path) -> list[Path]:
+    """One session recorded upright and with the trunk tilted 25 deg, ten minutes apart (the same arm)."""
+    import dataclasses
+
+    from bsp_ros.core.simulation import human_arm_cell
+
+    bags = []
+    for k, (name, tilt_deg) in enumerate((("upright", 0.0), ("tilted", 25.0))):
+        spec = human_arm_cell(duration_s=40.0, seed=7 + k, start_ns=WALL_START_NS + k * 600 * 10**9)
+        centre = (spec.trajectory.center_deg[0] + tilt_deg, *spec.trajectory.center_deg[1:])
+        trajectory = dataclasses.replace(spec.trajectory, center_deg=centre)
+        spec = dataclasses.replace(spec, trunk_tilt_rad=math.radians(tilt_deg), trajectory=trajectory)
+        bags.append(write_session_bag(tmp_path / name, simulate_cell(spec).session))
+    return bags
+
+
+@pytest.mark.slow
+def test_the_recordings_of_two_postures_are_stored_as_one_session(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bags = [str(b) for b in _posture_bags(tmp_path)]
+    store = tmp_path / "s.sqlite"
+    common = ["--subject", "S1", "--store", str(store)]
+    code, _, err = bsp(capsys, "sessions", "add", *bags, "--trunk-tilt-deg", "0", *common)
+    assert code == 2 and "--trunk-tilt-deg gives 1 tilts (0) for 2 recordings" in err
+    code, out, err = bsp(capsys, "sessions", "add", *bags, "--trunk-tilt-deg", "0", "25", *common)
+    assert code == 0, err
+    assert "added session 1 of S1" in out and "from upright + tilted" in out
+    (record,) = _stored(store)
+    assert record.config["trunk_tilt_deg"] == [0.0, 25.0] and record.source == "upright + tilted"
+    assert record.repeatability  # the upright recording's cycles
+    # The same two recordings again: refused before identifying, and nothing stored twice.
+    code, _, err = bsp(capsys, "sessions", "add", *bags, "--trunk-tilt-deg", "0", "25", *common)
+    assert code != 0 and "already" in err
+    assert len(_stored(store)) == 1
+    # A result JSON is one session already: it takes no second input and no tilts.
+    result = tmp_path / "r.json"
+    result.write_text(json.dumps(sample_estimate(3)))
+    code, _, err = bsp(capsys, "sessions", "add", str(result), bags[0], *common)
+    assert code == 2 and "give bags only" in err
