@@ -348,7 +348,17 @@ def _sandwich(design: np.ndarray, long_run: np.ndarray, names: list[ParameterNam
     """The estimator's covariance ``(A + P)^-1 (S + P) (A + P)^-1`` (p, p): the elastic terms' priors are
     information it adds (pseudo-observations of variance 1 / P)."""
     precision = np.diag(elastic_prior_precision(names))
-    inverse = np.linalg.pinv(design + precision)
+    matrix = design + precision
+    # Inverted with rows and columns scaled, as the estimator's design_inverse does: unscaled, a pseudo-inverse
+    # drops a nearly confounded direction of an elastic model and predicts it a variance of 0. The scales are
+    # powers of two relative to the largest diagonal: exact in floating point and the same for twice the data,
+    # so a prediction scales with the session's length exactly.
+    diagonal = np.clip(np.diag(matrix), 0.0, None)
+    top = float(diagonal.max()) if diagonal.size and diagonal.max() > 0 else 1.0
+    relative = np.where(diagonal > 0, diagonal / top, 1.0)
+    scale = np.where(diagonal > 0, 2.0 ** np.round(0.5 * np.log2(relative)), 1.0)
+    outer = np.outer(scale, scale)
+    inverse = np.linalg.pinv(matrix / outer, hermitian=True) / outer
     covariance = inverse @ (long_run + precision) @ inverse
     return np.asarray(0.5 * (covariance + covariance.T))
 
