@@ -118,6 +118,16 @@ def identify_bags(
     if len(paths) == 1 and not any(trunk_tilts_rad or ()):
         return identify_bag(paths[0], options, topics, progress)
     reads = [read_session(path, topics=topics, progress=progress) for path in paths]
+    return estimate_from_reads(reads, paths, options, trunk_tilts_rad)
+
+
+def estimate_from_reads(
+    reads: Sequence[BagRead],
+    paths: Sequence[str | Path],
+    options: IdentifyOptions | None = None,
+    trunk_tilts_rad: Sequence[float] | None = None,
+) -> dict[str, Any]:
+    """:func:`identify_bags` of recordings already read (``reads[k]`` of ``paths[k]``)."""
     combined, hashes = recordings_sha256(paths)
     info = {"source": " + ".join(Path(path).name for path in paths), "content_sha256": combined}
     recordings = [{"source": Path(path).name, "content_sha256": sha} for path, sha in zip(paths, hashes, strict=True)]

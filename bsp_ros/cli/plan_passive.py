@@ -11,9 +11,9 @@ def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str |
     """The lines printed for the plan's simulated passive-curve check, and a warning where curves stay unresolved.
 
     One simulated session of ``plan`` per trunk posture (the table arm of ``--sex``, ``--body-mass``,
-    ``--height``, with nonlinear two-joint passive moments; tared; markers re-placed within 3 mm) is identified with
-    the plan's passive model. Per joint: the passive curve's std (RMS over the planned range) and the smallest
-    passive moment the plan follows within 10 %, also as a share of the joint's gravity torque.
+    ``--height``, with nonlinear two-joint passive moments; tared; markers within 3 mm, kept for every posture) is
+    identified with the plan's passive model. Per joint: the passive curve's std (RMS over the planned range) and
+    the smallest passive moment the plan follows within 10 %, also as a share of the joint's gravity torque.
     """
     from bsp_ros.core.planning.simulated import (
         CURVE_TARGET,

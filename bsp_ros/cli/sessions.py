@@ -187,19 +187,20 @@ def identify_bag_for_store(
     with the `bsp identify` options of ``args`` (body data default to ``body``), with its within-session
     repeatability (of the first recording), the options and the content hash (``sha256`` if given)."""
     from bsp_ros.bag import read_session
-    from bsp_ros.bag.offline import estimate_from_read, identify_bags
+    from bsp_ros.bag.offline import estimate_from_read, estimate_from_reads
     from bsp_ros.cli.identify_options import options_from_args, options_record, topics_from_args, trunk_tilts_rad
     from bsp_ros.clinic.cycles import cycle_repeatability
 
     paths = path if isinstance(path, list) else [path]
     tilts_rad = trunk_tilts_rad(getattr(args, "trunk_tilt_deg", None), len(paths))
     options = options_from_args(args, body)
-    read = read_session(paths[0], topics=topics_from_args(args))  # once: the estimate and the cycles share it
+    # Each bag read once: the estimate and the first recording's cycles share it.
+    reads = [read_session(p, topics=topics_from_args(args)) for p in paths]
     if len(paths) == 1 and not any(tilts_rad or ()):
-        estimate = estimate_from_read(read, paths[0], options, sha256=sha256)
+        estimate = estimate_from_read(reads[0], paths[0], options, sha256=sha256)
     else:
-        estimate = identify_bags(paths, options, topics_from_args(args), None, tilts_rad)
-    found = cycle_repeatability(read.session, options)
+        estimate = estimate_from_reads(reads, paths, options, tilts_rad)
+    found = cycle_repeatability(reads[0].session, options)
     if found.message:
         print(f"note: no within-session repeatability for {paths[0].name}: {found.message}")
     estimate["repeatability"] = found.to_json()
@@ -279,7 +280,7 @@ def _add(store: Store, args: argparse.Namespace) -> int:
         sha256 = recordings_sha256(paths)[0] if several else content_sha256(path)
         store.refuse_stored_content(sha256)
         body = known.body() if known is not None else {}
-        estimate = identify_bag_for_store(paths if several else path, args, body, sha256)
+        estimate = identify_bag_for_store(paths, args, body, sha256)
     else:
         estimate = load_estimate_file(path)
     session = estimate.get("session") if isinstance(estimate.get("session"), dict) else {}

@@ -57,6 +57,7 @@ from bsp_ros.core.simulation import (
     PassiveTruth,
     SessionTruth,
     SubjectTruth,
+    TrunkTiltedTrajectory,
     paper_mechanical_arm_cell,
     rotation_from_rpy_deg,
 )
@@ -400,29 +401,8 @@ def planned_protocol(arm: Arm26, duration_s: float = 120.0, optimise: bool = Tru
     return plan_protocol(request).trajectory
 
 
-@dataclass(frozen=True)
-class TrunkTilted:
-    """``trajectory`` (angles relative to an upright trunk) with the trunk tilted by ``tilt_rad``: the same joint
-    angles relative to the trunk, the shoulder's world angle turned by the tilt."""
-
-    trajectory: JointTrajectory
-    tilt_rad: float
-
-    @property
-    def n_joints(self) -> int:
-        return int(self.trajectory.n_joints)
-
-    @property
-    def peak_speed_rad_s(self) -> tuple[float, ...]:
-        return tuple(self.trajectory.peak_speed_rad_s)
-
-    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
-        q = np.array(self.trajectory.angles_rad(t_s), dtype=np.float64)
-        q[..., 0] += self.tilt_rad
-        return q
-
-    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray:
-        return np.asarray(self.trajectory.velocities_rad_s(t_s), dtype=np.float64)
+#: ``trajectory`` recorded with the trunk tilted: the same angles relative to the trunk (the simulator's own).
+TrunkTilted = TrunkTiltedTrajectory
 
 
 def accelerations_rad_s2(trajectory: JointTrajectory, t_s: np.ndarray, step_s: float = 1e-3) -> np.ndarray:

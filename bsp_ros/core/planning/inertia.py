@@ -133,21 +133,10 @@ def simulated_inertia_std(
     """
     from bsp_ros.core import simulation as sim
     from bsp_ros.core.pipeline import IdentifyOptions, identify_session
-    from bsp_ros.core.planning.simulated import NOMINAL_COULOMB_NM
+    from bsp_ros.core.planning.simulated import NOMINAL_COULOMB_NM, plan_cell_spec
 
-    noise = plan.request.noise
-    # A CellSpec of its own: the human cell's defaults are a 3-segment arm, and a plan may be for 2.
-    spec = sim.CellSpec(
-        subject=subject,
-        passive=sim.PassiveTruth(coulomb_nm=NOMINAL_COULOMB_NM[: plan.request.nominal.n_joints]),
-        trajectory=plan.trajectory,
-        duration_s=plan.request.duration_s,
-        seed=seed,
-        sensor=sim.SensorSpec(
-            force_noise_n=noise.force_noise_n, torque_noise_nm=noise.torque_noise_nm, wrench_hz=noise.wrench_hz
-        ),
-        markers=sim.MarkerSpec(noise_m=noise.marker_noise_m, marker_hz=noise.marker_hz),
-    )
+    passive = sim.PassiveTruth(coulomb_nm=NOMINAL_COULOMB_NM[: plan.request.nominal.n_joints])
+    spec = plan_cell_spec(plan, subject, passive, seed=seed)
     options = IdentifyOptions(zero_sd_n=0.0, zero_sd_nm=0.0, marker_placement_sd_m=marker_placement_sd_m)
     document = identify_session(sim.simulate_cell(spec).session, options)
     found = {}

@@ -63,10 +63,43 @@ class SimulatedPlanCheck:
         """Joints where a passive moment of :data:`REALISTIC_PASSIVE_SHARE` of gravity is not followed."""
         return [
             joint
-            for joint, std in self.curve_rms_std_nm.items()
+            for joint in self.curve_rms_std_nm
+            # Written as "not <=" so that a curve the session could not identify (std inf) counts as unresolved.
             if not self.smallest_followed_nm(joint) <= REALISTIC_PASSIVE_SHARE * self.gravity_rms_nm[joint]
-            or not math.isfinite(std)
         ]
+
+
+def plan_cell_spec(
+    plan: Plan,
+    subject: Any,
+    passive: Any,
+    *,
+    seed: int,
+    recording: int = 0,
+    tilt_rad: float = 0.0,
+    skin_offset_m: tuple[tuple[float, float], ...] = (),
+) -> Any:
+    """The :class:`~bsp_ros.core.simulation.CellSpec` of one simulated recording of ``plan``: its noise and rates,
+    ``passive`` on ``subject``, at trunk tilt ``tilt_rad`` (the same motion relative to the trunk), recording number
+    ``recording`` placed after the earlier ones, skin markers at ``skin_offset_m`` (``(along, normal)`` per marker,
+    m). A CellSpec of its own: the human cell's defaults are a 3-segment arm, and a plan may be for 2."""
+    from bsp_ros.core import simulation as sim
+
+    noise = plan.request.noise
+    duration_s = plan.request.duration_s
+    return sim.CellSpec(
+        subject=subject,
+        passive=passive,
+        trajectory=sim.TrunkTiltedTrajectory(plan.trajectory, tilt_rad) if tilt_rad else plan.trajectory,
+        trunk_tilt_rad=tilt_rad,
+        duration_s=duration_s,
+        seed=seed,
+        start_ns=sim.DEFAULT_START_NS + recording * (round(duration_s * 1e9) + _RECORDING_GAP_NS),
+        sensor=sim.SensorSpec(
+            force_noise_n=noise.force_noise_n, torque_noise_nm=noise.torque_noise_nm, wrench_hz=noise.wrench_hz
+        ),
+        markers=sim.MarkerSpec(noise_m=noise.marker_noise_m, marker_hz=noise.marker_hz, skin_offset_m=skin_offset_m),
+    )
 
 
 def simulated_plan_check(
@@ -98,7 +131,6 @@ def simulated_plan_check(
     model = request.passive
     t = np.linspace(0.0, plan.trajectory.duration_s, 2001)
     q = plan.trajectory.angles_rad(t)
-    noise = request.noise
     passive = sim.PassiveTruth(
         coulomb_nm=NOMINAL_COULOMB_NM[:n],
         stiffness_nm_per_rad=NOMINAL_STIFFNESS_NM_PER_RAD[:n],
@@ -109,23 +141,12 @@ def simulated_plan_check(
     )
     # One day's marker placement, kept for every posture (the markers stay on between them).
     offsets = sim.skin_offsets_m(sim.MarkerSpec(skin_offset_bound_m=skin_bound_m), n + 1, seed)
-    sessions = []
-    for k, tilt in enumerate(request.trunk_tilts_rad):
-        trajectory = sim.TrunkTiltedTrajectory(plan.trajectory, tilt) if tilt else plan.trajectory
-        spec = sim.CellSpec(
-            subject=subject,
-            passive=passive,
-            trajectory=trajectory,
-            trunk_tilt_rad=tilt,
-            duration_s=plan.trajectory.duration_s,
-            seed=seed + k,
-            start_ns=sim.DEFAULT_START_NS + k * (round(plan.trajectory.duration_s * 1e9) + _RECORDING_GAP_NS),
-            sensor=sim.SensorSpec(
-                force_noise_n=noise.force_noise_n, torque_noise_nm=noise.torque_noise_nm, wrench_hz=noise.wrench_hz
-            ),
-            markers=sim.MarkerSpec(noise_m=noise.marker_noise_m, marker_hz=noise.marker_hz, skin_offset_m=offsets),
-        )
-        sessions.append(sim.simulate_cell(spec).session)
+    sessions = [
+        sim.simulate_cell(
+            plan_cell_spec(plan, subject, passive, seed=seed + k, recording=k, tilt_rad=tilt, skin_offset_m=offsets)
+        ).session
+        for k, tilt in enumerate(request.trunk_tilts_rad)
+    ]
     options = IdentifyOptions(passive=model, zero_sd_n=0.0, zero_sd_nm=0.0)
     document = identify_recordings(sessions, options, trunk_tilts_rad=request.trunk_tilts_rad)
     static = {
