@@ -27,6 +27,24 @@ def check_lengths_m(lengths_m: npt.ArrayLike) -> np.ndarray:
     return lengths
 
 
+def running_sum(values: np.ndarray, reverse: bool = False) -> np.ndarray:
+    """``np.cumsum(values, axis=1)`` (from the last column when ``reverse``) of (N, n, ...) arrays, the same bits.
+
+    Column by column: numpy's cumsum along a short inner axis runs element by element, 15 times slower for a
+    chain's few joints over N samples (the model's every evaluation begins with one).
+    """
+    out = np.empty_like(values)
+    order = range(values.shape[1] - 1, -1, -1) if reverse else range(values.shape[1])
+    previous = None
+    for j in order:
+        if previous is None:
+            out[:, j] = values[:, j]
+        else:
+            np.add(out[:, previous], values[:, j], out=out[:, j])
+        previous = j
+    return out
+
+
 def absolute_angles_rad(q_rad: npt.ArrayLike) -> np.ndarray:
     """Absolute segment angles from the horizontal +y axis.
 
@@ -38,7 +56,7 @@ def absolute_angles_rad(q_rad: npt.ArrayLike) -> np.ndarray:
     -------
     (N, n) ``phi_j = q_1 + ... + q_j`` (rad).
     """
-    return np.cumsum(np.atleast_2d(np.asarray(q_rad, dtype=np.float64)), axis=1)
+    return running_sum(np.atleast_2d(np.asarray(q_rad, dtype=np.float64)))
 
 
 def joint_positions_m(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> np.ndarray:
@@ -56,7 +74,7 @@ def joint_positions_m(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> np.ndar
     phi = absolute_angles_rad(q_rad)
     steps = np.asarray(lengths_m, dtype=np.float64)[None, :, None] * np.stack((np.cos(phi), np.sin(phi)), axis=-1)
     origin = np.zeros((phi.shape[0], 1, 2))
-    return np.concatenate((origin, np.cumsum(steps, axis=1)), axis=1)
+    return np.concatenate((origin, running_sum(steps)), axis=1)
 
 
 def contact_jacobian(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> np.ndarray:
@@ -74,8 +92,8 @@ def contact_jacobian(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> np.ndarr
     phi = absolute_angles_rad(q_rad)
     lengths = np.asarray(lengths_m, dtype=np.float64)
     # d p / d q_i sums the distal segments k >= i: a reversed cumulative sum.
-    dy = np.cumsum((-lengths * np.sin(phi))[:, ::-1], axis=1)[:, ::-1]
-    dz = np.cumsum((lengths * np.cos(phi))[:, ::-1], axis=1)[:, ::-1]
+    dy = running_sum(-lengths * np.sin(phi), reverse=True)
+    dz = running_sum(lengths * np.cos(phi), reverse=True)
     return np.stack((dy, dz, np.ones_like(phi)), axis=1)
 
 

@@ -9,7 +9,7 @@ from scipy.optimize import lsq_linear
 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
-from bsp_ros.core.model import GRAVITY_M_S2, absolute_angles_rad
+from bsp_ros.core.model import GRAVITY_M_S2, absolute_angles_rad, running_sum
 from bsp_ros.core.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_scalar, check_positive
 
@@ -143,5 +143,5 @@ def _residuals(data: IdentificationData, values: np.ndarray, n: int) -> list[np.
     """Per-joint torque residuals of the gravity part alone (what Eq. 11 averages)."""
     g_cos = GRAVITY_M_S2 * np.cos(absolute_angles_rad(data.q_rad))
     beta = values[:n]
-    gravity = np.cumsum((g_cos * beta)[:, ::-1], axis=1)[:, ::-1]
+    gravity = running_sum(g_cos * beta, reverse=True)
     return [data.tau_nm[:, j] - gravity[:, j] for j in range(n)]

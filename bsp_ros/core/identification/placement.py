@@ -4,11 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsp_ros.core.dynamics import base_torques_nm
-from bsp_ros.core.model import contact_jacobian, joint_positions_m
-
-# Finite-difference step of a marker offset (m): the torques are smooth in it over millimetres.
-_STEP_M = 1e-3
+from bsp_ros.core.dynamics import base_torque_angle_derivatives
+from bsp_ros.core.model import contact_jacobian, running_sum
 
 
 def chain_placement_sd_m(
@@ -21,13 +18,6 @@ def chain_placement_sd_m(
     if contact_from_robot:
         sd[-1] = handle_pose_sd_m
     return sd
-
-
-def _angles_from_points(points: np.ndarray) -> np.ndarray:
-    """Joint angles (N, n) of chain points (N, n + 1, 2)."""
-    steps = np.diff(points, axis=1)
-    phi = np.arctan2(steps[..., 1], steps[..., 0])
-    return np.concatenate((phi[:, :1], np.diff(phi, axis=1)), axis=1)
 
 
 def wrench_from_torques(q_rad: np.ndarray, lengths_m: np.ndarray, tau_nm: np.ndarray) -> np.ndarray:
@@ -48,12 +38,14 @@ def placement_columns(
     tau_nm: np.ndarray,
     base_values: np.ndarray,
 ) -> np.ndarray:
-    """How each marker's offset from its joint centre would change the torque equation, per mm of offset.
+    """How each marker's offset from its joint centre would change the torque equation, per m of offset.
 
     The markers define the chain the torques and the regressor are computed on. Were the true joint centres
     ``o`` away from them (in the frame of the segment the marker sits on: along, normal), the torques of the
     handle wrench would act on other lever arms and gravity on other segment angles. To first order the
-    equation ``tau = Y theta`` gains ``D o``; ``D`` is returned, computed at the current base parameters.
+    equation ``tau = Y theta`` gains ``D o``; ``D`` is returned, computed at the current base parameters, in closed
+    form: a centre moved by ``delta`` turns the segments ending at it by ``(axis x delta) / length`` and moves
+    the lever arms of the handle's wrench by ``delta``.
 
     Parameters
     ----------
@@ -68,22 +60,34 @@ def placement_columns(
     the shoulder to the contact point (the contact point's offset in the last segment's frame).
     """
     n = q_rad.shape[1]
-    wrench = wrench_from_torques(q_rad, lengths_m, tau_nm)
-    points = joint_positions_m(q_rad, lengths_m)  # (N, n + 1, 2) the marker chain
-    phi = np.cumsum(q_rad, axis=1)
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    force = wrench_from_torques(q_rad, lengths, tau_nm)[:, :2]  # (N, 2) the handle's [F_y, F_z]
+    phi = running_sum(q_rad)
+    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)  # (N, n, 2)
+    turning = base_torque_angle_derivatives(q_rad, qd_rad_s, qdd_rad_s2, lengths, base_values)  # (N, n, n)
     frame_of = [*range(n), n - 1]
-    model = base_torques_nm(q_rad, qd_rad_s, qdd_rad_s2, lengths_m, base_values)
     columns = np.zeros((q_rad.shape[0], n, 2 * (n + 1)))
     for k in range(n + 1):
-        angle = phi[:, frame_of[k]]
-        along = np.stack((np.cos(angle), np.sin(angle)), axis=-1)
+        along = axis[:, frame_of[k]]
         for c, direction in enumerate((along, np.stack((-along[:, 1], along[:, 0]), axis=-1))):
-            moved = points.copy()
-            moved[:, k] -= _STEP_M * direction  # the true centre, if the marker sits o = +step off it
-            q_true = _angles_from_points(moved)
-            lever = moved[:, -1:, :] - moved[:, :n, :]  # (N, n, 2) contact point from each joint
-            tau_true = -(lever[..., 0] * wrench[:, None, 1] - lever[..., 1] * wrench[:, None, 0] + wrench[:, None, 2])
-            model_true = base_torques_nm(q_true, qd_rad_s, qdd_rad_s2, lengths_m, base_values)
+            delta = -direction  # the true centre, if the marker sits o = +1 m off it
+            model = np.zeros((q_rad.shape[0], n))
+            if k >= 1:  # the segment ending at the centre turns
+                model += turning[:, :, k - 1] * (_cross(axis[:, k - 1], delta) / lengths[k - 1])[:, None]
+            if k < n:  # the segment starting at it turns the other way
+                model -= turning[:, :, k] * (_cross(axis[:, k], delta) / lengths[k])[:, None]
+            # The handle's lever arm about joint i (contact point minus joint i) moves with either end.
+            lever = np.zeros((q_rad.shape[0], n, 2))
+            if k == n:
+                lever += delta[:, None, :]
+            else:
+                lever[:, k] -= delta
+            torque = -(lever[..., 0] * force[:, None, 1] - lever[..., 1] * force[:, None, 0])
             # tau_meas = Y theta + [d(Y theta)/do - d tau/do] o
-            columns[:, :, 2 * k + c] = ((model_true - model) - (tau_true - tau_nm)) / _STEP_M
+            columns[:, :, 2 * k + c] = model - torque
     return columns
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Planar cross product of (..., 2) vectors."""
+    return np.asarray(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])

@@ -135,6 +135,33 @@ def prior_rows(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
     return rows, root * problem.prior_mean[picks]
 
 
+def joint_products(a: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``sum_t sum_i a[t, i]^T w[t, i] b[t, i]`` of per-joint rows: (p, m) for ``b`` (N, n, m), (p,) for ``b`` (N, n).
+
+    One BLAS product per joint (a three-operand einsum over N samples runs ten times slower).
+
+    Parameters
+    ----------
+    a : (N, n, p) e.g. a regressor.
+    w : (N, n) row weights (0 off the used rows).
+    b : (N, n, m) or (N, n).
+    """
+    total = None
+    for i in range(a.shape[1]):
+        weighted = w[:, i, None] * b[:, i] if b.ndim == 3 else w[:, i] * b[:, i]
+        product = a[:, i].T @ weighted
+        total = product if total is None else total + product
+    return np.asarray(total)
+
+
+def joint_scores(regressor: np.ndarray, weighted_residual: np.ndarray) -> np.ndarray:
+    """(N, p) per-sample scores ``sum_i x_ti r_ti`` (summed over the joints of each sample)."""
+    scores = regressor[:, 0] * weighted_residual[:, 0, None]
+    for i in range(1, regressor.shape[1]):
+        scores += regressor[:, i] * weighted_residual[:, i, None]
+    return np.asarray(scores)
+
+
 Statistics = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
@@ -240,7 +267,7 @@ def fit_problem(problem: Problem) -> Fit:
     values, weights, residual = solved.values, solved.weights, solved.residual
     w = np.where(problem.rows, weights[None, :], 0.0)
     design, moment, _ = normal_equations(problem, weights, solved.statistics)
-    scores = np.einsum("tip,ti->tp", problem.regressor, w * np.where(problem.rows, residual, 0.0))
+    scores = joint_scores(problem.regressor, w * np.where(problem.rows, residual, 0.0))
     used_samples = problem.rows.any(axis=1)
     covariance, lags = hac_covariance(design, scores[used_samples])
     if problem.prior_precision.any():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from pinocchio_chain import planar_chain
 
-from bsp_ros.core.dynamics import base_parameters, base_regressor, base_torques_nm
+from bsp_ros.core.dynamics import base_parameters, base_regressor, base_torque_angle_derivatives, base_torques_nm
 from bsp_ros.core.model import gravity_regressor
 
 pin = pytest.importorskip("pinocchio", reason="pinocchio (pip 'pin') is the independent rigid-body oracle")
@@ -34,3 +34,21 @@ def test_static_columns_are_the_gravity_regressor():
     q = np.random.default_rng(3).uniform(-1, 1, (20, 3))
     zeros = np.zeros_like(q)
     np.testing.assert_allclose(base_regressor(q, zeros, zeros, [0.3, 0.3, 0.1])[:, :, :3], gravity_regressor(q))
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_closed_form_angle_derivatives_match_central_differences(n: int) -> None:
+    rng = np.random.default_rng(11 + n)
+    q, qd, qdd = (rng.normal(scale=0.8, size=(40, n)) for _ in range(3))
+    lengths, base = rng.uniform(0.2, 0.4, n), rng.normal(size=3 * n)
+    derivative = base_torque_angle_derivatives(q, qd, qdd, lengths, base)
+    step = 1e-6
+    for s in range(n):
+        turn = np.zeros(n)
+        turn[s] = step
+        if s + 1 < n:
+            turn[s + 1] = -step  # the absolute angle of segment s alone
+        numeric = (
+            base_torques_nm(q + turn, qd, qdd, lengths, base) - base_torques_nm(q - turn, qd, qdd, lengths, base)
+        ) / (2 * step)
+        np.testing.assert_allclose(derivative[:, :, s], numeric, atol=1e-7 * np.abs(numeric).max())

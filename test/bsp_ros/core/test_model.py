@@ -75,3 +75,11 @@ def test_one_sample_torques_and_regressor_match_the_array_versions() -> None:
             atol=1e-12,
         )
         np.testing.assert_allclose(gravity_regressor_one(q), gravity_regressor(q[None])[0], atol=1e-12)
+
+
+def test_running_sum_gives_numpys_cumsum_bit_for_bit() -> None:
+    rng = np.random.default_rng(5)
+    flat, points = rng.normal(size=(500, 3)), rng.normal(size=(500, 3, 2))
+    assert np.array_equal(model.running_sum(flat), np.cumsum(flat, axis=1))
+    assert np.array_equal(model.running_sum(points), np.cumsum(points, axis=1))
+    assert np.array_equal(model.running_sum(flat, reverse=True), np.cumsum(flat[:, ::-1], axis=1)[:, ::-1])

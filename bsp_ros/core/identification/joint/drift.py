@@ -11,7 +11,7 @@ from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, term_test
 from bsp_ros.core.identification.result import ParameterName
-from bsp_ros.core.identification.stacked import Fit, Problem
+from bsp_ros.core.identification.stacked import Fit, Problem, joint_products
 from bsp_ros.core.model import contact_jacobian
 
 
@@ -65,7 +65,7 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
     delta_torque = np.zeros_like(data.tau_nm)
     for k, rows in enumerate(groups):
         delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
-    delta = design_inverse(fit.design) @ np.einsum("tip,ti,ti->p", problem.regressor, w, delta_torque)
+    delta = design_inverse(fit.design) @ joint_products(problem.regressor, w, delta_torque)
     std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
     offset_shift = np.abs(delta[:n]) / std
     if max(shift, float(offset_shift.max())) <= MODEL_CHECK_SHIFT_SD:

@@ -10,7 +10,7 @@ from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.result import ParameterName
-from bsp_ros.core.identification.stacked import Fit, Problem, augmented, reweighted_values
+from bsp_ros.core.identification.stacked import Fit, Problem, augmented, joint_products, reweighted_values
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,7 @@ def _per_recording(columns: np.ndarray, recording_index: np.ndarray | None) -> n
 def _covariance(problem: Problem, fit: Fit, columns: np.ndarray) -> np.ndarray:
     """Covariance of the estimate from offsets of unit variance along ``columns``."""
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    response = design_inverse(fit.design) @ np.einsum("tip,ti,tim->pm", problem.regressor, w, columns)
+    response = design_inverse(fit.design) @ joint_products(problem.regressor, w, columns)
     return np.asarray(response @ response.T)
 
 

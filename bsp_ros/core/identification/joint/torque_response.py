@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bsp_ros.core.identification.covariance import design_inverse
-from bsp_ros.core.identification.stacked import Fit, Problem
+from bsp_ros.core.identification.stacked import Fit, Problem, joint_products
 
 
 @dataclass(frozen=True)
@@ -31,7 +31,7 @@ class TorqueResponse:
 
     def __call__(self, delta_tau_nm: np.ndarray) -> np.ndarray:
         """(p,) parameter change for a torque change ``delta_tau_nm`` (N, n) Nm at the fit's samples."""
-        rhs = np.einsum("tip,ti,ti->p", self.regressor, self.row_weights, delta_tau_nm)
+        rhs = joint_products(self.regressor, self.row_weights, delta_tau_nm)
         out = np.zeros(rhs.size)
         free = self.free
         out[free] = design_inverse(self.design[np.ix_(free, free)]) @ rhs[free]

@@ -52,15 +52,21 @@ def transition_widths(
     base, base_x = solve(design, moment)
     for j in range(n):
         column = n + j * k + config.passive.local.index("coulomb")
-        x_j, w_j, y_j = problem.regressor[:, j, :], w[:, j], problem.torque[:, j]
+        used = w[:, j] > 0
+        x_j, w_j, y_j = problem.regressor[used, j, :], w[used, j], problem.torque[used, j]
+        # Every candidate width's column at once (N, widths): its products with the others are one BLAS product.
+        c = np.tanh(data.velocity_rad_s[used, j, None] / TRANSITION_WIDTHS_RAD_S[None, :])
+        weighted = w_j[:, None] * c
+        crosses = x_j.T @ weighted  # (p, widths)
+        squares = (weighted * c).sum(axis=0)
+        targets = y_j @ weighted
         profile = [(base, 0.0, float(base_x[column]))]
-        for width in TRANSITION_WIDTHS_RAD_S:
-            c = np.tanh(data.velocity_rad_s[:, j] / width)
+        for m, width in enumerate(TRANSITION_WIDTHS_RAD_S):
             a, b = design.copy(), moment.copy()
-            cross = (x_j * (w_j * c)[:, None]).sum(axis=0)
-            cross[column] = (w_j * c * c).sum()
+            cross = crosses[:, m].copy()
+            cross[column] = squares[m]
             a[column, :], a[:, column] = cross, cross
-            b[column] = (w_j * c * y_j).sum()
+            b[column] = targets[m]
             value, x = solve(a, b)
             profile.append((value, float(width), float(x[column])))
         best = min(profile)
