@@ -7,12 +7,14 @@ padding to a multiple of 8 counted from the end of the encapsulation header, the
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 
 import numpy as np
 
 from bsp_ros.bag.topics import POSE_TYPE, WRENCH_TYPE
 from bsp_ros.errors import InputError
+from msg_adapters.tf import TransformSample
 
 #: Message type -> number of float64 after the header (Wrench: force, torque; Pose: position, xyzw).
 FIXED_LAYOUT_FLOATS: dict[str, int] = {WRENCH_TYPE: 6, POSE_TYPE: 7}
@@ -139,3 +141,47 @@ def encode_fixed(t_ns: np.ndarray, frame_id: str, values: np.ndarray) -> np.ndar
     records["name"] = name
     records["values"] = floats
     return records.view(np.uint8).reshape(stamps.size, layout.itemsize)
+
+
+def decode_tf_message(raw: bytes) -> list[TransformSample] | None:
+    """A little-endian CDR ``tf2_msgs/msg/TFMessage`` read without a type store, or None where the bytes do not
+    fit its layout (decode those with rosbags'; its type store costs `bsp identify` 0.08 s to build).
+
+    Layout after the 4-byte encapsulation header (alignment counted from its end): ``uint32`` count, then per
+    transform ``int32 sec, uint32 nanosec``, ``frame_id`` and ``child_frame_id`` (``uint32`` length, bytes with
+    their NUL, each length 4-aligned), the translation (3 float64) and rotation (4 float64) 8-aligned.
+    """
+    if len(raw) < 8 or raw[0] != 0 or raw[1] != 1:
+        return None
+    body = memoryview(raw)[4:]
+    size = len(body)
+
+    def string(at: int) -> tuple[str, int] | None:
+        at = (at + 3) & ~3
+        if at + 4 > size:
+            return None
+        (length,) = struct.unpack_from("<I", body, at)
+        end = at + 4 + length
+        if length < 1 or end > size or body[end - 1] != 0:
+            return None
+        return bytes(body[at + 4 : end - 1]).decode("utf-8", errors="replace"), end
+
+    (count,) = struct.unpack_from("<I", body, 0)
+    at, samples = 4, []
+    for _ in range(count):
+        if at + 8 > size:
+            return None
+        sec, nanosec = struct.unpack_from("<iI", body, at)
+        parent = string(at + 8)
+        if parent is None:
+            return None
+        child = string(parent[1])
+        if child is None:
+            return None
+        at = (child[1] + 7) & ~7
+        if at + 56 > size:
+            return None
+        values = np.frombuffer(body, dtype="<f8", count=7, offset=at).astype(np.float64)
+        at += 56
+        samples.append(TransformSample(int(sec) * int(_NS) + int(nanosec), parent[0], child[0], values[:3], values[3:]))
+    return samples

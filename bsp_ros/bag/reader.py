@@ -10,7 +10,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
-from bsp_ros.bag.cdr import FIXED_LAYOUT_FLOATS, decode_fixed
+from bsp_ros.bag.cdr import FIXED_LAYOUT_FLOATS, decode_fixed, decode_tf_message
 from bsp_ros.bag.errors import (
     BagCorruptError,
     EmptyBagError,
@@ -142,6 +142,11 @@ class _SessionSink:
         self, stream: _Stream, buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray, log_ns: np.ndarray
     ) -> None:
         for offset, length, log in zip(offsets.tolist(), lengths.tolist(), log_ns.tolist(), strict=True):
+            if stream.msgtype == TF_TYPE:
+                transforms = decode_tf_message(buf[offset : offset + length].tobytes())
+                if transforms is not None:
+                    stream.transforms.append((int(log), transforms))
+                    continue
             decoded = self._deserialize(stream, buf, offset, length)
             if decoded is None:
                 continue

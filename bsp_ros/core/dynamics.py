@@ -188,9 +188,8 @@ def base_torque_angle_derivatives(
         for i in range(n):
             total = np.zeros(q_rad.shape[0])
             for j in range(i, n):
-                d_points = (moved if j > s else 0.0) - (moved if i > s else 0.0)
-                if j > s or i > s:
-                    total += _cross(d_points, force[:, j])
+                if i <= s < j:  # only the lever from joint i to a point beyond s moves (j >= i)
+                    total += _cross(moved, force[:, j])
                 if j == s:
                     total += _cross(points[:, j] - points[:, i], turned_force)
                     total += _cross(turned_h, accel[:, j]) + gravity_m_s2 * turned_h[:, 0]

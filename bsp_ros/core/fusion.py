@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from bsp_ros.core.anthropometry import (
     DEFAULT_BODY_MASS_KG,
@@ -120,6 +120,35 @@ def anthropometric_prior(subject: SubjectInfo, lengths_m: np.ndarray) -> Prior:
     return Prior(np.concatenate((mass_mean, com_mean)), covariance, notes)
 
 
+def _gauss_newton(
+    residual: Callable[[np.ndarray], np.ndarray],
+    jacobian: Callable[[np.ndarray], np.ndarray],
+    start: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> np.ndarray:
+    """The bounded least-squares minimum of ``|residual(x)|^2`` from ``start``: Gauss-Newton steps while they stay
+    inside the bounds and lower the cost (the prior makes the problem well posed and nearly linear: a few steps);
+    scipy's bounded solver (dogbox) where a bound binds or a step fails, imported then only (0.13 s)."""
+    x = start.copy()
+    cost = float(residual(x) @ residual(x))
+    for _ in range(50):
+        step = np.linalg.lstsq(jacobian(x), -residual(x), rcond=None)[0]
+        candidate = x + step
+        if not np.all((candidate > lower) & (candidate < upper)):
+            break
+        new_cost = float(residual(candidate) @ residual(candidate))
+        if new_cost > cost * (1.0 + 1e-12) + 1e-300:
+            break
+        x, cost = candidate, new_cost
+        if np.all(np.abs(step) <= 1e-12 * (1.0 + np.abs(x))):
+            return x
+    from scipy.optimize import least_squares
+
+    # dogbox, as scipy advises for small bounded problems: ~5 evaluations where trf's reflective steps take ~25.
+    return np.asarray(least_squares(residual, x, jac=jacobian, bounds=(lower, upper), method="dogbox", x_scale="jac").x)
+
+
 def fuse_static_moments(
     prior: Prior, lengths_m: np.ndarray, beta_kgm: np.ndarray, beta_covariance: np.ndarray
 ) -> Posterior:
@@ -154,18 +183,16 @@ def fuse_static_moments(
     lower = np.full(2 * n, 1e-6)
     upper = np.concatenate((np.full(n, 50.0), 1.5 * lengths_m))
     start = np.clip(prior.mean, lower * 2, upper * 0.99)
-    # dogbox, as scipy advises for small bounded problems: ~5 evaluations where trf's reflective steps take
-    # ~25 to the same optimum (to 1e-9) when no bound is active; it runs with every live update.
-    solution = least_squares(residual, start, jac=jacobian, bounds=(lower, upper), method="dogbox", x_scale="jac")
-    full_jacobian = jacobian(solution.x)
+    x = _gauss_newton(residual, jacobian, start, lower, upper)
+    full_jacobian = jacobian(x)
     covariance = np.linalg.inv(full_jacobian.T @ full_jacobian)
     prior_share = np.diag(covariance) / np.diag(prior.covariance)
-    masses, coms = solution.x[:n], solution.x[n:]
+    masses, coms = x[:n], x[n:]
     first = masses * coms
     # Delta method for m l.
     grad = np.hstack((np.diag(coms), np.diag(masses)))
     first_std = np.sqrt(np.diag(grad @ covariance @ grad.T))
-    return Posterior(solution.x, covariance, prior_share, first, first_std, list(prior.notes))
+    return Posterior(x, covariance, prior_share, first, first_std, list(prior.notes))
 
 
 # Static moments outside this factor of the anthropometric prior's are not a human arm (nor an arm with

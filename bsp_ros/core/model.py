@@ -110,9 +110,13 @@ def contact_torques_nm(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike, wrench_yz
     -------
     (N, n) torques (Nm); equal to ``tau_G + tau_p`` in quasi-static equilibrium.
     """
-    jacobian = contact_jacobian(q_rad, lengths_m)
+    phi = absolute_angles_rad(q_rad)
+    lengths = np.asarray(lengths_m, dtype=np.float64)
     wrench = np.atleast_2d(np.asarray(wrench_yzx, dtype=np.float64))
-    return -np.einsum("nki,nk->ni", jacobian, wrench)
+    # J^T F without the (N, 3, n) Jacobian: its rows d(y, z)/dq sum the distal segments, its phi row is 1.
+    dy = running_sum(-lengths * np.sin(phi), reverse=True)
+    dz = running_sum(lengths * np.cos(phi), reverse=True)
+    return -(dy * wrench[:, 0, None] + dz * wrench[:, 1, None] + wrench[:, 2, None])
 
 
 def contact_torques_one_nm(q_rad: FloatVector, lengths_m: FloatVector, wrench_yzx: FloatVector) -> list[float]:

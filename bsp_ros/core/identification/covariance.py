@@ -18,12 +18,14 @@ def bartlett_bandwidth(scores: np.ndarray) -> int:
     """
     n = scores.shape[0]
     x, y = scores[:-1], scores[1:]
-    denominator = (x * x).sum(axis=0)
+    denominator = np.einsum("tp,tp->p", x, x)  # sums without (N, p) temporaries
     usable = denominator > 0
     if n < 8 or not usable.any():
         return 1
-    rho = np.clip((x * y).sum(axis=0)[usable] / denominator[usable], -0.99, 0.99)
-    sigma2 = ((y[:, usable] - rho * x[:, usable]) ** 2).mean(axis=0)  # AR(1) innovation variances
+    rho = np.clip(np.einsum("tp,tp->p", x, y)[usable] / denominator[usable], -0.99, 0.99)
+    # AR(1) innovation variances
+    innovation = y[:, usable] - rho * x[:, usable]
+    sigma2 = np.einsum("tp,tp->p", innovation, innovation) / (n - 1)
     numerator = (4 * rho**2 * sigma2**2 / ((1 - rho) ** 6 * (1 + rho) ** 2)).sum()
     scale = (sigma2**2 / (1 - rho) ** 4).sum()
     alpha = numerator / scale if scale > 0 else 0.0
@@ -45,17 +47,18 @@ def correlation_length(scores: np.ndarray, max_lag: int = 500) -> int:
     """
     n = scores.shape[0]
     centred = scores - scores.mean(axis=0)
-    variance = (centred**2).sum(axis=0)
+    variance = np.einsum("tp,tp->p", centred, centred)
     usable = variance > 0
     if n < 8 or not usable.any():
         return 1
-    centred = centred[:, usable] / np.sqrt(variance[usable])
+    # Components as contiguous rows: the FFTs run a third faster along them than down the columns.
+    rows = (centred[:, usable] / np.sqrt(variance[usable])).T.copy()
     last = min(max_lag, n // 4)
     # Zero padding to N + last makes the circular correlation the linear one up to that lag (2N doubles the cost).
     size = 1 << int(np.ceil(np.log2(n + last + 1)))
-    spectrum = np.fft.rfft(centred, size, axis=0)
-    acf = np.fft.irfft(spectrum.real**2 + spectrum.imag**2, size, axis=0)[: last + 1]
-    inside = (np.abs(acf) < 2.0 / np.sqrt(n)).all(axis=1)
+    spectrum = np.fft.rfft(rows, size, axis=1)
+    acf = np.fft.irfft(spectrum.real**2 + spectrum.imag**2, size, axis=1)[:, : last + 1]
+    inside = (np.abs(acf) < 2.0 / np.sqrt(n)).all(axis=0)
     hits = np.flatnonzero(inside[1:])
     return int(hits[0] + 1) if hits.size else int(last)
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import lsq_linear
 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
+from bsp_ros.core.identification.stacked import bounded_least_squares
 from bsp_ros.core.model import GRAVITY_M_S2, absolute_angles_rad, running_sum
 from bsp_ros.core.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_scalar, check_positive
@@ -39,7 +39,7 @@ def _bounded_fit(columns: np.ndarray, target: np.ndarray, upper: np.ndarray, pas
     lower = np.zeros(columns.shape[1])
     lower[-1], upper = -passive_bound, upper.copy()
     upper[-1] = passive_bound
-    return np.asarray(lsq_linear(columns, target, bounds=(lower, upper), method="bvls", tol=1e-12).x)
+    return bounded_least_squares(columns, target, lower, upper)
 
 
 def identify_paper(data: IdentificationData, config: PaperConfig | None = None) -> IdentificationResult:

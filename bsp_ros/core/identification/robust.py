@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
+from numpy.lib.stride_tricks import sliding_window_view
 
 # The MAD of a normal sample times this is its standard deviation.
 MAD_TO_SD = 1.4826
@@ -48,10 +48,18 @@ def hampel_outliers(values: np.ndarray, window: int = 11, n_sd: float = 8.0, flo
     if columns.shape[0] < 3:
         return np.zeros(columns.shape[0], dtype=bool)
     size = max(3, min(window, columns.shape[0]) | 1)
-    deviation = columns - ndimage.median_filter(columns, size=(size, 1), mode="nearest")
+    deviation = columns - rolling_median(columns, size)
     scale = robust_sd(deviation, axis=0)
     limit = np.maximum(n_sd * scale, floor)
     return np.asarray((np.abs(deviation) > limit[None, :]).any(axis=1))
+
+
+def rolling_median(columns: np.ndarray, size: int) -> np.ndarray:
+    """Centred rolling median (N, k) over ``size`` (odd) samples, the ends extended by their edge values: as
+    ``scipy.ndimage.median_filter(columns, size=(size, 1), mode="nearest")``, bit for bit (the middle element)."""
+    half = size // 2
+    padded = np.pad(columns, ((half, half), (0, 0)), mode="edge")
+    return np.asarray(np.partition(sliding_window_view(padded, size, axis=0), half, axis=-1)[..., half])
 
 
 def high_frequency_sd(residual: np.ndarray) -> np.ndarray:
@@ -71,4 +79,4 @@ def high_frequency_sd(residual: np.ndarray) -> np.ndarray:
     return np.asarray(robust_sd(np.diff(np.asarray(residual, dtype=np.float64), axis=0), axis=0) / np.sqrt(2.0))
 
 
-__all__ = ["MAD_TO_SD", "hampel_outliers", "high_frequency_sd", "robust_sd"]
+__all__ = ["MAD_TO_SD", "hampel_outliers", "high_frequency_sd", "robust_sd", "rolling_median"]

@@ -6,8 +6,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (~0.5 s)
 
+from bsp_ros.core.identification.chi2 import chi2_sf
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.stacked import Extras, Fit, Problem, build_problem, fit_problem, problem_names
@@ -105,7 +105,7 @@ def select_passive(
             # evidence: a relative cut keeps their near-zero eigenvalues from turning rounding into significance.
             statistic = float(theta @ np.linalg.pinv(sub, rcond=1e-6, hermitian=True) @ theta)
             scores.append(statistic - penalty * len(left_out) + criteria[j])
-            p_values[i] = min(p_values[i], float(chdtrc(len(left_out), statistic)))
+            p_values[i] = min(p_values[i], float(chi2_sf(statistic, len(left_out))))
         criteria[i] = max(scores) if scores else 0.0
     criterion = np.array(criteria)
     weight = np.exp(-0.5 * (criterion - criterion.min()))

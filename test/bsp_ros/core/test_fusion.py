@@ -91,3 +91,32 @@ def test_a_static_moment_is_implausible_only_beyond_its_std() -> None:
     wide, narrow = (3.0 - limit) / 2.9, (3.0 - limit) / 3.1  # 3 std reach into the range / stop short of it
     assert implausible_static_moments(subject, lengths, np.array([1.0, 3.0]), beta_std_kgm=np.array([0.0, wide])) == []
     assert implausible_static_moments(subject, lengths, np.array([1.0, 3.0]), beta_std_kgm=np.array([0.0, narrow]))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_posterior_is_scipys_bounded_least_squares_minimum(seed: int) -> None:
+    """Gauss-Newton inside the bounds against scipy's dogbox (what the fusion called before), on static moments
+    drawn around the prior's with one to twenty percent std."""
+    from scipy.optimize import least_squares
+
+    from bsp_ros.core.model import static_moments_jacobian, static_moments_kgm
+
+    rng = np.random.default_rng(seed)
+    lengths = np.array([0.30, 0.27, 0.09]) * rng.uniform(0.9, 1.1, 3)
+    prior = anthropometric_prior(SubjectInfo(body_mass_kg=float(rng.uniform(55, 95))), lengths)
+    beta_mean = static_moments_kgm(lengths, prior.mean[:3], prior.mean[3:])
+    beta_std = beta_mean * rng.uniform(0.01, 0.2, 3)
+    beta = beta_mean * (1 + rng.normal(scale=0.1, size=3))
+    posterior = fuse_static_moments(prior, lengths, beta, np.diag(beta_std**2))
+    data_whiten, prior_whiten = np.diag(1 / beta_std), np.linalg.inv(np.linalg.cholesky(prior.covariance))
+
+    def residual(x):
+        model = static_moments_kgm(lengths, x[:3], x[3:])
+        return np.concatenate((data_whiten @ (model - beta), prior_whiten @ (x - prior.mean)))
+
+    def jacobian(x):
+        return np.vstack((data_whiten @ static_moments_jacobian(lengths, x[:3], x[3:]), prior_whiten))
+
+    bounds = (np.full(6, 1e-6), np.concatenate((np.full(3, 50.0), 1.5 * lengths)))
+    reference = least_squares(residual, prior.mean, jac=jacobian, bounds=bounds, xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    np.testing.assert_allclose(posterior.mean, reference.x, rtol=1e-7)

@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (~0.5 s)
 
+from bsp_ros.core.identification.chi2 import chi2_sf
 from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
@@ -57,7 +57,7 @@ def elastic_check(
         sub = covariance[np.ix_(picks, picks)]
         theta = fit.values[picks]
         statistic = float(theta @ np.linalg.pinv(sub) @ theta)
-        if chdtrc(len(picks), statistic) < 1e-4 and change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD:
+        if chi2_sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD:
             worst = int(np.argmax(shift_sd))
             corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
             notes.append(

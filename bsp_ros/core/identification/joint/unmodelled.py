@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import chdtrc  # chi2.sf without importing scipy.stats (~0.5 s)
 
+from bsp_ros.core.identification.chi2 import chi2_sf
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import Fit, Problem, augmented, fit_problem
 
@@ -37,4 +37,4 @@ def term_test(
         return 1.0, 0.0, watched[0], wide
     shift = shifts_sd(fit, wide, watched)
     worst = int(np.argmax(shift))
-    return float(chdtrc(len(picks), statistic)), float(shift[worst]), watched[worst], wide
+    return float(chi2_sf(statistic, len(picks))), float(shift[worst]), watched[worst], wide

@@ -1,0 +1,103 @@
+"""Issue 23: compute time of the live windowed identifier's update, per window length and wrench rate, in process.
+
+Usage: ``python bench/live_window_update.py [--windows 10 30 60] [--wrench-hz 100 1000] [--updates 40]
+[--seed 13]`` (with the worktree first on PYTHONPATH).
+
+For each wrench rate, one simulated session (the human arm cell, ``--seed``, 100 Hz markers, 60 s longer than the
+longest window) is fed to :class:`WindowedIdentifier` as the live node feeds it: the wrench in ``world`` and the
+unfiltered marker angles of the causal angle estimator. Then, for each window length, ``--updates`` updates
+(``estimate()``) are timed at 5 Hz steps of the session's clock (0.2 s more samples each), on one thread, nothing
+else running. The model checks run at their live rate (every ``elastic_check_every`` updates, the first update
+included), as they do when the node runs them in its own thread.
+
+Printed per window and rate: the number of samples identified, mean, p99 and max compute time (ms), the share of
+updates over the 5 Hz period, and the update's validity. Issue 23's target: 30 s at 1 kHz, mean <= 10 ms,
+max <= 30 ms.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import time
+
+import numpy as np
+
+from bsp_ros.core import simulation as sim
+from bsp_ros.core.identification.data import wrench_world_yzx
+from bsp_ros.live.online.causal_angles import CausalJointAngles
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
+
+PERIOD_S = 0.2  # the identifier's default 5 Hz
+
+
+def _streams(duration_s: float, wrench_hz: float, seed: int):
+    spec = sim.human_arm_cell(seed=seed, duration_s=duration_s)
+    spec = dataclasses.replace(
+        spec,
+        sensor=dataclasses.replace(spec.sensor, wrench_hz=wrench_hz),
+        markers=dataclasses.replace(spec.markers, marker_hz=100.0),
+    )
+    session = sim.simulate_cell(spec).session
+    frames: dict[int, dict[str, np.ndarray]] = {}
+    for name, series in session.markers.items():
+        for t, p in zip(series.t_ns, series.position_m, strict=True):
+            frames.setdefault(int(t), {})[name] = p
+    estimator = CausalJointAngles(3)
+    raw = []
+    for t in sorted(frames):
+        estimator.update(t, frames[t])
+        if estimator.accepted(t):
+            raw.append((t, estimator.last_raw_q_rad, estimator.lengths_m))
+    wrench = wrench_world_yzx(session.wrench, session.rotation_world_from_sensor)
+    return session.wrench.t_ns, wrench, raw
+
+
+def _run(window_s: float, stamps, wrench, raw, updates: int) -> tuple[int, np.ndarray, list[bool]]:
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=window_s))
+    end_ns = int(stamps[-1]) - int(updates * PERIOD_S * 1e9)
+    wrench_i, angle_i = 0, 0
+    times, valid, samples = [], [], 0
+
+    def feed_until(t_ns: int) -> None:
+        nonlocal wrench_i, angle_i
+        while angle_i < len(raw) and raw[angle_i][0] <= t_ns:
+            identifier.add_joint_state(raw[angle_i][0], raw[angle_i][1], raw[angle_i][2])
+            angle_i += 1
+        while wrench_i < len(stamps) and stamps[wrench_i] <= t_ns:
+            identifier.add_wrench(int(stamps[wrench_i]), wrench[wrench_i])
+            wrench_i += 1
+
+    feed_until(end_ns)
+    for k in range(updates):
+        feed_until(end_ns + int(k * PERIOD_S * 1e9))
+        started = time.perf_counter()
+        estimate = identifier.estimate()
+        times.append(time.perf_counter() - started)
+        valid.append(bool(estimate.valid))
+        samples = int(estimate.document.get("session", {}).get("n_samples", samples) or samples)
+    return samples, 1e3 * np.asarray(times), valid
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--windows", type=float, nargs="+", default=[10.0, 30.0, 60.0])
+    parser.add_argument("--wrench-hz", type=float, nargs="+", default=[100.0, 1000.0])
+    parser.add_argument("--updates", type=int, default=40)
+    parser.add_argument("--seed", type=int, default=13)
+    args = parser.parse_args()
+    print(f"{'window s':>8} {'wrench Hz':>9} {'mean ms':>8} {'p99 ms':>7} {'max ms':>7} {'late %':>6}  valid")
+    for rate in args.wrench_hz:
+        stamps, wrench, raw = _streams(max(args.windows) + 60.0, rate, args.seed)
+        for window_s in args.windows:
+            _, ms, valid = _run(window_s, stamps, wrench, raw, args.updates)
+            late = 100.0 * float((ms > 1e3 * PERIOD_S).mean())
+            print(
+                f"{window_s:8.0f} {rate:9.0f} {ms.mean():8.1f} {np.percentile(ms, 99):7.1f} {ms.max():7.1f} "
+                f"{late:6.1f}  {sum(valid)}/{len(valid)}",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
