@@ -137,3 +137,23 @@ def test_a_delay_beyond_the_search_is_not_compensated() -> None:
     delay = estimate_wrench_delay(session)
     assert delay.source == "none" and delay.delay_s == 0.0
     assert "beyond the searched" in delay.warnings[0]
+
+
+@pytest.mark.parametrize("minimum_s", [-0.13, -0.1, -0.047, 0.0, 0.031, 0.09, 0.2])
+def test_the_downhill_walk_finds_the_grids_minimum_with_its_neighbours(minimum_s: float) -> None:
+    from bsp_ros.core.identification.timing import _descend
+
+    grid = np.arange(-0.1, 0.1 + 0.01, 0.02)
+    calls: list[float] = []
+
+    def misfit(delay_s: float) -> float:
+        calls.append(delay_s)
+        return (delay_s - minimum_s) ** 2 + 0.3 * abs(delay_s - minimum_s) ** 3
+
+    walked = _descend(grid, misfit)
+    full = np.array([misfit(d) for d in grid])
+    best = int(np.argmin(full))
+    assert int(np.nanargmin(walked)) == best
+    around = slice(max(best - 1, 0), best + 2)
+    np.testing.assert_array_equal(walked[around], full[around])
+    assert len(calls) - grid.size < grid.size  # fewer fits than the whole grid
