@@ -24,6 +24,7 @@ from bsp_ros.core.identification.paper import PaperConfig, identify_paper
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.placement import chain_placement_sd_m
 from bsp_ros.core.identification.priors import base_prior_for_subject
+from bsp_ros.core.identification.rate import identification_rate_hz
 from bsp_ros.core.identification.recordings import combine_recordings
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
@@ -216,6 +217,7 @@ def identify_recordings(
         "end_time_ns": int(data.t_ns[-1]),
         "duration_s": float(data.t_ns[-1] - data.t_ns[0]) / 1e9,
         "n_wrench_samples": data.n_wrench_samples,
+        "identification_rate_hz": identification_rate_hz(data.t_ns),
         "method": options.method,
         "config": options.config(),
         **(session_info or {}),

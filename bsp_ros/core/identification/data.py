@@ -8,6 +8,7 @@ import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.identification.planarity import out_of_plane_fraction
+from bsp_ros.core.identification.rate import IDENTIFICATION_MAX_RATE_HZ, block_means
 from bsp_ros.core.joint_angles import (
     KinematicsConfig,
     MarkerKinematics,
@@ -209,20 +210,21 @@ def identification_data_from_session(
         session.wrench.torque_nm[keep],
         session.wrench.frame_id,
     )
-    wrench_yzx = wrench_world_yzx(wrench, rotation)
-    q_rad, velocity, qd_all, qdd_all, valid = resample_with_motion(kinematics, wrench.t_ns)
+    # A fast sensor's samples are averaged to the identification rate in world (a turning sensor included).
+    t_ns, wrench_yzx, counts = block_means(wrench.t_ns, wrench_world_yzx(wrench, rotation), IDENTIFICATION_MAX_RATE_HZ)
+    q_rad, velocity, qd_all, qdd_all, valid = resample_with_motion(kinematics, t_ns)
     if not valid.any():
         raise DataError("no wrench sample falls where the markers give joint angles (streams do not overlap)")
     # Samples before the first and after the last angle are the session's edges (filter run-in): expected,
     # not worth a warning. Those lost inside the session are.
-    inside = np.flatnonzero(valid)
-    dropped = int((~valid[inside[0] : inside[-1] + 1]).sum())
+    inside = slice(np.flatnonzero(valid)[0], np.flatnonzero(valid)[-1] + 1)
+    dropped = int(counts[inside][~valid[inside]].sum())
     if dropped:
         notes.append(f"{dropped} of {keep.size} wrench samples inside the session have no joint angles (marker gaps)")
     tau = contact_torques_nm(q_rad[valid], kinematics.lengths_m, wrench_yzx[valid])
     qd, qdd = qd_all[valid], qdd_all[valid]
     return IdentificationData(
-        wrench.t_ns[valid],
+        t_ns[valid],
         q_rad[valid],
         velocity[valid],
         tau,

@@ -14,6 +14,7 @@ from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.data import IdentificationData, _clean_wrench, wrench_world_yzx
 from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.rate import IDENTIFICATION_MAX_RATE_HZ, block_means
 from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_markers, resample_kinematics
 from bsp_ros.core.model import contact_torques_nm, gravity_regressor
 from bsp_ros.core.streams import Session, WrenchSeries
@@ -144,7 +145,10 @@ def delay_problem(
     )
     if kinematics is None:
         kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, kinematics_config)
-    return DelayProblem(kinematics, np.asarray(wrench.t_ns, dtype=np.int64), wrench_world_yzx(wrench, rotation))
+    t_ns, wrench_yzx, _ = block_means(
+        np.asarray(wrench.t_ns, dtype=np.int64), wrench_world_yzx(wrench, rotation), IDENTIFICATION_MAX_RATE_HZ
+    )
+    return DelayProblem(kinematics, t_ns, wrench_yzx)
 
 
 def _regressor(data: IdentificationData, passive: PassiveModel) -> np.ndarray:

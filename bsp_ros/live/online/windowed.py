@@ -9,6 +9,7 @@ import numpy as np
 
 from bsp_ros.core.estimate import estimate_document, invalid_document
 from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.rate import block_means, identification_rate_hz
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import parameter_timing
 from bsp_ros.core.joint_angles import kinematics_from_angles, resample_with_motion
@@ -97,32 +98,6 @@ class WindowSamples:
     rotation_world_from_sensor: np.ndarray | None = None
     wrench_frame_id: str = ""
     contact_from_robot: bool = False
-
-
-def block_average(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
-    """Means of consecutive blocks of samples so that the rate is at most ``max_rate_hz``.
-
-    Parameters
-    ----------
-    t_ns : (N,) increasing stamps (ns).
-    values : (N, k) samples.
-    max_rate_hz : the highest rate wanted.
-
-    Returns
-    -------
-    Block mean stamps (M,) int64 and values (M, k); the inputs unchanged when already slow enough.
-    """
-    if t_ns.size < 2:
-        return t_ns, values
-    rate_hz = (t_ns.size - 1) / ((t_ns[-1] - t_ns[0]) / 1e9) if t_ns[-1] > t_ns[0] else 0.0
-    block = int(np.ceil(rate_hz / max_rate_hz))
-    if block <= 1:
-        return t_ns, values
-    usable = (t_ns.size // block) * block
-    start = t_ns.size - usable  # keep the newest samples whole
-    t_blocks = t_ns[start:].reshape(-1, block)
-    stamps = t_blocks[:, 0] + (t_blocks - t_blocks[:, :1]).mean(axis=1).round().astype(np.int64)
-    return stamps, values[start:].reshape(-1, block, values.shape[1]).mean(axis=1)
 
 
 class WindowedIdentifier:
@@ -221,7 +196,7 @@ class WindowedIdentifier:
 
     def _window_data(self, window: WindowSamples) -> IdentificationData | str:
         """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none."""
-        t_w, wrench = block_average(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
+        t_w, wrench, _ = block_means(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
         t_a, rows = window.angle_t_ns, window.angle_rows
         lengths = np.median(rows[:, self.n :], axis=0)
         kinematics = kinematics_from_angles(
@@ -317,6 +292,7 @@ class WindowedIdentifier:
             "start_time_ns": int(data.t_ns[0]),
             "end_time_ns": int(data.t_ns[-1]),
             "window_s": self.config.window_s,
+            "identification_rate_hz": identification_rate_hz(data.t_ns),
             "refused_samples": window.refused,
             "clock_jumps": window.clock_jumps,
             "config": self.config.options.config(),

@@ -67,17 +67,25 @@ def test_stale_joint_states_make_the_estimate_invalid(live_streams) -> None:
     assert "stale input: newest joint states" in estimate.document["quality"]["message"]
 
 
-def test_block_average_slows_a_fast_stream_and_keeps_its_mean() -> None:
-    from bsp_ros.live.online.windowed import block_average
+def test_block_means_slow_a_fast_stream_and_keep_its_mean() -> None:
+    from bsp_ros.core.identification.rate import block_means
 
     t_ns = 1_000_000_000 + np.arange(1000, dtype=np.int64) * 1_000_000  # 1 kHz
     values = np.column_stack((np.arange(1000.0), np.ones(1000)))
-    stamps, means = block_average(t_ns, values, 200.0)
-    assert stamps.size == 200
+    stamps, means, counts = block_means(t_ns, values, 200.0)
+    assert stamps.size == 200 and (counts == 5).all()
     np.testing.assert_allclose(means[:, 0], np.arange(1000.0).reshape(-1, 5).mean(axis=1))
     np.testing.assert_array_equal(stamps, t_ns.reshape(-1, 5)[:, 2])
-    same_t, _ = block_average(t_ns[::10], values[::10], 200.0)
+    same_t, _, _ = block_means(t_ns[::10], values[::10], 200.0)
     assert same_t.size == 100
+    # A gap of 7 samples ends a block instead of averaging across it; every sample is in one block.
+    kept = np.r_[0:503, 510:1000]
+    stamps, means, counts = block_means(t_ns[kept], values[kept], 200.0)
+    assert counts.sum() == kept.size and set(counts.tolist()) == {3, 5}
+    assert not ((stamps > t_ns[502]) & (stamps < t_ns[510])).any()
+    # A 100 Hz sensor whose clock runs 2 % fast is left alone.
+    fast = (np.arange(100) * 9_800_000).astype(np.int64)
+    assert block_means(fast, np.ones((100, 1)), 100.0)[0].size == 100
 
 
 def test_a_tare_s_uncertainty_joins_the_window_estimate(live_streams) -> None:
