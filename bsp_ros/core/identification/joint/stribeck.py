@@ -71,16 +71,26 @@ def stribeck_check(
             continue
         speed = np.abs(data.velocity_rad_s[:, j])
         column = n + j * k + config.passive.local.index("coulomb")
-        # The speed by a profile on the bordered normal equations (O(N) per candidate), then one full fit.
+        # The speed by a profile on the bordered normal equations, every candidate's column at once (one BLAS
+        # product over the used rows), then one full fit.
+        used = w[:, j] > 0
+        w_j, y_j = w[used, j], problem.torque[used, j]
+        speeds = np.asarray(STRIBECK_SPEEDS_RAD_S)
+        bumps = np.sign(data.velocity_rad_s[used, j, None]) * np.exp(-((speed[used, None] / speeds[None, :]) ** 2))
+        weighted = w_j[:, None] * bumps
+        crosses = problem.regressor[used, j, :].T @ weighted  # (p, candidates)
+        squares = (weighted * bumps).sum(axis=0)
+        targets = y_j @ weighted
+        try:
+            base = float(moment @ np.linalg.solve(design, moment))
+        except np.linalg.LinAlgError:
+            continue
         best_gain, best_speed = 0.0, 0.0
-        for speed_s in STRIBECK_SPEEDS_RAD_S:
-            c = np.sign(data.velocity_rad_s[:, j]) * np.exp(-((speed / speed_s) ** 2)) * w[:, j]
-            cross = problem.regressor[:, j, :].T @ c
-            cc = float(c @ (c / np.where(w[:, j] > 0, w[:, j], 1.0)))
-            a = np.block([[design, cross[:, None]], [cross[None, :], np.array([[cc]])]])
-            rhs = np.append(moment, float(c @ problem.torque[:, j]))
+        for m, speed_s in enumerate(STRIBECK_SPEEDS_RAD_S):
+            a = np.block([[design, crosses[:, m, None]], [crosses[None, :, m], np.array([[squares[m]]])]])
+            rhs = np.append(moment, targets[m])
             try:
-                gain = float(rhs @ np.linalg.solve(a, rhs)) - float(moment @ np.linalg.solve(design, moment))
+                gain = float(rhs @ np.linalg.solve(a, rhs)) - base
             except np.linalg.LinAlgError:
                 continue
             if gain > best_gain:
