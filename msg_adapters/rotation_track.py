@@ -59,7 +59,7 @@ class RotationTrack:
 
     Attributes
     ----------
-    rotations : (N, 3, 3) one rotation per stamp.
+    rotations : (N, 3, 3) one rotation per stamp (read-only, one shared rotation when the chain is fixed).
     turning : True when a /tf link of the chain changes (more than one distinct rotation): the rotation
         is then per sample; False when the chain is fixed (/tf_static, or /tf republishing one rotation).
     source : ``"tf"`` when a /tf link is in the chain, else ``"tf_static"``.
@@ -221,15 +221,23 @@ class TransformBuffer:
             return None
         from_source, from_target = found
 
+        links = [self._links[c] for c in from_source + from_target]
+        turning = [link for link in links if link.turning()]
+        # A fixed chain is one rotation: composed once and shared by every stamp (a 1 kHz session's 600,000
+        # compositions took 0.17 s).
+        stamps = t if turning or t.size == 0 else t[:1]
+
         def compose(children: list[str]) -> np.ndarray:
-            rotation = np.broadcast_to(np.eye(3), (t.size, 3, 3))
+            rotation = np.broadcast_to(np.eye(3), (stamps.size, 3, 3))
             for child in children:  # R_ancestor_from_frame = R_parent_from_child @ R_child_from_frame
-                rotation = np.einsum("nij,njk->nik", self._links[child].at(t), rotation)
+                rotation = np.einsum("nij,njk->nik", self._links[child].at(stamps), rotation)
             return np.asarray(rotation)
 
         rotations = np.einsum("nji,njk->nik", compose(from_target), compose(from_source))
-        links = [self._links[c] for c in from_source + from_target]
-        turning = [link for link in links if link.turning()]
+        if turning or t.size == 0:
+            rotations = np.ascontiguousarray(rotations)
+        else:
+            rotations = np.broadcast_to(rotations[0], (t.size, 3, 3))
         span = None
         held = np.zeros(t.size, dtype=bool)
         if turning:
@@ -238,4 +246,4 @@ class TransformBuffer:
             span = (first, last)
             held = (t < first) | (t > last)
         source_name = "tf" if any(link.dynamic for link in links) else "tf_static"
-        return RotationTrack(np.ascontiguousarray(rotations), bool(turning), source_name, span, held)
+        return RotationTrack(rotations, bool(turning), source_name, span, held)
