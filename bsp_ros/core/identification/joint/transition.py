@@ -60,15 +60,19 @@ def transition_widths(
         crosses = x_j.T @ weighted  # (p, widths)
         squares = (weighted * c).sum(axis=0)
         targets = y_j @ weighted
+        # Each candidate's normal equations: the Coulomb row and column swapped for the candidate's.
+        crosses[column] = squares
+        a = np.repeat(design[None], crosses.shape[1], axis=0)
+        b = np.repeat(moment[None], crosses.shape[1], axis=0)
+        a[:, column, :], a[:, :, column], b[:, column] = crosses.T, crosses.T, targets
+        try:
+            solved = [(total - float(b[m] @ x), x) for m, x in enumerate(np.linalg.solve(a, b[..., None])[..., 0])]
+        except np.linalg.LinAlgError:  # one candidate singular: solve them one by one
+            solved = [solve(a[m], b[m]) for m in range(a.shape[0])]
         profile = [(base, 0.0, float(base_x[column]))]
-        for m, width in enumerate(TRANSITION_WIDTHS_RAD_S):
-            a, b = design.copy(), moment.copy()
-            cross = crosses[:, m].copy()
-            cross[column] = squares[m]
-            a[column, :], a[:, column] = cross, cross
-            b[column] = targets[m]
-            value, x = solve(a, b)
-            profile.append((value, float(width), float(x[column])))
+        profile += [
+            (v, float(width), float(x[column])) for (v, x), width in zip(solved, TRANSITION_WIDTHS_RAD_S, strict=True)
+        ]
         best = min(profile)
         chosen = best if base - best[0] > TRANSITION_MIN_GAIN else profile[0]
         widths[j] = chosen[1]
