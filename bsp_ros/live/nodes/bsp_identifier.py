@@ -26,7 +26,6 @@ from bsp_ros.live.nodes import estimate_jobs as jobs
 from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue, rotation_from_quaternion_xyzw
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
 from bsp_ros.live.online.windowed import (
-    MODEL_CHECK_PENDING,
     WindowConfig,
     WindowedIdentifier,
     WindowEstimate,
@@ -214,18 +213,11 @@ class BspIdentifierNode(RosNode):
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
         self.offload.run(jobs.ping)
-        # Windowed: the model checks (drift, Stribeck, elastic; several refits) run every elastic_check_every
-        # updates in a second process, beside the regular updates, which apply their latest verdict; an
-        # estimate in line with a check would come a period late every few seconds. The checker runs on idle
-        # CPU time only (SCHED_IDLE): a verdict may wait, an update on the timer grid should not.
-        self.model_verdict: list[str] = [MODEL_CHECK_PENDING]
-        self.updates = 0
-        self.checker: ProcessOffload | None = None
-        self.check_worker: LatestJobWorker | None = None
-        if self.mode == "windowed":
-            self.checker = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, True))
-            self.check_worker = LatestJobWorker(f"{NAME}-model-check")
-            self.checker.run(jobs.ping)
+        # Windowed: the model checks (Stribeck, elastic; several refits) run in the update itself, every
+        # elastic_check_every updates (a 30 s window at 1 kHz: 40 ms with them, bench/live_window_update.py), and
+        # their verdict holds in between. A restart (a new transform, contact point) starts a new check epoch:
+        # the next update checks again.
+        self.check_epoch = 0
         self.support_fraction = float(p["support_fraction"])
         self.support_estimate: dict[str, Any] | None = None  # set by the worker thread with each estimate
         self.support_diagnostics: dict[str, str] = {}
@@ -273,9 +265,6 @@ class BspIdentifierNode(RosNode):
         """Stop the worker thread and the worker process, then the node."""
         self.worker.close()
         self.offload.close()
-        if self.check_worker is not None and self.checker is not None:
-            self.check_worker.close()
-            self.checker.close()
         super().destroy_node()
 
     # -- inputs ---------------------------------------------------------------------------------------
@@ -303,7 +292,7 @@ class BspIdentifierNode(RosNode):
             self.get_logger().warning(f"transform of {frame_id} changed: estimate restarted")
             self.windowed.reset()
             self.recursive.reset()
-            self.model_verdict = [MODEL_CHECK_PENDING]
+            self.check_epoch += 1
 
     def on_contact_point(self, msg: Any) -> None:
         """Where the angles' contact point comes from (`joint_angle_estimator`): the robot's handle pose holds
@@ -314,7 +303,7 @@ class BspIdentifierNode(RosNode):
             self.get_logger().info(f"contact point: {msg.data}; estimate restarted")
             self.windowed.reset()
             self.recursive.reset()
-            self.model_verdict = [MODEL_CHECK_PENDING]
+            self.check_epoch += 1
             self.windowed.contact_from_robot = robot
 
     def on_lengths(self, msg: Any) -> None:
@@ -435,24 +424,12 @@ class BspIdentifierNode(RosNode):
         ready, self.ready = self.ready, None
         if ready is not None and ready[0] == self.generation:
             self.publish(ready[1], counts)
-        generation, verdict = self.generation, list(self.model_verdict)
-        self.worker.submit(lambda: self._compute_window(window, generation, verdict))
-        if self.check_worker is not None and self.updates % self.windowed.config.elastic_check_every == 0:
-            self.check_worker.submit(lambda: self._check_window(window))
-        self.updates += 1
+        generation, epoch = self.generation, self.check_epoch
+        self.worker.submit(lambda: self._compute_window(window, generation, epoch))
 
-    def _compute_window(self, window: WindowSamples, generation: int, verdict: list[str]) -> None:
+    def _compute_window(self, window: WindowSamples, generation: int, epoch: int) -> None:
         """On the worker thread: identify a window in the worker process; keep it for the next tick."""
-        self.ready = (generation, self._timed(lambda: self.offload.run(jobs.window_estimate, window, verdict)))
-
-    def _check_window(self, window: WindowSamples) -> None:
-        """On the model-check thread: the model checks of a window, in the checker process; the verdict
-        holds for the updates that follow until the next check."""
-        assert self.checker is not None
-        try:
-            self.model_verdict = self.checker.run(jobs.window_model_check, window)
-        except BspError as exc:  # the checker died: restarted; the previous verdict holds until the next check
-            self.get_logger().error(f"model check failed: {exc}")
+        self.ready = (generation, self._timed(lambda: self.offload.run(jobs.window_estimate, window, epoch)))
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
         """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""

@@ -25,7 +25,8 @@ from msg_adapters.diagnostics import build_diagnostic_array
 from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import build_joint_state
 
-_windowed: WindowedIdentifier | None = None  # the child's own: it keeps the elastic-check schedule
+_windowed: WindowedIdentifier | None = None  # the child's own: it keeps the model checks' schedule
+_epoch = 0  # the node's check epoch the schedule belongs to
 _store: Any = None
 
 
@@ -101,19 +102,17 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
     return EstimateOutputs(valid, str(document["quality"]["message"]), out, estimate_from_document(document))
 
 
-def window_estimate(window: WindowSamples, verdict: list[str] | None = None) -> EstimateOutputs:
-    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench;
-    ``verdict``: the latest model-check warnings (None: the checks run here on their schedule)."""
+def window_estimate(window: WindowSamples, epoch: int = 0) -> EstimateOutputs:
+    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench. The
+    model checks run here on their schedule; a new ``epoch`` (the node restarted its estimate) starts it again."""
+    global _epoch
     assert _windowed is not None, "init_worker was not run"
-    estimate = _windowed.estimate_window(window, verdict)
+    if epoch != _epoch:
+        _windowed.restart_checks()
+        _epoch = epoch
+    estimate = _windowed.estimate_window(window)
     estimate.document["mode"] = "windowed"
     return outputs_from_document(estimate.document, estimate.last_wrench_t_ns or 0, with_passive=True)
-
-
-def window_model_check(window: WindowSamples) -> list[str]:
-    """The model checks of a window (``WindowedIdentifier.model_check``), run beside the regular updates."""
-    assert _windowed is not None, "init_worker was not run"
-    return _windowed.model_check(window)
 
 
 def recursive_estimate(

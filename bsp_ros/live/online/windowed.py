@@ -146,9 +146,15 @@ class WindowedIdentifier:
         return True
 
     def reset(self) -> None:
-        """Forget every sample (a new session or a clock jump)."""
+        """Forget every sample (a new session or a clock jump); the next update runs the model checks."""
         self.wrench.clear()
         self.angles.clear()
+        self.restart_checks()
+
+    def restart_checks(self) -> None:
+        """Forget the model checks' verdict: the next :meth:`estimate_window` runs them again."""
+        self._updates = 0
+        self._elastic_warnings = []
 
     def _invalid(self, message: str, last_wrench_t_ns: int | None = None) -> WindowEstimate:
         document = invalid_document(self.config.options.method, message)
@@ -225,8 +231,8 @@ class WindowedIdentifier:
     def model_check(self, window: WindowSamples) -> list[str]:
         """Run the model checks (Stribeck, elastic) on a window; their warnings, empty if it passes.
 
-        The checks refit the window several times (a few hundred ms for 30 s): live, they run beside the
-        regular updates (another process), and :meth:`estimate_window` applies their latest verdict.
+        The checks refit the window several times: :meth:`estimate_window` runs them itself on its schedule
+        (``verdict`` None, as the node does), or applies the verdict of a caller that runs them elsewhere.
         A window that cannot be identified gives no verdict (empty).
         """
         try:
