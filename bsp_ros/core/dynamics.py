@@ -35,14 +35,50 @@ class ChainMotion:
     qdd_rad_s2: np.ndarray
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def planar_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Planar cross product (moment about +x) of (..., 2) vectors ``[y, z]``."""
     return np.asarray(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
 
 
-def _perp(v: np.ndarray) -> np.ndarray:
+def perpendicular(v: np.ndarray) -> np.ndarray:
     """(..., 2) vectors turned 90 deg counter-clockwise (the angular velocity's cross product)."""
     return np.stack((-v[..., 1], v[..., 0]), axis=-1)
+
+
+@dataclass(frozen=True)
+class _ChainFrames:
+    """What every torque of a planar chain is built from, per sample: absolute rates (N, n), each segment's axis
+    and normal (N, n, 2), the joints' positions and accelerations (N, n, 2, from the shoulder), and each
+    segment's share of the acceleration of the joints beyond it (N, n - 1, 2)."""
+
+    omega: np.ndarray
+    alpha: np.ndarray
+    axis: np.ndarray
+    normal: np.ndarray
+    points: np.ndarray
+    accel: np.ndarray
+    steps: np.ndarray
+
+
+def _chain_frames(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, lengths: npt.ArrayLike) -> _ChainFrames:
+    """:class:`_ChainFrames` of (N, n) angles, velocities and accelerations: P_0 is the fixed shoulder,
+    P_{j+1} = P_j + a_j e_j, and its acceleration gains a_j (alpha_j n_j - omega_j^2 e_j)."""
+    count, n = q.shape
+    segment_m = np.asarray(lengths, dtype=np.float64)
+    phi, omega, alpha = running_sum(q), running_sum(qd), running_sum(qdd)
+    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)  # (N, n, 2) unit vector along each segment
+    normal = perpendicular(axis)
+    points = np.zeros((count, n, 2))
+    accel = np.zeros((count, n, 2))
+    steps = np.zeros((count, max(n - 1, 0), 2))
+    for j in range(1, n):
+        step = segment_m[j - 1]
+        steps[:, j - 1] = step * (
+            alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1]
+        )
+        points[:, j] = points[:, j - 1] + step * axis[:, j - 1]
+        accel[:, j] = accel[:, j - 1] + steps[:, j - 1]
+    return _ChainFrames(omega, alpha, axis, normal, points, accel, steps)
 
 
 def base_regressor(
@@ -73,27 +109,24 @@ def base_regressor(
     qdd = np.atleast_2d(np.asarray(qdd_rad_s2, dtype=np.float64))
     lengths = np.asarray(lengths_m, dtype=np.float64)
     count, n = q.shape
-    phi, omega, alpha = running_sum(q), running_sum(qd), running_sum(qdd)
-    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)  # (N, n, 2) unit vector along each segment
-    normal = _perp(axis)
-    # Joint positions and accelerations: P_0 is the fixed shoulder, P_{j+1} = P_j + a_j e_j.
-    points = np.zeros((count, n, 2))
-    accel = np.zeros((count, n, 2))
-    for j in range(1, n):
-        step = lengths[j - 1]
-        points[:, j] = points[:, j - 1] + step * axis[:, j - 1]
-        accel[:, j] = accel[:, j - 1] + step * (
-            alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1]
-        )
+    frames = _chain_frames(q, qd, qdd, lengths)
+    omega, alpha, axis, normal, points, accel = (
+        frames.omega,
+        frames.alpha,
+        frames.axis,
+        frames.normal,
+        frames.points,
+        frames.accel,
+    )
     regressor = np.zeros((count, n, 3 * n))
     for j in range(n):
         for column, h in ((j, axis[:, j]), (n + j, normal[:, j])):
             # A first moment h of segment j: its inertial force alpha x h - omega^2 h acts at P_j's lever
             # about joint i, h x a(P_j) is the moment of P_j's acceleration, and g h_y that of gravity.
-            force = alpha[:, j, None] * _perp(h) - omega[:, j, None] ** 2 * h
-            own = _cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0]
+            force = alpha[:, j, None] * perpendicular(h) - omega[:, j, None] ** 2 * h
+            own = planar_cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0]
             for i in range(j + 1):
-                regressor[:, i, column] = _cross(points[:, j] - points[:, i], force) + own
+                regressor[:, i, column] = planar_cross(points[:, j] - points[:, i], force) + own
         regressor[:, : j + 1, 2 * n + j] = alpha[:, j, None]
     return regressor
 
@@ -118,24 +151,22 @@ def base_torques_nm(
     gravity_m_s2 : g (m/s^2), acting along -z.
     """
     n = q_rad.shape[1]
-    phi, omega, alpha = running_sum(q_rad), running_sum(qd_rad_s), running_sum(qdd_rad_s2)
-    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)
-    normal = _perp(axis)
-    points = np.zeros((q_rad.shape[0], n, 2))
-    accel = np.zeros((q_rad.shape[0], n, 2))
-    for j in range(1, n):
-        step = lengths_m[j - 1]
-        points[:, j] = points[:, j - 1] + step * axis[:, j - 1]
-        accel[:, j] = accel[:, j - 1] + step * (
-            alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1]
-        )
+    frames = _chain_frames(q_rad, qd_rad_s, qdd_rad_s2, lengths_m)
+    omega, alpha, axis, normal, points, accel = (
+        frames.omega,
+        frames.alpha,
+        frames.axis,
+        frames.normal,
+        frames.points,
+        frames.accel,
+    )
     torque = np.zeros((q_rad.shape[0], n))
     for j in range(n):
         h = base_values[j] * axis[:, j] + base_values[n + j] * normal[:, j]  # the segment's first moment vector
-        force = alpha[:, j, None] * _perp(h) - omega[:, j, None] ** 2 * h
-        own = _cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0] + base_values[2 * n + j] * alpha[:, j]
+        force = alpha[:, j, None] * perpendicular(h) - omega[:, j, None] ** 2 * h
+        own = planar_cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0] + base_values[2 * n + j] * alpha[:, j]
         for i in range(j + 1):
-            torque[:, i] += _cross(points[:, j] - points[:, i], force) + own
+            torque[:, i] += planar_cross(points[:, j] - points[:, i], force) + own
     return torque
 
 
@@ -165,36 +196,33 @@ def base_torque_angle_derivatives(
     (N, n, n) ``d tau_i / d phi_s`` (Nm/rad), joints i then segments s.
     """
     n = q_rad.shape[1]
-    phi, omega, alpha = running_sum(q_rad), running_sum(qd_rad_s), running_sum(qdd_rad_s2)
-    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)
-    normal = _perp(axis)
-    points = np.zeros((q_rad.shape[0], n, 2))
-    accel = np.zeros((q_rad.shape[0], n, 2))
-    steps = []  # segment s's contribution to the acceleration of the points beyond it
-    for j in range(1, n):
-        turn = alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1]
-        step = lengths_m[j - 1] * turn
-        steps.append(step)
-        points[:, j] = points[:, j - 1] + lengths_m[j - 1] * axis[:, j - 1]
-        accel[:, j] = accel[:, j - 1] + step
+    frames = _chain_frames(q_rad, qd_rad_s, qdd_rad_s2, lengths_m)
+    omega, alpha, axis, normal, points, accel = (
+        frames.omega,
+        frames.alpha,
+        frames.axis,
+        frames.normal,
+        frames.points,
+        frames.accel,
+    )
     h = base_values[None, :n, None] * axis + base_values[None, n : 2 * n, None] * normal  # (N, n, 2)
-    force = alpha[..., None] * _perp(h) - omega[..., None] ** 2 * h
+    force = alpha[..., None] * perpendicular(h) - omega[..., None] ** 2 * h
     derivative = np.zeros((q_rad.shape[0], n, n))
     for s in range(n):
         # Segment s turned: its own first moment and force turn; the points and accelerations beyond it move.
-        turned_h, turned_force = _perp(h[:, s]), _perp(force[:, s])
+        turned_h, turned_force = perpendicular(h[:, s]), perpendicular(force[:, s])
         moved = lengths_m[s] * normal[:, s]  # d points_j for j > s
-        moved_accel = _perp(steps[s]) if s < n - 1 else None  # d accel_j for j > s
+        moved_accel = perpendicular(frames.steps[:, s]) if s < n - 1 else None  # d accel_j for j > s
         for i in range(n):
             total = np.zeros(q_rad.shape[0])
             for j in range(i, n):
                 if i <= s < j:  # only the lever from joint i to a point beyond s moves (j >= i)
-                    total += _cross(moved, force[:, j])
+                    total += planar_cross(moved, force[:, j])
                 if j == s:
-                    total += _cross(points[:, j] - points[:, i], turned_force)
-                    total += _cross(turned_h, accel[:, j]) + gravity_m_s2 * turned_h[:, 0]
+                    total += planar_cross(points[:, j] - points[:, i], turned_force)
+                    total += planar_cross(turned_h, accel[:, j]) + gravity_m_s2 * turned_h[:, 0]
                 if j > s and moved_accel is not None:
-                    total += _cross(h[:, j], moved_accel)
+                    total += planar_cross(h[:, j], moved_accel)
             derivative[:, i, s] = total
     return derivative
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsp_ros.core.dynamics import base_torque_angle_derivatives
+from bsp_ros.core.dynamics import base_torque_angle_derivatives, perpendicular, planar_cross
 from bsp_ros.core.model import contact_jacobian, running_sum
 
 
@@ -69,13 +69,13 @@ def placement_columns(
     columns = np.zeros((q_rad.shape[0], n, 2 * (n + 1)))
     for k in range(n + 1):
         along = axis[:, frame_of[k]]
-        for c, direction in enumerate((along, np.stack((-along[:, 1], along[:, 0]), axis=-1))):
+        for c, direction in enumerate((along, perpendicular(along))):
             delta = -direction  # the true centre, if the marker sits o = +1 m off it
             model = np.zeros((q_rad.shape[0], n))
             if k >= 1:  # the segment ending at the centre turns
-                model += turning[:, :, k - 1] * (_cross(axis[:, k - 1], delta) / lengths[k - 1])[:, None]
+                model += turning[:, :, k - 1] * (planar_cross(axis[:, k - 1], delta) / lengths[k - 1])[:, None]
             if k < n:  # the segment starting at it turns the other way
-                model -= turning[:, :, k] * (_cross(axis[:, k], delta) / lengths[k])[:, None]
+                model -= turning[:, :, k] * (planar_cross(axis[:, k], delta) / lengths[k])[:, None]
             # The handle's lever arm about joint i (contact point minus joint i) moves with either end.
             lever = np.zeros((q_rad.shape[0], n, 2))
             if k == n:
@@ -86,8 +86,3 @@ def placement_columns(
             # tau_meas = Y theta + [d(Y theta)/do - d tau/do] o
             columns[:, :, 2 * k + c] = model - torque
     return columns
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Planar cross product of (..., 2) vectors."""
-    return np.asarray(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
