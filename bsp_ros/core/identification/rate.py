@@ -18,16 +18,25 @@ IDENTIFICATION_MAX_RATE_HZ = 100.0
 _RATE_TOLERANCE = 0.05
 
 
+def _median_period_ns(t_ns: np.ndarray) -> float:
+    """The median sample period (ns) of increasing stamps; 0 for fewer than 2 or repeated stamps."""
+    if t_ns.size < 2:
+        return 0.0
+    period_ns = float(np.median(np.diff(t_ns)))
+    return period_ns if period_ns > 0 else 0.0
+
+
 def block_size(t_ns: np.ndarray, max_rate_hz: float) -> int:
     """Samples per block that bring a stream of stamps ``t_ns`` (ns, increasing) to at most ``max_rate_hz``
     (within 5 %), from its median sample period; 1 when it is slow enough."""
-    if t_ns.size < 2:
+    return _block(_median_period_ns(t_ns), max_rate_hz)
+
+
+def _block(period_ns: float, max_rate_hz: float) -> int:
+    """:func:`block_size` of a stream with this median sample period (ns; 0 when unknown)."""
+    if period_ns == 0.0:
         return 1
-    period_ns = float(np.median(np.diff(t_ns)))
-    if not period_ns > 0:
-        return 1
-    rate_hz = 1e9 / period_ns
-    return max(1, math.ceil(rate_hz / max_rate_hz - _RATE_TOLERANCE))
+    return max(1, math.ceil(1e9 / period_ns / max_rate_hz - _RATE_TOLERANCE))
 
 
 def block_means(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -46,10 +55,11 @@ def block_means(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tup
     means : (M, k) mean of each bin.
     counts : (M,) samples in each bin. The inputs unchanged (counts of 1) when already slow enough.
     """
-    block = block_size(t_ns, max_rate_hz)
+    sample_ns = _median_period_ns(t_ns)
+    block = _block(sample_ns, max_rate_hz)
     if block <= 1:
         return t_ns, values, np.ones(t_ns.size, dtype=np.int64)
-    period_ns = block * float(np.median(np.diff(t_ns)))
+    period_ns = block * sample_ns
     age = (t_ns[-1] - t_ns).astype(np.float64)
     bins = np.floor(age / period_ns + 1e-9).astype(np.int64)  # non-increasing along the stream
     starts = np.concatenate(([0], np.flatnonzero(np.diff(bins)) + 1))
@@ -62,7 +72,5 @@ def block_means(t_ns: np.ndarray, values: np.ndarray, max_rate_hz: float) -> tup
 
 def identification_rate_hz(t_ns: np.ndarray) -> float:
     """The rate (Hz) of identification samples stamped ``t_ns``, from their median period; 0 for fewer than 2."""
-    if t_ns.size < 2:
-        return 0.0
-    period_ns = float(np.median(np.diff(t_ns)))
+    period_ns = _median_period_ns(t_ns)
     return round(1e9 / period_ns, 3) if period_ns > 0 else 0.0

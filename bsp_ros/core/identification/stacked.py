@@ -159,6 +159,21 @@ def joint_products(a: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.asarray(total)
 
 
+def candidate_products(
+    regressor_j: np.ndarray, weights_j: np.ndarray, torque_j: np.ndarray, candidates: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What a profile over candidate columns of one joint needs of each to border or swap into the normal
+    equations: ``X^T W c`` (p, m), ``c^T W c`` (m,) and ``y^T W c`` (m,), every candidate in one BLAS product.
+
+    Parameters
+    ----------
+    regressor_j : (N, p) the joint's used rows; weights_j, torque_j : (N,) their weights and torques.
+    candidates : (N, m) one column per candidate, on the same rows.
+    """
+    weighted = weights_j[:, None] * candidates
+    return regressor_j.T @ weighted, (weighted * candidates).sum(axis=0), torque_j @ weighted
+
+
 def joint_scores(regressor: np.ndarray, weighted_residual: np.ndarray) -> np.ndarray:
     """(N, p) per-sample scores ``sum_i x_ti r_ti`` (summed over the joints of each sample)."""
     scores = regressor[:, 0] * weighted_residual[:, 0, None]

@@ -9,7 +9,7 @@ import numpy as np
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, shifts_sd, term_test
-from bsp_ros.core.identification.stacked import Fit, Problem, normal_equations
+from bsp_ros.core.identification.stacked import Fit, Problem, candidate_products, normal_equations
 from bsp_ros.core.streams import joints_for
 
 # A Coulomb amplitude moved by at most this many std is weakly identified (its std takes the shift); beyond it the
@@ -77,10 +77,7 @@ def stribeck_check(
         w_j, y_j = w[used, j], problem.torque[used, j]
         speeds = np.asarray(STRIBECK_SPEEDS_RAD_S)
         bumps = np.sign(data.velocity_rad_s[used, j, None]) * np.exp(-((speed[used, None] / speeds[None, :]) ** 2))
-        weighted = w_j[:, None] * bumps
-        crosses = problem.regressor[used, j, :].T @ weighted  # (p, candidates)
-        squares = (weighted * bumps).sum(axis=0)
-        targets = y_j @ weighted
+        crosses, squares, targets = candidate_products(problem.regressor[used, j, :], w_j, y_j, bumps)
         try:
             base = float(moment @ np.linalg.solve(design, moment))
         except np.linalg.LinAlgError:

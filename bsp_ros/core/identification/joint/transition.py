@@ -6,7 +6,7 @@ import numpy as np
 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
-from bsp_ros.core.identification.stacked import Fit, Problem, normal_equations
+from bsp_ros.core.identification.stacked import Fit, Problem, candidate_products, normal_equations
 
 # Candidate widths of a smooth friction transition, tanh(v / w) (rad/s): 0.25 to 16 mrad/s.
 TRANSITION_WIDTHS_RAD_S = 0.00025 * 2.0 ** (np.arange(25) / 4.0)
@@ -54,12 +54,9 @@ def transition_widths(
         column = n + j * k + config.passive.local.index("coulomb")
         used = w[:, j] > 0
         x_j, w_j, y_j = problem.regressor[used, j, :], w[used, j], problem.torque[used, j]
-        # Every candidate width's column at once (N, widths): its products with the others are one BLAS product.
+        # Every candidate width's column at once (N, widths).
         c = np.tanh(data.velocity_rad_s[used, j, None] / TRANSITION_WIDTHS_RAD_S[None, :])
-        weighted = w_j[:, None] * c
-        crosses = x_j.T @ weighted  # (p, widths)
-        squares = (weighted * c).sum(axis=0)
-        targets = y_j @ weighted
+        crosses, squares, targets = candidate_products(x_j, w_j, y_j, c)
         # Each candidate's normal equations: the Coulomb row and column swapped for the candidate's.
         crosses[column] = squares
         a = np.repeat(design[None], crosses.shape[1], axis=0)
