@@ -24,8 +24,6 @@ from bsp_ros.validation import check_finite_scalar, check_positive
 # ``elastic_check_every`` updates and their verdict holds in between. A drifting sensor is not among them: as
 # offline, every update tests for a drift and models one it finds (one fit).
 MODEL_CHECK_WARNINGS = ("elastic passive moment", "depends on speed (Stribeck")
-# The verdict before the first model check of a session has come back (see WindowedIdentifier.model_check).
-MODEL_CHECK_PENDING = "the model checks (friction shape, elastic terms) have not run on this session yet"
 
 
 def model_check_warnings(warnings: list[str]) -> list[str]:
@@ -231,9 +229,8 @@ class WindowedIdentifier:
     def model_check(self, window: WindowSamples) -> list[str]:
         """Run the model checks (Stribeck, elastic) on a window; their warnings, empty if it passes.
 
-        The checks refit the window several times: :meth:`estimate_window` runs them itself on its schedule
-        (``verdict`` None, as the node does), or applies the verdict of a caller that runs them elsewhere.
-        A window that cannot be identified gives no verdict (empty).
+        The checks refit the window several times: :meth:`estimate_window` runs them itself on its schedule;
+        this runs them alone. A window that cannot be identified gives no verdict (empty).
         """
         try:
             prepared = self._window_data(window)
@@ -244,36 +241,29 @@ class WindowedIdentifier:
             return []
         return model_check_warnings(result.warnings)
 
-    def estimate_window(self, window: WindowSamples, verdict: list[str] | None = None) -> WindowEstimate:
-        """Identify a window copied by :meth:`snapshot` (the slow part: ~30-100 ms for 30 s at 1 kHz).
+    def estimate_window(self, window: WindowSamples) -> WindowEstimate:
+        """Identify a window copied by :meth:`snapshot` (the slow part: ~25 ms for 30 s at 1 kHz).
 
-        Parameters
-        ----------
-        window : the samples.
-        verdict : the latest :meth:`model_check` warnings, run by the caller ([MODEL_CHECK_PENDING] before
-            the first has come back); any makes the estimate invalid. None: the checks run here, every
-            ``elastic_check_every`` calls, and their verdict holds in between (one thread at a time).
+        The model checks (Stribeck, elastic) run with every ``elastic_check_every``-th call, the first included,
+        and their verdict holds in between (one thread at a time).
         """
         last_wrench = int(window.wrench_t_ns[-1])
         try:
             data = self._window_data(window)
             if isinstance(data, str):
                 return self._invalid(data, last_wrench)
-            check = verdict is None and self._updates % self.config.elastic_check_every == 0
+            check = self._updates % self.config.elastic_check_every == 0
             self._updates += 1
             result = identify_data(data, self.config.options, check_elastic=check, check_drift=True)
             if check:
                 self._elastic_warnings = model_check_warnings(result.warnings)
-            held = self._elastic_warnings if verdict is None else verdict
-            if not check and held:
+            elif self._elastic_warnings:
                 # Between checks the last verdict stands: an effect the model lacks does not come and go.
-                result.warnings += [w for w in held if w != MODEL_CHECK_PENDING]
+                result.warnings += self._elastic_warnings
                 if result.valid:
                     result.valid = False
                     result.message = (
-                        MODEL_CHECK_PENDING
-                        if held == [MODEL_CHECK_PENDING]
-                        else "the data show an effect the model lacks that biases the estimate (see warnings; "
+                        "the data show an effect the model lacks that biases the estimate (see warnings; "
                         "checked every few updates)"
                     )
             quality = None

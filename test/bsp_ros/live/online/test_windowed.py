@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bsp_ros.live.online.windowed import MODEL_CHECK_PENDING, WindowConfig, WindowedIdentifier, WindowSamples
+from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowSamples
 
 
 def _feed(identifier: WindowedIdentifier, stamps, wrench, raw, corrupt=None) -> None:
@@ -114,11 +115,12 @@ def test_a_tare_s_uncertainty_joins_the_window_estimate(live_streams) -> None:
         assert q["static_moment_kgm"]["std"] > without["segments"][segment]["static_moment_kgm"]["std"]
 
 
-def _window(live_streams, drift_n_per_s: float = 0.0):
+def _window(live_streams, drift_n_per_s: float = 0.0, options: IdentifyOptions | None = None):
     _, stamps, wrench, _, raw = live_streams
     drifted = wrench.copy()
     drifted[:, 1] += drift_n_per_s * (np.asarray(stamps) - stamps[0]) / 1e9  # vertical force offset creeping up
-    identifier = WindowedIdentifier(3, WindowConfig(window_s=60.0))
+    config = WindowConfig(window_s=60.0) if options is None else WindowConfig(window_s=60.0, options=options)
+    identifier = WindowedIdentifier(3, config)
     _feed(identifier, stamps, drifted, raw)
     window = identifier.snapshot()
     assert isinstance(window, WindowSamples)
@@ -138,7 +140,7 @@ def test_a_drifting_sensor_is_modelled_on_every_update_as_bsp_identify_does(live
     simulated, *_ = live_streams
     identifier, window = _window(live_streams, drift_n_per_s=0.01)
     assert identifier.model_check(window) == []
-    estimate = identifier.estimate_window(window, [])
+    estimate = identifier.estimate_window(window)  # the first update: the model checks run too, and pass
     quality = estimate.document["quality"]
     assert estimate.valid, quality["message"]
     assert any("the wrench drifts" in w and "modelled" in w for w in quality["warnings"]), quality["warnings"]
@@ -160,17 +162,15 @@ def test_model_check_names_an_elastic_moment_the_model_lacks(elastic_live_stream
     assert any("elastic passive moment" in w for w in verdict), verdict
 
 
-def test_estimate_is_invalid_until_the_first_model_check_is_back(live_streams) -> None:
-    identifier, window = _window(live_streams)
-    pending = identifier.estimate_window(window, [MODEL_CHECK_PENDING])
-    assert not pending.valid and pending.document["quality"]["message"] == MODEL_CHECK_PENDING
-    assert identifier.estimate_window(window, []).valid
-
-
-def test_a_failed_model_check_holds_for_the_updates_given_it(elastic_live_streams) -> None:
-    identifier, window = _window(elastic_live_streams)
+def test_a_failed_model_check_holds_for_the_updates_between_checks(elastic_live_streams) -> None:
+    # As the node runs it: a lacking elastic term makes the estimate invalid, no fallback to another model.
+    identifier, window = _window(elastic_live_streams, options=IdentifyOptions(elastic_fallback=False))
     verdict = identifier.model_check(window)
     assert verdict
-    estimate = identifier.estimate_window(window, verdict)
-    assert not estimate.valid and "effect the model lacks" in estimate.document["quality"]["message"]
-    assert all(w in estimate.document["quality"]["warnings"] for w in verdict)
+    checked = identifier.estimate_window(window)  # the first update runs the checks itself
+    assert not checked.valid
+    held = identifier.estimate_window(window)  # the next does not: the verdict holds
+    assert not held.valid and "effect the model lacks" in held.document["quality"]["message"]
+    assert all(w in held.document["quality"]["warnings"] for w in verdict)
+    identifier.restart_checks()  # a restart checks again at once
+    assert identifier.estimate_window(window).document["quality"]["message"] != held.document["quality"]["message"]
