@@ -20,6 +20,8 @@ from bsp_ros.core.fusion import (
 )
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
+from bsp_ros.core.identification.joint.held import HeldModel
+from bsp_ros.core.identification.joint.refit import refit_held
 from bsp_ros.core.identification.paper import PaperConfig, identify_paper
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.placement import chain_placement_sd_m
@@ -89,14 +91,19 @@ class IdentifyOptions:
 
 
 def identify_data(
-    data: IdentificationData, options: IdentifyOptions, check_elastic: bool = True, check_drift: bool = False
+    data: IdentificationData,
+    options: IdentifyOptions,
+    check_elastic: bool = True,
+    check_drift: bool = False,
+    held: HeldModel | None = None,
 ) -> IdentificationResult:
     """Run the chosen identification method on prepared samples.
 
     ``check_elastic`` runs the model checks (an unmodelled elastic passive term, friction at low speed, a
     drifting sensor; several fits): a live window may run them on only some updates. ``check_drift`` runs
-    the drift check (one fit) without the others: a live window models a drift on every update. A valid
-    result whose static moments are implausible for a human arm
+    the drift check (one fit) without the others. ``held`` (the stacked method) refits what an earlier
+    identification of the same arm with its checks chose instead (:func:`refit_held`: one fit), as a live window
+    does between its checks. A valid result whose static moments are implausible for a human arm
     (:func:`bsp_ros.core.fusion.implausible_static_moments`) is made invalid.
     """
     if options.method == "paper":
@@ -111,7 +118,7 @@ def identify_data(
             handle_pose_sd_m=options.handle_pose_sd_m,
             elastic_fallback=options.elastic_fallback,
         )
-        result = identify_joint(data, config)
+        result = identify_joint(data, config) if held is None else refit_held(data, held, config)
     if result.valid:
         _, beta, beta_cov = result.block("static_moment_kgm")
         std = np.sqrt(np.clip(np.diag(beta_cov), 0.0, None))

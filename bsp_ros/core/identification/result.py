@@ -4,8 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from bsp_ros.core.identification.joint.held import HeldModel
 
 # A parameter is named by (quantity key, segment or joint name), e.g. ("static_moment_kgm", "forearm")
 # or ("coulomb_nm", "elbow"): the same keys as the estimate JSON of docs/contract.md.
@@ -31,6 +35,8 @@ class IdentificationResult:
     diagnostics : further figures (per-parameter max correlation with gravity terms, HAC lags, ...).
     torque_response : the estimate's first-order change (p,) for a change (N, n) of the measured torques (Nm),
         where the method provides it (a sensor offset's effect without re-running the estimator).
+    held : what the model checks chose (the stacked method), for refits of newer samples without them
+        (:func:`bsp_ros.core.identification.joint.refit.refit_held`).
     """
 
     method: str
@@ -45,6 +51,7 @@ class IdentificationResult:
     n_samples: int = 0
     diagnostics: dict[str, object] = field(default_factory=dict)
     torque_response: Callable[[np.ndarray], np.ndarray] | None = field(default=None, repr=False, compare=False)
+    held: HeldModel | None = field(default=None, repr=False, compare=False)
 
     @property
     def std(self) -> np.ndarray:

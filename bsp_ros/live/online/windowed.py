@@ -9,6 +9,7 @@ import numpy as np
 
 from bsp_ros.core.estimate import estimate_document, invalid_document
 from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.rate import block_means, identification_rate_hz
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import parameter_timing
@@ -19,16 +20,6 @@ from bsp_ros.errors import BspError
 from bsp_ros.live.online.buffer import TimedBuffer
 from bsp_ros.live.online.guard import StreamGuard
 from bsp_ros.validation import check_finite_scalar, check_positive
-
-# Warnings of the model checks (identification/joint/) that make an estimate invalid; live they run every
-# ``elastic_check_every`` updates and their verdict holds in between. A drifting sensor is not among them: as
-# offline, every update tests for a drift and models one it finds (one fit).
-MODEL_CHECK_WARNINGS = ("elastic passive moment", "depends on speed (Stribeck")
-
-
-def model_check_warnings(warnings: list[str]) -> list[str]:
-    """The warnings of an identification that come from its model checks (the verdict that holds)."""
-    return [w for w in warnings if any(k in w for k in MODEL_CHECK_WARNINGS)]
 
 
 @dataclass(frozen=True)
@@ -52,7 +43,7 @@ class WindowConfig:
     options: IdentifyOptions = field(default_factory=IdentifyOptions)
     max_rate_hz: float = 50.0
     # The model checks (elastic, drift, Stribeck) refit the window several times; at 5 Hz every 25th update
-    # (5 s) keeps an update well inside its period, and their verdict holds in between.
+    # (5 s) keeps an update well inside its period. In between, each update refits what the last check chose.
     elastic_check_every: int = 25
 
     def __post_init__(self) -> None:
@@ -114,8 +105,8 @@ class WindowedIdentifier:
         self.wrench = TimedBuffer(3, horizon_ns)
         self.angles = TimedBuffer(2 * n_segments, horizon_ns)
         self.wrench_guard = StreamGuard("wrench")
-        self._updates = 0
-        self._elastic_warnings: list[str] = []
+        self._since_check = 0
+        self._held: HeldModel | None = None
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False
@@ -150,9 +141,9 @@ class WindowedIdentifier:
         self.restart_checks()
 
     def restart_checks(self) -> None:
-        """Forget the model checks' verdict: the next :meth:`estimate_window` runs them again."""
-        self._updates = 0
-        self._elastic_warnings = []
+        """Forget what the model checks chose: the next :meth:`estimate_window` runs them again."""
+        self._since_check = 0
+        self._held = None
 
     def _invalid(self, message: str, last_wrench_t_ns: int | None = None) -> WindowEstimate:
         document = invalid_document(self.config.options.method, message)
@@ -226,46 +217,32 @@ class WindowedIdentifier:
             contact_from_robot=window.contact_from_robot,
         )
 
-    def model_check(self, window: WindowSamples) -> list[str]:
-        """Run the model checks (Stribeck, elastic) on a window; their warnings, empty if it passes.
-
-        The checks refit the window several times: :meth:`estimate_window` runs them itself on its schedule;
-        this runs them alone. A window that cannot be identified gives no verdict (empty).
-        """
-        try:
-            prepared = self._window_data(window)
-            if isinstance(prepared, str):
-                return []
-            result = identify_data(prepared, self.config.options, check_elastic=True)
-        except BspError:
-            return []
-        return model_check_warnings(result.warnings)
+    def _due(self) -> bool:
+        """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and sooner (every
+        fifth) while the last check's verdict was invalid, so that an arm that starts moving is not kept waiting."""
+        every = self.config.elastic_check_every
+        if self._held is None or self._since_check >= every:
+            return True
+        return bool(self._held.problems) and self._since_check >= max(every // 5, 1)
 
     def estimate_window(self, window: WindowSamples) -> WindowEstimate:
-        """Identify a window copied by :meth:`snapshot` (the slow part: ~25 ms for 30 s at 1 kHz).
+        """Identify a window copied by :meth:`snapshot` (one thread at a time).
 
-        The model checks (Stribeck, elastic) run with every ``elastic_check_every``-th call, the first included,
-        and their verdict holds in between (one thread at a time).
+        Every ``elastic_check_every``-th call (the first included) identifies with the model checks (drift,
+        Stribeck, elastic: ~30 ms for 30 s at 1 kHz); the calls in between refit the model they chose, with its
+        verdict (:func:`bsp_ros.core.identification.joint.refit.refit_held`: one fit).
         """
         last_wrench = int(window.wrench_t_ns[-1])
         try:
             data = self._window_data(window)
             if isinstance(data, str):
                 return self._invalid(data, last_wrench)
-            check = self._updates % self.config.elastic_check_every == 0
-            self._updates += 1
-            result = identify_data(data, self.config.options, check_elastic=check, check_drift=True)
-            if check:
-                self._elastic_warnings = model_check_warnings(result.warnings)
-            elif self._elastic_warnings:
-                # Between checks the last verdict stands: an effect the model lacks does not come and go.
-                result.warnings += self._elastic_warnings
-                if result.valid:
-                    result.valid = False
-                    result.message = (
-                        "the data show an effect the model lacks that biases the estimate (see warnings; "
-                        "checked every few updates)"
-                    )
+            if self._due():
+                result = identify_data(data, self.config.options, check_elastic=True, check_drift=True)
+                self._held, self._since_check = result.held, 1
+            else:
+                result = identify_data(data, self.config.options, held=self._held)
+                self._since_check += 1
             quality = None
             if window.rotation_world_from_sensor is not None:
                 # The sensor zero's share of the std (the tare's, or the assumed zero's), from the estimate's own

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -13,16 +14,38 @@ from bsp_ros.core.identification.selection import Candidate, Selection
 from bsp_ros.core.identification.stacked import Fit
 
 
+@dataclass(frozen=True)
+class CurveBasis:
+    """What a model choice's passive curves are made of: the curves' gradients in the chosen model's parameters
+    (n, K + 1, p), the variance the other candidates and the planar model add to them (n, K + 1), and the range."""
+
+    gradients: np.ndarray
+    spread: np.ndarray
+    reference: ElasticReference
+
+    def curves(self, fit: Fit) -> dict[str, dict[str, Any]]:
+        """The curves of ``fit`` (the chosen model's values and covariance) with this basis's spread."""
+        return passive_curves(self.gradients, fit.values, fit.covariance, self.reference, self.spread)
+
+
 def selection_curves(
     data: IdentificationData, reference: ElasticReference, fit: Fit, selection: Selection | None
 ) -> dict[str, dict[str, Any]]:
     """Per joint, the elastic passive moment over the measured range with its std (``passive_curve``), the other
     joints at their session means; with a model choice, the candidates' curves join its variance as the
     parameters' do. Empty for a fixed model."""
+    basis = curve_basis(data, reference, fit, selection)
+    return {} if basis is None else basis.curves(fit)
+
+
+def curve_basis(
+    data: IdentificationData, reference: ElasticReference, fit: Fit, selection: Selection | None
+) -> CurveBasis | None:
+    """The basis of :func:`selection_curves`; None for a fixed model."""
     if selection is None:
         # A fixed model's curve would carry no uncertainty of its form (a linear spring on a muscle's exponential
         # curve, a two-joint moment it lacks): curves come with the model choice, whose spread their std holds.
-        return {}
+        return None
 
     def curve_of(candidate: Candidate) -> np.ndarray:
         assert candidate.problem is not None
@@ -50,4 +73,4 @@ def selection_curves(
         spread = spread.copy()
         spread[:, :points] += error[:, None] ** 2
         spread[:, points] += (error / reference.half_range_rad) ** 2
-    return passive_curves(gradients, fit.values, fit.covariance, reference, spread)
+    return CurveBasis(gradients, spread, reference)

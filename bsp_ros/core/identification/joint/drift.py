@@ -22,19 +22,28 @@ class Drift:
 
     note: str
     fit: Fit
+    # The wider fit's own covariance of the problem's parameters (without the unknown level's share).
+    own_covariance: np.ndarray
 
 
-def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift | None:
-    """A wrench offset that changes linearly over each recording (an F/T sensor drifting with temperature):
-    the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x), one set per
-    recording (recordings minutes apart are not one line: between them the sensor may have been re-tared, and a
-    second posture's different misfit would pass for a drift across the gap).
+@dataclass(frozen=True)
+class DriftSpans:
+    """Where each recording's drift runs: its rows, its length (s), the drift columns kept, the contact Jacobian."""
 
-    A drift that moves the static moments is modelled, not thrown away: the fit with the drift columns
-    replaces ``fit``. Its rate is identified; its level at any moment is not (a tare holds when it was taken,
-    and an offset is collinear with gravity at one posture), so the static moments' shift under an offset as
-    large as the drift over each recording joins their covariance."""
-    n = data.n_joints
+    groups: list[np.ndarray]
+    spans_s: np.ndarray
+    columns: list[int]
+    jacobian: np.ndarray  # (N, 3, n)
+
+
+def drift_columns(data: IdentificationData) -> tuple[np.ndarray, list[ParameterName], DriftSpans]:
+    """The torques ``-J(q)^T t`` of a unit drift rate along world y, z and x, one set per recording.
+
+    Returns
+    -------
+    columns : (N, n, m) the non-zero columns; names : (m,) their parameter names;
+    spans : each recording's rows and length (s), which of its 3 columns are kept, the contact Jacobian.
+    """
     jacobian = contact_jacobian(data.q_rad, data.lengths_m)  # (N, 3, n)
     groups = (
         [np.arange(data.t_ns.size)]
@@ -53,10 +62,26 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
     names: list[ParameterName] = [
         (f"drift_{label[c % 3]}" + (f"_{c // 3 + 1}" if len(groups) > 1 else ""), "sensor") for c in columns
     ]
-    p_value, shift, worst, wide = term_test(problem, fit, extra[:, :, columns], names, list(range(n)))
+    return extra[:, :, columns], names, DriftSpans(groups, spans_s, columns, jacobian)
+
+
+def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift | None:
+    """A wrench offset that changes linearly over each recording (an F/T sensor drifting with temperature):
+    the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x), one set per
+    recording (recordings minutes apart are not one line: between them the sensor may have been re-tared, and a
+    second posture's different misfit would pass for a drift across the gap).
+
+    A drift that moves the static moments is modelled, not thrown away: the fit with the drift columns
+    replaces ``fit``. Its rate is identified; its level at any moment is not (a tare holds when it was taken,
+    and an offset is collinear with gravity at one posture), so the static moments' shift under an offset as
+    large as the drift over each recording joins their covariance."""
+    n = data.n_joints
+    extra, names, spans = drift_columns(data)
+    groups, spans_s, columns, jacobian = spans.groups, spans.spans_s, spans.columns, spans.jacobian
+    p_value, shift, worst, wide = term_test(problem, fit, extra, names, list(range(n)))
     if p_value >= MODEL_CHECK_P:
         return None
-    flat_rate = np.zeros(extra.shape[2])
+    flat_rate = np.zeros(3 * len(groups))
     flat_rate[columns] = wide.values[len(problem.names) :]
     rate = flat_rate.reshape(len(groups), 3)  # per recording, along world y, z and x
     # A drifting sensor's offset at any moment is unknown (a tare holds at the moment it was taken): what the
@@ -84,4 +109,4 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
         f"static moment by {shift:.1f} std): modelled as a linear drift, with what its unknown level leaves open in "
         "the std; let the sensor warm up and re-tare for a precise session"
     )
-    return Drift(note, modelled)
+    return Drift(note, modelled, wide.covariance[:p, :p])

@@ -10,11 +10,12 @@ from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.elastic import ElasticReference
 from bsp_ros.core.identification.joint.config import JointConfig
-from bsp_ros.core.identification.joint.curves import selection_curves
+from bsp_ros.core.identification.joint.curves import curve_basis
 from bsp_ros.core.identification.joint.drift import drift_check
 from bsp_ros.core.identification.joint.elastic_check import elastic_check
 from bsp_ros.core.identification.joint.excitation import excitation_problems, motion_rows
 from bsp_ros.core.identification.joint.extras import base_extras
+from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
 from bsp_ros.core.identification.joint.outliers import (
     GAP_EDGE_S,
@@ -38,7 +39,7 @@ from bsp_ros.core.streams import joints_for
 UNIDENTIFIABLE_CONDITION = 1e8
 
 
-def _prior_share(problem: Problem, covariance: np.ndarray) -> dict[str, float]:
+def prior_share(problem: Problem, covariance: np.ndarray) -> dict[str, float]:
     """Posterior / prior variance of every parameter with a prior: near 1, the prior alone decided it."""
     out = {}
     for i in np.flatnonzero(problem.prior_precision > 0):
@@ -54,7 +55,7 @@ def _unbounded_static_moments(problem: Problem) -> np.ndarray:
     return fit_problem(dataclasses.replace(problem, lower=lower)).values
 
 
-def _failed(
+def failed_result(
     data: IdentificationData, names: list[ParameterName], problems: list[str], warnings: list[str]
 ) -> IdentificationResult:
     """An invalid result: NaN values and covariance, the problems as its message."""
@@ -101,9 +102,10 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     extras = base_extras(data, config)
     problem = build_problem(data, config.passive, rows, extras=extras)
     warnings = list(data.warnings) + spike_notes + notes
+    data_notes = len(warnings)  # the notes above are the samples'; those after them, the model's (held)
     if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
         problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
-        return _failed(data, problem.names, problems, warnings)
+        return failed_result(data, problem.names, problems, warnings)
     usable = int((~spikes).sum())
     if "coulomb" in config.passive.terms:
         for j, joint in enumerate(joints):
@@ -199,14 +201,16 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             covariance[index, index] += spread[j] ** 2
         fit = dataclasses.replace(fit, covariance=covariance)
     # Whether the data or the prior decided a parameter, judged before the placement uncertainty is added.
-    prior_share = _prior_share(problem, fit.covariance)
+    shares = prior_share(problem, fit.covariance)
     judged_residual = None
     placement_sd = np.zeros(len(problem.names))
+    placement_share = np.zeros_like(fit.covariance)
     if placement_sd_m.any():
         placement = placement_effect(data, problem, fit, placement_sd_m)
         fit = dataclasses.replace(fit, covariance=fit.covariance + placement.covariance)
         judged_residual = placement.residual
         placement_sd = np.sqrt(np.clip(np.diag(placement.covariance), 0.0, None))
+        placement_share = placement.covariance
     model_spread = np.zeros_like(fit.covariance)
     if probed is not None:
         # What the choice of passive model leaves open belongs in the std (model-averaged variance).
@@ -218,6 +222,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 f"between or on the passive curves' assumed shape (they differ by up to {model_shift[index]:.1f} of "
                 "its data std): that spread is in its std"
             )
+    drift = None
     if (config.check_elastic or config.check_drift) and not problems:
         # Before the fit is judged: a drifting sensor leaves a slow residual that would otherwise read as a model
         # that does not fit (the quieter the sensor, the sooner). One refit: a live window runs it on every update.
@@ -227,9 +232,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 judged_residual = judged_residual - (fit.residual - drift.fit.residual)
             added = fit.covariance - own_covariance
             fit = dataclasses.replace(drift.fit, covariance=drift.fit.covariance + added)
+            own_covariance = drift.own_covariance
             warnings.append(drift.note)
     reference = ElasticReference.from_angles(data.passive_q_rad)
-    curves = selection_curves(data, reference, fit, probed)
+    basis = curve_basis(data, reference, fit, probed)
+    curves = {} if basis is None else basis.curves(fit)
     noise, misfit = misfit_against_noise(fit, judged_residual)
     for j, joint in enumerate(joints):
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM:
@@ -327,6 +334,22 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)}
     used = problem.rows.sum(axis=0)
     removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_removed}
+    diagnostics: dict[str, object] = {
+        "hac_lags": fit.lags,
+        "max_corr_with_gravity": max_corr_with_gravity,
+        "passive_model": config.passive.label,
+        "passive_selection": {} if selection is None else selection.to_dict(),
+        "passive_curves": curves,
+        "elastic_reference": reference.to_dict(),
+        "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
+        "sensor_noise_nm": {j: float(v) for j, v in zip(joints, noise, strict=True)},
+        "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},
+        "removed_samples": {k: v for k, v in removed.items() if v},
+        "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
+        "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
+        "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
+        "prior_share": shares,
+    }
     return IdentificationResult(
         "joint",
         problem.names,
@@ -338,21 +361,18 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         fit.condition,
         residual_rms,
         int(data.t_ns.size),
-        {
-            "hac_lags": fit.lags,
-            "max_corr_with_gravity": max_corr_with_gravity,
-            "passive_model": config.passive.label,
-            "passive_selection": {} if selection is None else selection.to_dict(),
-            "passive_curves": curves,
-            "elastic_reference": reference.to_dict(),
-            "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
-            "sensor_noise_nm": {j: float(v) for j, v in zip(joints, noise, strict=True)},
-            "misfit_ratio": {j: float(v) for j, v in zip(joints, misfit, strict=True)},
-            "removed_samples": {k: v for k, v in removed.items() if v},
-            "offset_sensitivity_kgm_per_0_05_nm": sensitivity,
-            "friction_transition_rad_s": {j: float(v) for j, v in zip(joints, widths, strict=True)},
-            "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
-            "prior_share": prior_share,
-        },
+        diagnostics,
         torque_response=TorqueResponse.of(problem, fit),
+        held=HeldModel(
+            problem.names,
+            dataclasses.replace(config.passive, select=False),
+            widths,
+            drift is not None,
+            placement_sd_m,
+            fit.covariance - own_covariance - placement_share,
+            basis,
+            tuple(problems),
+            tuple(w for w in warnings[data_notes:] if not w.startswith("removed ")),
+            diagnostics,
+        ),
     )

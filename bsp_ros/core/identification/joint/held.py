@@ -1,0 +1,46 @@
+"""What a full identification's model checks chose, held for cheaper refits of newer samples of the same arm."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bsp_ros.core.identification.joint.curves import CurveBasis
+from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.result import ParameterName
+
+
+@dataclass(frozen=True)
+class HeldModel:
+    """The choices and verdict of one identification with its model checks (:func:`identify_joint`).
+
+    A live window refits newer samples with them between checks (:func:`refit_held`): the parameters and the
+    fit's own (HAC) covariance are the newer data's, everything the checks decided is held.
+
+    Attributes
+    ----------
+    names : (p,) the parameters.
+    passive : the passive model the estimate used (a data-chosen one, fixed).
+    widths_rad_s : (n,) friction transition widths (0: a sign step).
+    drift : a drifting wrench offset was found and is modelled.
+    placement_sd_m : (n + 1,) the chain points' placement sd (m): their share of the covariance follows the
+        motion in the window, and a refit computes it anew.
+    systematic_covariance : (p, p) what the estimate's covariance holds beyond its fit's own and the placement's:
+        the passive model's choice, the friction shape, the drift's unknown level. These do not shrink with more
+        samples, and a few seconds more of the same arm hardly change them.
+    curves : the passive curves' basis (a model choice), or None.
+    problems : why the estimate is invalid (empty: valid); warnings : its notes.
+    diagnostics : the estimate's diagnostics.
+    """
+
+    names: list[ParameterName]
+    passive: PassiveModel
+    widths_rad_s: np.ndarray
+    drift: bool
+    placement_sd_m: np.ndarray
+    systematic_covariance: np.ndarray
+    curves: CurveBasis | None
+    problems: tuple[str, ...]
+    warnings: tuple[str, ...]
+    diagnostics: dict[str, object]

@@ -1,0 +1,121 @@
+"""A held model refitted to newer samples: one fit, no model checks (a live window between its checks)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.identification.joint.drift import drift_columns
+from bsp_ros.core.identification.joint.excitation import excitation_problems, motion_rows
+from bsp_ros.core.identification.joint.extras import base_extras
+from bsp_ros.core.identification.joint.held import HeldModel
+from bsp_ros.core.identification.joint.identify import UNIDENTIFIABLE_CONDITION, failed_result, prior_share
+from bsp_ros.core.identification.joint.outliers import fit_outliers, wrench_spikes
+from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
+from bsp_ros.core.identification.joint.torque_response import TorqueResponse
+from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.identification.stacked import augmented, build_problem, fit_problem
+from bsp_ros.core.streams import joints_for
+
+
+def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | None = None) -> IdentificationResult:
+    """Refit the model ``held`` chose to ``data``: newer samples of the same arm and session.
+
+    What the data alone decide is the data's: the rows with a trustworthy direction of motion, wrench spikes and
+    samples far off the fit (removed), the parameters, their fit's own HAC covariance, the condition number and
+    whether the motion still excites every joint, and the marker placement's share of the covariance. What the model
+    checks decided is held: the passive model, the friction transition widths, a drift's model, the other
+    systematic shares of the covariance (the model's choice, the friction shape, the drift's level) and their
+    verdict, which also makes this result invalid. Costs one fit (two with a modelled drift, one more after
+    removing far-off samples).
+
+    Parameters
+    ----------
+    data : the newer samples; the same chain as the held identification's.
+    held : :attr:`IdentificationResult.held` of an identification with its model checks.
+    config : the thresholds and prior of that identification; its passive model is replaced by the held one.
+
+    Returns
+    -------
+    IdentificationResult, with ``held`` passed on for the next refit.
+    """
+    config = dataclasses.replace(config or JointConfig(), passive=held.passive, check_elastic=False, check_drift=False)
+    n = data.n_joints
+    joints = joints_for(n)
+    rows, notes = motion_rows(data, config)
+    spikes, spike_notes = wrench_spikes(data, config)
+    rows &= ~spikes[:, None]
+    widths = held.widths_rad_s if held.widths_rad_s.any() else None
+    problem = build_problem(data, config.passive, rows, widths, base_extras(data, config))
+    problems = excitation_problems(data, rows, config)
+    warnings = list(data.warnings) + spike_notes + notes
+    if problem.names != held.names:
+        problems.append("the samples are not of the arm the model was chosen for (its parameters differ)")
+    if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
+        problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
+    if problems:
+        return failed_result(data, problem.names, problems, warnings)
+    fit = fit_problem(problem)
+    far = fit_outliers(fit, config)
+    n_far = int(far.sum())
+    if n_far > 0.05 * int((~spikes).sum()):
+        problems.append(
+            f"the model does not fit: {n_far} of {int((~spikes).sum())} samples lie over {config.outlier_sd:g} robust "
+            "sd off it"
+        )
+    elif n_far:
+        problem = build_problem(data, config.passive, rows & ~far[:, None], widths, base_extras(data, config))
+        fit = fit_problem(problem)
+        warnings.append(
+            f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over {config.outlier_sd:g} "
+            "robust sd)"
+        )
+    own = fit.covariance
+    placement = np.zeros_like(own)
+    if held.placement_sd_m.any():
+        placement = placement_covariance(data, problem, fit, held.placement_sd_m)
+    if held.drift:
+        # The drift's rate is the newer data's; its unknown level's share is in the held systematic covariance.
+        extra, names, _ = drift_columns(data)
+        wide = fit_problem(augmented(problem, extra, names))
+        p = len(problem.names)
+        fit = dataclasses.replace(wide, values=wide.values[:p], design=wide.design[:p, :p])
+        own = wide.covariance[:p, :p]
+    shares = prior_share(problem, own)
+    fit = dataclasses.replace(fit, covariance=own + placement + held.systematic_covariance)
+    if fit.condition > UNIDENTIFIABLE_CONDITION:
+        problems.append(
+            f"not identifiable: condition number {fit.condition:.3g} (the motion cannot tell some parameters apart; "
+            "move each joint over a wider range: bsp plan)"
+        )
+    problems += list(held.problems)
+    valid = not problems and bool(np.isfinite(fit.values).all())
+    used = problem.rows.sum(axis=0)
+    removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_far if n_far <= 0.05 * (~spikes).sum() else 0}
+    diagnostics = {
+        **held.diagnostics,
+        "hac_lags": fit.lags,
+        "passive_curves": {} if held.curves is None else held.curves.curves(fit),
+        "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
+        "removed_samples": {k: v for k, v in removed.items() if v},
+        "prior_share": shares,
+    }
+    result = IdentificationResult(
+        "joint",
+        problem.names,
+        fit.values,
+        fit.covariance,
+        valid,
+        "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples",
+        warnings + [w for w in held.warnings if w not in warnings],
+        fit.condition,
+        {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)},
+        int(data.t_ns.size),
+        diagnostics,
+        torque_response=TorqueResponse.of(problem, fit),
+        held=held,
+    )
+    return result
