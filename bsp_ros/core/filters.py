@@ -99,7 +99,8 @@ def sosfilt(sos: np.ndarray, x: np.ndarray, zi: np.ndarray) -> np.ndarray:
 
     Each section runs as a block recursion: within blocks of 64 samples its output is the zero-state response (a
     Toeplitz product, one BLAS call for all blocks and channels) plus the response to the state the block starts
-    in, handed from block to block in a short loop. The same filter as the sample recursion, to rounding.
+    in, those states from block to block by a prefix scan (log2 of the blocks' count in steps). The same filter
+    as the sample recursion, to rounding.
 
     Parameters
     ----------
@@ -119,11 +120,15 @@ def sosfilt(sos: np.ndarray, x: np.ndarray, zi: np.ndarray) -> np.ndarray:
         blocks = padded.reshape(count, block, -1)  # (blocks, block, channels)
         out = np.matmul(toeplitz, blocks)
         driven = np.matmul(end_states, blocks)  # (blocks, 2, channels): each block's input's share of its end state
-        z = np.asarray(state, dtype=np.float64).reshape(2, -1) * np.ones((1, blocks.shape[2]))
+        # The state each block starts in, z_k = V z_(k-1) + d_(k-1) from z_0, as a prefix scan in log2(blocks)
+        # steps: after the step with shift s, each entry holds its last 2 s terms, sum_i V^(k - i) e_i.
         starts = np.empty((count, 2, blocks.shape[2]))
-        for k in range(count):
-            starts[k] = z
-            z = driven[k] + decay @ z
+        starts[0] = np.asarray(state, dtype=np.float64).reshape(2, -1)
+        starts[1:] = driven[:-1]
+        power, shift = decay, 1
+        while shift < count:
+            starts[shift:] = starts[shift:] + np.matmul(power, starts[:-shift])
+            power, shift = power @ power, 2 * shift
         out += np.matmul(state_response, starts)
         y = out.reshape(count * block, *shape[1:])[:n]
     return y

@@ -22,8 +22,14 @@ def robust_sd(values: np.ndarray, axis: int = 0) -> np.ndarray:
     ``1.4826 * median(|x - median(x)|)`` along ``axis``: a single sample, however large, barely moves it.
     """
     x = np.asarray(values, dtype=np.float64)
-    centre = np.nanmedian(x, axis=axis, keepdims=True)
-    return np.asarray(MAD_TO_SD * np.nanmedian(np.abs(x - centre), axis=axis))
+    return np.asarray(MAD_TO_SD * _nanmedian(np.abs(x - _nanmedian(x, axis, keepdims=True)), axis))
+
+
+def _nanmedian(x: np.ndarray, axis: int, keepdims: bool = False) -> np.ndarray:
+    """``np.nanmedian(x, axis)``: numpy's median where nothing is NaN (the same numbers, twice as fast)."""
+    if np.isnan(x).any():
+        return np.asarray(np.nanmedian(x, axis=axis, keepdims=keepdims))
+    return np.asarray(np.median(x, axis=axis, keepdims=keepdims))
 
 
 def hampel_outliers(values: np.ndarray, window: int = 11, n_sd: float = 8.0, floor: float = 0.0) -> np.ndarray:

@@ -67,6 +67,7 @@ class MarkerKinematics:
     warnings : plain-language notes on data quality.
     velocity_rad_s, acceleration_rad_s2 : (M, n) derivatives of the angles low-passed at
         ``dynamics_cutoff_hz`` (rad/s, rad/s^2), for the inertial torques; None when not computed.
+    config : the filter settings used, cutoffs raised to the motion's band; None when not recorded.
     """
 
     t_ns: np.ndarray
@@ -81,6 +82,7 @@ class MarkerKinematics:
     n_frames_rejected: dict[str, int] = field(default_factory=dict)
     velocity_rad_s: np.ndarray | None = None
     acceleration_rad_s2: np.ndarray | None = None
+    config: KinematicsConfig | None = None
 
     @property
     def rate_hz(self) -> float:

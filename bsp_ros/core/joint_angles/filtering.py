@@ -136,6 +136,7 @@ def kinematics_from_angles(
     lengths_m: npt.ArrayLike,
     config: KinematicsConfig | None = None,
     angle_filter: bool = False,
+    adapt_to_motion: bool = True,
 ) -> MarkerKinematics:
     """Put already-estimated joint angles (e.g. a live `arm/joint_states` stream) on a uniform grid.
 
@@ -148,6 +149,8 @@ def kinematics_from_angles(
     lengths_m : (n,) segment lengths (m).
     config : gap and filter settings.
     angle_filter : also low-pass the angles (False when the source already filtered them).
+    adapt_to_motion : raise the direction and dynamics cutoffs to the motion's band (:func:`config_for_motion`);
+        False uses ``config`` as given (e.g. the returned ``config`` of an earlier call on the same motion).
     """
     config = config or KinematicsConfig()
     stamps = np.asarray(t_ns, dtype=np.int64)
@@ -157,14 +160,14 @@ def kinematics_from_angles(
     step_ns = round(float(np.median(np.diff(stamps))))
     grid_ns = stamps[0] + step_ns * np.arange((stamps[-1] - stamps[0]) // step_ns + 1, dtype=np.int64)
     gridded, _ = grid_values(grid_ns, stamps, angles, int(config.max_gap_s * 1e9) + step_ns // 2)
-    config, widened = config_for_motion(config, gridded, 1e9 / step_ns)
+    config, widened = config_for_motion(config, gridded, 1e9 / step_ns) if adapt_to_motion else (config, [])
     q_grid, velocity, noise, notes = _filtered_runs(gridded, 1e9 / step_ns, config, angle_filter)
     notes = widened + notes
     lengths = np.asarray(lengths_m, dtype=np.float64)
     invalid = int((~np.isfinite(q_grid).all(axis=1)).sum())
     qd, qdd = _motion_runs(gridded, q_grid, 1e9 / step_ns, config.dynamics_cutoff_hz)
     return MarkerKinematics(
-        grid_ns, q_grid, velocity, lengths, np.zeros_like(lengths), {}, invalid, noise, notes, {}, qd, qdd
+        grid_ns, q_grid, velocity, lengths, np.zeros_like(lengths), {}, invalid, noise, notes, {}, qd, qdd, config
     )
 
 

@@ -13,7 +13,7 @@ from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.rate import block_means, identification_rate_hz
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import parameter_timing
-from bsp_ros.core.joint_angles import kinematics_from_angles, resample_with_motion
+from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_angles, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data, refit_options
 from bsp_ros.errors import BspError
@@ -51,6 +51,15 @@ class WindowConfig:
         check_finite_scalar("stale_s", self.stale_s, 0.01, 60.0)
         check_positive("max_rate_hz", self.max_rate_hz, 1e5)
         check_positive("elastic_check_every", self.elastic_check_every, 1000)
+
+
+@dataclass(frozen=True)
+class WindowSettings:
+    """What a window's samples are prepared with, held between model checks: the segment lengths (n,) m (the
+    window's median) and the kinematics filter settings (cutoffs raised to the motion's band)."""
+
+    lengths_m: np.ndarray
+    kinematics: KinematicsConfig
 
 
 @dataclass(frozen=True)
@@ -107,6 +116,9 @@ class WindowedIdentifier:
         self.wrench_guard = StreamGuard("wrench")
         self._since_check = 0
         self._held: HeldModel | None = None
+        # The segment lengths and filter cutoffs of the window the last check identified, and of the last window.
+        self._held_settings: WindowSettings | None = None
+        self._settings: WindowSettings | None = None
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False
@@ -144,6 +156,7 @@ class WindowedIdentifier:
         """Forget what the model checks chose: the next :meth:`estimate_window` runs them again."""
         self._since_check = 0
         self._held = None
+        self._held_settings = None
 
     def _invalid(self, message: str, last_wrench_t_ns: int | None = None) -> WindowEstimate:
         document = invalid_document(self.config.options.method, message)
@@ -189,14 +202,21 @@ class WindowedIdentifier:
             contact_from_robot=self.contact_from_robot,
         )
 
-    def _window_data(self, window: WindowSamples) -> IdentificationData | str:
-        """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none."""
+    def _window_data(self, window: WindowSamples, held: WindowSettings | None = None) -> IdentificationData | str:
+        """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none; with
+        ``held``, on those segment lengths and filter cutoffs instead of the window's own."""
         t_w, wrench, _ = block_means(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
         t_a, rows = window.angle_t_ns, window.angle_rows
-        lengths = np.median(rows[:, self.n :], axis=0)
+        lengths = np.median(rows[:, self.n :], axis=0) if held is None else held.lengths_m
         kinematics = kinematics_from_angles(
-            t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
+            t_a,
+            rows[:, : self.n],
+            lengths,
+            self.config.options.kinematics if held is None else held.kinematics,
+            angle_filter=True,
+            adapt_to_motion=held is None,
         )
+        self._settings = WindowSettings(lengths, kinematics.config or self.config.options.kinematics)
         # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
         q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
         if valid.sum() < 2:
@@ -230,16 +250,19 @@ class WindowedIdentifier:
 
         Every ``elastic_check_every``-th call (the first included) identifies with the model checks (drift,
         Stribeck, elastic: ~30 ms for 30 s at 1 kHz); the calls in between refit the model they chose, with its
-        verdict (:func:`bsp_ros.core.identification.joint.refit.refit_held`: one fit).
+        verdict (:func:`bsp_ros.core.identification.joint.refit.refit_held`: one fit), on the segment lengths and
+        filter cutoffs of the checked window.
         """
         last_wrench = int(window.wrench_t_ns[-1])
         try:
-            data = self._window_data(window)
+            check = self._due()
+            held_settings = None if check else self._held_settings
+            data = self._window_data(window, held_settings)
             if isinstance(data, str):
                 return self._invalid(data, last_wrench)
-            if self._due():
+            if check:
                 result = identify_data(data, self.config.options, check_elastic=True, check_drift=True)
-                self._held, self._since_check = result.held, 1
+                self._held, self._held_settings, self._since_check = result.held, self._settings, 1
             else:
                 result = identify_data(data, self.config.options, held=self._held)
                 self._since_check += 1

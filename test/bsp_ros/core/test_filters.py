@@ -32,11 +32,12 @@ def test_the_filter_is_scipys(order: int, cutoff_hz: float, rate_hz: float) -> N
     padlen = min(values.shape[0] - 1, int(3.0 * rate_hz / cutoff_hz))
     ours = zero_phase_lowpass(values, sos, padlen)
     theirs = signal.sosfiltfilt(expected, values, axis=0, padtype="odd", padlen=padlen)
-    # Rounding only: a 6th order at 1/1000 of the rate has poles within 1e-2 of 1 and loses a few more digits.
+    # Rounding only: a 6th order at 1/1000 of the rate has poles within 1e-2 of 1 and loses a few more digits (the
+    # block states' prefix scan multiplies powers of the block's decay, ~2e-11 of the signal there, 1e-14 elsewhere).
     np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-9 * np.abs(theirs).max())
     one = zero_phase_lowpass(values[:, 0], sos, 0)
     np.testing.assert_allclose(
-        one, signal.sosfiltfilt(expected, values[:, 0], padtype=None), atol=1e-11 * np.abs(theirs).max()
+        one, signal.sosfiltfilt(expected, values[:, 0], padtype=None), atol=1e-10 * np.abs(theirs).max()
     )
 
 
