@@ -31,7 +31,6 @@ from bsp_ros.live.online.windowed import (
     WindowEstimate,
     WindowSamples,
 )
-from bsp_ros.live.runtime.offload import ProcessOffload
 from bsp_ros.live.runtime.parameters import Param, declare_parameters
 from bsp_ros.live.runtime.qos import rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
@@ -204,20 +203,18 @@ class BspIdentifierNode(RosNode):
         self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
+        # Estimates run on one worker thread, so that the wrench callbacks never wait for one: a windowed update
+        # refits the model its last check chose (~15 ms for 30 s at 1 kHz, the checks every elastic_check_every
+        # updates ~40 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
+        # callbacks every switch interval (main() sets 0.2 ms).
         self.worker = LatestJobWorker(f"{NAME}-estimate")
-        # The estimates run in a child process (see ProcessOffload); a worker thread waits for them.
-        # In recursive mode the per-sample filter here comes first and the child only fuses at 5 Hz: it runs
-        # in the background. A windowed estimate is the main work and keeps a normal priority.
-        background = self.mode == "recursive"
-        self.offload = ProcessOffload(jobs.init_worker, (self.n, self.windowed.config, background))
+        # The worker's own identifier: it keeps the model checks' schedule and what they chose, apart from the
+        # buffers the callbacks fill. A restart (a new transform, contact point) starts a new check epoch, and
+        # the worker's next update checks again.
+        self.estimator = WindowedIdentifier(self.n, self.windowed.config)
+        self.check_epoch, self.estimator_epoch = 0, 0
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
-        self.offload.run(jobs.ping)
-        # Windowed: the model checks (Stribeck, elastic; several refits) run in the update itself, every
-        # elastic_check_every updates (a 30 s window at 1 kHz: 40 ms with them, bench/live_window_update.py), and
-        # their verdict holds in between. A restart (a new transform, contact point) starts a new check epoch:
-        # the next update checks again.
-        self.check_epoch = 0
         self.support_fraction = float(p["support_fraction"])
         self.support_estimate: dict[str, Any] | None = None  # set by the worker thread with each estimate
         self.support_diagnostics: dict[str, str] = {}
@@ -262,9 +259,8 @@ class BspIdentifierNode(RosNode):
         return int(self.get_clock().now().nanoseconds)
 
     def destroy_node(self) -> None:
-        """Stop the worker thread and the worker process, then the node."""
+        """Stop the worker thread, then the node."""
         self.worker.close()
-        self.offload.close()
         super().destroy_node()
 
     # -- inputs ---------------------------------------------------------------------------------------
@@ -393,8 +389,8 @@ class BspIdentifierNode(RosNode):
     def on_update(self) -> None:
         """Publish the estimate (invalid if an input is stale) and the node's health.
 
-        The slow part runs in a worker process, waited for by a worker thread, so that the wrench callbacks
-        never wait for an estimate; here, on the executor thread, only what it needs is copied.
+        The estimate runs on the worker thread, so that the wrench callbacks never wait for it; here, on the
+        executor thread, only what it needs is copied.
         """
         reason = self.stale_reason()
         counts = dict(self.counts)
@@ -428,8 +424,11 @@ class BspIdentifierNode(RosNode):
         self.worker.submit(lambda: self._compute_window(window, generation, epoch))
 
     def _compute_window(self, window: WindowSamples, generation: int, epoch: int) -> None:
-        """On the worker thread: identify a window in the worker process; keep it for the next tick."""
-        self.ready = (generation, self._timed(lambda: self.offload.run(jobs.window_estimate, window, epoch)))
+        """On the worker thread: identify a window; keep it for the next tick."""
+        if epoch != self.estimator_epoch:
+            self.estimator.restart_checks()
+            self.estimator_epoch = epoch
+        self.ready = (generation, self._timed(lambda: jobs.window_estimate(self.estimator, window)))
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
         """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
@@ -443,7 +442,7 @@ class BspIdentifierNode(RosNode):
             result, lengths = self.recursive.identifier.result(), self.lengths.copy()
             stamp = self.recursive.guard.last_t_ns or 0
             robot = self.windowed.contact_from_robot
-            job = lambda: self.offload.run(jobs.recursive_estimate, result, lengths, self.options, stamp, robot)  # noqa: E731
+            job = lambda: jobs.recursive_estimate(result, lengths, self.options, stamp, robot)  # noqa: E731
         self.worker.submit(lambda: self.publish(self._timed(job), counts))
 
     def _timed(self, job: Callable[[], jobs.EstimateOutputs]) -> jobs.EstimateOutputs:

@@ -1,9 +1,8 @@
-"""The estimates `bsp_identifier` computes in its worker process (module-level, so they pickle by name)."""
+"""The estimates `bsp_identifier` computes on its worker thread, serialised for their topics."""
 
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,50 +19,28 @@ from bsp_ros.live.estimate_messages import (
     inertias_from_estimate,
     passive_moments_from_estimate,
 )
-from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowSamples
+from bsp_ros.live.online.windowed import WindowedIdentifier, WindowSamples
 from msg_adapters.diagnostics import build_diagnostic_array
 from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import build_joint_state
 
-_windowed: WindowedIdentifier | None = None  # the child's own: it keeps the model checks' schedule
-_epoch = 0  # the node's check epoch the schedule belongs to
 _store: Any = None
 
 
 def _typestore() -> Any:
-    """The rosbags Jazzy type store: it serialises CDR in the worker process without rclpy."""
+    """The rosbags Jazzy type store: it serialises CDR without a message class per call."""
     global _store
     if _store is None:
         _store = get_typestore(Stores.ROS2_JAZZY)
     return _store
 
 
-def init_worker(n_segments: int, config: WindowConfig, background: bool = False) -> None:
-    """Set up the worker process; ``background`` runs it only on otherwise idle CPU time.
-
-    Linux's ``SCHED_IDLE`` never takes a core from a normal thread, such as the recursive filter's
-    1 kHz path in the node; elsewhere the lowest ``nice`` does what it can.
-    """
-    global _windowed
-    if background:
-        try:
-            os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
-        except (AttributeError, OSError):
-            os.nice(19)
-    _windowed = WindowedIdentifier(n_segments, config)
-
-
-def ping() -> bool:
-    """Nothing: the first call waits until the child has imported numpy and scipy."""
-    return True
-
-
 @dataclass(frozen=True)
 class EstimateOutputs:
     """One estimate, serialised for its topics: what the node's worker thread only has to write.
 
-    Building and serialising the messages here, in the worker process, keeps the node's interpreter lock
-    free for the 1 kHz wrench path. ``cdr`` maps an output (``estimate``, ``json``, ``inertia/<segment>``,
+    Building and serialising the messages on the worker thread leaves the executor thread only the writes.
+    ``cdr`` maps an output (``estimate``, ``json``, ``inertia/<segment>``,
     ``passive``) to serialised CDR, which rclpy's ``Publisher.publish`` takes as it is.
     """
 
@@ -102,15 +79,10 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
     return EstimateOutputs(valid, str(document["quality"]["message"]), out, estimate_from_document(document))
 
 
-def window_estimate(window: WindowSamples, epoch: int = 0) -> EstimateOutputs:
-    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench. The
-    model checks run here on their schedule; a new ``epoch`` (the node restarted its estimate) starts it again."""
-    global _epoch
-    assert _windowed is not None, "init_worker was not run"
-    if epoch != _epoch:
-        _windowed.restart_checks()
-        _epoch = epoch
-    estimate = _windowed.estimate_window(window)
+def window_estimate(identifier: WindowedIdentifier, window: WindowSamples) -> EstimateOutputs:
+    """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench;
+    ``identifier`` keeps the model checks' schedule (one thread at a time)."""
+    estimate = identifier.estimate_window(window)
     estimate.document["mode"] = "windowed"
     return outputs_from_document(estimate.document, estimate.last_wrench_t_ns or 0, with_passive=True)
 

@@ -123,8 +123,7 @@ def test_an_unknown_executor_is_refused_naming_it(ros_domain: int) -> None:
 def test_a_stopped_identifier_exits_cleanly_without_leaked_semaphores(
     stop: signal.Signals, executor: str, ros_domain: int, tmp_path: Path
 ) -> None:
-    # The cell's params file, as `ros2 launch` passes it; the node is up once it publishes its health
-    # (its worker process started before that).
+    # The cell's params file, as `ros2 launch` passes it; the node is up once it publishes its health.
     config = ROOT / "bsp_ros" / "config" / "bsp_cell.yaml"
     log = tmp_path / "stderr.log"
     with log.open("wb") as stderr:
