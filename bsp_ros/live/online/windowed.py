@@ -238,12 +238,11 @@ class WindowedIdentifier:
         )
 
     def _due(self) -> bool:
-        """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and sooner (every
-        fifth) while the last check's verdict was invalid, so that an arm that starts moving is not kept waiting."""
+        """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and every update
+        while the last one's samples could not support an estimate (poor excitation, a misfit: nothing to hold). A
+        model the checks found lacking holds its verdict until the next check."""
         every = self.config.elastic_check_every
-        if self._held is None or self._since_check >= every:
-            return True
-        return bool(self._held.problems) and self._since_check >= max(every // 5, 1)
+        return self._held is None or self._since_check >= every or bool(self._held.data_problems)
 
     def estimate_window(self, window: WindowSamples) -> WindowEstimate:
         """Identify a window copied by :meth:`snapshot` (one thread at a time).

@@ -30,7 +30,11 @@ class HeldModel:
         the passive model's choice, the friction shape, the drift's unknown level. These do not shrink with more
         samples, and a few seconds more of the same arm hardly change them.
     curves : the passive curves' basis (a model choice), or None.
-    problems : why the estimate is invalid (empty: valid); warnings : its notes.
+    data_problems : why the samples could not support the estimate (excitation, misfit, identifiability): a refit
+        judges its own samples' instead.
+    check_problems : what the model checks found the model lacks (an elastic term, Stribeck-like friction, an
+        implausible off-axis moment): the verdict a refit holds.
+    warnings : the estimate's notes on its model.
     diagnostics : the estimate's diagnostics.
     """
 
@@ -41,6 +45,7 @@ class HeldModel:
     placement_sd_m: np.ndarray
     systematic_covariance: np.ndarray
     curves: CurveBasis | None
-    problems: tuple[str, ...]
+    data_problems: tuple[str, ...]
+    check_problems: tuple[str, ...]
     warnings: tuple[str, ...]
     diagnostics: dict[str, object]

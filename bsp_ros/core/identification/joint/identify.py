@@ -290,6 +290,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
             warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
+    data_problems = len(problems)  # those below come from the model checks (held between a live window's checks)
     if config.check_elastic and not problems:
         stribeck = stribeck_check(data, problem, fit, config, widths)
         unmodelled = [f.note for f in stribeck if f.biases_estimate]
@@ -371,7 +372,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             placement_sd_m,
             fit.covariance - own_covariance - placement_share,
             basis,
-            tuple(problems),
+            tuple(problems[:data_problems]),
+            tuple(problems[data_problems:]),
             tuple(w for w in warnings[data_notes:] if not w.startswith("removed ")),
             diagnostics,
         ),

@@ -91,7 +91,7 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
             f"not identifiable: condition number {fit.condition:.3g} (the motion cannot tell some parameters apart; "
             "move each joint over a wider range: bsp plan)"
         )
-    problems += list(held.problems)
+    problems += list(held.check_problems)
     valid = not problems and bool(np.isfinite(fit.values).all())
     used = problem.rows.sum(axis=0)
     removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_far if n_far <= 0.05 * (~spikes).sum() else 0}

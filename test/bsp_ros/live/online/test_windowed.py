@@ -234,3 +234,20 @@ def test_the_elastic_fallback_holds_its_chosen_model_between_checks(elastic_live
             abs(q["static_moment_kgm"]["value"] - truth[segment]["static_moment_kgm"])
             < 3 * q["static_moment_kgm"]["std"]
         )
+
+
+def test_a_window_whose_samples_cannot_support_an_estimate_is_checked_again_at_the_next_update(live_streams) -> None:
+    """Poor excitation or a misfit is the samples' verdict, not the model's: nothing is held, the next update
+    identifies with the checks again; a clean check holds its model for elastic_check_every updates."""
+    import dataclasses
+
+    identifier, window = _window(live_streams)
+    assert identifier.estimate_window(window).valid
+    assert identifier._held is not None and not identifier._held.data_problems
+    for _ in range(identifier.config.elastic_check_every - 1):
+        assert not identifier._due()
+        identifier.estimate_window(window)
+    assert identifier._due()
+    identifier.estimate_window(window)
+    identifier._held = dataclasses.replace(identifier._held, data_problems=("the elbow moved in one direction only",))
+    assert identifier._due()
