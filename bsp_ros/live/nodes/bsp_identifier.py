@@ -204,8 +204,8 @@ class BspIdentifierNode(RosNode):
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
         # Estimates run on one worker thread, so that the wrench callbacks never wait for one: a windowed update
-        # refits the model its last check chose (~15 ms for 30 s at 1 kHz, the checks every elastic_check_every
-        # updates ~40 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
+        # refits the model its last check chose (~14 ms for 30 s at 1 kHz, the checks every elastic_check_every
+        # updates ~35 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
         # callbacks every switch interval (main() sets 0.2 ms).
         self.worker = LatestJobWorker(f"{NAME}-estimate")
         # The worker's own identifier: it keeps the model checks' schedule and what they chose, apart from the
