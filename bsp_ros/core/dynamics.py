@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -45,8 +46,7 @@ def perpendicular(v: np.ndarray) -> np.ndarray:
     return np.stack((-v[..., 1], v[..., 0]), axis=-1)
 
 
-@dataclass(frozen=True)
-class _ChainFrames:
+class _ChainFrames(NamedTuple):
     """What every torque of a planar chain is built from, per sample: absolute rates (N, n), each segment's axis
     and normal (N, n, 2), the joints' positions and accelerations (N, n, 2, from the shoulder), and each
     segment's share of the acceleration of the joints beyond it (N, n - 1, 2)."""
@@ -109,15 +109,7 @@ def base_regressor(
     qdd = np.atleast_2d(np.asarray(qdd_rad_s2, dtype=np.float64))
     lengths = np.asarray(lengths_m, dtype=np.float64)
     count, n = q.shape
-    frames = _chain_frames(q, qd, qdd, lengths)
-    omega, alpha, axis, normal, points, accel = (
-        frames.omega,
-        frames.alpha,
-        frames.axis,
-        frames.normal,
-        frames.points,
-        frames.accel,
-    )
+    omega, alpha, axis, normal, points, accel, _ = _chain_frames(q, qd, qdd, lengths)
     regressor = np.zeros((count, n, 3 * n))
     for j in range(n):
         for column, h in ((j, axis[:, j]), (n + j, normal[:, j])):
@@ -131,45 +123,6 @@ def base_regressor(
     return regressor
 
 
-def base_torques_nm(
-    q_rad: np.ndarray,
-    qd_rad_s: np.ndarray,
-    qdd_rad_s2: np.ndarray,
-    lengths_m: np.ndarray,
-    base_values: np.ndarray,
-    gravity_m_s2: float = GRAVITY_M_S2,
-) -> np.ndarray:
-    """``base_regressor(...) @ base_values`` (N, n) Nm without the regressor: each segment's two first moments
-    act as one vector, so a chain's torques cost a third of its regressor (the marker placement's finite
-    differences evaluate them many times).
-
-    Parameters
-    ----------
-    q_rad, qd_rad_s, qdd_rad_s2 : (N, n) joint angles (rad), velocities (rad/s), accelerations (rad/s^2).
-    lengths_m : (n,) segment lengths (m).
-    base_values : (3n,) ``[beta, gamma, zeta]`` (kg m, kg m, kg m^2).
-    gravity_m_s2 : g (m/s^2), acting along -z.
-    """
-    n = q_rad.shape[1]
-    frames = _chain_frames(q_rad, qd_rad_s, qdd_rad_s2, lengths_m)
-    omega, alpha, axis, normal, points, accel = (
-        frames.omega,
-        frames.alpha,
-        frames.axis,
-        frames.normal,
-        frames.points,
-        frames.accel,
-    )
-    torque = np.zeros((q_rad.shape[0], n))
-    for j in range(n):
-        h = base_values[j] * axis[:, j] + base_values[n + j] * normal[:, j]  # the segment's first moment vector
-        force = alpha[:, j, None] * perpendicular(h) - omega[:, j, None] ** 2 * h
-        own = planar_cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0] + base_values[2 * n + j] * alpha[:, j]
-        for i in range(j + 1):
-            torque[:, i] += planar_cross(points[:, j] - points[:, i], force) + own
-    return torque
-
-
 def base_torque_angle_derivatives(
     q_rad: np.ndarray,
     qd_rad_s: np.ndarray,
@@ -178,7 +131,8 @@ def base_torque_angle_derivatives(
     base_values: np.ndarray,
     gravity_m_s2: float = GRAVITY_M_S2,
 ) -> np.ndarray:
-    """How :func:`base_torques_nm` changes with each segment's absolute angle, velocities and accelerations held.
+    """How the torques ``base_regressor(...) @ base_values`` change with each segment's absolute angle, velocities
+    and accelerations held.
 
     Turning segment s by ``d phi_s`` turns every vector fixed in it (its axis, first moment, inertial force) by
     90 deg times ``d phi_s``, and moves the points and accelerations of the segments beyond it: the derivative in
@@ -196,15 +150,7 @@ def base_torque_angle_derivatives(
     (N, n, n) ``d tau_i / d phi_s`` (Nm/rad), joints i then segments s.
     """
     n = q_rad.shape[1]
-    frames = _chain_frames(q_rad, qd_rad_s, qdd_rad_s2, lengths_m)
-    omega, alpha, axis, normal, points, accel = (
-        frames.omega,
-        frames.alpha,
-        frames.axis,
-        frames.normal,
-        frames.points,
-        frames.accel,
-    )
+    omega, alpha, axis, normal, points, accel, steps = _chain_frames(q_rad, qd_rad_s, qdd_rad_s2, lengths_m)
     h = base_values[None, :n, None] * axis + base_values[None, n : 2 * n, None] * normal  # (N, n, 2)
     force = alpha[..., None] * perpendicular(h) - omega[..., None] ** 2 * h
     derivative = np.zeros((q_rad.shape[0], n, n))
@@ -212,7 +158,7 @@ def base_torque_angle_derivatives(
         # Segment s turned: its own first moment and force turn; the points and accelerations beyond it move.
         turned_h, turned_force = perpendicular(h[:, s]), perpendicular(force[:, s])
         moved = lengths_m[s] * normal[:, s]  # d points_j for j > s
-        moved_accel = perpendicular(frames.steps[:, s]) if s < n - 1 else None  # d accel_j for j > s
+        moved_accel = perpendicular(steps[:, s]) if s < n - 1 else None  # d accel_j for j > s
         for i in range(n):
             total = np.zeros(q_rad.shape[0])
             for j in range(i, n):
