@@ -13,19 +13,19 @@ from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.curves import curve_basis
 from bsp_ros.core.identification.joint.drift import drift_check
 from bsp_ros.core.identification.joint.elastic_check import elastic_check
-from bsp_ros.core.identification.joint.excitation import excitation_problems, motion_rows
-from bsp_ros.core.identification.joint.extras import base_extras
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
 from bsp_ros.core.identification.joint.outliers import (
     GAP_EDGE_S,
     MIN_OUTLIER_NM,
+    far_off_problem,
     fit_outliers,
     near_gaps,
-    wrench_spikes,
+    too_far_off,
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
 from bsp_ros.core.identification.joint.placement_covariance import placement_covariance, placement_effect
+from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.stribeck import stribeck_check
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
 from bsp_ros.core.identification.joint.transition import transition_widths
@@ -37,6 +37,14 @@ from bsp_ros.core.streams import joints_for
 
 # Above this column-scaled condition number no std is meaningful: parameters the motion cannot tell apart.
 UNIDENTIFIABLE_CONDITION = 1e8
+
+
+def unidentifiable_problem(condition: float) -> str:
+    """The problem of a fit whose column-scaled condition number is above :data:`UNIDENTIFIABLE_CONDITION`."""
+    return (
+        f"not identifiable: condition number {condition:.3g} (the motion cannot tell some parameters apart; move "
+        "each joint over a wider range: bsp plan)"
+    )
 
 
 def prior_share(problem: Problem, covariance: np.ndarray) -> dict[str, float]:
@@ -95,18 +103,13 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     joints = joints_for(n)
     # How far each chain point may sit from where the data put it (skin markers; the robot's contact point).
     placement_sd_m = config.placement_sd_m(n, data.contact_from_robot)
-    rows, notes = motion_rows(data, config)
-    spikes, spike_notes = wrench_spikes(data, config)
-    rows &= ~spikes[:, None]
-    problems = excitation_problems(data, rows, config)
-    extras = base_extras(data, config)
-    problem = build_problem(data, config.passive, rows, extras=extras)
-    warnings = list(data.warnings) + spike_notes + notes
+    samples = usable_samples(data, config)
+    rows, spikes, extras, problem = samples.rows, samples.spikes, samples.extras, samples.problem
+    problems, warnings = samples.problems, samples.warnings
     data_notes = len(warnings)  # the notes above are the samples'; those after them, the model's (held)
-    if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
-        problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
-        return failed_result(data, problem.names, problems, warnings)
-    usable = int((~spikes).sum())
+    if samples.too_few is not None:
+        return failed_result(data, problem.names, problems or [samples.too_few], warnings)
+    usable = samples.usable
     if "coulomb" in config.passive.terms:
         for j, joint in enumerate(joints):
             share = rows[:, j].sum() / max(usable, 1)
@@ -158,10 +161,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
     n_removed = 0
-    if n_far > 0.05 * usable:
-        problems.append(
-            f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
-        )
+    if too_far_off(n_far, usable):
+        problems.append(far_off_problem(n_far, usable, config))
     elif n_far:
         kept = build_problem(data, config.passive, rows & ~far[:, None], widths, extras)
         refit = fit_problem(kept)
@@ -246,10 +247,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "wrong sensor transform, an unmodelled load or passive moment?)"
             )
     if fit.condition > UNIDENTIFIABLE_CONDITION:
-        problems.append(
-            f"not identifiable: condition number {fit.condition:.3g} (the motion cannot tell some parameters apart; "
-            "move each joint over a wider range: bsp plan)"
-        )
+        problems.append(unidentifiable_problem(fit.condition))
     elif fit.condition > config.max_condition:
         # An honest std is large here, not wrong: the estimate stays, its std says what the motion leaves open.
         warnings.append(f"poorly excited: condition number {fit.condition:.3g} > {config.max_condition:g}")

@@ -39,6 +39,20 @@ def fit_outliers(fit: Fit, config: JointConfig) -> np.ndarray:
     return np.asarray(far.any(axis=1))
 
 
+# More samples far off the fit than this share of the usable ones: the model does not fit (nothing is removed).
+MAX_FAR_SHARE = 0.05
+
+
+def too_far_off(n_far: int, usable: int) -> bool:
+    """Whether ``n_far`` samples far off the fit (:func:`fit_outliers`) of ``usable`` mean the model does not fit."""
+    return n_far > MAX_FAR_SHARE * usable
+
+
+def far_off_problem(n_far: int, usable: int, config: JointConfig) -> str:
+    """The problem of a fit that too many samples lie far off (:func:`too_far_off`)."""
+    return f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
+
+
 # Samples this close to a gap in the data (angles lost to marker dropouts) sit where the direction filter
 # has least support; far-off samples there are named as such (seen at 0-0.2 s in simulated dropouts).
 GAP_EDGE_S = 0.25

@@ -9,12 +9,16 @@ import numpy as np
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.drift import drift_columns
-from bsp_ros.core.identification.joint.excitation import excitation_problems, motion_rows
-from bsp_ros.core.identification.joint.extras import base_extras
 from bsp_ros.core.identification.joint.held import HeldModel
-from bsp_ros.core.identification.joint.identify import UNIDENTIFIABLE_CONDITION, failed_result, prior_share
-from bsp_ros.core.identification.joint.outliers import fit_outliers, wrench_spikes
+from bsp_ros.core.identification.joint.identify import (
+    UNIDENTIFIABLE_CONDITION,
+    failed_result,
+    prior_share,
+    unidentifiable_problem,
+)
+from bsp_ros.core.identification.joint.outliers import far_off_problem, fit_outliers, too_far_off
 from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
+from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.stacked import augmented, build_problem, fit_problem
@@ -26,11 +30,11 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
 
     What the data alone decide is the data's: the rows with a trustworthy direction of motion, wrench spikes and
     samples far off the fit (removed), the parameters, their fit's own HAC covariance, the condition number and
-    whether the motion still excites every joint, and the marker placement's share of the covariance. What the model
-    checks decided is held: the passive model, the friction transition widths, a drift's model, the other
-    systematic shares of the covariance (the model's choice, the friction shape, the drift's level) and their
-    verdict, which also makes this result invalid. Costs one fit (two with a modelled drift, one more after
-    removing far-off samples).
+    whether the motion still excites every joint, and the marker placement's share of the covariance. What the
+    model checks decided is held: the passive model, the friction transition widths, a drift's model, the other
+    systematic shares of the covariance (the model's choice, the friction shape, the drift's level) and what the
+    checks found the model lacks, which also makes this result invalid. Costs one fit (two with a modelled drift,
+    one more after removing far-off samples).
 
     Parameters
     ----------
@@ -45,29 +49,21 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
     config = dataclasses.replace(config or JointConfig(), passive=held.passive, check_elastic=False, check_drift=False)
     n = data.n_joints
     joints = joints_for(n)
-    rows, notes = motion_rows(data, config)
-    spikes, spike_notes = wrench_spikes(data, config)
-    rows &= ~spikes[:, None]
     widths = held.widths_rad_s if held.widths_rad_s.any() else None
-    problem = build_problem(data, config.passive, rows, widths, base_extras(data, config))
-    problems = excitation_problems(data, rows, config)
-    warnings = list(data.warnings) + spike_notes + notes
+    samples = usable_samples(data, config, widths)
+    rows, spikes, problem, usable = samples.rows, samples.spikes, samples.problem, samples.usable
+    problems, warnings = samples.problems, samples.warnings
     if problem.names != held.names:
         problems.append("the samples are not of the arm the model was chosen for (its parameters differ)")
-    if data.t_ns.size < max(config.min_samples, 2 * len(problem.names)) or rows.sum(axis=0).min() < len(problem.names):
-        problems = problems or [f"too few usable samples: {int(rows.sum(axis=0).min())}"]
-    if problems:
-        return failed_result(data, problem.names, problems, warnings)
+    if problems or samples.too_few is not None:
+        return failed_result(data, problem.names, problems or [str(samples.too_few)], warnings)
     fit = fit_problem(problem)
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
-    if n_far > 0.05 * int((~spikes).sum()):
-        problems.append(
-            f"the model does not fit: {n_far} of {int((~spikes).sum())} samples lie over {config.outlier_sd:g} robust "
-            "sd off it"
-        )
+    if too_far_off(n_far, usable):
+        problems.append(far_off_problem(n_far, usable, config))
     elif n_far:
-        problem = build_problem(data, config.passive, rows & ~far[:, None], widths, base_extras(data, config))
+        problem = build_problem(data, config.passive, rows & ~far[:, None], widths, samples.extras)
         fit = fit_problem(problem)
         warnings.append(
             f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over {config.outlier_sd:g} "
@@ -87,14 +83,11 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
     shares = prior_share(problem, own)
     fit = dataclasses.replace(fit, covariance=own + placement + held.systematic_covariance)
     if fit.condition > UNIDENTIFIABLE_CONDITION:
-        problems.append(
-            f"not identifiable: condition number {fit.condition:.3g} (the motion cannot tell some parameters apart; "
-            "move each joint over a wider range: bsp plan)"
-        )
+        problems.append(unidentifiable_problem(fit.condition))
     problems += list(held.check_problems)
     valid = not problems and bool(np.isfinite(fit.values).all())
     used = problem.rows.sum(axis=0)
-    removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_far if n_far <= 0.05 * (~spikes).sum() else 0}
+    removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": 0 if too_far_off(n_far, usable) else n_far}
     diagnostics = {
         **held.diagnostics,
         "hac_lags": fit.lags,
