@@ -116,9 +116,8 @@ class WindowedIdentifier:
         self.wrench_guard = StreamGuard("wrench")
         self._since_check = 0
         self._held: HeldModel | None = None
-        # The segment lengths and filter cutoffs of the window the last check identified, and of the last window.
+        # The segment lengths and filter cutoffs of the window the last check identified.
         self._held_settings: WindowSettings | None = None
-        self._settings: WindowSettings | None = None
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False
@@ -202,9 +201,11 @@ class WindowedIdentifier:
             contact_from_robot=self.contact_from_robot,
         )
 
-    def _window_data(self, window: WindowSamples, held: WindowSettings | None = None) -> IdentificationData | str:
-        """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none; with
-        ``held``, on those segment lengths and filter cutoffs instead of the window's own."""
+    def _window_data(
+        self, window: WindowSamples, held: WindowSettings | None = None
+    ) -> tuple[IdentificationData | str, WindowSettings]:
+        """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none, and the
+        settings it was prepared with: ``held``'s segment lengths and filter cutoffs, else the window's own."""
         t_w, wrench, _ = block_means(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
         t_a, rows = window.angle_t_ns, window.angle_rows
         lengths = np.median(rows[:, self.n :], axis=0) if held is None else held.lengths_m
@@ -216,13 +217,13 @@ class WindowedIdentifier:
             angle_filter=True,
             adapt_to_motion=held is None,
         )
-        self._settings = WindowSettings(lengths, kinematics.config or self.config.options.kinematics)
+        settings = WindowSettings(lengths, kinematics.config or self.config.options.kinematics)
         # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
         q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
         if valid.sum() < 2:
-            return "no wrench sample in the window has joint angles"
+            return "no wrench sample in the window has joint angles", settings
         tau = contact_torques_nm(q[valid], lengths, wrench[valid])
-        return IdentificationData(
+        data = IdentificationData(
             t_w[valid],
             q[valid],
             velocity[valid],
@@ -236,6 +237,7 @@ class WindowedIdentifier:
             qdd_rad_s2=qdd[valid],
             contact_from_robot=window.contact_from_robot,
         )
+        return data, settings
 
     def _due(self) -> bool:
         """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and every update
@@ -256,12 +258,12 @@ class WindowedIdentifier:
         try:
             check = self._due()
             held_settings = None if check else self._held_settings
-            data = self._window_data(window, held_settings)
+            data, settings = self._window_data(window, held_settings)
             if isinstance(data, str):
                 return self._invalid(data, last_wrench)
             if check:
                 result = identify_data(data, self.config.options, check_elastic=True, check_drift=True)
-                self._held, self._held_settings, self._since_check = result.held, self._settings, 1
+                self._held, self._held_settings, self._since_check = result.held, settings, 1
             else:
                 result = identify_data(data, self.config.options, held=self._held)
                 self._since_check += 1

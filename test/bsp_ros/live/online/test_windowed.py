@@ -164,7 +164,7 @@ def test_updates_between_checks_refit_the_checked_model_to_the_newer_samples(liv
     newer = identifier.snapshot()
     refit = identifier.estimate_window(newer)
     assert refit.valid
-    data = identifier._window_data(newer)
+    data, _ = identifier._window_data(newer)
     assert not isinstance(data, str)
     full = identify_data(data, identifier.config.options, check_drift=True)
     truth = simulated.truth.to_dict()["segments"]
@@ -181,7 +181,7 @@ def test_a_drift_found_by_a_check_is_modelled_by_the_updates_after_it(live_strea
 
     simulated, *_ = live_streams
     identifier, window = _window(live_streams, drift_n_per_s=0.01)
-    data = identifier._window_data(window)
+    data, _ = identifier._window_data(window)
     assert not isinstance(data, str)
     offline = identify_data(data, identifier.config.options)
     assert offline.valid
