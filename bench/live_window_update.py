@@ -21,15 +21,17 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from scoring import rates, verdict, z_scores
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.identification.data import wrench_world_yzx
-from bsp_ros.live.online.causal_angles import CausalJointAngles
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "bsp_ros" / "live" / "online"))
 
 PERIOD_S = 0.2  # the identifier's default 5 Hz
 
@@ -41,20 +43,10 @@ def _streams(duration_s: float, wrench_hz: float, seed: int):
         sensor=dataclasses.replace(spec.sensor, wrench_hz=wrench_hz),
         markers=dataclasses.replace(spec.markers, marker_hz=100.0),
     )
-    simulated = sim.simulate_cell(spec)
-    session = simulated.session
-    frames: dict[int, dict[str, np.ndarray]] = {}
-    for name, series in session.markers.items():
-        for t, p in zip(series.t_ns, series.position_m, strict=True):
-            frames.setdefault(int(t), {})[name] = p
-    estimator = CausalJointAngles(3)
-    raw = []
-    for t in sorted(frames):
-        estimator.update(t, frames[t])
-        if estimator.accepted(t):
-            raw.append((t, estimator.last_raw_q_rad, estimator.lengths_m))
-    wrench = wrench_world_yzx(session.wrench, session.rotation_world_from_sensor)
-    return session.wrench.t_ns, wrench, raw, simulated.truth.to_dict()
+    from live_inputs import live_inputs  # the live tests' simulated inputs (test/bsp_ros/live/online)
+
+    simulated, stamps, wrench, _, raw = live_inputs(spec)
+    return stamps, wrench, raw, simulated.truth.to_dict()
 
 
 def _run(window_s: float, stamps, wrench, raw, updates: int) -> tuple[int, np.ndarray, list[bool], list[dict]]:

@@ -4,19 +4,17 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
 import pytest
+from live_inputs import live_inputs
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.identification.data import wrench_world_yzx
-from bsp_ros.live.online.causal_angles import CausalJointAngles
 
 
 @pytest.fixture(scope="session")
 def live_streams():
     """(simulated session, wrench stamps, world wrench (N,3), causal angle samples stamped by group delay,
     unfiltered angles (t_ns, q_rad, lengths_m) per accepted frame)."""
-    return _streams(sim.human_arm_cell(seed=13, duration_s=60.0))
+    return live_inputs(sim.human_arm_cell(seed=13, duration_s=60.0))
 
 
 @pytest.fixture(scope="session")
@@ -24,24 +22,4 @@ def elastic_live_streams():
     """:func:`live_streams` of an arm with an elastic passive offset of 0.2 Nm at every joint."""
     spec = sim.human_arm_cell(seed=14, duration_s=60.0)
     passive = dataclasses.replace(spec.passive, offset_nm=(0.2, 0.2, 0.2))
-    return _streams(dataclasses.replace(spec, passive=passive))
-
-
-def _streams(spec: sim.CellSpec):
-    simulated = sim.simulate_cell(spec)
-    session = simulated.session
-    frames: dict[int, dict[str, np.ndarray]] = {}
-    for name, series in session.markers.items():
-        for t, p in zip(series.t_ns, series.position_m, strict=True):
-            frames.setdefault(int(t), {})[name] = p
-    estimator = CausalJointAngles(3)
-    delay_ns = int(estimator.group_delay_s() * 1e9)
-    angles, raw = [], []
-    for t in sorted(frames):
-        sample = estimator.update(t, frames[t])
-        if estimator.accepted(t):
-            raw.append((t, estimator.last_raw_q_rad, estimator.lengths_m))
-        if sample is not None:
-            angles.append((t - delay_ns, sample))
-    wrench = wrench_world_yzx(session.wrench, session.rotation_world_from_sensor)
-    return simulated, session.wrench.t_ns, wrench, angles, raw
+    return live_inputs(dataclasses.replace(spec, passive=passive))
