@@ -200,6 +200,9 @@ class BspIdentifierNode(RosNode):
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
         self.recursive = RecursiveFeed(self.n, self.options.passive, subject)
         self.lengths: np.ndarray | None = None
+        # Unfiltered angles that came before the first segment lengths (a topic of their own, which can match
+        # later or be taken after them); they join the window when the lengths arrive.
+        self.early_angles: deque[tuple[int, np.ndarray]] = deque(maxlen=4000)
         self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
@@ -307,6 +310,8 @@ class BspIdentifierNode(RosNode):
         sample = read_joint_state(msg)
         if sample.position.size == self.n and np.isfinite(sample.position).all() and (sample.position > 0).all():
             self.lengths = sample.position
+            while self.early_angles:
+                self.add_raw_angles(*self.early_angles.popleft())
 
     def on_raw_angles(self, msg: Any) -> None:
         """Unfiltered joint angles: the windowed mode filters them with zero phase, like `bsp identify`."""
@@ -314,9 +319,17 @@ class BspIdentifierNode(RosNode):
         if self.mode != "windowed":
             return
         self.last_receive["joint_states"] = self.now_ns()
-        if self.lengths is None or sample.position.size != self.n:
+        if sample.position.size != self.n:
             return
-        accepted = self.windowed.add_joint_state(sample.t_ns, sample.position, self.lengths)
+        if self.lengths is None:
+            self.early_angles.append((sample.t_ns, sample.position))
+            return
+        self.add_raw_angles(sample.t_ns, sample.position)
+
+    def add_raw_angles(self, t_ns: int, q_rad: np.ndarray) -> None:
+        """Unfiltered angles into the window, with the newest segment lengths."""
+        assert self.lengths is not None
+        accepted = self.windowed.add_joint_state(t_ns, q_rad, self.lengths)
         self.counts["joint_states" if accepted else "refused"] += 1
 
     def on_joint_state(self, msg: Any) -> None:

@@ -93,8 +93,9 @@ def test_real_time_replay_into_the_nodes_matches_the_offline_identification(tmp_
     valid = [d for _, d in estimates if _is_valid(d)]
     assert len(valid) > 10, [d["quality"]["message"] for _, d in estimates]
     live = valid[-1]
-    # The final window spans the bag, from its first wrench sample (bar the joint angle filters' 2 s settling)
-    # to its last.
+    # The final window spans the bag, from its first wrench sample to its last. Its start is 0-0.4 s late when
+    # the nodes' own topics match after the replay began (seen under load); the 2.2 s allow for a late match,
+    # not for the 1 s steps lost while the identifier waited for the segment lengths (3 s seen in CI, fixed).
     live_session, offline_session = live["session"], offline["session"]
     assert live_session["start_time_ns"] - offline_session["start_time_ns"] < 2.2e9, (live_session, offline_session)
     assert offline_session["end_time_ns"] - live_session["end_time_ns"] < 0.1e9, (live_session, offline_session)
