@@ -206,12 +206,12 @@ class Cell:
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen[bytes]] = {}
 
-    def start(self, name: str, params: list[str]) -> None:
+    def start(self, name: str, params: list[str], script: str | None = None) -> None:
+        """Start node ``name`` (``python -m bsp_ros.live.nodes.<name>``, or the file ``script`` in its place)."""
         args = ["--ros-args", *[a for p in params for a in ("-p", p)]] if params else []
         out = open(os.path.join(self.log_dir, f"{name}.log"), "wb") if self.log_dir else subprocess.DEVNULL
-        self.processes[name] = subprocess.Popen(
-            [sys.executable, "-m", f"bsp_ros.live.nodes.{name}", *args], env=self.env, stdout=out, stderr=out
-        )
+        program = [script] if script else ["-m", f"bsp_ros.live.nodes.{name}"]
+        self.processes[name] = subprocess.Popen([sys.executable, *program, *args], env=self.env, stdout=out, stderr=out)
 
     def alive(self) -> dict[str, bool]:
         return {name: p.poll() is None for name, p in self.processes.items()}
@@ -261,7 +261,10 @@ def run_mode(
     result: dict[str, Any] = {"mode": mode, "executor": executor, "domain": domain}
     try:
         cell.start("joint_angle_estimator", [f"marker_hz:={MARKER_HZ}"])
-        cell.start("bsp_identifier", [f"mode:={mode}", f"update_hz:={UPDATE_HZ}", *_wrench_frame_parameter()])
+        if mode == "relay":  # the floor: a node that only relays each wrench's stamp (bench/relay_node.py)
+            cell.start("bsp_identifier", [], os.path.join(os.path.dirname(os.path.abspath(__file__)), "relay_node.py"))
+        else:
+            cell.start("bsp_identifier", [f"mode:={mode}", f"update_hz:={UPDATE_HZ}", *_wrench_frame_parameter()])
         deadline = time.time_ns() + int(60e9)
         while not {"bsp_identifier", "joint_angle_estimator"} <= listener.diagnostics.keys():
             if time.time_ns() > deadline or not all(cell.alive().values()):
@@ -330,8 +333,9 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
     print(f"    received {w_stamp.size} stamped in the measured run (grid: {expected_in_window}), gaps: {gaps}")
 
     # -- end-to-end latency ----------------------------------------------------------------------------
-    stream = listener.passive if mode == "recursive" else listener.estimate
-    topic = "bsp/passive_moments" if mode == "recursive" else "bsp/estimate"
+    relayed = mode in ("recursive", "relay")  # a JointState on bsp/passive_moments per wrench
+    stream = listener.passive if relayed else listener.estimate
+    topic = "bsp/passive_moments" if relayed else "bsp/estimate"
     e_stamp, e_pub, e_recv = stream.arrays(t0, t1, by="stamp")
     all_stamp, all_pub, all_recv = listener.wrench.arrays(0, 2**62)
     order = np.argsort(all_stamp, kind="stable")
@@ -356,6 +360,8 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
     print(f"    estimate receive - wrench receive  {stats_ms(lat_recv)}   <- primary")
     print(f"    estimate receive - wrench stamp    {stats_ms(lat_stamp)}")
     print(f"    estimate pub - wrench pub (nodes)  {stats_ms(lat_pub)}")
+    if mode == "relay":
+        print(f"    (the floor: nothing computed) p99 {pct(lat_recv / 1e6, 99):.2f} ms")
     if mode == "recursive":
         p99 = pct(lat_recv / 1e6, 99)
         per_wrench = e_stamp.size / max(expected_in_window, 1)
@@ -476,7 +482,11 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--duration", type=float, default=600.0, help="measured seconds per mode (after warm-up)")
     parser.add_argument("--warmup", type=float, default=20.0, help="seconds before measuring")
-    parser.add_argument("--modes", default="windowed,recursive", help="comma-separated identifier modes")
+    parser.add_argument(
+        "--modes",
+        default="windowed,recursive",
+        help="comma-separated identifier modes; relay: the latency floor (bench/relay_node.py, nothing computed)",
+    )
     parser.add_argument(
         "--executors", default="events,single", help="comma-separated node executors (BSP_EXECUTOR), side by side"
     )

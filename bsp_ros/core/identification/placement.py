@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsp_ros.core.dynamics import base_torque_angle_derivatives, perpendicular, planar_cross
-from bsp_ros.core.model import contact_jacobian, running_sum
+from bsp_ros.core.model import running_sum
 
 
 def chain_placement_sd_m(
@@ -21,12 +21,32 @@ def chain_placement_sd_m(
 
 
 def wrench_from_torques(q_rad: np.ndarray, lengths_m: np.ndarray, tau_nm: np.ndarray) -> np.ndarray:
-    """(N, 3) ``[F_y, F_z, M_x]`` whose ``-J^T F`` is ``tau_nm`` (a 2-segment chain transmits no moment)."""
-    jacobian = contact_jacobian(q_rad, lengths_m)  # (N, 3, n)
+    """(N, 3) ``[F_y, F_z, M_x]`` whose ``-J^T F`` is ``tau_nm`` (a 2-segment chain transmits no moment).
+
+    In closed form (Cramer's rule on 2 x 2 systems; batched LAPACK solves cost ten times as much): the moment
+    cancels from the difference of neighbouring joints' torques, ``tau_i - tau_(i+1) = -(a_i F_y + b_i F_z)`` with
+    ``(a_i, b_i) = l_i (-sin phi_i, cos phi_i)``, which gives the force, and the last joint's torque the moment.
+    Singular where the system is (the elbow straight), like any solve of it.
+    """
     n = q_rad.shape[1]
+    phi = running_sum(q_rad)
+    lengths = np.asarray(lengths_m, dtype=np.float64)
+    a, b = -lengths * np.sin(phi), lengths * np.cos(phi)  # (N, n) d(y, z) of the contact point per segment turn
     out = np.zeros((q_rad.shape[0], 3))
-    rows = slice(0, 3) if n == 3 else slice(0, 2)
-    out[:, rows] = np.linalg.solve(-np.transpose(jacobian[:, rows, :], (0, 2, 1)), tau_nm[..., None])[..., 0]
+    if n == 3:
+        # Rows: (a_0, b_0) F = tau_1 - tau_0 and (a_1, b_1) F = tau_2 - tau_1.
+        r0, r1 = tau_nm[:, 1] - tau_nm[:, 0], tau_nm[:, 2] - tau_nm[:, 1]
+        a0, b0, a1, b1 = a[:, 0], b[:, 0], a[:, 1], b[:, 1]
+    else:
+        # Rows: -J^T F = tau without a moment: (dy_i, dz_i) F = -tau_i, dy_i and dz_i summing the distal segments.
+        r0, r1 = -tau_nm[:, 0], -tau_nm[:, 1]
+        a0, b0, a1, b1 = a[:, 0] + a[:, 1], b[:, 0] + b[:, 1], a[:, 1], b[:, 1]
+    det = a0 * b1 - a1 * b0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out[:, 0] = (r0 * b1 - r1 * b0) / det
+        out[:, 1] = (a0 * r1 - a1 * r0) / det
+    if n == 3:
+        out[:, 2] = -tau_nm[:, 2] - a[:, 2] * out[:, 0] - b[:, 2] * out[:, 1]
     return out
 
 
