@@ -137,6 +137,7 @@ def kinematics_from_angles(
     config: KinematicsConfig | None = None,
     angle_filter: bool = False,
     adapt_to_motion: bool = True,
+    grid: tuple[int, int] | None = None,
 ) -> MarkerKinematics:
     """Put already-estimated joint angles (e.g. a live `arm/joint_states` stream) on a uniform grid.
 
@@ -151,14 +152,23 @@ def kinematics_from_angles(
     angle_filter : also low-pass the angles (False when the source already filtered them).
     adapt_to_motion : raise the direction and dynamics cutoffs to the motion's band (:func:`config_for_motion`);
         False uses ``config`` as given (e.g. the returned ``config`` of an earlier call on the same motion).
+    grid : ``(origin_ns, step_ns)``: the grid's points are ``origin_ns + k step_ns`` within the stamps (so that
+        an earlier call's grid continues, e.g. a live window's newest seconds); None starts it at the first stamp,
+        stepped by the stamps' median interval.
     """
     config = config or KinematicsConfig()
     stamps = np.asarray(t_ns, dtype=np.int64)
     angles = np.asarray(q_rad, dtype=np.float64)
     if stamps.size < 16:
         raise DataError(f"{stamps.size} joint-angle samples: at least 16 are needed")
-    step_ns = round(float(np.median(np.diff(stamps))))
-    grid_ns = stamps[0] + step_ns * np.arange((stamps[-1] - stamps[0]) // step_ns + 1, dtype=np.int64)
+    if grid is None:
+        origin_ns, step_ns = int(stamps[0]), round(float(np.median(np.diff(stamps))))
+    else:
+        origin_ns, step_ns = int(grid[0]), int(grid[1])
+    first = -(-(int(stamps[0]) - origin_ns) // step_ns)  # the first grid point at or after the first stamp
+    grid_ns = origin_ns + step_ns * np.arange(first, (int(stamps[-1]) - origin_ns) // step_ns + 1, dtype=np.int64)
+    if grid_ns.size < 16:
+        raise DataError(f"{grid_ns.size} joint-angle grid points: at least 16 are needed")
     gridded, _ = grid_values(grid_ns, stamps, angles, int(config.max_gap_s * 1e9) + step_ns // 2)
     config, widened = config_for_motion(config, gridded, 1e9 / step_ns) if adapt_to_motion else (config, [])
     q_grid, velocity, noise, notes = _filtered_runs(gridded, 1e9 / step_ns, config, angle_filter)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -13,7 +14,7 @@ from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.rate import block_means, identification_rate_hz
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import parameter_timing
-from bsp_ros.core.joint_angles import KinematicsConfig, kinematics_from_angles, resample_with_motion
+from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_angles, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data, refit_options
 from bsp_ros.errors import BspError
@@ -53,13 +54,24 @@ class WindowConfig:
         check_positive("elastic_check_every", self.elastic_check_every, 1000)
 
 
+# A zero-phase filtered angle this far behind the newest is settled: what the backward pass brings from the end has
+# decayed to e^-11 (the slowest filter, the direction velocity's at 0.5 Hz, decays with ~0.45 s). The updates
+# between checks keep the settled kinematics and filter only the newest seconds, from this much before the settled
+# end, where the forward pass has decayed as much from its start.
+SETTLED_S = 5.0
+TAIL_LEAD_S = 5.0
+
+
 @dataclass(frozen=True)
 class WindowSettings:
     """What a window's samples are prepared with, held between model checks: the segment lengths (n,) m (the
-    window's median) and the kinematics filter settings (cutoffs raised to the motion's band)."""
+    window's median), the kinematics filter settings (cutoffs raised to the motion's band), the angle grid
+    (origin and step, ns) and the direction velocity's noise (n,) rad/s (the dead band at reversals)."""
 
     lengths_m: np.ndarray
     kinematics: KinematicsConfig
+    grid: tuple[int, int]
+    direction_noise_rad_s: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -98,6 +110,23 @@ class WindowSamples:
     contact_from_robot: bool = False
 
 
+def _settled_part(kinematics: MarkerKinematics, until_ns: int) -> MarkerKinematics:
+    """``kinematics`` at its grid points up to ``until_ns``."""
+    keep = kinematics.t_ns <= until_ns
+
+    def part(values: np.ndarray | None) -> np.ndarray | None:
+        return None if values is None else values[keep]
+
+    return dataclasses.replace(
+        kinematics,
+        t_ns=kinematics.t_ns[keep],
+        q_rad=kinematics.q_rad[keep],
+        direction_velocity_rad_s=kinematics.direction_velocity_rad_s[keep],
+        velocity_rad_s=part(kinematics.velocity_rad_s),
+        acceleration_rad_s2=part(kinematics.acceleration_rad_s2),
+    )
+
+
 class WindowedIdentifier:
     """Wrench and unfiltered joint-angle samples in, an estimate of the last ``window_s`` seconds out.
 
@@ -118,6 +147,8 @@ class WindowedIdentifier:
         self._held: HeldModel | None = None
         # The segment lengths and filter cutoffs of the window the last check identified.
         self._held_settings: WindowSettings | None = None
+        # The last update's kinematics older than SETTLED_S before its newest angle (on the held grid).
+        self._settled: MarkerKinematics | None = None
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False
@@ -156,6 +187,7 @@ class WindowedIdentifier:
         self._since_check = 0
         self._held = None
         self._held_settings = None
+        self._settled = None
 
     def _invalid(self, message: str, last_wrench_t_ns: int | None = None) -> WindowEstimate:
         document = invalid_document(self.config.options.method, message)
@@ -208,29 +240,32 @@ class WindowedIdentifier:
         settings it was prepared with: ``held``'s segment lengths and filter cutoffs, else the window's own."""
         t_w, wrench, _ = block_means(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
         t_a, rows = window.angle_t_ns, window.angle_rows
-        lengths = np.median(rows[:, self.n :], axis=0) if held is None else held.lengths_m
-        kinematics = kinematics_from_angles(
-            t_a,
-            rows[:, : self.n],
-            lengths,
-            self.config.options.kinematics if held is None else held.kinematics,
-            angle_filter=True,
-            adapt_to_motion=held is None,
-        )
-        settings = WindowSettings(lengths, kinematics.config or self.config.options.kinematics)
+        if held is None:
+            kinematics = kinematics_from_angles(
+                t_a, rows[:, : self.n], np.median(rows[:, self.n :], axis=0), self.config.options.kinematics, True
+            )
+            settings = WindowSettings(
+                kinematics.lengths_m,
+                kinematics.config or self.config.options.kinematics,
+                (int(kinematics.t_ns[0]), int(kinematics.t_ns[1] - kinematics.t_ns[0])),
+                kinematics.direction_velocity_noise_rad_s,
+            )
+        else:
+            kinematics, settings = self._held_kinematics(t_a, rows[:, : self.n], held), held
+        self._settled = _settled_part(kinematics, int(t_a[-1]) - int(SETTLED_S * 1e9))
         # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
         q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
         if valid.sum() < 2:
             return "no wrench sample in the window has joint angles", settings
-        tau = contact_torques_nm(q[valid], lengths, wrench[valid])
+        tau = contact_torques_nm(q[valid], settings.lengths_m, wrench[valid])
         data = IdentificationData(
             t_w[valid],
             q[valid],
             velocity[valid],
             tau,
-            lengths,
+            settings.lengths_m,
             np.zeros(self.n),
-            kinematics.direction_velocity_noise_rad_s,
+            settings.direction_noise_rad_s,
             int(t_w.size),
             [],
             qd_rad_s=qd[valid],
@@ -238,6 +273,36 @@ class WindowedIdentifier:
             contact_from_robot=window.contact_from_robot,
         )
         return data, settings
+
+    def _held_kinematics(self, t_ns: np.ndarray, q_rad: np.ndarray, held: WindowSettings) -> MarkerKinematics:
+        """The window's kinematics on ``held``'s settings: the settled part of the last update's and the newest
+        seconds filtered anew on the same grid (all of the window when nothing is settled yet)."""
+        settled = self._settled
+
+        def filtered(first: int) -> MarkerKinematics:
+            return kinematics_from_angles(
+                t_ns[first:], q_rad[first:], held.lengths_m, held.kinematics, True, False, held.grid
+            )
+
+        if settled is None or settled.t_ns.size < 2 or settled.t_ns[-1] - TAIL_LEAD_S * 1e9 < t_ns[0]:
+            return filtered(0)
+        tail = filtered(int(np.searchsorted(t_ns, settled.t_ns[-1] - int(TAIL_LEAD_S * 1e9))))
+        old = settled.t_ns >= t_ns[0]
+        new = tail.t_ns > settled.t_ns[-1]
+
+        def joined(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None or b is None else np.concatenate((a[old], b[new]))
+
+        return dataclasses.replace(
+            tail,
+            t_ns=np.concatenate((settled.t_ns[old], tail.t_ns[new])),
+            q_rad=np.concatenate((settled.q_rad[old], tail.q_rad[new])),
+            direction_velocity_rad_s=np.concatenate(
+                (settled.direction_velocity_rad_s[old], tail.direction_velocity_rad_s[new])
+            ),
+            velocity_rad_s=joined(settled.velocity_rad_s, tail.velocity_rad_s),
+            acceleration_rad_s2=joined(settled.acceleration_rad_s2, tail.acceleration_rad_s2),
+        )
 
     def _due(self) -> bool:
         """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and every update

@@ -97,3 +97,31 @@ def test_one_spike_in_a_live_angle_stream_does_not_inflate_the_velocity_noise() 
     q[700, 1] += 0.5
     after = kinematics_from_angles(t_ns, q, [0.3, 0.3], angle_filter=True).direction_velocity_noise_rad_s
     np.testing.assert_allclose(after, before, rtol=0.05)
+
+
+def test_angles_filtered_from_a_later_start_on_the_same_grid_settle_to_the_whole_run_s() -> None:
+    """``grid`` continues an earlier call's grid (a live window filters its newest seconds anew): the points
+    coincide, and 5 s from both ends of the shorter run its angles and derivatives are the whole run's, to 1e-6
+    of their range (measured 3.3e-7 at most, the acceleration's: the zero-phase passes decay from the shorter run's
+    padded start and end)."""
+    from bsp_ros.core.joint_angles import kinematics_from_angles
+
+    rng = np.random.default_rng(6)
+    step_ns = 10_000_000
+    t_ns = 1_000_000_000 + step_ns * np.arange(4000, dtype=np.int64) + rng.integers(-200_000, 200_000, 4000)
+    seconds = (t_ns - t_ns[0]) / 1e9
+    q = np.column_stack([0.6 * np.sin(2 * np.pi * seconds / p) for p in (9.0, 7.0, 5.0)])
+    q += rng.normal(0, 1e-3, q.shape)
+    whole = kinematics_from_angles(t_ns, q, [0.3, 0.27, 0.09], angle_filter=True)
+    origin, grid_step = int(whole.t_ns[0]), int(whole.t_ns[1] - whole.t_ns[0])
+    tail = kinematics_from_angles(
+        t_ns[2500:], q[2500:], [0.3, 0.27, 0.09], whole.config, True, False, (origin, grid_step)
+    )
+    assert ((tail.t_ns - origin) % grid_step == 0).all() and tail.t_ns[0] >= t_ns[2500]
+    inner = (tail.t_ns >= tail.t_ns[0] + 5_000_000_000) & (tail.t_ns <= tail.t_ns[-1] - 5_000_000_000)
+    at = np.searchsorted(whole.t_ns, tail.t_ns[inner])
+    assert inner.sum() > 400
+    for name in ("q_rad", "direction_velocity_rad_s", "velocity_rad_s", "acceleration_rad_s2"):
+        reference = getattr(whole, name)[at]
+        span = np.ptp(reference, axis=0)
+        np.testing.assert_allclose(getattr(tail, name)[inner], reference, rtol=0, atol=1e-6 * span.max(), err_msg=name)

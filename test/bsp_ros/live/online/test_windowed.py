@@ -135,8 +135,9 @@ def _upto(live_streams, end_ns: int):
 
 
 def test_updates_between_checks_refit_the_checked_model_to_the_newer_samples(live_streams) -> None:
-    """A check's update and the next on the same samples agree to rounding; 2 s later the refit is within a
-    tenth of its std of the full identification of the newer window, and its std holds the truth."""
+    """A check's update and the next on the same samples agree to 1e-7 (the next filters its newest seconds
+    anew); 2 s later the refit is within a tenth of its std of the full identification of the newer window, and
+    its std holds the truth."""
     from bsp_ros.core.pipeline import identify_data
 
     simulated, stamps, _, _, _ = live_streams
@@ -148,7 +149,7 @@ def test_updates_between_checks_refit_the_checked_model_to_the_newer_samples(liv
     for segment, q in checked.document["segments"].items():
         for key in ("value", "std"):
             assert same.document["segments"][segment]["static_moment_kgm"][key] == pytest.approx(
-                q["static_moment_kgm"][key], rel=1e-9
+                q["static_moment_kgm"][key], rel=1e-7
             )
     identifier = WindowedIdentifier(3, WindowConfig(window_s=30.0))
     _feed(identifier, *_upto(live_streams, int(stamps[-1]) - 2_000_000_000))
@@ -218,7 +219,8 @@ def test_a_failed_model_check_holds_for_the_updates_between_checks(elastic_live_
 
 def test_the_elastic_fallback_holds_its_chosen_model_between_checks(elastic_live_streams) -> None:
     """With the fallback (`bsp identify`'s default) the check chooses the elastic terms; the refits between
-    checks keep that model, valid as the check is, and their std holds the truth."""
+    checks keep that model, valid as the check is (on the same samples the same values to 1e-7: the refit
+    filters its newest seconds anew), and their std holds the truth."""
     simulated, *_ = elastic_live_streams
     identifier, window = _window(elastic_live_streams)
     checked, refit = identifier.estimate_window(window), identifier.estimate_window(window)
@@ -228,7 +230,7 @@ def test_the_elastic_fallback_holds_its_chosen_model_between_checks(elastic_live
     truth = simulated.truth.to_dict()["segments"]
     for segment, q in refit.document["segments"].items():
         assert q["static_moment_kgm"]["value"] == pytest.approx(
-            checked.document["segments"][segment]["static_moment_kgm"]["value"], rel=1e-9
+            checked.document["segments"][segment]["static_moment_kgm"]["value"], rel=1e-7
         )
         assert (
             abs(q["static_moment_kgm"]["value"] - truth[segment]["static_moment_kgm"])
@@ -251,3 +253,53 @@ def test_a_window_whose_samples_cannot_support_an_estimate_is_checked_again_at_t
     identifier.estimate_window(window)
     identifier._held = dataclasses.replace(identifier._held, data_problems=("the elbow moved in one direction only",))
     assert identifier._due()
+
+
+class _WholeWindowKinematics(WindowedIdentifier):
+    """Filters the whole window's angles at every update (on the held settings), keeping nothing settled."""
+
+    def _held_kinematics(self, t_ns, q_rad, held):
+        from bsp_ros.core.joint_angles import kinematics_from_angles
+
+        return kinematics_from_angles(t_ns, q_rad, held.lengths_m, held.kinematics, True, False, held.grid)
+
+
+def _documented(document: dict) -> dict[str, tuple[float, float]]:
+    return {
+        f"{owner}/{key}": (float(v["value"]), float(v["std"]))
+        for group in ("segments", "joints")
+        for owner, quantities in document[group].items()
+        for key, v in quantities.items()
+        if isinstance(v, dict) and "value" in v and v.get("std")
+    }
+
+
+def test_updates_that_keep_the_settled_kinematics_give_the_whole_window_s_estimate(live_streams) -> None:
+    """Between checks an update filters only its newest seconds and keeps the older, settled, kinematics: every
+    estimate over 3 s of updates is within 0.02 of its std of the one that filters the whole window, its std
+    within 3 %, and valid alike (measured: 0.0094 std and 2.1 % at most over 30 updates of two seeds)."""
+    _, stamps, wrench, _, raw = live_streams
+    kept, whole = (
+        WindowedIdentifier(3, WindowConfig(window_s=30.0)),
+        _WholeWindowKinematics(3, WindowConfig(window_s=30.0)),
+    )
+    start = int(stamps[-1]) - 3_000_000_000
+    for identifier in (kept, whole):
+        _feed(identifier, *_upto(live_streams, start))
+    checked = 0
+    for k in range(1, 16):
+        end = start + k * 200_000_000
+        later = (np.asarray(stamps) > end - 200_000_000) & (np.asarray(stamps) <= end)
+        newer = [r for r in raw if end - 200_000_000 < r[0] <= end]
+        estimates = []
+        for identifier in (kept, whole):
+            _feed(identifier, np.asarray(stamps)[later], wrench[later], newer)
+            estimates.append(identifier.estimate())
+        assert estimates[0].valid == estimates[1].valid
+        ours, reference = _documented(estimates[0].document), _documented(estimates[1].document)
+        assert ours.keys() == reference.keys()
+        for name, (value, std) in reference.items():
+            assert abs(ours[name][0] - value) < 0.02 * std, name
+            assert ours[name][1] == pytest.approx(std, rel=0.03), name
+            checked += 1
+    assert checked > 100
