@@ -284,7 +284,13 @@ class WindowedIdentifier:
                 t_ns[first:], q_rad[first:], held.lengths_m, held.kinematics, True, False, held.grid
             )
 
-        if settled is None or settled.t_ns.size < 2 or settled.t_ns[-1] - TAIL_LEAD_S * 1e9 < t_ns[0]:
+        origin, step = held.grid
+        if (
+            settled is None
+            or settled.t_ns.size < 2
+            or (int(settled.t_ns[0]) - origin) % step  # kept from a window on another grid
+            or settled.t_ns[-1] - TAIL_LEAD_S * 1e9 < t_ns[0]
+        ):
             return filtered(0)
         tail = filtered(int(np.searchsorted(t_ns, settled.t_ns[-1] - int(TAIL_LEAD_S * 1e9))))
         old = settled.t_ns >= t_ns[0]
