@@ -110,21 +110,22 @@ class WindowSamples:
     contact_from_robot: bool = False
 
 
-def _settled_part(kinematics: MarkerKinematics, until_ns: int) -> MarkerKinematics:
-    """``kinematics`` at its grid points up to ``until_ns``."""
-    keep = kinematics.t_ns <= until_ns
+# The fields of MarkerKinematics with one row per grid point.
+_PER_POINT = ("t_ns", "q_rad", "direction_velocity_rad_s", "velocity_rad_s", "acceleration_rad_s2")
 
-    def part(values: np.ndarray | None) -> np.ndarray | None:
-        return None if values is None else values[keep]
 
-    return dataclasses.replace(
-        kinematics,
-        t_ns=kinematics.t_ns[keep],
-        q_rad=kinematics.q_rad[keep],
-        direction_velocity_rad_s=kinematics.direction_velocity_rad_s[keep],
-        velocity_rad_s=part(kinematics.velocity_rad_s),
-        acceleration_rad_s2=part(kinematics.acceleration_rad_s2),
-    )
+def _grid_points(*parts: tuple[MarkerKinematics, np.ndarray]) -> MarkerKinematics:
+    """The grid points ``keep`` (bool) of each ``(kinematics, keep)`` part, joined in order; the other fields
+    (settings, noise, notes) are the last part's."""
+
+    def joined(name: str) -> np.ndarray | None:
+        values = [getattr(kinematics, name) for kinematics, _ in parts]
+        if any(v is None for v in values):
+            return None
+        return np.concatenate([v[keep] for v, (_, keep) in zip(values, parts, strict=True)])
+
+    points: dict[str, Any] = {name: joined(name) for name in _PER_POINT}
+    return dataclasses.replace(parts[-1][0], **points)
 
 
 class WindowedIdentifier:
@@ -145,7 +146,7 @@ class WindowedIdentifier:
         self.wrench_guard = StreamGuard("wrench")
         self._since_check = 0
         self._held: HeldModel | None = None
-        # The segment lengths and filter cutoffs of the window the last check identified.
+        # What the window the last check identified was prepared with (lengths, cutoffs, grid, noise).
         self._held_settings: WindowSettings | None = None
         # The last update's kinematics older than SETTLED_S before its newest angle (on the held grid).
         self._settled: MarkerKinematics | None = None
@@ -237,12 +238,13 @@ class WindowedIdentifier:
         self, window: WindowSamples, held: WindowSettings | None = None
     ) -> tuple[IdentificationData | str, WindowSettings]:
         """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none, and the
-        settings it was prepared with: ``held``'s segment lengths and filter cutoffs, else the window's own."""
+        settings it was prepared with: ``held`` (a check's), else the window's own."""
         t_w, wrench, _ = block_means(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
         t_a, rows = window.angle_t_ns, window.angle_rows
         if held is None:
+            lengths = np.median(rows[:, self.n :], axis=0)
             kinematics = kinematics_from_angles(
-                t_a, rows[:, : self.n], np.median(rows[:, self.n :], axis=0), self.config.options.kinematics, True
+                t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
             )
             settings = WindowSettings(
                 kinematics.lengths_m,
@@ -252,7 +254,7 @@ class WindowedIdentifier:
             )
         else:
             kinematics, settings = self._held_kinematics(t_a, rows[:, : self.n], held), held
-        self._settled = _settled_part(kinematics, int(t_a[-1]) - int(SETTLED_S * 1e9))
+        self._settled = _grid_points((kinematics, kinematics.t_ns <= int(t_a[-1]) - int(SETTLED_S * 1e9)))
         # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
         q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
         if valid.sum() < 2:
@@ -281,7 +283,13 @@ class WindowedIdentifier:
 
         def filtered(first: int) -> MarkerKinematics:
             return kinematics_from_angles(
-                t_ns[first:], q_rad[first:], held.lengths_m, held.kinematics, True, False, held.grid
+                t_ns[first:],
+                q_rad[first:],
+                held.lengths_m,
+                held.kinematics,
+                angle_filter=True,
+                adapt_to_motion=False,
+                grid=held.grid,
             )
 
         origin, step = held.grid
@@ -293,22 +301,7 @@ class WindowedIdentifier:
         ):
             return filtered(0)
         tail = filtered(int(np.searchsorted(t_ns, settled.t_ns[-1] - int(TAIL_LEAD_S * 1e9))))
-        old = settled.t_ns >= t_ns[0]
-        new = tail.t_ns > settled.t_ns[-1]
-
-        def joined(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
-            return None if a is None or b is None else np.concatenate((a[old], b[new]))
-
-        return dataclasses.replace(
-            tail,
-            t_ns=np.concatenate((settled.t_ns[old], tail.t_ns[new])),
-            q_rad=np.concatenate((settled.q_rad[old], tail.q_rad[new])),
-            direction_velocity_rad_s=np.concatenate(
-                (settled.direction_velocity_rad_s[old], tail.direction_velocity_rad_s[new])
-            ),
-            velocity_rad_s=joined(settled.velocity_rad_s, tail.velocity_rad_s),
-            acceleration_rad_s2=joined(settled.acceleration_rad_s2, tail.acceleration_rad_s2),
-        )
+        return _grid_points((settled, settled.t_ns >= t_ns[0]), (tail, tail.t_ns > settled.t_ns[-1]))
 
     def _due(self) -> bool:
         """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and every update

@@ -125,3 +125,14 @@ def test_angles_filtered_from_a_later_start_on_the_same_grid_settle_to_the_whole
         reference = getattr(whole, name)[at]
         span = np.ptp(reference, axis=0)
         np.testing.assert_allclose(getattr(tail, name)[inner], reference, rtol=0, atol=1e-6 * span.max(), err_msg=name)
+
+
+def test_a_grid_coarser_than_the_angles_span_is_a_data_error() -> None:
+    """A ``grid`` whose points the stamps cover fewer than 16 of cannot be filtered: a DataError naming the count."""
+    from bsp_ros.core.joint_angles import kinematics_from_angles
+    from bsp_ros.errors import DataError
+
+    t_ns = 1_000_000_000 + 10_000_000 * np.arange(100, dtype=np.int64)  # 1.00-1.99 s at 100 Hz: 10 points 0.1 s apart
+    q = np.zeros((100, 3))
+    with pytest.raises(DataError, match="10 joint-angle grid points"):
+        kinematics_from_angles(t_ns, q, [0.3, 0.27, 0.09], grid=(0, 100_000_000))
