@@ -346,8 +346,11 @@ def reweighted_values(problem: Problem) -> Reweighted:
     return Reweighted(values, weights, sigma, problem.torque - problem.regressor @ values, statistics)
 
 
-def fit_problem(problem: Problem) -> Fit:
-    solved = reweighted_values(problem)
+def fit_problem(problem: Problem, solved: Reweighted | None = None) -> Fit:
+    """The reweighted fit of ``problem`` with its HAC covariance; ``solved``: its :func:`reweighted_values`, when a
+    caller has them already (a model check that looks at the values first, and needs the covariance only if they
+    could matter)."""
+    solved = reweighted_values(problem) if solved is None else solved
     values, weights, residual = solved.values, solved.weights, solved.residual
     w = np.where(problem.rows, weights[None, :], 0.0)
     design, moment, _ = normal_equations(problem, weights, solved.statistics)

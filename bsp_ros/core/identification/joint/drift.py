@@ -9,7 +9,7 @@ import numpy as np
 
 from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
-from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, term_test
+from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, shift_bound_sd, term_test
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import Fit, Problem, joint_products
 from bsp_ros.core.model import contact_jacobian
@@ -78,20 +78,31 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
     n = data.n_joints
     extra, names, spans = drift_columns(data)
     groups, spans_s, columns, jacobian = spans.groups, spans.spans_s, spans.columns, spans.jacobian
-    p_value, shift, worst, wide = term_test(problem, fit, extra, names, list(range(n)))
-    if p_value >= MODEL_CHECK_P:
-        return None
-    flat_rate = np.zeros(3 * len(groups))
-    flat_rate[columns] = wide.values[len(problem.names) :]
-    rate = flat_rate.reshape(len(groups), 3)  # per recording, along world y, z and x
-    # A drifting sensor's offset at any moment is unknown (a tare holds at the moment it was taken): what the
-    # offset changes over each recording alone moves the static moments by this much, as a constant offset would.
+    p = len(problem.names)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    delta_torque = np.zeros_like(data.tau_nm)
-    for k, rows in enumerate(groups):
-        delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
-    delta = design_inverse(fit.design) @ joint_products(problem.regressor, w, delta_torque)
     std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
+
+    def offset_effect(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The drift rate per recording (along world y, z and x) of a wider fit's ``values``, and how far an offset
+        as large as the drift over each recording moves the parameters: a drifting sensor's offset at any moment is
+        unknown (a tare holds at the moment it was taken), so that shift is what a constant offset would cause."""
+        flat_rate = np.zeros(3 * len(groups))
+        flat_rate[columns] = values[p:]
+        rate = flat_rate.reshape(len(groups), 3)
+        delta_torque = np.zeros_like(data.tau_nm)
+        for k, rows in enumerate(groups):
+            delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
+        return rate, design_inverse(fit.design) @ joint_products(problem.regressor, w, delta_torque)
+
+    def can_count(values: np.ndarray) -> bool:
+        bound = shift_bound_sd(fit, values, list(range(n))).max()
+        return bool(max(bound, (np.abs(offset_effect(values)[1][:n]) / std).max()) > MODEL_CHECK_SHIFT_SD)
+
+    test = term_test(problem, fit, extra, names, list(range(n)), can_count)
+    if test is None or test.p_value >= MODEL_CHECK_P:
+        return None
+    shift, worst, wide = test.shift_sd, test.worst, test.wide
+    rate, delta = offset_effect(wide.values)
     offset_shift = np.abs(delta[:n]) / std
     if max(shift, float(offset_shift.max())) <= MODEL_CHECK_SHIFT_SD:
         return None
@@ -100,7 +111,6 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
     force_rates = np.hypot(rate[:, 0], rate[:, 1])
     k = int(np.argmax(force_rates))
     where = f" in recording {k + 1}" if len(groups) > 1 else " during the session"
-    p = len(problem.names)
     covariance = wide.covariance[:p, :p] + np.outer(delta, delta)
     modelled = dataclasses.replace(wide, values=wide.values[:p], covariance=covariance, design=wide.design[:p, :p])
     note = (

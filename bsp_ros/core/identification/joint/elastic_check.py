@@ -11,7 +11,15 @@ from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_SHIFT_SD
-from bsp_ros.core.identification.stacked import Extras, Fit, Problem, build_problem, fit_problem, problem_names
+from bsp_ros.core.identification.stacked import (
+    Extras,
+    Fit,
+    Problem,
+    build_problem,
+    fit_problem,
+    problem_names,
+    reweighted_values,
+)
 from bsp_ros.core.streams import joints_for
 
 
@@ -40,14 +48,17 @@ def elastic_check(
     wider = config.passive.with_terms(("offset", "stiffness"))
     kinds = " and ".join(term for term in wider.terms if term not in config.passive.terms)
     problem = build_problem(data, wider, rows, widths, extras)
-    fit = fit_problem(problem)
-    covariance = fit.covariance if covariance_of is None else covariance_of(problem, fit)
+    solved = reweighted_values(problem)
     n = data.n_joints
-    notes = []
-    base_beta, wide_beta = base.values[:n], fit.values[:n]
+    base_beta, wide_beta = base.values[:n], solved.values[:n]
     change = np.abs(wide_beta - base_beta) / np.maximum(np.abs(base_beta), 1e-9)
     # Against the base fit's std (marker placement included): a shift well inside it cannot make it wrong.
     shift_sd = np.abs(wide_beta - base_beta) / np.sqrt(np.clip(np.diag(base.covariance)[:n], 1e-300, None))
+    if not (change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD):
+        return []  # no significance makes a term count that moves nothing: its covariance is not needed
+    fit = fit_problem(problem, solved)
+    covariance = fit.covariance if covariance_of is None else covariance_of(problem, fit)
+    notes = []
     correlation = correlation_from_covariance(covariance)
     have = set(problem_names(config.passive, n, extras is not None))
     for joint in joints_for(n):

@@ -32,7 +32,7 @@ from bsp_ros.core.identification.joint.transition import transition_widths
 from bsp_ros.core.identification.priors import implausible_perpendicular_moments
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.selection import Candidate, Selection, select_passive, shape_probe, spread_covariance
-from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem
+from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem, reweighted_values
 from bsp_ros.core.streams import joints_for
 
 # Above this column-scaled condition number no std is meaningful: parameters the motion cannot tell apart.
@@ -60,7 +60,7 @@ def _unbounded_static_moments(problem: Problem) -> np.ndarray:
     """(p,) the fit of ``problem`` with the static moments' lower bound 0 lifted: the data's own estimate."""
     n = problem.torque.shape[1]
     lower = np.where(np.arange(len(problem.names)) < n, -np.inf, problem.lower)
-    return fit_problem(dataclasses.replace(problem, lower=lower)).values
+    return reweighted_values(dataclasses.replace(problem, lower=lower)).values
 
 
 def failed_result(

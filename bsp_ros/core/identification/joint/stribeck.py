@@ -8,7 +8,13 @@ import numpy as np
 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
-from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, shifts_sd, term_test
+from bsp_ros.core.identification.joint.unmodelled import (
+    MODEL_CHECK_P,
+    MODEL_CHECK_SHIFT_SD,
+    shift_bound_sd,
+    shifts_sd,
+    term_test,
+)
 from bsp_ros.core.identification.stacked import Fit, Problem, candidate_products, normal_equations
 from bsp_ros.core.streams import joints_for
 
@@ -96,11 +102,17 @@ def stribeck_check(
             continue
         extra = np.zeros((data.t_ns.size, n, 1))
         extra[:, j, 0] = np.sign(data.velocity_rad_s[:, j]) * np.exp(-((speed / best_speed) ** 2))
-        p_value, shift, worst, wide = term_test(problem, fit, extra, [("stribeck_nm", joint)], [column, *range(n)])
-        # Only an excess of friction at low speed is Stribeck-like; a deficit is what direction-of-motion
-        # errors near reversals (e.g. around marker gaps) look like, and the transition test covers it.
-        if not (wide.values[-1] > 0 and p_value < MODEL_CHECK_P and shift > MODEL_CHECK_SHIFT_SD):
+        watched = [column, *range(n)]
+
+        def can_count(values: np.ndarray, watched: list[int] = watched) -> bool:
+            # Only an excess of friction at low speed is Stribeck-like; a deficit is what direction-of-motion
+            # errors near reversals (e.g. around marker gaps) look like, and the transition test covers it.
+            return bool(values[-1] > 0 and shift_bound_sd(fit, values, watched).max() > MODEL_CHECK_SHIFT_SD)
+
+        test = term_test(problem, fit, extra, [("stribeck_nm", joint)], watched, can_count)
+        if test is None or not (test.p_value < MODEL_CHECK_P and test.shift_sd > MODEL_CHECK_SHIFT_SD):
             continue
+        shift, worst, wide = test.shift_sd, test.worst, test.wide
         static_shift = float(shifts_sd(fit, wide, list(range(n))).max())
         coulomb_shift = float(wide.values[column] - fit.values[column])
         coulomb_sd = float(shifts_sd(fit, wide, [column])[0])

@@ -81,3 +81,43 @@ def test_near_gaps_marks_the_samples_beside_a_gap_only() -> None:
     near = near_gaps(t_ns, 0.05)
     # The last 6 samples before the gap (0.94-0.99 s) and the first 6 after it (2.00-2.05 s).
     assert np.flatnonzero(near).tolist() == [*range(94, 100), *range(100, 106)]
+
+
+@pytest.mark.parametrize("stribeck_ratio", [1.0, 1.5])
+def test_a_term_test_skips_the_covariance_only_of_a_term_that_cannot_count(stribeck_ratio: float) -> None:
+    """term_test looks at the wider fit's values first and computes its HAC covariance only when a watched
+    parameter moves by more than the base std: a skipped term must be one the full test does not count either,
+    and a term it tests must get the full test's numbers. The terms: a low-speed friction excess at each joint
+    (the simulated arm has it at every joint with ``stribeck_ratio`` 1.5, at none with 1)."""
+    from bsp_ros.core.identification.joint.samples import usable_samples
+    from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, term_test
+    from bsp_ros.core.identification.stacked import fit_problem
+
+    spec = sim.human_arm_cell(seed=3, duration_s=60.0)
+    passive = dataclasses.replace(spec.passive, stribeck_ratio=stribeck_ratio, stribeck_speed_rad_s=0.01)
+    data = identification_data_from_session(sim.simulate_cell(dataclasses.replace(spec, passive=passive)).session)
+    config = JointConfig(marker_placement_sd_m=0.0)
+    problem = usable_samples(data, config).problem
+    fit = fit_problem(problem)
+    n, k = data.n_joints, len(config.passive.local)
+    outcomes = []
+    for j in range(n):
+        extra = np.zeros((data.t_ns.size, n, 1))
+        for speed_rad_s in (0.004, 0.016):
+            velocity = data.velocity_rad_s[:, j]
+            extra[:, j, 0] = np.sign(velocity) * np.exp(-((velocity / speed_rad_s) ** 2))
+            watched = [n + j * k + config.passive.local.index("coulomb"), *range(n)]
+            gated = term_test(problem, fit, extra, [("stribeck_nm", "joint")], watched)
+            full = term_test(problem, fit, extra, [("stribeck_nm", "joint")], watched, can_count=lambda values: True)
+            assert full is not None
+            counts = full.p_value < MODEL_CHECK_P and full.shift_sd > MODEL_CHECK_SHIFT_SD
+            outcomes.append("skipped" if gated is None else "counts" if counts else "tested")
+            if gated is None:
+                assert not counts
+            else:
+                assert (gated.p_value, gated.shift_sd, gated.worst) == (full.p_value, full.shift_sd, full.worst)
+                np.testing.assert_array_equal(gated.wide.covariance, full.wide.covariance)
+    if stribeck_ratio == 1.0:
+        assert "skipped" in outcomes and "counts" not in outcomes, outcomes  # the gate saves work on a clean arm
+    else:
+        assert "counts" in outcomes, outcomes
