@@ -321,8 +321,12 @@ class Reweighted:
     values: np.ndarray  # (p,)
     weights: np.ndarray  # (n,) 1 / sigma^2
     sigma: np.ndarray  # (n,) residual sd per joint at the previous values
-    residual: np.ndarray  # (N, n) on every row
     statistics: Statistics
+
+    def residual(self, problem: Problem) -> np.ndarray:
+        """(N, n) the residual of ``problem`` (the one solved) on every row: one pass over the samples, which the
+        model checks that look at the values alone do without."""
+        return np.asarray(problem.torque - problem.regressor @ self.values)
 
 
 def reweighted_values(problem: Problem) -> Reweighted:
@@ -343,7 +347,7 @@ def reweighted_values(problem: Problem) -> Reweighted:
         sigma = np.maximum(sigma, floor)
         weights = 1.0 / sigma**2
         values = weighted_solve(problem, weights, statistics)
-    return Reweighted(values, weights, sigma, problem.torque - problem.regressor @ values, statistics)
+    return Reweighted(values, weights, sigma, statistics)
 
 
 def fit_problem(problem: Problem, solved: Reweighted | None = None) -> Fit:
@@ -351,7 +355,7 @@ def fit_problem(problem: Problem, solved: Reweighted | None = None) -> Fit:
     caller has them already (a model check that looks at the values first, and needs the covariance only if they
     could matter)."""
     solved = reweighted_values(problem) if solved is None else solved
-    values, weights, residual = solved.values, solved.weights, solved.residual
+    values, weights, residual = solved.values, solved.weights, solved.residual(problem)
     w = np.where(problem.rows, weights[None, :], 0.0)
     design, moment, _ = normal_equations(problem, weights, solved.statistics)
     scores = joint_scores(problem.regressor, w * np.where(problem.rows, residual, 0.0))

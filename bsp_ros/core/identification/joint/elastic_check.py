@@ -22,6 +22,22 @@ from bsp_ros.core.identification.stacked import (
 )
 from bsp_ros.core.streams import joints_for
 
+# The elastic terms count when their coefficients differ from 0 at this significance (HAC chi-square) and they
+# move a static moment by more than 0.5 % and MODEL_CHECK_SHIFT_SD of its std.
+ELASTIC_P = 1e-4
+
+
+def _surely_insignificant(values: np.ndarray, covariance: np.ndarray, picks: list[int]) -> bool | None:
+    """Whether the terms at ``picks`` are insignificant on ``covariance`` (positive definite there), hence on any
+    covariance that adds variance to it (its chi-square can only fall); None where it is singular."""
+    sub = covariance[np.ix_(picks, picks)]
+    try:
+        np.linalg.cholesky(sub)
+    except np.linalg.LinAlgError:
+        return None
+    theta = values[picks]
+    return bool(chi2_sf(float(theta @ np.linalg.solve(sub, theta)), len(picks)) >= ELASTIC_P)
+
 
 def elastic_check(
     data: IdentificationData,
@@ -57,18 +73,24 @@ def elastic_check(
     if not (change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD):
         return []  # no significance makes a term count that moves nothing: its covariance is not needed
     fit = fit_problem(problem, solved)
+    have = set(problem_names(config.passive, n, extras is not None))
+    joint_picks = {
+        joint: [i for i, name in enumerate(problem.names) if name[1] == joint and name not in have and i >= n]
+        for joint in joints_for(n)
+    }
+    joint_picks = {joint: picks for joint, picks in joint_picks.items() if picks}
+    if covariance_of is not None and all(
+        _surely_insignificant(fit.values, fit.covariance, picks) is True for picks in joint_picks.values()
+    ):
+        return []  # the placement's share only adds variance: insignificant without it, insignificant with it
     covariance = fit.covariance if covariance_of is None else covariance_of(problem, fit)
     notes = []
     correlation = correlation_from_covariance(covariance)
-    have = set(problem_names(config.passive, n, extras is not None))
-    for joint in joints_for(n):
-        picks = [i for i, name in enumerate(problem.names) if name[1] == joint and name not in have and i >= n]
-        if not picks:
-            continue
+    for joint, picks in joint_picks.items():
         sub = covariance[np.ix_(picks, picks)]
         theta = fit.values[picks]
         statistic = float(theta @ np.linalg.pinv(sub) @ theta)
-        if chi2_sf(statistic, len(picks)) < 1e-4 and change.max() > 0.005 and shift_sd.max() > MODEL_CHECK_SHIFT_SD:
+        if chi2_sf(statistic, len(picks)) < ELASTIC_P:
             worst = int(np.argmax(shift_sd))
             corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
             notes.append(

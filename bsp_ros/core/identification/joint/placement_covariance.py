@@ -93,5 +93,5 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     names: list[ParameterName] = [(f"marker_offset_{k}_sd", "markers") for k in range(m)]
     # Offsets in units of their sd (the columns are scaled): each with the prior N(0, 1).
     with_offsets = augmented(problem, columns, names, np.zeros(m), np.ones(m))
-    residual = np.where(problem.rows, reweighted_values(with_offsets).residual, np.nan)
+    residual = np.where(problem.rows, reweighted_values(with_offsets).residual(with_offsets), np.nan)
     return PlacementEffect(_covariance(problem, fit, columns), residual)

@@ -121,3 +121,44 @@ def test_a_term_test_skips_the_covariance_only_of_a_term_that_cannot_count(strib
         assert "skipped" in outcomes and "counts" not in outcomes, outcomes  # the gate saves work on a clean arm
     else:
         assert "counts" in outcomes, outcomes
+
+
+@pytest.mark.parametrize("elbow_stiffness_nm_per_rad", [0.0, 1.0])
+def test_the_elastic_check_skips_the_placement_share_only_where_it_cannot_change_the_verdict(
+    elbow_stiffness_nm_per_rad: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The marker placement's share only adds variance to the elastic terms': terms insignificant without it stay
+    so with it, and the check skips computing it there. Its notes must be those of always computing it."""
+    import bsp_ros.core.identification.joint.elastic_check as check_module
+    from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
+    from bsp_ros.core.identification.joint.samples import usable_samples
+    from bsp_ros.core.identification.stacked import fit_problem
+
+    passive = sim.PassiveTruth(
+        coulomb_nm=(0.5, 0.28, 0.06),
+        stiffness_nm_per_rad=(0.0, elbow_stiffness_nm_per_rad, 0.0),
+        neutral_rad=(0.0, np.radians(107.0), 0.0),
+    )
+    data = identification_data_from_session(sim.simulate_cell(sim.human_arm_cell(seed=5, passive=passive)).session)
+    config = JointConfig()
+    samples = usable_samples(data, config)
+    base = fit_problem(samples.problem)
+    sd_m = config.placement_sd_m(data.n_joints, data.contact_from_robot)
+    calls = []
+
+    def with_placement(problem, fit):  # type: ignore[no-untyped-def]
+        calls.append(1)
+        return fit.covariance + placement_covariance(data, problem, fit, sd_m)
+
+    def notes() -> list[str]:
+        widths = np.zeros(data.n_joints)
+        return check_module.elastic_check(data, config, samples.rows, base, widths, samples.extras, with_placement)
+
+    gated = notes()
+    gated_calls = len(calls)
+    monkeypatch.setattr(check_module, "_surely_insignificant", lambda *args: None)
+    assert gated == notes()
+    if elbow_stiffness_nm_per_rad == 0.0:
+        assert gated == [] and gated_calls == 0
+    else:
+        assert any(note.startswith("elastic passive moment at the elbow") for note in gated), gated
