@@ -394,6 +394,13 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
             f"    identifier update compute time (its /diagnostics, 10 s windows): mean {np.mean(means):.1f} ms,"
             f" worst window mean {max(means):.1f} ms, max {max(float(v['update_ms_max']) for v in timing):.1f} ms"
         )
+        if all("update_cpu_ms_mean" in v for v in timing):
+            print(
+                "    of which the worker thread's own CPU time: mean"
+                f" {np.mean([float(v['update_cpu_ms_mean']) for v in timing]):.1f} ms,"
+                f" max {max(float(v['update_cpu_ms_max']) for v in timing):.1f} ms (the rest: waiting for a core or"
+                " for the interpreter)"
+            )
     if listener.invalid_reasons:
         top = sorted(listener.invalid_reasons.items(), key=lambda kv: -kv[1])[:3]
         print("    invalid (whole run, after the simulator started): " + "; ".join(f"{n}x {m!r}" for m, n in top))

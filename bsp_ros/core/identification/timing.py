@@ -15,8 +15,14 @@ from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.data import IdentificationData, _clean_wrench, wrench_world_yzx
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.rate import IDENTIFICATION_MAX_RATE_HZ, block_means
-from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_markers, resample_kinematics
-from bsp_ros.core.model import contact_torques_nm, gravity_regressor
+from bsp_ros.core.joint_angles import (
+    KinematicsConfig,
+    MarkerKinematics,
+    kinematics_from_markers,
+    resample_kinematics,
+    valid_stamps,
+)
+from bsp_ros.core.model import GRAVITY_M_S2, contact_torques_nm, running_sum
 from bsp_ros.core.streams import Session, WrenchSeries
 from bsp_ros.errors import DataError, InputError
 from bsp_ros.validation import check_finite_scalar
@@ -106,7 +112,7 @@ class DelayProblem:
 
     def valid(self, delay_s: float) -> np.ndarray:
         """(N,) which wrench samples have angles at their stamps shifted by ``-delay_s``."""
-        return resample_kinematics(self.kinematics, self.t_ns - np.int64(round(delay_s * 1e9)))[2]
+        return valid_stamps(self.kinematics, self.t_ns - np.int64(round(delay_s * 1e9)))
 
     def data(self, delay_s: float, keep: np.ndarray | None = None) -> tuple[IdentificationData, np.ndarray]:
         """The identification samples with the wrench stamps shifted by ``-delay_s``.
@@ -151,15 +157,40 @@ def delay_problem(
     return DelayProblem(kinematics, t_ns, wrench_yzx)
 
 
-def _regressor(data: IdentificationData, passive: PassiveModel) -> np.ndarray:
-    """(N, n, p) gravity then passive columns (sign steps), as :mod:`identification.joint` stacks them."""
-    n = data.n_joints
-    columns = [gravity_regressor(data.q_rad)]
-    for j in range(n):
-        block = np.zeros((data.t_ns.size, n, len(passive.local)))
-        block[:, j, :] = passive.columns(data.passive_q_rad, data.velocity_rad_s, j)
-        columns.append(block)
-    return np.concatenate(columns, axis=2)
+@dataclass(frozen=True)
+class _JointColumns:
+    """The default profile's linear model, joint by joint: joint ``i``'s torque takes the gravity columns (those of
+    the segments it carries) and its own passive columns (sign steps), as :mod:`identification.joint` stacks them;
+    the zero blocks of the stacked (N, n, p) regressor are never built."""
+
+    columns: list[np.ndarray]  # per joint (N, n + k)
+    indices: list[np.ndarray]  # per joint, where its columns sit among the p parameters
+    n_parameters: int
+
+    @classmethod
+    def of(cls, data: IdentificationData, passive: PassiveModel) -> _JointColumns:
+        n, k = data.n_joints, len(passive.local)
+        # Joint i carries the segments j >= i: its row of gravity_regressor, without the zeros before them.
+        gravity = GRAVITY_M_S2 * np.cos(running_sum(data.q_rad))
+        columns, indices = [], []
+        for i in range(n):
+            columns.append(np.hstack((gravity[:, i:], passive.columns(data.passive_q_rad, data.velocity_rad_s, i))))
+            indices.append(np.concatenate((np.arange(i, n), n + i * k + np.arange(k))))
+        return cls(columns, indices, n + n * k)
+
+    def predicted(self, values: np.ndarray) -> np.ndarray:
+        """(N, n) the model's torques at ``values``."""
+        return np.stack([x @ values[index] for x, index in zip(self.columns, self.indices, strict=True)], axis=1)
+
+    def products(self, w: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``X^T W X`` (p, p) and ``X^T W y`` (p,) over the joints' rows: row weights ``w`` (N, n), targets ``y``
+        (N, n)."""
+        design, moment = np.zeros((self.n_parameters, self.n_parameters)), np.zeros(self.n_parameters)
+        for i, (x, index) in enumerate(zip(self.columns, self.indices, strict=True)):
+            weighted = x * w[:, i, None]
+            design[np.ix_(index, index)] += weighted.T @ x
+            moment[index] += weighted.T @ y[:, i]
+        return design, moment
 
 
 @dataclass(frozen=True)
@@ -170,24 +201,26 @@ class _LinearFit:
     rows: np.ndarray  # (N, n) rows used (direction of motion clear at the reference)
     weights: np.ndarray  # (n,) 1 / sigma^2 per joint
 
-    def solve(self, data: IdentificationData) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Regressor (N, n, p), parameters (p,) and residuals (N, n) (0 off the rows) of one candidate."""
-        regressor = _regressor(data, self.passive)
-        root = np.sqrt(np.where(self.rows, self.weights[None, :], 0.0))
-        a = (regressor * root[..., None]).reshape(-1, regressor.shape[2])
-        b = (data.tau_nm * root).reshape(-1)
+    def solve(
+        self, data: IdentificationData, columns: _JointColumns | None = None
+    ) -> tuple[_JointColumns, np.ndarray, np.ndarray]:
+        """The model's columns, parameters (p,) and residuals (N, n) (0 off the rows) of one candidate."""
+        columns = columns or _JointColumns.of(data, self.passive)
         # Normal equations: a p x p solve (the columns are few and well scaled); lstsq's SVD of the tall
         # matrix would cost 10 times more for each candidate delay.
-        values = np.linalg.lstsq(a.T @ a, a.T @ b, rcond=None)[0]
-        residual = np.where(self.rows, data.tau_nm - np.einsum("tip,p->ti", regressor, values), 0.0)
-        return regressor, values, residual
+        design, moment = columns.products(np.where(self.rows, self.weights[None, :], 0.0), data.tau_nm)
+        values = np.linalg.lstsq(design, moment, rcond=None)[0]
+        residual = np.where(self.rows, data.tau_nm - columns.predicted(values), 0.0)
+        return columns, values, residual
 
     def rss(self, data: IdentificationData) -> float:
         _, _, residual = self.solve(data)
         return float((self.weights[None, :] * residual**2).sum())
 
 
-def _linear_fit(reference: IdentificationData, passive: PassiveModel) -> _LinearFit:
+def _linear_fit(
+    reference: IdentificationData, passive: PassiveModel, columns: _JointColumns | None = None
+) -> _LinearFit:
     speed = np.abs(reference.velocity_rad_s)
     rows = np.ones_like(speed, dtype=bool)
     if "coulomb" in passive.terms:
@@ -197,7 +230,7 @@ def _linear_fit(reference: IdentificationData, passive: PassiveModel) -> _Linear
         deadband = np.maximum(0.1 * np.percentile(speed, 95, axis=0), 4.0 * noise)
         rows = speed > deadband[None, :]
     fit = _LinearFit(passive, rows, np.ones(reference.n_joints))
-    _, _, residual = fit.solve(reference)
+    _, _, residual = fit.solve(reference, columns)
     sigma = np.sqrt((residual**2).sum(axis=0) / np.maximum(rows.sum(axis=0), 1))
     sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(reference.tau_nm).max()), 1e-9))
     return dataclasses.replace(fit, weights=1.0 / sigma**2)
@@ -232,19 +265,19 @@ def _autocorrelation_inflation(problem: DelayProblem, keep: np.ndarray, delay_s:
     """
     h = _DERIVATIVE_STEP_S
     centre, _ = problem.data(delay_s, keep)
-    fit = _linear_fit(centre, passive)
-    regressor, values, residual = fit.solve(centre)
+    columns = _JointColumns.of(centre, passive)
+    fit = _linear_fit(centre, passive, columns)
+    _, values, residual = fit.solve(centre, columns)
     plus = problem.data(delay_s + h, keep)[0]
     minus = problem.data(delay_s - h, keep)[0]
     if plus.t_ns.size != centre.t_ns.size or minus.t_ns.size != centre.t_ns.size:
         return 1.0
-    predicted = lambda d: d.tau_nm - np.einsum("tip,p->ti", _regressor(d, passive), values)  # noqa: E731
+    predicted = lambda d: d.tau_nm - _JointColumns.of(d, passive).predicted(values)  # noqa: E731
     slope = (predicted(plus) - predicted(minus)) / (2.0 * h)  # d(residual)/d(delay), (N, n)
     w = np.where(fit.rows, fit.weights[None, :], 0.0)
     # Partial the parameters out: the part of the slope the model's columns cannot take up.
-    design = np.einsum("tip,ti,tiq->pq", regressor, w, regressor)
-    cross = np.einsum("tip,ti,ti->p", regressor, w, slope)
-    slope = slope - np.einsum("tip,p->ti", regressor, np.linalg.lstsq(design, cross, rcond=None)[0])
+    design, cross = columns.products(w, slope)
+    slope = slope - columns.predicted(np.linalg.lstsq(design, cross, rcond=None)[0])
     information = float((w * slope**2).sum())
     scores = (w * slope * residual).sum(axis=1)[:, None]
     if information <= 0:

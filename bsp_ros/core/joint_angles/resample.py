@@ -22,18 +22,8 @@ def resample_kinematics(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tu
     velocity_rad_s : (N, n) direction velocities (rad/s), NaN where invalid.
     valid : (N,) bool, True where both neighbouring grid frames are valid.
     """
-    target = np.asarray(t_ns, dtype=np.int64)
-    grid = kinematics.t_ns
-    step = float(grid[1] - grid[0]) if grid.size > 1 else 1.0
-    position = (target - grid[0]).astype(np.float64) / step
-    lower = np.floor(position).astype(np.int64)
-    inside = (lower >= 0) & (lower < grid.size - 1)
-    lower_c = np.clip(lower, 0, max(grid.size - 2, 0))
-    frac = (position - lower_c)[:, None]
-    exact_last = position == grid.size - 1
-    lower_c = np.where(exact_last, grid.size - 2, lower_c)
-    frac = np.where(exact_last[:, None], 1.0, frac)
-    inside |= exact_last
+    lower_c, frac, inside = _neighbours(kinematics.t_ns, t_ns)
+    frac = frac[:, None]
 
     def blend(values: np.ndarray) -> np.ndarray:
         return (1.0 - frac) * values[lower_c] + frac * values[lower_c + 1]
@@ -44,6 +34,32 @@ def resample_kinematics(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tu
     q_rad[~valid] = np.nan
     velocity[~valid] = np.nan
     return q_rad, velocity, valid
+
+
+def _neighbours(grid: np.ndarray, t_ns: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each stamp of ``t_ns``: the grid frame before it (N,) (clipped to the grid), its fraction of the step
+    to the next frame (N,), and whether it lies on the grid (N,) bool."""
+    target = np.asarray(t_ns, dtype=np.int64)
+    step = float(grid[1] - grid[0]) if grid.size > 1 else 1.0
+    position = (target - grid[0]).astype(np.float64) / step
+    lower = np.floor(position).astype(np.int64)
+    inside = (lower >= 0) & (lower < grid.size - 1)
+    lower_c = np.clip(lower, 0, max(grid.size - 2, 0))
+    frac = position - lower_c
+    exact_last = position == grid.size - 1
+    lower_c = np.where(exact_last, grid.size - 2, lower_c)
+    frac = np.where(exact_last, 1.0, frac)
+    return lower_c, frac, inside | exact_last
+
+
+def valid_stamps(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> np.ndarray:
+    """(N,) bool: the ``valid`` of :func:`resample_kinematics` without interpolating anything (on the grid, both
+    neighbouring frames finite: a blend of finite frames is finite, and one with a NaN frame is not)."""
+    lower_c, _, inside = _neighbours(kinematics.t_ns, t_ns)
+    finite = np.isfinite(kinematics.q_rad).all(axis=1) & np.isfinite(kinematics.direction_velocity_rad_s).all(axis=1)
+    if finite.size < 2:
+        return np.zeros(lower_c.size, dtype=bool)
+    return np.asarray(inside & finite[lower_c] & finite[lower_c + 1])
 
 
 def resample_motion(kinematics: MarkerKinematics, t_ns: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.joint_angles import kinematics_from_markers, resample_kinematics
+from bsp_ros.core.joint_angles import kinematics_from_markers, resample_kinematics, valid_stamps
 from bsp_ros.core.streams import MarkerSeries
 from bsp_ros.errors import DataError
 
@@ -67,6 +67,26 @@ def test_resampling_onto_wrench_stamps_interpolates_and_marks_gaps(human_session
     truth = simulator.joint_angles_rad(simulator.seconds_since_start(t_ns[valid]))
     np.testing.assert_allclose(q[valid], truth, atol=1e-6)
     assert not np.isfinite(q[~valid]).any()
+
+
+def test_valid_stamps_is_the_validity_of_resampling_without_interpolating(human_session_noise_free) -> None:
+    """The wrench-delay profile asks only which shifted stamps have angles; the answer must be resample_kinematics'
+    own: at frames beside a gap (NaN), before the first and after the last frame, and exactly on the last."""
+    kinematics = kinematics_from_markers(human_session_noise_free.session.markers, 3)
+    q_rad = kinematics.q_rad.copy()
+    q_rad[300:304] = np.nan
+    velocity = kinematics.direction_velocity_rad_s.copy()
+    velocity[900, 1] = np.nan
+    gappy = dataclasses.replace(kinematics, q_rad=q_rad, direction_velocity_rad_s=velocity)
+    grid = gappy.t_ns
+    wrench_t_ns = human_session_noise_free.session.wrench.t_ns
+    stamps = np.concatenate(
+        (wrench_t_ns, [grid[0] - 1, grid[0], grid[-1], grid[-1] + 1], grid[299:306], grid[899:902] + 7_000_000)
+    )
+    for shift_ns in (0, 20_000_000, -100_000_000):
+        expected = resample_kinematics(gappy, stamps + shift_ns)[2]
+        np.testing.assert_array_equal(valid_stamps(gappy, stamps + shift_ns), expected)
+    assert not expected.all() and expected.any()
 
 
 def test_nan_marker_frames_are_removed_and_counted(human_session_noise_free) -> None:
