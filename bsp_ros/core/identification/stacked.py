@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,7 +29,10 @@ Statistics = tuple[np.ndarray, np.ndarray, np.ndarray]
 @dataclass(frozen=True)
 class Problem:
     names: list[ParameterName]
-    regressor: np.ndarray  # (N, n, p)
+    # (N, n, p_k) the regressor's column blocks, in order: a problem augmented with a few columns keeps its base's
+    # regressor and the new columns apart, and joins them (``regressor``) only when a pass over them needs it
+    # (a model check that looks at a wider fit's values alone solves from the statistics, and never does).
+    blocks: tuple[np.ndarray, ...]
     torque: np.ndarray  # (N, n)
     rows: np.ndarray  # (N, n) bool: row used
     lower: np.ndarray
@@ -38,6 +43,21 @@ class Problem:
     # Per-joint sufficient statistics (joint_statistics), kept once computed: every reweighting, check and
     # augmented problem solves from them. The arrays above are never changed after construction.
     statistics: Statistics | None = field(default=None, compare=False, repr=False)
+
+    @functools.cached_property
+    def regressor(self) -> np.ndarray:
+        """(N, n, p) the blocks joined (the one block itself when there is one)."""
+        return self.blocks[0] if len(self.blocks) == 1 else np.concatenate(self.blocks, axis=2)
+
+    def predicted(self, values: np.ndarray) -> np.ndarray:
+        """(N, n) the model's torques ``regressor @ values``, block by block (the blocks are not joined)."""
+        if len(self.blocks) == 1 or "regressor" in self.__dict__:
+            return np.asarray(self.regressor @ values)
+        out, start = None, 0
+        for block in self.blocks:
+            part = block @ values[start : start + block.shape[2]]
+            out, start = part if out is None else out + part, start + block.shape[2]
+        return np.asarray(out)
 
 
 @dataclass(frozen=True)
@@ -93,7 +113,7 @@ def build_problem(
     lower = [0.0] * n + [TERMS[term][2] for _ in range(n) for term in local] + [-np.inf] * (p - n - n * k)
     precision = elastic_prior_precision(names[:p])
     problem = Problem(
-        names[:p], regressor, data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), precision, p
+        names[:p], (regressor,), data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), precision, p
     )
     if extras is None:
         return problem
@@ -101,7 +121,9 @@ def build_problem(
     mean = np.concatenate((prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
     sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
     precision = np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)
-    return augmented(problem, extras.base[:, :, n:], names[p:], mean, precision)
+    wide = augmented(problem, extras.base[:, :, n:], names[p:], mean, precision)
+    # Every fit of it passes over all its columns: joined once, as one block its augmentations keep.
+    return dataclasses.replace(wide, blocks=(wide.regressor,), statistics=wide.statistics)
 
 
 def problem_names(passive: PassiveModel, n: int, dynamics: bool) -> list[ParameterName]:
@@ -326,7 +348,7 @@ class Reweighted:
     def residual(self, problem: Problem) -> np.ndarray:
         """(N, n) the residual of ``problem`` (the one solved) on every row: one pass over the samples, which the
         model checks that look at the values alone do without."""
-        return np.asarray(problem.torque - problem.regressor @ self.values)
+        return np.asarray(problem.torque - problem.predicted(self.values))
 
 
 def reweighted_values(problem: Problem) -> Reweighted:
@@ -391,7 +413,7 @@ def augmented(
     m = len(names)
     return Problem(
         problem.names + names,
-        np.concatenate((problem.regressor, extra), axis=2),
+        (*problem.blocks, extra),
         problem.torque,
         problem.rows,
         np.concatenate((problem.lower, np.full(m, -np.inf))),
