@@ -37,6 +37,18 @@ def test_version_runs_as_a_module_without_heavy_imports() -> None:
     assert done.stdout.splitlines()[-1] == "0 []"
 
 
+def test_identifying_a_bag_does_not_import_the_bag_writer() -> None:
+    """`bsp identify` reads: the writer's modules (mcap's writer among them) are not its cost."""
+    code = (
+        "import sys\n"
+        "from bsp_ros.bag.offline import identify_bag\n"
+        "from bsp_ros.bag import read_session, BagCorruptError\n"
+        "print(sorted(m for m in sys.modules if m in ('bsp_ros.bag.writer', 'mcap.writer')))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]", done.stdout
+
+
 def test_the_command_table_lists_every_subcommand_module() -> None:
     names = [info.name for info in pkgutil.iter_modules(bsp_ros.cli.__path__) if not info.name.startswith("_")]
     modules = [importlib.import_module(f"bsp_ros.cli.{name}") for name in names]
