@@ -44,6 +44,15 @@ class Problem:
     # augmented problem solves from them. The arrays above are never changed after construction.
     statistics: Statistics | None = field(default=None, compare=False, repr=False)
 
+    def used_rows(self, joint: int) -> tuple[np.ndarray, np.ndarray]:
+        """The regressor's (M, p) and the torques' (M,) used rows of ``joint``, gathered once and kept: the
+        statistics, the augmented problems of the model checks and their candidate profiles all pass over them."""
+        cache: dict[int, tuple[np.ndarray, np.ndarray]] = self.__dict__.setdefault("_used_rows", {})
+        if joint not in cache:
+            used = self.rows[:, joint]
+            cache[joint] = (self.regressor[used, joint, :], self.torque[used, joint])
+        return cache[joint]
+
     @functools.cached_property
     def regressor(self) -> np.ndarray:
         """(N, n, p) the blocks joined (the one block itself when there is one)."""
@@ -214,8 +223,7 @@ def joint_statistics(problem: Problem) -> Statistics:
     n, p = problem.torque.shape[1], problem.regressor.shape[2]
     grams, moments, totals = np.empty((n, p, p)), np.empty((n, p)), np.empty(n)
     for j in range(n):
-        x = problem.regressor[problem.rows[:, j], j, :]
-        y = problem.torque[problem.rows[:, j], j]
+        x, y = problem.used_rows(j)
         grams[j], moments[j], totals[j] = x.T @ x, x.T @ y, y @ y
     object.__setattr__(problem, "statistics", (grams, moments, totals))  # a cache of the frozen problem's arrays
     return grams, moments, totals
@@ -228,8 +236,7 @@ def _augmented_statistics(problem: Problem, extra: np.ndarray) -> Statistics:
     n, p, m = grams.shape[0], grams.shape[1], extra.shape[2]
     out_grams, out_moments = np.empty((n, p + m, p + m)), np.empty((n, p + m))
     for j in range(n):
-        used = problem.rows[:, j]
-        x, e, y = problem.regressor[used, j, :], extra[used, j, :], problem.torque[used, j]
+        (x, y), e = problem.used_rows(j), extra[problem.rows[:, j], j, :]
         cross = x.T @ e
         out_grams[j, :p, :p], out_grams[j, :p, p:], out_grams[j, p:, :p] = grams[j], cross, cross.T
         out_grams[j, p:, p:] = e.T @ e

@@ -52,8 +52,8 @@ def transition_widths(
     base, base_x = solve(design, moment)
     for j in range(n):
         column = n + j * k + config.passive.local.index("coulomb")
-        used = w[:, j] > 0
-        x_j, w_j, y_j = problem.regressor[used, j, :], w[used, j], problem.torque[used, j]
+        used = problem.rows[:, j]  # the fit's weights are positive: its weighted rows
+        (x_j, y_j), w_j = problem.used_rows(j), w[used, j]
         # Every candidate width's column at once (N, widths).
         c = np.tanh(data.velocity_rad_s[used, j, None] / TRANSITION_WIDTHS_RAD_S[None, :])
         crosses, squares, targets = candidate_products(x_j, w_j, y_j, c)
