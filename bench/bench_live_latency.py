@@ -439,8 +439,15 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
         if name != "listener":
             flat &= half_growth < FLAT_MB  # growth: a shrinking RSS is no leak
             growth_text.append(f"{half_growth:+.2f}")
+    # This VM's /proc/stat sometimes counts less busy time than the processes' own counters add up to: then the
+    # other processes' share is unknown, not negative.
+    others = (
+        f"other processes {busy - ours:.0%}"
+        if busy >= ours
+        else f"other processes unknown (/proc/stat counted less than our processes' own {ours:.0%})"
+    )
     print(
-        f"    machine busy {busy:.0%} of one core ({cores} cores = {cores}00%), other processes {busy - ours:.0%};"
+        f"    machine busy {busy:.0%} of one core ({cores} cores = {cores}00%), {others};"
         f" stolen by the hypervisor {stolen:.1%} (time no process of this machine ran)"
     )
     targets.append(
