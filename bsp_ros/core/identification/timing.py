@@ -22,7 +22,7 @@ from bsp_ros.core.joint_angles import (
     resample_kinematics,
     valid_stamps,
 )
-from bsp_ros.core.model import GRAVITY_M_S2, contact_torques_nm, running_sum
+from bsp_ros.core.model import GRAVITY_M_S2, absolute_angles_rad, contact_torques_nm
 from bsp_ros.core.streams import Session, WrenchSeries
 from bsp_ros.errors import DataError, InputError
 from bsp_ros.validation import check_finite_scalar
@@ -163,7 +163,7 @@ class _JointColumns:
     the segments it carries) and its own passive columns (sign steps), as :mod:`identification.joint` stacks them;
     the zero blocks of the stacked (N, n, p) regressor are never built."""
 
-    columns: list[np.ndarray]  # per joint (N, n + k)
+    columns: list[np.ndarray]  # per joint i (N, n - i + k)
     indices: list[np.ndarray]  # per joint, where its columns sit among the p parameters
     n_parameters: int
 
@@ -171,7 +171,7 @@ class _JointColumns:
     def of(cls, data: IdentificationData, passive: PassiveModel) -> _JointColumns:
         n, k = data.n_joints, len(passive.local)
         # Joint i carries the segments j >= i: its row of gravity_regressor, without the zeros before them.
-        gravity = GRAVITY_M_S2 * np.cos(running_sum(data.q_rad))
+        gravity = GRAVITY_M_S2 * np.cos(absolute_angles_rad(data.q_rad))
         columns, indices = [], []
         for i in range(n):
             columns.append(np.hstack((gravity[:, i:], passive.columns(data.passive_q_rad, data.velocity_rad_s, i))))
@@ -201,20 +201,19 @@ class _LinearFit:
     rows: np.ndarray  # (N, n) rows used (direction of motion clear at the reference)
     weights: np.ndarray  # (n,) 1 / sigma^2 per joint
 
-    def solve(
-        self, data: IdentificationData, columns: _JointColumns | None = None
-    ) -> tuple[_JointColumns, np.ndarray, np.ndarray]:
-        """The model's columns, parameters (p,) and residuals (N, n) (0 off the rows) of one candidate."""
+    def solve(self, data: IdentificationData, columns: _JointColumns | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Parameters (p,) and residuals (N, n) (0 off the rows) of one candidate (``columns``: its model's, when
+        already built)."""
         columns = columns or _JointColumns.of(data, self.passive)
         # Normal equations: a p x p solve (the columns are few and well scaled); lstsq's SVD of the tall
         # matrix would cost 10 times more for each candidate delay.
         design, moment = columns.products(np.where(self.rows, self.weights[None, :], 0.0), data.tau_nm)
         values = np.linalg.lstsq(design, moment, rcond=None)[0]
         residual = np.where(self.rows, data.tau_nm - columns.predicted(values), 0.0)
-        return columns, values, residual
+        return values, residual
 
     def rss(self, data: IdentificationData) -> float:
-        _, _, residual = self.solve(data)
+        _, residual = self.solve(data)
         return float((self.weights[None, :] * residual**2).sum())
 
 
@@ -230,7 +229,7 @@ def _linear_fit(
         deadband = np.maximum(0.1 * np.percentile(speed, 95, axis=0), 4.0 * noise)
         rows = speed > deadband[None, :]
     fit = _LinearFit(passive, rows, np.ones(reference.n_joints))
-    _, _, residual = fit.solve(reference, columns)
+    _, residual = fit.solve(reference, columns)
     sigma = np.sqrt((residual**2).sum(axis=0) / np.maximum(rows.sum(axis=0), 1))
     sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(reference.tau_nm).max()), 1e-9))
     return dataclasses.replace(fit, weights=1.0 / sigma**2)
@@ -267,7 +266,7 @@ def _autocorrelation_inflation(problem: DelayProblem, keep: np.ndarray, delay_s:
     centre, _ = problem.data(delay_s, keep)
     columns = _JointColumns.of(centre, passive)
     fit = _linear_fit(centre, passive, columns)
-    _, values, residual = fit.solve(centre, columns)
+    values, residual = fit.solve(centre, columns)
     plus = problem.data(delay_s + h, keep)[0]
     minus = problem.data(delay_s - h, keep)[0]
     if plus.t_ns.size != centre.t_ns.size or minus.t_ns.size != centre.t_ns.size:

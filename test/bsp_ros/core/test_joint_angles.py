@@ -135,7 +135,13 @@ def test_angles_filtered_from_a_later_start_on_the_same_grid_settle_to_the_whole
     whole = kinematics_from_angles(t_ns, q, [0.3, 0.27, 0.09], angle_filter=True)
     origin, grid_step = int(whole.t_ns[0]), int(whole.t_ns[1] - whole.t_ns[0])
     tail = kinematics_from_angles(
-        t_ns[2500:], q[2500:], [0.3, 0.27, 0.09], whole.config, True, False, (origin, grid_step)
+        t_ns[2500:],
+        q[2500:],
+        [0.3, 0.27, 0.09],
+        whole.config,
+        angle_filter=True,
+        adapt_to_motion=False,
+        grid=(origin, grid_step),
     )
     assert ((tail.t_ns - origin) % grid_step == 0).all() and tail.t_ns[0] >= t_ns[2500]
     inner = (tail.t_ns >= tail.t_ns[0] + 5_000_000_000) & (tail.t_ns <= tail.t_ns[-1] - 5_000_000_000)

@@ -261,7 +261,9 @@ class _WholeWindowKinematics(WindowedIdentifier):
     def _held_kinematics(self, t_ns, q_rad, held):
         from bsp_ros.core.joint_angles import kinematics_from_angles
 
-        return kinematics_from_angles(t_ns, q_rad, held.lengths_m, held.kinematics, True, False, held.grid)
+        return kinematics_from_angles(
+            t_ns, q_rad, held.lengths_m, held.kinematics, angle_filter=True, adapt_to_motion=False, grid=held.grid
+        )
 
 
 def _documented(document: dict) -> dict[str, tuple[float, float]]:
