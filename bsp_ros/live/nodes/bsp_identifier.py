@@ -23,7 +23,7 @@ from bsp_ros.core.tare import Tare, read_tare_file
 from bsp_ros.core.weight_support import live_support
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.nodes import estimate_jobs as jobs
-from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue, rotation_from_quaternion_xyzw
+from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue, frame_source, rotation_from_quaternion_xyzw
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
 from bsp_ros.live.online.windowed import (
     WindowConfig,
@@ -31,6 +31,7 @@ from bsp_ros.live.online.windowed import (
     WindowEstimate,
     WindowSamples,
 )
+from bsp_ros.live.online.wrench_input import WrenchInput
 from bsp_ros.live.runtime.parameters import Param, declare_parameters
 from bsp_ros.live.runtime.qos import rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
@@ -148,28 +149,15 @@ class BspIdentifierNode(RosNode):
             parameter_rotation = rotation_from_quaternion_xyzw(p["wrench_frame_rotation_xyzw"])
         except ValueError as exc:
             raise InputError(f"{NAME}: parameter wrench_frame_rotation_xyzw: {exc}") from exc
-        tf_installed = has_message(TF_TYPE)
-        source = p["wrench_frame_source"]
-        if source == "tf" and not tf_installed:
-            raise InputError(
-                f"{NAME}: wrench_frame_source is tf but {TF_TYPE} is not installed; "
-                "give wrench_frame_rotation_xyzw with wrench_frame_source:=parameter"
-            )
-        use_tf = source == "tf" or (source == "auto" and tf_installed)
-        # A TransformStamped topic feeds the same transform buffer as /tf: turning or fixed, slerped per wrench.
-        transforms = use_tf or source == "topic"
-        self.frames = WrenchFrames(self.world_frame, transforms, parameter_rotation, p["tf_wait_s"])
+        try:
+            self.frame_source = frame_source(p["wrench_frame_source"], has_message(TF_TYPE), p["wrench_frame_topic"])
+        except ValueError as exc:
+            raise InputError(f"{NAME}: {exc}") from exc
+        self.frames = WrenchFrames(self.world_frame, self.frame_source.transforms, parameter_rotation, p["tf_wait_s"])
         self.wrench_queue = WrenchQueue(self.frames)  # a turning sensor's wrench waits for the /tf after it
-        self.frame_source = (
-            f"topic {p['wrench_frame_topic']} (TransformStamped)"
-            if source == "topic"
-            else "tf (/tf_static, /tf)"
-            if use_tf
-            else "parameter wrench_frame_rotation_xyzw"
-        )
         self.get_logger().info(
-            f"wrench frame rotation from {self.frame_source}"
-            + ("" if transforms else f" = {p['wrench_frame_rotation_xyzw']} ({TF_TYPE} not used)")
+            f"wrench frame rotation from {self.frame_source.description}"
+            + ("" if self.frame_source.transforms else f" = {p['wrench_frame_rotation_xyzw']} ({TF_TYPE} not used)")
         )
         subject = SubjectInfo(p["body_mass_kg"] or None, p["height_m"] or None, p["sex"])
         try:
@@ -184,7 +172,7 @@ class BspIdentifierNode(RosNode):
                 raise InputError(f"{NAME}: parameter tare_file {p['tare_file']}: {exc}") from exc
             self.get_logger().info(f"tare {p['tare_file']} of frame {self.tare.frame_id!r} applied to every wrench")
         self.wrench_rotation: tuple[str, np.ndarray] | None = None  # the latest wrench's frame and rotation
-        self.wrench_delay_ns = round(p["wrench_delay_s"] * 1e9)
+        self.wrench_input = WrenchInput(self.tare, round(p["wrench_delay_s"] * 1e9))
         # The model named by the parameter, kept: a window showing an elastic moment it lacks is invalid with the
         # warning (choosing among the elastic family per 5 Hz update is `bsp identify --passive auto`'s work).
         self.options = IdentifyOptions(
@@ -197,6 +185,7 @@ class BspIdentifierNode(RosNode):
             zero_sd_n=p["zero_sd_n"],
             zero_sd_nm=p["zero_sd_nm"],
         )
+        # Its buffers are the callbacks'; its estimator (the model checks' schedule) runs on the worker thread.
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
         self.recursive = RecursiveFeed(self.n, self.options.passive, subject)
         self.lengths: np.ndarray | None = None
@@ -207,24 +196,18 @@ class BspIdentifierNode(RosNode):
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
         # Estimates run on one worker thread, so that the wrench callbacks never wait for one: a windowed update
-        # refits the model its last check chose (~14 ms for 30 s at 1 kHz, the checks every elastic_check_every
-        # updates ~35 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
+        # refits the model its last check chose (~13 ms for 30 s at 1 kHz, the checks every elastic_check_every
+        # updates ~25 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
         # callbacks every switch interval (main() sets 0.2 ms).
         self.worker = LatestJobWorker(f"{NAME}-estimate")
-        # The worker's own identifier: it keeps the model checks' schedule and what they chose, apart from the
-        # buffers the callbacks fill. A restart (a new transform, contact point) starts a new check epoch, and
-        # the worker's next update checks again.
-        self.estimator = WindowedIdentifier(self.n, self.windowed.config)
-        self.check_epoch, self.estimator_epoch = 0, 0
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
         self.support_fraction = float(p["support_fraction"])
         self.support_estimate: dict[str, Any] | None = None  # set by the worker thread with each estimate
         self.support_diagnostics: dict[str, str] = {}
-        self.update_s: deque[float] = deque(maxlen=int(10 * p["update_hz"]) + 1)  # compute time of the last ~10 s
-        # The worker thread's own CPU time in those updates: below the compute time, the update waited for a core
-        # or for the interpreter (the 1 kHz callbacks, the other nodes).
-        self.update_cpu_s: deque[float] = deque(maxlen=int(10 * p["update_hz"]) + 1)
+        # The last ~10 s of updates: compute time and the worker thread's own CPU time, s. Below the compute time,
+        # an update waited for a core or for the interpreter (the 1 kHz callbacks, the other nodes).
+        self.update_s: deque[tuple[float, float]] = deque(maxlen=int(10 * p["update_hz"]) + 1)
         self.types = message_class
         estimates = rclpy_qos("estimates")
         self.estimate_pub = self.create_publisher(
@@ -251,11 +234,11 @@ class BspIdentifierNode(RosNode):
         self.create_subscription(
             message_class("std_msgs/msg/String"), "arm/contact_point", self.on_contact_point, rclpy_qos("tf_static")
         )
-        if use_tf:
+        if self.frame_source.tf:
             tf = message_class(TF_TYPE)
             self.create_subscription(tf, "/tf_static", self.on_tf_static, rclpy_qos("tf_static_listener"))
             self.create_subscription(tf, "/tf", self.on_tf, rclpy_qos("tf"))
-        if source == "topic":
+        if self.frame_source.topic:
             transform = message_class("geometry_msgs/msg/TransformStamped")
             self.create_subscription(transform, p["wrench_frame_topic"], self.on_transform, rclpy_qos("tf"))
         self.create_timer(1.0 / p["update_hz"], self.on_update)
@@ -294,7 +277,6 @@ class BspIdentifierNode(RosNode):
             self.get_logger().warning(f"transform of {frame_id} changed: estimate restarted")
             self.windowed.reset()
             self.recursive.reset()
-            self.check_epoch += 1
 
     def on_contact_point(self, msg: Any) -> None:
         """Where the angles' contact point comes from (`joint_angle_estimator`): the robot's handle pose holds
@@ -305,7 +287,6 @@ class BspIdentifierNode(RosNode):
             self.get_logger().info(f"contact point: {msg.data}; estimate restarted")
             self.windowed.reset()
             self.recursive.reset()
-            self.check_epoch += 1
             self.windowed.contact_from_robot = robot
 
     def on_lengths(self, msg: Any) -> None:
@@ -358,17 +339,12 @@ class BspIdentifierNode(RosNode):
         if rotation is None:
             self.counts["waiting_for_tf"] = self.counts.get("waiting_for_tf", 0) + 1
             return
-        force_n, torque_nm = sample.force_n, sample.torque_nm
-        if self.tare is not None:
-            if sample.frame_id != self.tare.frame_id:
-                self.counts["tare_frame_mismatch"] = self.counts.get("tare_frame_mismatch", 0) + 1
-                return
-            load_force_n, load_torque_nm = self.tare.predicted_wrench(rotation)
-            force_n, torque_nm = force_n - load_force_n, torque_nm - load_torque_nm
+        world = self.wrench_input.world(sample, rotation)
+        if world is None:
+            self.counts["tare_frame_mismatch"] = self.counts.get("tare_frame_mismatch", 0) + 1
+            return
         self.wrench_rotation = (sample.frame_id, rotation)
-        force, torque = rotation @ force_n, rotation @ torque_nm
-        wrench_yzx = np.array([force[1], force[2], torque[0]])
-        t_ns = sample.t_ns - self.wrench_delay_ns  # when it was measured, on the joint states' clock
+        t_ns, wrench_yzx = world
         if self.mode == "windowed":
             accepted = self.windowed.add_wrench(t_ns, wrench_yzx)
         else:
@@ -436,15 +412,12 @@ class BspIdentifierNode(RosNode):
         ready, self.ready = self.ready, None
         if ready is not None and ready[0] == self.generation:
             self.publish(ready[1], counts)
-        generation, epoch = self.generation, self.check_epoch
-        self.worker.submit(lambda: self._compute_window(window, generation, epoch))
+        generation = self.generation
+        self.worker.submit(lambda: self._compute_window(window, generation))
 
-    def _compute_window(self, window: WindowSamples, generation: int, epoch: int) -> None:
+    def _compute_window(self, window: WindowSamples, generation: int) -> None:
         """On the worker thread: identify a window; keep it for the next tick."""
-        if epoch != self.estimator_epoch:
-            self.estimator.restart_checks()
-            self.estimator_epoch = epoch
-        self.ready = (generation, self._timed(lambda: jobs.window_estimate(self.estimator, window)))
+        self.ready = (generation, self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)))
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
         """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
@@ -472,8 +445,7 @@ class BspIdentifierNode(RosNode):
             document = invalid_document(self.options.method, f"internal error: {exc!r}")
             document["mode"] = self.mode
             outputs = jobs.outputs_from_document(document, self.now_ns(), with_passive=False)
-        self.update_s.append(time.perf_counter() - started)
-        self.update_cpu_s.append(time.thread_time() - started_cpu)
+        self.update_s.append((time.perf_counter() - started, time.thread_time() - started_cpu))
         return outputs
 
     def publish(self, outputs: jobs.EstimateOutputs, counts: dict[str, int]) -> None:
@@ -490,11 +462,13 @@ class BspIdentifierNode(RosNode):
         level = OK if outputs.valid else (WARN if "waiting" in outputs.message else ERROR)
         timing = {}
         if self.update_s:  # how long an update takes: near the period, the node cannot keep up
+            wall_cpu_ms = 1e3 * np.array(self.update_s)
+            mean, top = wall_cpu_ms.mean(axis=0), wall_cpu_ms.max(axis=0)
             timing = {
-                "update_ms_mean": f"{1e3 * np.mean(self.update_s):.1f}",
-                "update_ms_max": f"{1e3 * max(self.update_s):.1f}",
-                "update_cpu_ms_mean": f"{1e3 * np.mean(self.update_cpu_s):.1f}",
-                "update_cpu_ms_max": f"{1e3 * max(self.update_cpu_s):.1f}",
+                "update_ms_mean": f"{mean[0]:.1f}",
+                "update_ms_max": f"{top[0]:.1f}",
+                "update_cpu_ms_mean": f"{mean[1]:.1f}",
+                "update_cpu_ms_max": f"{top[1]:.1f}",
             }
         frames = {f"wrench_frame.{f}": source for f, source in self.frames.sources.items()}
         if self.wrench_queue.held:  # wrenches that waited longest for a /tf sample and held the newest one
@@ -504,7 +478,7 @@ class BspIdentifierNode(RosNode):
             "published": self.published,
             "updates_dropped": self.worker.dropped,
             **timing,
-            "wrench_frame_source": self.frame_source,
+            "wrench_frame_source": self.frame_source.description,
             **frames,
             **self.support_diagnostics,
         }

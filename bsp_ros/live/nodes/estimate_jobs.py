@@ -19,7 +19,7 @@ from bsp_ros.live.estimate_messages import (
     inertias_from_estimate,
     passive_moments_from_estimate,
 )
-from bsp_ros.live.online.windowed import WindowedIdentifier, WindowSamples
+from bsp_ros.live.online.windowed import WindowEstimator, WindowSamples
 from msg_adapters.diagnostics import build_diagnostic_array
 from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import build_joint_state
@@ -79,10 +79,10 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
     return EstimateOutputs(valid, str(document["quality"]["message"]), out, estimate_from_document(document))
 
 
-def window_estimate(identifier: WindowedIdentifier, window: WindowSamples) -> EstimateOutputs:
+def window_estimate(estimator: WindowEstimator, window: WindowSamples) -> EstimateOutputs:
     """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench;
-    ``identifier`` keeps the model checks' schedule (one thread at a time)."""
-    estimate = identifier.estimate_window(window)
+    ``estimator`` keeps the model checks' schedule (one thread at a time)."""
+    estimate = estimator.estimate_window(window)
     estimate.document["mode"] = "windowed"
     return outputs_from_document(estimate.document, estimate.last_wrench_t_ns or 0, with_passive=True)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -12,7 +13,7 @@ from msg_adapters.rotation import matrix_from_quaternion
 from msg_adapters.rotation_track import TransformBuffer
 from msg_adapters.tf import TransformSample
 
-__all__ = ["WrenchFrames", "WrenchQueue", "rotation_from_quaternion_xyzw"]
+__all__ = ["FrameSource", "WrenchFrames", "WrenchQueue", "frame_source", "rotation_from_quaternion_xyzw"]
 
 
 def rotation_from_quaternion_xyzw(quaternion_xyzw: Iterable[float]) -> np.ndarray:
@@ -30,6 +31,43 @@ def rotation_from_quaternion_xyzw(quaternion_xyzw: Iterable[float]) -> np.ndarra
     if abs(norm - 1.0) > 1e-3:
         raise ValueError(f"rotation quaternion {q.tolist()} has norm {norm:.4g}, not 1")
     return np.asarray(matrix_from_quaternion(q / norm), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class FrameSource:
+    """Where the wrench frame's rotation comes from: /tf_static and /tf (``tf``), a TransformStamped topic
+    (``topic``), or else the fixed parameter quaternion; ``description`` says which, for the log and
+    /diagnostics."""
+
+    tf: bool
+    topic: bool
+    description: str
+
+    @property
+    def transforms(self) -> bool:
+        """Stamped transforms feed the rotation (turning or fixed, slerped per wrench)."""
+        return self.tf or self.topic
+
+
+def frame_source(choice: str, tf_installed: bool, topic: str) -> FrameSource:
+    """The source a ``wrench_frame_source`` parameter names: ``tf``, ``topic`` (the TransformStamped ``topic``),
+    ``parameter``, or ``auto`` (tf where tf2_msgs is installed, else the parameter).
+
+    Raises
+    ------
+    ValueError
+        ``tf`` without tf2_msgs installed.
+    """
+    if choice == "tf" and not tf_installed:
+        raise ValueError(
+            "wrench_frame_source is tf but tf2_msgs/msg/TFMessage is not installed; "
+            "give wrench_frame_rotation_xyzw with wrench_frame_source:=parameter"
+        )
+    if choice == "topic":
+        return FrameSource(False, True, f"topic {topic} (TransformStamped)")
+    if choice == "tf" or (choice == "auto" and tf_installed):
+        return FrameSource(True, False, "tf (/tf_static, /tf)")
+    return FrameSource(False, False, "parameter wrench_frame_rotation_xyzw")
 
 
 class WrenchFrames:

@@ -2,130 +2,15 @@
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field
-from typing import Any
-
 import numpy as np
 
-from bsp_ros.core.estimate import estimate_document, invalid_document
-from bsp_ros.core.identification.data import IdentificationData
-from bsp_ros.core.identification.joint.held import HeldModel
-from bsp_ros.core.identification.rate import block_means, identification_rate_hz
-from bsp_ros.core.identification.sensitivity import account_for_tare
-from bsp_ros.core.identification.timing import parameter_timing
-from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_angles, resample_with_motion
-from bsp_ros.core.model import contact_torques_nm
-from bsp_ros.core.pipeline import IdentifyOptions, fuse, identify_data, refit_options
-from bsp_ros.errors import BspError
+from bsp_ros.core.estimate import invalid_document
 from bsp_ros.live.online.buffer import TimedBuffer
 from bsp_ros.live.online.guard import StreamGuard
-from bsp_ros.validation import check_finite_scalar, check_positive
+from bsp_ros.live.online.window_estimator import WindowEstimator
+from bsp_ros.live.online.window_samples import WindowConfig, WindowEstimate, WindowSamples
 
-
-@dataclass(frozen=True)
-class WindowConfig:
-    """Settings of :class:`WindowedIdentifier`.
-
-    Attributes
-    ----------
-    window_s : length of the sliding window (s).
-    stale_s : an input whose newest stamp is older than this (against the other input or the caller's
-        clock) makes the estimate invalid.
-    options : method, passive model and subject, as for `bsp identify`.
-    max_rate_hz : faster wrench streams are block-averaged down to this rate before identifying, so an
-        update at 1 kHz costs what one at 50 Hz does. The model's torques change below 2 Hz, and a block mean
-        keeps a white noise's information about them; measured on a 30 s window of 1 kHz wrench and 100 Hz
-        markers, 200, 100 and 50 Hz give the same estimates and std to 3 digits, at 92, 52 and 36 ms.
-    """
-
-    window_s: float = 30.0
-    stale_s: float = 0.5
-    options: IdentifyOptions = field(default_factory=IdentifyOptions)
-    max_rate_hz: float = 50.0
-    # The model checks (elastic, drift, Stribeck) refit the window several times; at 5 Hz every 25th update
-    # (5 s) keeps an update well inside its period. In between, each update refits what the last check chose.
-    elastic_check_every: int = 25
-
-    def __post_init__(self) -> None:
-        check_positive("window_s", self.window_s, 3600.0)
-        check_finite_scalar("stale_s", self.stale_s, 0.01, 60.0)
-        check_positive("max_rate_hz", self.max_rate_hz, 1e5)
-        check_positive("elastic_check_every", self.elastic_check_every, 1000)
-
-
-# A zero-phase filtered angle this far behind the newest is settled: what the backward pass brings from the end has
-# decayed to e^-11 (the slowest filter, the direction velocity's at 0.5 Hz, decays with ~0.45 s). The updates
-# between checks keep the settled kinematics and filter only the newest seconds, from this much before the settled
-# end, where the forward pass has decayed as much from its start.
-SETTLED_S = 5.0
-TAIL_LEAD_S = 5.0
-
-
-@dataclass(frozen=True)
-class WindowSettings:
-    """What a window's samples are prepared with, held between model checks: the segment lengths (n,) m (the
-    window's median), the kinematics filter settings (cutoffs raised to the motion's band), the angle grid
-    (origin and step, ns) and the direction velocity's noise (n,) rad/s (the dead band at reversals)."""
-
-    lengths_m: np.ndarray
-    kinematics: KinematicsConfig
-    grid: tuple[int, int]
-    direction_noise_rad_s: np.ndarray
-
-
-@dataclass(frozen=True)
-class WindowEstimate:
-    """One update: the estimate document (docs/contract.md schema) and the newest wrench stamp it used."""
-
-    document: dict[str, Any]
-    valid: bool
-    last_wrench_t_ns: int | None
-
-
-@dataclass(frozen=True)
-class WindowSamples:
-    """A copy of one window's samples, taken by :meth:`WindowedIdentifier.snapshot`.
-
-    Attributes
-    ----------
-    wrench_t_ns : (N,) wrench stamps (ns); wrench_yzx : (N, 3) ``[F_y, F_z, M_x]`` in ``world``.
-    angle_t_ns : (M,) joint-angle stamps (ns), from 2 s before the window (filter run-in);
-    angle_rows : (M, 2n) unfiltered angles (rad) then segment lengths (m).
-    refused : refused samples by input and reason; clock_jumps : clock jumps seen so far.
-    rotation_world_from_sensor : (3, 3) the wrench sensor's orientation, wrench_frame_id : its frame, when a
-        tare was applied to the wrench (its uncertainty then joins the estimate's).
-    contact_from_robot : the angles' contact point is the robot's handle pose, not the hand's skin marker.
-    """
-
-    wrench_t_ns: np.ndarray
-    wrench_yzx: np.ndarray
-    angle_t_ns: np.ndarray
-    angle_rows: np.ndarray
-    refused: dict[str, int]
-    clock_jumps: int
-    # The wrench sensor's orientation and frame, for a tare's uncertainty (set by the node when it applies one).
-    rotation_world_from_sensor: np.ndarray | None = None
-    wrench_frame_id: str = ""
-    contact_from_robot: bool = False
-
-
-# The fields of MarkerKinematics with one row per grid point.
-_PER_POINT = ("t_ns", "q_rad", "direction_velocity_rad_s", "velocity_rad_s", "acceleration_rad_s2")
-
-
-def _grid_points(*parts: tuple[MarkerKinematics, np.ndarray]) -> MarkerKinematics:
-    """The grid points ``keep`` (bool) of each ``(kinematics, keep)`` part, joined in order; the other fields
-    (settings, noise, notes) are the last part's."""
-
-    def joined(name: str) -> np.ndarray | None:
-        values = [getattr(kinematics, name) for kinematics, _ in parts]
-        if any(v is None for v in values):
-            return None
-        return np.concatenate([v[keep] for v, (_, keep) in zip(values, parts, strict=True)])
-
-    points: dict[str, Any] = {name: joined(name) for name in _PER_POINT}
-    return dataclasses.replace(parts[-1][0], **points)
+__all__ = ["WindowConfig", "WindowEstimate", "WindowEstimator", "WindowSamples", "WindowedIdentifier"]
 
 
 class WindowedIdentifier:
@@ -135,24 +20,25 @@ class WindowedIdentifier:
 
     Samples that are non-finite, out of order or duplicated are refused and counted; a backwards clock
     jump clears both buffers, so no estimate mixes samples from either side of it.
+
+    The buffers and :meth:`snapshot` belong to the thread that receives the samples; :meth:`estimate_window`
+    (``estimator``, :class:`WindowEstimator`) may run on another, one thread at a time.
     """
 
-    def __init__(self, n_segments: int, config: WindowConfig | None = None) -> None:
+    def __init__(
+        self, n_segments: int, config: WindowConfig | None = None, estimator: WindowEstimator | None = None
+    ) -> None:
         self.n = n_segments
         self.config = config or WindowConfig()
+        self.estimator = estimator or WindowEstimator(n_segments, self.config)
         horizon_ns = int((self.config.window_s + 5.0) * 1e9)
         self.wrench = TimedBuffer(3, horizon_ns)
         self.angles = TimedBuffer(2 * n_segments, horizon_ns)
         self.wrench_guard = StreamGuard("wrench")
-        self._since_check = 0
-        self._held: HeldModel | None = None
-        # What the window the last check identified was prepared with (lengths, cutoffs, grid, noise).
-        self._held_settings: WindowSettings | None = None
-        # The last update's kinematics older than SETTLED_S before its newest angle (on the held grid).
-        self._settled: MarkerKinematics | None = None
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False
+        self.epoch = 0  # the buffers' clears: a window copied after one starts the model checks again
 
     def add_wrench(self, t_ns: int, wrench_yzx: np.ndarray) -> bool:
         """Add ``[F_y, F_z, M_x]`` in ``world`` at ``t_ns``; False if refused."""
@@ -181,18 +67,15 @@ class WindowedIdentifier:
         """Forget every sample (a new session or a clock jump); the next update runs the model checks."""
         self.wrench.clear()
         self.angles.clear()
-        self.restart_checks()
+        self.epoch += 1
 
     def restart_checks(self) -> None:
         """Forget what the model checks chose: the next :meth:`estimate_window` runs them again."""
-        self._since_check = 0
-        self._held = None
-        self._held_settings = None
-        self._settled = None
+        self.estimator.restart_checks()
 
-    def _invalid(self, message: str, last_wrench_t_ns: int | None = None) -> WindowEstimate:
+    def _invalid(self, message: str) -> WindowEstimate:
         document = invalid_document(self.config.options.method, message)
-        return WindowEstimate(document, False, last_wrench_t_ns or self.wrench.last_t_ns)
+        return WindowEstimate(document, False, self.wrench.last_t_ns)
 
     def estimate(self, now_ns: int | None = None) -> WindowEstimate:
         """Identify over the newest window: :meth:`snapshot` then :meth:`estimate_window`.
@@ -232,141 +115,9 @@ class WindowedIdentifier:
             refused,
             self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
             contact_from_robot=self.contact_from_robot,
+            epoch=self.epoch,
         )
-
-    def _window_data(
-        self, window: WindowSamples, held: WindowSettings | None = None
-    ) -> tuple[IdentificationData | str, WindowSettings]:
-        """The identification data of a window (its samples' stamps: ``t_ns``), or why there are none, and the
-        settings it was prepared with: ``held`` (a check's), else the window's own."""
-        t_w, wrench, _ = block_means(window.wrench_t_ns, window.wrench_yzx, self.config.max_rate_hz)
-        t_a, rows = window.angle_t_ns, window.angle_rows
-        if held is None:
-            lengths = np.median(rows[:, self.n :], axis=0)
-            kinematics = kinematics_from_angles(
-                t_a, rows[:, : self.n], lengths, self.config.options.kinematics, angle_filter=True
-            )
-            settings = WindowSettings(
-                kinematics.lengths_m,
-                kinematics.config or self.config.options.kinematics,
-                (int(kinematics.t_ns[0]), int(kinematics.t_ns[1] - kinematics.t_ns[0])),
-                kinematics.direction_velocity_noise_rad_s,
-            )
-        else:
-            kinematics, settings = self._held_kinematics(t_a, rows[:, : self.n], held), held
-        self._settled = _grid_points((kinematics, kinematics.t_ns <= int(t_a[-1]) - int(SETTLED_S * 1e9)))
-        # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
-        q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
-        if valid.sum() < 2:
-            return "no wrench sample in the window has joint angles", settings
-        tau = contact_torques_nm(q[valid], settings.lengths_m, wrench[valid])
-        data = IdentificationData(
-            t_w[valid],
-            q[valid],
-            velocity[valid],
-            tau,
-            settings.lengths_m,
-            np.zeros(self.n),
-            settings.direction_noise_rad_s,
-            int(t_w.size),
-            [],
-            qd_rad_s=qd[valid],
-            qdd_rad_s2=qdd[valid],
-            contact_from_robot=window.contact_from_robot,
-        )
-        return data, settings
-
-    def _held_kinematics(self, t_ns: np.ndarray, q_rad: np.ndarray, held: WindowSettings) -> MarkerKinematics:
-        """The window's kinematics on ``held``'s settings: the settled part of the last update's and the newest
-        seconds filtered anew on the same grid (all of the window when nothing is settled yet)."""
-        settled = self._settled
-
-        def filtered(first: int) -> MarkerKinematics:
-            return kinematics_from_angles(
-                t_ns[first:],
-                q_rad[first:],
-                held.lengths_m,
-                held.kinematics,
-                angle_filter=True,
-                adapt_to_motion=False,
-                grid=held.grid,
-            )
-
-        origin, step = held.grid
-        if (
-            settled is None
-            or settled.t_ns.size < 2
-            or (int(settled.t_ns[0]) - origin) % step  # kept from a window on another grid
-            or settled.t_ns[-1] - TAIL_LEAD_S * 1e9 < t_ns[0]
-        ):
-            return filtered(0)
-        tail = filtered(int(np.searchsorted(t_ns, settled.t_ns[-1] - int(TAIL_LEAD_S * 1e9))))
-        return _grid_points((settled, settled.t_ns >= t_ns[0]), (tail, tail.t_ns > settled.t_ns[-1]))
-
-    def _due(self) -> bool:
-        """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and every update
-        while the last one's samples could not support an estimate (poor excitation, a misfit: nothing to hold). A
-        model the checks found lacking holds its verdict until the next check."""
-        every = self.config.elastic_check_every
-        return self._held is None or self._since_check >= every or bool(self._held.data_problems)
 
     def estimate_window(self, window: WindowSamples) -> WindowEstimate:
-        """Identify a window copied by :meth:`snapshot` (one thread at a time).
-
-        Every ``elastic_check_every``-th call (the first included) identifies with the model checks (drift,
-        Stribeck, elastic: ~30 ms for 30 s at 1 kHz); the calls in between refit the model they chose, with its
-        verdict (:func:`bsp_ros.core.identification.joint.refit.refit_held`: one fit), on the segment lengths and
-        filter cutoffs of the checked window.
-        """
-        last_wrench = int(window.wrench_t_ns[-1])
-        try:
-            check = self._due()
-            held_settings = None if check else self._held_settings
-            data, settings = self._window_data(window, held_settings)
-            if isinstance(data, str):
-                return self._invalid(data, last_wrench)
-            if check:
-                result = identify_data(data, self.config.options, check_elastic=True, check_drift=True)
-                self._held, self._held_settings, self._since_check = result.held, settings, 1
-            else:
-                result = identify_data(data, self.config.options, held=self._held)
-                self._since_check += 1
-            quality = None
-            if window.rotation_world_from_sensor is not None:
-                # The sensor zero's share of the std (the tare's, or the assumed zero's), from the estimate's own
-                # response to a torque change (no refits).
-                options = self.config.options
-                refit = refit_options(result, options)
-                quality = account_for_tare(
-                    result,
-                    data,
-                    window.rotation_world_from_sensor,
-                    window.wrench_frame_id,
-                    options.tare,
-                    lambda d: identify_data(d, refit, check_elastic=False),
-                    (options.zero_sd_n, options.zero_sd_nm),
-                )
-        except BspError as error:
-            return self._invalid(str(error), last_wrench)
-        posterior = fuse(result, data, self.config.options.subject) if result.valid else None
-        info = {
-            "start_time_ns": int(data.t_ns[0]),
-            "end_time_ns": int(data.t_ns[-1]),
-            "window_s": self.config.window_s,
-            "identification_rate_hz": identification_rate_hz(data.t_ns),
-            "refused_samples": window.refused,
-            "clock_jumps": window.clock_jumps,
-            "config": self.config.options.config(),
-        }
-        document = estimate_document(
-            result,
-            data,
-            posterior,
-            self.config.options.subject,
-            info,
-            marker_placement_sd_m=self.config.options.placement_sd_m(data),
-        )
-        document["quality"]["timing"] = parameter_timing(self.config.options.wrench_delay_s)  # the node shifts stamps
-        if quality is not None:
-            document["quality"].update(quality)
-        return WindowEstimate(document, result.valid, last_wrench)
+        """Identify a window copied by :meth:`snapshot` (:meth:`WindowEstimator.estimate_window`)."""
+        return self.estimator.estimate_window(window)

@@ -82,17 +82,24 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
 
+    # The last values' effect: the test's values come again once it went on to the wider fit.
+    computed: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
     def offset_effect(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The drift rate per recording (along world y, z and x) of a wider fit's ``values``, and how far an offset
         as large as the drift over each recording moves the parameters: a drifting sensor's offset at any moment is
         unknown (a tare holds at the moment it was taken), so that shift is what a constant offset would cause."""
-        flat_rate = np.zeros(3 * len(groups))
-        flat_rate[columns] = values[p:]
-        rate = flat_rate.reshape(len(groups), 3)
-        delta_torque = np.zeros_like(data.tau_nm)
-        for k, rows in enumerate(groups):
-            delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
-        return rate, design_inverse(fit.design) @ joint_products(problem.regressor, w, delta_torque)
+        key = values.tobytes()
+        if key not in computed:
+            flat_rate = np.zeros(3 * len(groups))
+            flat_rate[columns] = values[p:]
+            rate = flat_rate.reshape(len(groups), 3)
+            delta_torque = np.zeros_like(data.tau_nm)
+            for k, rows in enumerate(groups):
+                delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
+            computed.clear()
+            computed[key] = rate, design_inverse(fit.design) @ joint_products(problem.regressor, w, delta_torque)
+        return computed[key]
 
     def can_count(values: np.ndarray) -> bool:
         bound = shift_bound_sd(fit, values, list(range(n))).max()

@@ -106,7 +106,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     samples = usable_samples(data, config)
     rows, spikes, extras, problem = samples.rows, samples.spikes, samples.extras, samples.problem
     problems, warnings = samples.problems, samples.warnings
-    data_notes = len(warnings)  # the notes above are the samples'; those after them, the model's (held)
+    # The notes so far are the samples'; those added below are the model's (held between a live window's checks),
+    # but for the samples' own notes among them (``sample_notes``).
+    data_notes, sample_notes = len(warnings), []
     if samples.too_few is not None:
         return failed_result(data, problem.names, problems or [samples.too_few], warnings)
     usable = samples.usable
@@ -177,10 +179,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             if near_gap
             else ""
         )
-        warnings.append(
+        sample_notes.append(
             f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over "
             f"{config.outlier_sd:g} robust sd){where}"
         )
+        warnings.append(sample_notes[-1])
         if shift.max() > config.max_outlier_shift:
             worst = int(np.argmax(shift))
             key, owner = problem.names[worst]
@@ -372,7 +375,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             basis,
             tuple(problems[:data_problems]),
             tuple(problems[data_problems:]),
-            tuple(w for w in warnings[data_notes:] if not w.startswith("removed ")),
+            tuple(w for w in warnings[data_notes:] if w not in sample_notes),
             diagnostics,
         ),
     )

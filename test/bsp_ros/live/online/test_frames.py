@@ -48,3 +48,14 @@ def test_with_tf_a_frame_without_transform_waits_then_is_world() -> None:
     assert frames.rotation_for("ft_sensor", 2_500_000_000) is None
     np.testing.assert_allclose(frames.rotation_for("ft_sensor", 3_000_000_001), np.eye(3))
     assert frames.sources["ft_sensor"] == "world (no transform)"
+
+
+def test_the_wrench_frame_source_parameter_picks_tf_a_topic_or_the_quaternion() -> None:
+    from bsp_ros.live.online.frames import frame_source
+
+    assert frame_source("auto", True, "t").tf and not frame_source("auto", False, "t").transforms
+    topic = frame_source("topic", False, "ft_sensor/transform")
+    assert topic.topic and not topic.tf and topic.transforms and "ft_sensor/transform" in topic.description
+    assert frame_source("parameter", True, "t").description == "parameter wrench_frame_rotation_xyzw"
+    with pytest.raises(ValueError, match="tf2_msgs/msg/TFMessage is not installed"):
+        frame_source("tf", False, "t")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core.pipeline import IdentifyOptions
-from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowSamples
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimator, WindowSamples
 
 
 def _feed(identifier: WindowedIdentifier, stamps, wrench, raw, corrupt=None) -> None:
@@ -165,7 +165,7 @@ def test_updates_between_checks_refit_the_checked_model_to_the_newer_samples(liv
     newer = identifier.snapshot()
     refit = identifier.estimate_window(newer)
     assert refit.valid
-    data, _ = identifier._window_data(newer)
+    data, _ = identifier.estimator._window_data(newer)
     assert not isinstance(data, str)
     full = identify_data(data, identifier.config.options, check_drift=True)
     truth = simulated.truth.to_dict()["segments"]
@@ -182,7 +182,7 @@ def test_a_drift_found_by_a_check_is_modelled_by_the_updates_after_it(live_strea
 
     simulated, *_ = live_streams
     identifier, window = _window(live_streams, drift_n_per_s=0.01)
-    data, _ = identifier._window_data(window)
+    data, _ = identifier.estimator._window_data(window)
     assert not isinstance(data, str)
     offline = identify_data(data, identifier.config.options)
     assert offline.valid
@@ -201,7 +201,7 @@ def test_a_drift_found_by_a_check_is_modelled_by_the_updates_after_it(live_strea
             )
             assert z < 3.0, (segment, z)
     # Without the drift's columns the refit would be off: the held model is what keeps it right.
-    assert identifier._held is not None and identifier._held.drift
+    assert identifier.estimator._held is not None and identifier.estimator._held.drift
 
 
 def test_a_failed_model_check_holds_for_the_updates_between_checks(elastic_live_streams) -> None:
@@ -214,7 +214,7 @@ def test_a_failed_model_check_holds_for_the_updates_between_checks(elastic_live_
     assert not held.valid and held.document["quality"]["message"] == quality["message"]
     assert all(w in held.document["quality"]["warnings"] for w in quality["warnings"] if "elastic" in w)
     identifier.restart_checks()  # a restart checks again at once
-    assert identifier._due()
+    assert identifier.estimator._due()
 
 
 def test_the_elastic_fallback_holds_its_chosen_model_between_checks(elastic_live_streams) -> None:
@@ -245,17 +245,19 @@ def test_a_window_whose_samples_cannot_support_an_estimate_is_checked_again_at_t
 
     identifier, window = _window(live_streams)
     assert identifier.estimate_window(window).valid
-    assert identifier._held is not None and not identifier._held.data_problems
+    assert identifier.estimator._held is not None and not identifier.estimator._held.data_problems
     for _ in range(identifier.config.elastic_check_every - 1):
-        assert not identifier._due()
+        assert not identifier.estimator._due()
         identifier.estimate_window(window)
-    assert identifier._due()
+    assert identifier.estimator._due()
     identifier.estimate_window(window)
-    identifier._held = dataclasses.replace(identifier._held, data_problems=("the elbow moved in one direction only",))
-    assert identifier._due()
+    identifier.estimator._held = dataclasses.replace(
+        identifier.estimator._held, data_problems=("the elbow moved in one direction only",)
+    )
+    assert identifier.estimator._due()
 
 
-class _WholeWindowKinematics(WindowedIdentifier):
+class _WholeWindowKinematics(WindowEstimator):
     """Filters the whole window's angles at every update (on the held settings), keeping nothing settled."""
 
     def _held_kinematics(self, t_ns, q_rad, held):
@@ -283,7 +285,7 @@ def test_updates_that_keep_the_settled_kinematics_give_the_whole_window_s_estima
     _, stamps, wrench, _, raw = live_streams
     kept, whole = (
         WindowedIdentifier(3, WindowConfig(window_s=30.0)),
-        _WholeWindowKinematics(3, WindowConfig(window_s=30.0)),
+        WindowedIdentifier(3, WindowConfig(window_s=30.0), _WholeWindowKinematics(3, WindowConfig(window_s=30.0))),
     )
     start = int(stamps[-1]) - 3_000_000_000
     for identifier in (kept, whole):
@@ -305,3 +307,24 @@ def test_updates_that_keep_the_settled_kinematics_give_the_whole_window_s_estima
             assert ours[name][1] == pytest.approx(std, rel=0.03), name
             checked += 1
     assert checked > 100
+
+
+def test_a_window_copied_after_the_buffers_were_cleared_is_checked_afresh(live_streams) -> None:
+    """What a check chose before a reset (here: a drifting wrench's drift columns) does not carry over: the first
+    window after it, identified on the estimator that held that choice, equals a fresh estimator's."""
+    _, stamps, wrench, _, raw = live_streams
+    drifted = wrench.copy()
+    drifted[:, 1] += 0.01 * (np.asarray(stamps) - stamps[0]) / 1e9
+    earlier_ns = 100_000_000_000  # the drifting session, 100 s before the clean one
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=60.0))
+    _feed(identifier, np.asarray(stamps) - earlier_ns, drifted, [(t - earlier_ns, q, m) for t, q, m in raw])
+    assert identifier.estimate().valid and identifier.estimator._held is not None
+    assert identifier.estimator._held.drift
+    identifier.reset()  # as the node does on a new transform or contact point
+    _feed(identifier, stamps, wrench, raw)
+    window = identifier.snapshot()
+    assert isinstance(window, WindowSamples) and window.epoch > 0
+    again = identifier.estimate_window(window)
+    new = WindowEstimator(3, identifier.config).estimate_window(window)
+    assert again.valid and new.valid and not identifier.estimator._held.drift
+    assert _documented(again.document) == _documented(new.document)
