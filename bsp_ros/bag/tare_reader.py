@@ -16,7 +16,8 @@ from bsp_ros.bag.errors import (
 )
 from bsp_ros.bag.layout import resolve_bag
 from bsp_ros.bag.mcap_scan import scan_mcap
-from bsp_ros.bag.reader import _collect, _SessionSink, _usable_transform, held_warning
+from bsp_ros.bag.reader.rotation import held_warning, usable_transform
+from bsp_ros.bag.reader.sink import SessionSink, collect_stream
 from bsp_ros.bag.topics import WORLD_FRAME, TopicMap
 from msg_adapters import TransformSample
 from msg_adapters.rotation_track import TransformBuffer
@@ -63,7 +64,7 @@ def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame:
     wanted = TopicMap(topic_map.wrench, {}, topic_map.tf_static, topic_map.tf)
     root = Path(path)
     layout = resolve_bag(root)
-    sink = _SessionSink(wanted)
+    sink = SessionSink(wanted)
     present: dict[str, str] = {}
     warnings = list(layout.warnings) + [f"damage: {d}" for d in layout.damage]
     seen = 0
@@ -84,7 +85,7 @@ def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame:
         raise UnsupportedBagError("; ".join(sorted(set(sink.unsupported))))
     if (not present or seen == 0) and not damage:
         raise EmptyBagError(f"{root} holds no messages")
-    t_ns, values, _, frames, _ = _collect(sink.streams.get(wanted.wrench), 6)
+    t_ns, values, _, frames, _ = collect_stream(sink.streams.get(wanted.wrench), 6)
     if wanted.wrench not in present:
         if damage and not complete and layout.metadata is None:  # its channel may have been in the damaged part
             raise BagCorruptError(f"{wanted.wrench} is not among the topics that survive ({'; '.join(damage)})")
@@ -101,7 +102,7 @@ def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame:
         stream = sink.streams.get(topic)
         if stream is None:
             return []
-        return [s for _, batch in sorted(stream.transforms, key=lambda x: x[0]) for s in batch if _usable_transform(s)]
+        return [s for _, batch in sorted(stream.transforms, key=lambda x: x[0]) for s in batch if usable_transform(s)]
 
     transforms = TransformBuffer()
     transforms.add_static(samples(wanted.tf_static))

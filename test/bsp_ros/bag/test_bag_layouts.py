@@ -19,7 +19,9 @@ from bsp_ros.bag import read_session, write_session_bag
 from bsp_ros.bag.tare_reader import read_tare_bag
 from bsp_ros.cli import main
 from bsp_ros.core.simulation import SimulatedSession
-from bsp_ros.live.replay import _plan, _scan_thread, bag_files
+from bsp_ros.live.replay import bag_files
+from bsp_ros.live.replay.batches import scan_thread
+from bsp_ros.live.replay.plan import plan_topics
 
 LIST_ONLY = "the bag lists only"
 
@@ -119,11 +121,11 @@ def test_play_publishes_the_decompressed_cdr(source_bag: Path, tmp_path: Path) -
     """What `bsp play` would publish (its scan thread's batches, no DDS needed) is the recorded CDR."""
     bag = write_rosbags(source_bag, tmp_path / "compressed", mode=CompressionMode.MESSAGE)
     files, meta = bag_files(bag)
-    plans = _plan(files, meta, None, _empty_play_report(bag))
+    plans = plan_topics(files, meta, None, _empty_play_report(bag))
     want = {topic: n for topic, n in _counts(raw_messages(source_bag)).items()}
     assert {p.topic: p.expected for p in plans} == want
     batches: queue.Queue = queue.Queue(maxsize=4)
-    thread = _scan_thread(files, lambda c: True, batches, threading.Event())
+    thread = scan_thread(files, lambda c: True, batches, threading.Event())
     published: dict[str, list[bytes]] = {}
     while (item := batches.get()) is not None:
         if isinstance(item, BaseException):

@@ -12,7 +12,8 @@ from test_mcap_conformance import _AllSink
 from bsp_ros.bag import MissingTopicError, read_session
 from bsp_ros.bag.mcap_scan import scan_mcap
 from bsp_ros.cli import main
-from bsp_ros.live.replay import PlayReport, _plan, bag_files
+from bsp_ros.live.replay import PlayReport, bag_files
+from bsp_ros.live.replay.plan import plan_topics
 
 DATA = Path(__file__).resolve().parents[2] / "data" / "rosbag2"
 CDR_TEST = DATA / "cdr_test"
@@ -38,7 +39,7 @@ def test_rosbag2s_mcap_is_read_as_mcap_reads_it() -> None:
     assert listed == {"/array_topic": 4, "/test_topic": 3}
     assert scan.summary_counts == listed
     files, meta = bag_files(CDR_TEST)
-    plans = _plan(files, meta, None, PlayReport(path=str(CDR_TEST)))
+    plans = plan_topics(files, meta, None, PlayReport(path=str(CDR_TEST)))
     assert {p.topic: p.expected for p in plans} == listed
     # Metadata version 7 writes the QoS enums as numbers: durability 1 is transient-local (latched).
     assert "durability: 1" in (CDR_TEST / "metadata.yaml").read_text()
@@ -82,7 +83,7 @@ def test_rosbag2s_other_mcap_bags_are_counted_as_their_metadata_lists(bag: Path)
     assert {t: n for t, n in scan.summary_counts.items() if n} == {t: n for t, n in listed.items() if n}
     files, meta = bag_files(bag)
     report = PlayReport(path=str(bag))
-    plans = _plan(files, meta, None, report)
+    plans = plan_topics(files, meta, None, report)
     if bag == WRONG_RMW:  # nothing it could publish as CDR
         assert not plans and set(report.skipped) == set(listed)
     else:

@@ -1,0 +1,251 @@
+"""Play a rosbag2 MCAP bag onto ROS 2 topics (rclpy, serialized), with recorded timing, reporting any damage."""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.bag.errors import UnsupportedBagError
+from bsp_ros.bag.mcap_scan import ScanResult
+from bsp_ros.errors import BspError, InputError
+from bsp_ros.live.replay.batches import Batch, scan_thread
+from bsp_ros.live.replay.clock import CLOCK_QOS, CLOCK_TYPE, clock_bytes, sleep_until
+from bsp_ros.live.replay.plan import TopicPlan, bag_files, plan_topics
+from bsp_ros.live.replay.report import PlayReport, note_damage
+
+_LOG = logging.getLogger("bsp_ros.live.replay")
+_QUEUE_BATCHES = 4
+
+
+def play_bag(
+    path: str | Path,
+    *,
+    rate: float = 1.0,
+    loop: bool = False,
+    clock: bool = False,
+    clock_hz: float = 40.0,
+    topics: Sequence[str] | None = None,
+    domain_id: int | None = None,
+    wait_subscribers_s: float = 2.0,
+    settle_s: float = 0.2,
+    ack_timeout_s: float = 5.0,
+    stop: threading.Event | None = None,
+    on_start: Callable[[PlayReport], None] | None = None,
+) -> PlayReport:
+    """Publish a bag's messages on ROS 2 topics (rclpy), timed by their receive (log) times.
+
+    Messages are read raw from the MCAP file(s) with CRC checking and published as serialized CDR, byte
+    for byte as recorded; a topic whose message package is not installed (e.g. ``tf2_msgs`` outside a
+    cell) is skipped with a warning naming its type. The wrench and marker streams go out best effort
+    (``sensor_data``), latched (transient-local) topics such as ``/tf_static`` reliable transient-local
+    and ahead of the timeline, everything else reliable. A damaged bag plays its intact part; the report
+    says what was lost.
+
+    Parameters
+    ----------
+    path : bag directory, its ``metadata.yaml`` or an ``.mcap`` file.
+    rate : time scale (2 = twice as fast); 0 (or less) publishes as fast as possible.
+    loop : replay forever (the stamps and ``/clock`` jump back at each pass) until ``stop`` is set.
+    clock : publish ``rosgraph_msgs/msg/Clock`` on ``/clock`` with the bag's log time.
+    clock_hz : ``/clock`` rate in bag time, Hz.
+    topics : play only these topics (default: all).
+    domain_id : ROS domain id (``ROS_DOMAIN_ID`` or 0 when omitted).
+    wait_subscribers_s : wait up to this long for every topic to have a matched subscriber before playing.
+    settle_s : pause after the subscribers matched, s (lets the subscribers' side of discovery finish).
+    ack_timeout_s : wait up to this long at the end for reliable subscribers to acknowledge everything
+        (at most 0.5 s when stopped early).
+    stop : set it (e.g. from a signal handler) to stop the playback early.
+    on_start : called once the publishers exist and playback begins (with the report so far).
+
+    Returns
+    -------
+    PlayReport
+        Counts per topic, skipped topics and damage found.
+
+    Raises
+    ------
+    BagNotFoundError, NotABagError, UnsupportedBagError, InputError, RuntimeBackendError
+    """
+    if not np.isfinite(rate):
+        raise InputError(f"rate must be finite, got {rate!r}")
+    if not (np.isfinite(clock_hz) and clock_hz > 0):
+        raise InputError(f"clock rate must be positive, got {clock_hz!r}")
+    stop = stop or threading.Event()
+    files, meta = bag_files(path)
+    report = PlayReport(path=str(path))
+    plans = plan_topics(files, meta, topics, report)
+    if not plans and report.skipped:
+        # Exiting 0 after publishing nothing would read as a successful replay.
+        reasons = "; ".join(f"{topic}: {why}" for topic, why in sorted(report.skipped.items()))
+        raise UnsupportedBagError(f"{path}: nothing to play, every topic is skipped ({reasons})")
+
+    from bsp_ros.live.runtime.ros import Client, message_class
+
+    client = Client("rosbag2_player", domain_id)
+    started = time.monotonic()
+    try:
+        writers: dict[str, Callable[[bytes], None]] = {}
+        publishers: dict[str, Any] = {}
+        plan_of: dict[str, TopicPlan] = {}
+        for plan in plans:
+            try:
+                message_class(plan.msgtype)
+            except BspError as error:
+                report.skipped[plan.topic] = f"type {plan.msgtype or '<none>'} not installed: {error}"
+                _LOG.warning("skipping %s: %s", plan.topic, report.skipped[plan.topic])
+                continue
+            pub = client.publisher(plan.msgtype, plan.topic, plan.qos)
+            publishers[plan.topic] = pub
+            writers[plan.topic] = _raw_writer(pub)
+            plan_of[plan.topic] = plan
+            report.published[plan.topic] = 0
+            report.expected[plan.topic] = plan.expected
+        clock_write = _raw_writer(client.publisher(CLOCK_TYPE, "/clock", CLOCK_QOS)) if clock else None
+
+        _wait_for_subscribers(publishers, wait_subscribers_s, settle_s, stop)
+        report.matched = {t: p.get_subscription_count() for t, p in publishers.items()}
+        if on_start is not None:
+            on_start(report)
+        _play_passes(files, writers, plan_of, report, rate, loop, clock_write, clock_hz, stop)
+        report.interrupted = stop.is_set()
+        reliable = [p for t, p in publishers.items() if plan_of[t].qos.reliable and report.published[t]]
+        if reliable:
+            # Interrupted: do not hang on a subscriber that may be dead (DDS notices only after its lease).
+            deadline = time.monotonic() + (min(ack_timeout_s, 0.5) if report.interrupted else ack_timeout_s)
+            report.acked = all(_wait_for_acks(p, deadline - time.monotonic()) for p in reliable)
+        time.sleep(0.05)  # best-effort samples just written leave the socket
+    finally:
+        report.wall_s = time.monotonic() - started
+        client.close()
+    return report
+
+
+def _raw_writer(publisher: Any) -> Callable[[bytes], None]:
+    """A function publishing serialized CDR (with its encapsulation header) as it is on ``publisher``."""
+    topic = publisher.topic_name
+
+    def write(data: bytes) -> None:
+        try:
+            publisher.publish(data)  # rclpy: bytes are published raw, no deserialize/serialize round trip
+        except Exception as exc:  # rclpy raises RCLError
+            raise BspError(f"publishing on {topic} failed: {exc}") from exc
+
+    return write
+
+
+def _wait_for_acks(publisher: Any, timeout_s: float) -> bool:
+    from rclpy.duration import Duration
+
+    return bool(publisher.wait_for_all_acked(Duration(nanoseconds=max(0, int(timeout_s * 1e9)))))
+
+
+def _wait_for_subscribers(publishers: dict[str, Any], timeout_s: float, settle_s: float, stop: threading.Event) -> None:
+    if timeout_s <= 0 or not publishers:
+        return
+    deadline = time.monotonic() + timeout_s
+    while not stop.is_set() and time.monotonic() < deadline:
+        if all(p.get_subscription_count() > 0 for p in publishers.values()):
+            stop.wait(settle_s)
+            return
+        stop.wait(0.02)
+    if any(p.get_subscription_count() > 0 for p in publishers.values()):
+        stop.wait(settle_s)
+
+
+def _play_passes(
+    files: Sequence[Path],
+    writers: dict[str, Callable[[bytes], None]],
+    plans: dict[str, TopicPlan],
+    report: PlayReport,
+    rate: float,
+    loop: bool,
+    clock_write: Callable[[bytes], None] | None,
+    clock_hz: float,
+    stop: threading.Event,
+) -> None:
+    """Play the bag once, or until ``stop`` when looping."""
+    latched_done: set[str] = set()
+    first = True
+    while not stop.is_set():
+        finished = _play_once(
+            files, writers, plans, report, rate, clock_write, clock_hz, stop, latched_done, record_damage=first
+        )
+        if not finished:
+            return
+        report.loops += 1
+        if first:
+            report.first_pass = dict(report.published)
+        first = False
+        if not loop:
+            return
+
+
+def _play_once(
+    files: Sequence[Path],
+    writers: dict[str, Callable[[bytes], None]],
+    plans: dict[str, TopicPlan],
+    report: PlayReport,
+    rate: float,
+    clock_write: Callable[[bytes], None] | None,
+    clock_hz: float,
+    stop: threading.Event,
+    latched_done: set[str],
+    record_damage: bool,
+) -> bool:
+    """One pass over the bag; returns False if stopped before the end."""
+    batches: queue.Queue[Batch | ScanResult | BaseException | None] = queue.Queue(maxsize=_QUEUE_BATCHES)
+    scan_stop = threading.Event()
+    thread = scan_thread(files, lambda c: c.topic in writers, batches, scan_stop)
+    fast = rate <= 0
+    clock_period_ns = int(1e9 / clock_hz)
+    t_log0: int | None = None
+    t_wall0 = 0.0
+    next_clock_ns: int | None = None
+    latched_now = {t for t, p in plans.items() if p.latched and t not in latched_done}
+    try:
+        while True:
+            item = batches.get()
+            if item is None:
+                return True
+            if isinstance(item, BaseException):
+                raise item
+            if isinstance(item, ScanResult):
+                if record_damage:
+                    note_damage(report, item)
+                continue
+            # Latched topics go out first, without waiting for their time (and once over all loops).
+            for _, topic, data in item:
+                if topic in latched_now:
+                    writers[topic](data)
+                    report.published[topic] += 1
+            for log_ns, topic, data in item:
+                if stop.is_set():
+                    return False
+                if topic in latched_now or topic in latched_done:
+                    continue
+                if t_log0 is None:
+                    t_log0, t_wall0 = log_ns, time.monotonic()
+                    next_clock_ns = log_ns
+                if not fast:
+                    target = t_wall0 + (log_ns - t_log0) / 1e9 / rate
+                    next_clock_ns = sleep_until(
+                        target, stop, clock_write, next_clock_ns, clock_period_ns, t_log0, t_wall0, rate
+                    )
+                    if stop.is_set():
+                        return False
+                if clock_write is not None and next_clock_ns is not None and log_ns >= next_clock_ns:
+                    clock_write(clock_bytes(log_ns))
+                    next_clock_ns = log_ns + clock_period_ns
+                writers[topic](data)
+                report.published[topic] += 1
+    finally:
+        latched_done |= latched_now
+        scan_stop.set()
+        thread.join(timeout=5.0)
