@@ -82,7 +82,6 @@ def read_session(
         All subclasses of :class:`bsp_ros.errors.BagError`, each with a ``code``.
     """
     topic_map = topics or TopicMap()
-    topic_map = topics or TopicMap()
     aliases = dict(frame_aliases or {})
     root = Path(path)
     report = ReadReport(path=str(root))
