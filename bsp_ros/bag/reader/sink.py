@@ -51,11 +51,14 @@ class SessionSink:
 
     @property
     def typestore(self) -> Any:
+        """rosbags' Jazzy type store, loaded only when a message needs it (a non-fixed layout or a damaged one)."""
         if self._typestore is None:
             self._typestore = get_typestore(Stores.ROS2_JAZZY)
         return self._typestore
 
     def wants(self, channel: ChannelInfo) -> bool:
+        """Whether ``channel`` is a mapped topic of the expected type in CDR (the others are noted as wrong or
+        unsupported)."""
         want = self.expected.get(channel.topic)
         if want is None:
             return False
@@ -68,6 +71,7 @@ class SessionSink:
         return True
 
     def stream(self, channel: ChannelInfo) -> Stream:
+        """The stream collecting ``channel``'s topic, made on its first message."""
         stream = self.streams.get(channel.topic)
         if stream is None:
             stream = self.streams[channel.topic] = Stream(channel.topic, channel.msgtype)
@@ -76,6 +80,8 @@ class SessionSink:
     def feed(
         self, channel: ChannelInfo, buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray, log_ns: np.ndarray
     ) -> None:
+        """Decode messages ``buf[offsets[i]:offsets[i] + lengths[i]]`` of ``channel``: fixed layouts in bulk, a
+        message the bulk decoder cannot take (and every other type) through rosbags."""
         stream = self.stream(channel)
         n_floats = FIXED_LAYOUT_FLOATS.get(channel.msgtype)
         if n_floats is None:

@@ -28,6 +28,9 @@ Statistics = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 @dataclass(frozen=True)
 class Problem:
+    """The joint model stacked over samples and joints: ``torque[t, i] = sum_k regressor[t, i, k] theta_k`` on the
+    used rows, with bounds and Gaussian priors on some parameters (``p`` of them, ``n`` joints, ``N`` samples)."""
+
     names: list[ParameterName]
     # (N, n, p_k) the regressor's column blocks, in order: a problem augmented with a few columns keeps its base's
     # regressor and the new columns apart, and joins them (``regressor``) only when a pass over them needs it
@@ -80,6 +83,9 @@ class Extras:
 
 @dataclass(frozen=True)
 class Fit:
+    """A solved :class:`Problem`: values (p,), HAC covariance (p, p), the residuals and per-joint noise, the
+    condition number of the scaled design and the HAC's lags."""
+
     values: np.ndarray
     covariance: np.ndarray
     residual: np.ndarray  # (N, n), NaN off the used rows
@@ -331,6 +337,9 @@ def _bounded(problem: Problem, r_factor: np.ndarray, rhs: np.ndarray, scale: np.
 
 
 def weighted_solve(problem: Problem, weights: np.ndarray, statistics: Statistics | None = None) -> np.ndarray:
+    """The bounded weighted least-squares values (p,) of ``problem`` with per-joint weights ``weights`` (n,)
+    (1 / sigma^2, 1/Nm^2) and its priors; from the normal equations (``statistics``: the per-joint ones, when already
+    computed), or from a QR factor of the tall system when they are too ill-conditioned to factor."""
     # Column scaling makes the bounded solver's tolerances meaningful for kgm and Nm alike.
     design, moment, _ = normal_equations(problem, weights, statistics)
     factor = _scaled_cholesky(design, moment)

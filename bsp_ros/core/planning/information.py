@@ -33,11 +33,17 @@ class Trajectory(Protocol):
     """What a prediction needs of a joint trajectory (``TrajectorySpec`` and ``PlannedTrajectory`` have it)."""
 
     @property
-    def n_joints(self) -> int: ...
+    def n_joints(self) -> int:
+        """Number of joints (2 or 3)."""
+        ...
 
-    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint angles at ``t_s`` (s since the session start): (N,) -> (N, n) rad."""
+        ...
 
-    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint velocities at ``t_s``: (N,) -> (N, n) rad/s."""
+        ...
 
 
 @dataclass(frozen=True)

@@ -93,14 +93,22 @@ class JointTrajectory(Protocol):
     """Any joint motion the simulator can follow: ``TrajectorySpec`` or ``bsp_ros.core.planning.PlannedTrajectory``."""
 
     @property
-    def n_joints(self) -> int: ...
+    def n_joints(self) -> int:
+        """Number of joints (2 or 3)."""
+        ...
 
     @property
-    def peak_speed_rad_s(self) -> tuple[float, ...]: ...
+    def peak_speed_rad_s(self) -> tuple[float, ...]:
+        """(n,) peak joint speeds, rad/s."""
+        ...
 
-    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+    def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint angles at ``t_s`` (s since the session start): (N,) -> (N, n) rad."""
+        ...
 
-    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray: ...
+    def velocities_rad_s(self, t_s: npt.ArrayLike) -> np.ndarray:
+        """Joint velocities at ``t_s``: (N,) -> (N, n) rad/s."""
+        ...
 
 
 def joint_accelerations_rad_s2(trajectory: TrajectorySpec | JointTrajectory, t_s: npt.ArrayLike) -> np.ndarray:
@@ -219,10 +227,12 @@ class TrunkTiltedTrajectory:
 
     @property
     def n_joints(self) -> int:
+        """The trajectory's joints."""
         return int(self.trajectory.n_joints)
 
     @property
     def peak_speed_rad_s(self) -> tuple[float, ...]:
+        """(n,) the trajectory's peak joint speeds, rad/s: a constant tilt leaves them as they are."""
         return tuple(self.trajectory.peak_speed_rad_s)
 
     def angles_rad(self, t_s: npt.ArrayLike) -> np.ndarray:

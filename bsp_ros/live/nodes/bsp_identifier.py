@@ -368,6 +368,7 @@ class BspIdentifierNode(RosNode):
         self.support_pub.publish(build_wrench_stamped(self.types, support))
 
     def stale_reason(self) -> str | None:
+        """Why no estimate can be made now (an input never came or fell silent for ``stale_s``), or None."""
         now = self.now_ns()
         for name, last in self.last_receive.items():
             if last is None:
