@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -74,9 +75,10 @@ class PassiveModel:
         """The ``+``-joined term names (``auto`` when the data choose)."""
         return AUTO if self.select else "+".join(self.terms)
 
-    @property
+    @functools.cached_property
     def local(self) -> tuple[str, ...]:
-        """The terms with one column per joint in that joint's row (:data:`TERMS`)."""
+        """The terms with one column per joint in that joint's row (:data:`TERMS`); kept (the 1 kHz live filter
+        asks for them with every row)."""
         return tuple(term for term in self.terms if term in TERMS)
 
     @property

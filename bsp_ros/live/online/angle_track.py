@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import bisect
+
 import numpy as np
 
 __all__ = ["AngleTrack", "Kinematics"]
@@ -57,7 +59,7 @@ class AngleTrack:
             self._next += 1
         # States older than the next fit's window are no longer needed.
         if self._next < len(self.t_ns):
-            keep_from = int(np.searchsorted(self.t_ns, self.t_ns[self._next] - self.half_ns))
+            keep_from = bisect.bisect_left(self.t_ns, self.t_ns[self._next] - self.half_ns)
             del self.t_ns[:keep_from], self.q_rad[:keep_from]
             self._next -= keep_from
         return done
@@ -66,8 +68,9 @@ class AngleTrack:
         """The fit centred on state ``k``; None where the states around it do not span most of the window (a
         gap, the start)."""
         t_center = self.t_ns[k]
-        lo = int(np.searchsorted(self.t_ns, t_center - self.half_ns))
-        hi = int(np.searchsorted(self.t_ns, t_center + self.half_ns, side="right"))
+        # bisect on the list itself: numpy's searchsorted would copy the list into an array at every call.
+        lo = bisect.bisect_left(self.t_ns, t_center - self.half_ns)
+        hi = bisect.bisect_right(self.t_ns, t_center + self.half_ns)
         if hi - lo < 7 or min(t_center - self.t_ns[lo], self.t_ns[hi - 1] - t_center) < 0.8 * self.half_ns:
             return None
         t_s = (np.array(self.t_ns[lo:hi]) - t_center) / 1e9

@@ -7,7 +7,7 @@ import collections
 
 import numpy as np
 
-from bsp_ros.core.dynamics import base_regressor
+from bsp_ros.core.dynamics import base_regressor_one
 from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.priors import BasePrior, base_prior_for_subject
@@ -65,9 +65,10 @@ class RecursiveFeed:
         self.passive_joints: tuple[str, ...] = tuple(name for key, name in self.identifier.names if key == "coulomb_nm")
         # The lengths the prior was made for, its static moments (kg m) and its perpendicular moments and inertias.
         self._prior: tuple[np.ndarray, np.ndarray, BasePrior] | None = None
-        # Per joint state, oldest first: stamp (ns), and angles, velocities, inertial torques (n,) each.
+        # Per joint state, oldest first: stamp (ns), and angles, velocities, inertial torques (n,) each, in plain
+        # floats (each 1 kHz wrench is interpolated between two of them).
         self._stamps: collections.deque[int] = collections.deque()
-        self._rows: collections.deque[tuple[np.ndarray, np.ndarray, np.ndarray]] = collections.deque()
+        self._rows: collections.deque[tuple[list[float], list[float], list[float]]] = collections.deque()
         self._pending: collections.deque[tuple[int, np.ndarray, np.ndarray]] = collections.deque()
 
     def add_joint_state(
@@ -86,7 +87,7 @@ class RecursiveFeed:
             if self.dynamics and lengths_m is not None:
                 inertial = self.inertial_torque_nm(q, qd, qdd, lengths_m)
             self._stamps.append(stamp)
-            self._rows.append((q, qd, inertial))
+            self._rows.append((q.tolist(), qd.tolist(), inertial.tolist()))
         while self._stamps and self._stamps[0] < t_ns - MAX_WAIT_NS:
             self._stamps.popleft()
             self._rows.popleft()
@@ -109,10 +110,10 @@ class RecursiveFeed:
         if not ((static_kgm > 0.5 * prior_static_kgm) & (static_kgm < 2.0 * prior_static_kgm)).all():
             static_kgm = prior_static_kgm
         parameters = np.concatenate((static_kgm, prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
-        regressor = base_regressor(q_rad[None], qd_rad_s[None], qdd_rad_s2[None], lengths_m, gravity_m_s2=0.0)[0]
-        return np.asarray(regressor @ parameters)
+        regressor = base_regressor_one(q_rad, qd_rad_s, qdd_rad_s2, lengths_m, gravity_m_s2=0.0)
+        return np.asarray(regressor) @ parameters
 
-    def kinematics_at(self, t_ns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    def kinematics_at(self, t_ns: int) -> tuple[list[float], list[float], list[float]] | None:
         """Angles (rad), velocities (rad/s) and inertial torques (Nm), (n,) each, interpolated at ``t_ns`` between
         the joint states around it; None outside them or across a gap."""
         after = bisect.bisect_left(self._stamps, t_ns)
@@ -125,7 +126,11 @@ class RecursiveFeed:
             return None
         w = (t_ns - t0) / (t1 - t0)
         (q0, v0, i0), (q1, v1, i1) = self._rows[after - 1], self._rows[after]
-        return (1 - w) * q0 + w * q1, (1 - w) * v0 + w * v1, (1 - w) * i0 + w * i1
+
+        def blend(x0: list[float], x1: list[float]) -> list[float]:
+            return [(1 - w) * a + w * b for a, b in zip(x0, x1, strict=True)]
+
+        return blend(q0, q1), blend(v0, v1), blend(i0, i1)
 
     def add_wrench(
         self, t_ns: int, wrench_yzx: np.ndarray, lengths_m: np.ndarray | None
@@ -147,7 +152,7 @@ class RecursiveFeed:
         if lengths_m is not None:
             self._pending.append((t_ns, np.asarray(wrench_yzx, dtype=np.float64), lengths_m))
         known_until = self._stamps[-1] if self._stamps else None
-        updated = False
+        ready = []
         while self._pending and (
             self._pending[0][0] < t_ns - MAX_WAIT_NS or (known_until is not None and self._pending[0][0] <= known_until)
         ):
@@ -157,9 +162,9 @@ class RecursiveFeed:
                 continue
             q, velocity, inertial = kinematics
             tau = contact_torques_one_nm(q, lengths, wrench)
-            tau = [a - b for a, b in zip(tau, inertial.tolist(), strict=True)]
-            updated |= self.identifier.update(stamp, q, velocity, tau)
-        if not updated:
+            ready.append((stamp, q, velocity, [a - b for a, b in zip(tau, inertial, strict=True)]))
+        # The wrenches a joint state released fold in together: one solve, one estimate published.
+        if not ready or not self.identifier.update_many(ready):
             return True, None
         return True, np.asarray(self.identifier.theta[self.n :: self._terms], dtype=np.float64)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from pinocchio_chain import planar_chain
 
-from bsp_ros.core.dynamics import base_parameters, base_regressor, base_torque_angle_derivatives
+from bsp_ros.core.dynamics import base_parameters, base_regressor, base_regressor_one, base_torque_angle_derivatives
 from bsp_ros.core.model import gravity_regressor
 
 pin = pytest.importorskip("pinocchio", reason="pinocchio (pip 'pin') is the independent rigid-body oracle")
@@ -27,6 +27,9 @@ def test_base_regressor_equals_pinocchio_rnea(n):
     ours = base_regressor(q, qd, qdd, lengths) @ theta
     theirs = np.array([pin.rnea(model, data, q[t], qd[t], qdd[t]) for t in range(q.shape[0])])
     np.testing.assert_allclose(ours, theirs, atol=1e-10)
+    # The live filter's one-sample version in plain floats: the same bits as the vectorised one.
+    one = np.array([base_regressor_one(q[t], qd[t], qdd[t], lengths) for t in range(q.shape[0])])
+    assert np.array_equal(one, base_regressor(q, qd, qdd, lengths))
 
 
 def test_static_columns_are_the_gravity_regressor():
