@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 import pytest
 
@@ -9,7 +11,8 @@ from bsp_ros.core.identification.recursive import RecursiveIdentifier
 from bsp_ros.core.model import contact_torques_nm
 
 
-def _run(identifier: RecursiveIdentifier, stamps, wrench, angles, still_after_s: float | None = None) -> None:
+def _samples(stamps, wrench, angles, still_after_s: float | None = None) -> Iterator[tuple]:
+    """``(t_ns, q_rad, velocity_rad_s, tau_nm)`` of each wrench with the newest joint state at or before it."""
     k = 0
     for i, t in enumerate(stamps):
         while k + 1 < len(angles) and angles[k + 1][0] <= t:
@@ -21,7 +24,12 @@ def _run(identifier: RecursiveIdentifier, stamps, wrench, angles, still_after_s:
         if still_after_s is not None and (t - stamps[0]) / 1e9 > still_after_s:
             velocity = np.zeros(3)
         tau = contact_torques_nm(sample.q_rad[None], sample.lengths_m, wrench[i][None])[0]
-        identifier.update(int(t), sample.q_rad, velocity, tau)
+        yield int(t), sample.q_rad, velocity, tau
+
+
+def _run(identifier: RecursiveIdentifier, stamps, wrench, angles, still_after_s: float | None = None) -> None:
+    for sample in _samples(stamps, wrench, angles, still_after_s):
+        identifier.update(*sample)
 
 
 def test_recursive_estimate_converges_to_the_truth(live_streams) -> None:
@@ -66,15 +74,7 @@ def test_samples_folded_in_together_give_the_one_at_a_time_estimate(live_streams
     _, stamps, wrench, angles, _raw = live_streams
     single, batched = RecursiveIdentifier(3), RecursiveIdentifier(3)
     _run(single, stamps, wrench, angles)
-    samples, k = [], 0
-    for i, t in enumerate(stamps):
-        while k + 1 < len(angles) and angles[k + 1][0] <= t:
-            k += 1
-        if angles[k][0] > t:
-            continue
-        sample = angles[k][1]
-        tau = contact_torques_nm(sample.q_rad[None], sample.lengths_m, wrench[i][None])[0]
-        samples.append((int(t), sample.q_rad, sample.velocity_rad_s, tau))
+    samples = list(_samples(stamps, wrench, angles))
     folded = sum(batched.update_many(samples[s : s + 10]) for s in range(0, len(samples), 10))
     assert folded == batched.n_updates == single.n_updates
     std = np.sqrt(np.diag(single.covariance))
