@@ -195,10 +195,10 @@ class BspIdentifierNode(RosNode):
         self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
-        # Estimates run on one worker thread, so that the wrench callbacks never wait for one: a windowed update
+        # Windowed estimates run on one worker thread, so that the wrench callbacks never wait for one: an update
         # refits the model its last check chose (~13 ms for 30 s at 1 kHz, the checks every elastic_check_every
         # updates ~25 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
-        # callbacks every switch interval (main() sets 0.2 ms).
+        # callbacks every switch interval (main() sets 0.2 ms). The recursive mode's ~1 ms estimate runs here.
         self.worker = LatestJobWorker(f"{NAME}-estimate")
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None
@@ -421,7 +421,8 @@ class BspIdentifierNode(RosNode):
         self.ready = (generation, self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)))
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
-        """The filter's state is copied here; the worker fuses it with the prior and publishes it at once."""
+        """The filter's state, fused with the prior and published here, on the executor thread: it takes ~2 ms,
+        and on the worker thread it handed the interpreter lock back and forth with the callbacks for longer."""
         job: Callable[[], jobs.EstimateOutputs]
         if reason is not None:
             document, now = invalid_document(self.options.method, reason), self.now_ns()
@@ -433,10 +434,10 @@ class BspIdentifierNode(RosNode):
             stamp = self.recursive.guard.last_t_ns or 0
             robot = self.windowed.contact_from_robot
             job = lambda: jobs.recursive_estimate(result, lengths, self.options, stamp, robot)  # noqa: E731
-        self.worker.submit(lambda: self.publish(self._timed(job), counts))
+        self.publish(self._timed(job), counts)
 
     def _timed(self, job: Callable[[], jobs.EstimateOutputs]) -> jobs.EstimateOutputs:
-        """On the worker thread: run an estimate job and record how long it took; a job that fails
+        """Run an estimate job and record how long it took; a job that fails
         unexpectedly gives an invalid estimate (published, not lost) and a logged traceback."""
         started, started_cpu = time.perf_counter(), time.thread_time()
         try:

@@ -32,7 +32,9 @@ class RecursiveFeed:
 
     Angles, velocities (for the direction of friction) and accelerations come from fits centred on each joint
     state (:class:`AngleTrack`), so the filter runs half a fit window (0.5 s) behind the wrench stream: a
-    wrench waits until the kinematics around its stamp are known, then they are interpolated to it.
+    wrench waits until the kinematics around its stamp are known, then they are interpolated to it. The joint
+    state that makes them known folds the waiting wrenches in (one solve); the next wrench carries the new
+    estimate out, so that its own callback only publishes.
 
     The arm's inertial torque ``M(q) q'' + C(q, q') q'`` is taken off each wrench's torque, as the windowed and
     offline fits model it: the static moments' share with the filter's current estimate (the prior's until it is
@@ -70,6 +72,7 @@ class RecursiveFeed:
         self._stamps: collections.deque[int] = collections.deque()
         self._rows: collections.deque[tuple[list[float], list[float], list[float]]] = collections.deque()
         self._pending: collections.deque[tuple[int, np.ndarray, np.ndarray]] = collections.deque()
+        self._updated = False  # the filter took samples since add_wrench last reported its estimate
 
     def add_joint_state(
         self, t_ns: int, q_rad: np.ndarray, velocity_rad_s: np.ndarray, lengths_m: np.ndarray | None = None
@@ -91,6 +94,8 @@ class RecursiveFeed:
         while self._stamps and self._stamps[0] < t_ns - MAX_WAIT_NS:
             self._stamps.popleft()
             self._rows.popleft()
+        if self._stamps:
+            self._release(self._stamps[-1])
         return True
 
     def inertial_torque_nm(
@@ -141,20 +146,34 @@ class RecursiveFeed:
         Returns
         -------
         (accepted, coulomb_nm)
-            Whether the sample was accepted, and the joints' Coulomb amplitudes (Nm) if the filter updated.
+            Whether the sample was accepted, and the joints' Coulomb amplitudes (Nm) if the filter took samples
+            since the last wrench.
         """
         verdict = self.guard.check(t_ns, wrench_yzx)
         if verdict in ("jump", "gap"):
-            self.identifier.reset()
-            self._pending.clear()
+            self.reset()
         if verdict == "refused":
             return False, None
         if lengths_m is not None:
             self._pending.append((t_ns, np.asarray(wrench_yzx, dtype=np.float64), lengths_m))
+        # Usually the joint states have released everything before this wrench; not a wrench that came later
+        # than the kinematics at its stamp, nor those left waiting when the joint states stopped.
         known_until = self._stamps[-1] if self._stamps else None
+        first = self._pending[0][0] if self._pending else None
+        if first is not None and (first < t_ns - MAX_WAIT_NS or (known_until is not None and first <= known_until)):
+            self._release(known_until, t_ns - MAX_WAIT_NS)
+        if not self._updated:
+            return True, None
+        self._updated = False
+        return True, np.asarray(self.identifier.theta[self.n :: self._terms], dtype=np.float64)
+
+    def _release(self, known_until_ns: int | None, expired_ns: int | None = None) -> None:
+        """Fold in the waiting wrenches whose kinematics are known (stamped up to ``known_until_ns``), together:
+        one solve. Those stamped before ``expired_ns`` leave the queue too, folded if they have kinematics."""
         ready = []
         while self._pending and (
-            self._pending[0][0] < t_ns - MAX_WAIT_NS or (known_until is not None and self._pending[0][0] <= known_until)
+            (expired_ns is not None and self._pending[0][0] < expired_ns)
+            or (known_until_ns is not None and self._pending[0][0] <= known_until_ns)
         ):
             stamp, wrench, lengths = self._pending.popleft()
             kinematics = self.kinematics_at(stamp)
@@ -163,12 +182,11 @@ class RecursiveFeed:
             q, velocity, inertial = kinematics
             tau = contact_torques_one_nm(q, lengths, wrench)
             ready.append((stamp, q, velocity, [a - b for a, b in zip(tau, inertial, strict=True)]))
-        # The wrenches a joint state released fold in together: one solve, one estimate published.
-        if not ready or not self.identifier.update_many(ready):
-            return True, None
-        return True, np.asarray(self.identifier.theta[self.n :: self._terms], dtype=np.float64)
+        if ready and self.identifier.update_many(ready):
+            self._updated = True
 
     def reset(self) -> None:
         """Restart the filter (e.g. the wrench frame's rotation changed)."""
         self.identifier.reset()
         self._pending.clear()
+        self._updated = False

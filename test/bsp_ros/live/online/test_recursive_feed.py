@@ -78,6 +78,54 @@ def test_the_inertial_torque_taken_off_follows_the_simulated_arm() -> None:
     assert (error_rms < 0.3 * true_rms).all(), (error_rms, true_rms)
 
 
+def _world_wrench(simulated: sim.SimulatedSession) -> tuple[list[int], np.ndarray]:
+    session = simulated.session
+    return session.wrench.t_ns.tolist(), wrench_world_yzx(session.wrench, session.rotation_world_from_sensor)
+
+
+def test_a_joint_state_folds_the_waiting_wrenches_in_and_the_next_wrench_carries_the_estimate_out() -> None:
+    # The filter runs 0.5 s behind: a wrench in order never has its kinematics yet, so its callback only reports
+    # what the joint state before it folded in (the node publishes that, stamped with the wrench).
+    _, simulated, states = _fast_session(7, 20.0)
+    stamps, wrench = _world_wrench(simulated)
+    feed = RecursiveFeed(3, PassiveModel.parse("coulomb"))
+    k, folded, reported = 0, False, 0
+    for i, t in enumerate(stamps):
+        while k < len(states) and states[k][0] <= t:
+            before = feed.identifier.n_updates
+            feed.add_joint_state(states[k][0], states[k][1].q_rad, states[k][1].velocity_rad_s, LENGTHS_M)
+            folded = folded or feed.identifier.n_updates > before
+            k += 1
+        before = feed.identifier.n_updates
+        accepted, coulomb_nm = feed.add_wrench(t, wrench[i], LENGTHS_M)
+        assert accepted and feed.identifier.n_updates == before
+        assert (coulomb_nm is not None) == folded
+        if coulomb_nm is not None:
+            assert np.array_equal(coulomb_nm, feed.identifier.theta[3:])
+            reported += 1
+        folded = False
+    # One per joint state once the filter has warmed up, while the arm moves (350 of ~1000 states here).
+    assert reported > 0.25 * len(states)
+
+
+def test_a_wrench_later_than_the_kinematics_at_its_stamp_is_folded_in_at_once() -> None:
+    _, simulated, states = _fast_session(7, 30.0)
+    stamps, wrench = _world_wrench(simulated)
+    feed = RecursiveFeed(3, PassiveModel.parse("coulomb"))
+    half = stamps[0] + 20_000_000_000  # in order until 20 s (the filter warms up), then the wrench stream lags
+    k, late = 0, 0
+    for i, t in enumerate(stamps):
+        while k < len(states) and (states[k][0] <= t or t > half):
+            feed.add_joint_state(states[k][0], states[k][1].q_rad, states[k][1].velocity_rad_s, LENGTHS_M)
+            k += 1
+        before = feed.identifier.n_updates
+        accepted, coulomb_nm = feed.add_wrench(t, wrench[i], LENGTHS_M)
+        if stamps[i - 1] > half:  # its kinematics are known (or gone): folded at once if the arm moves, or dropped
+            assert accepted and (coulomb_nm is not None) == (feed.identifier.n_updates == before + 1)
+            late += coulomb_nm is not None
+    assert late > 100
+
+
 TWO_SINES = sim.MultiSineTrajectory.within_speed(
     (-43.3, 45.0, 0.2), ((2.1, 7.9), (2.7, 9.3), (3.3, 11.1)), 0.15, ((0.0, 1.3), (1.0, 2.9), (2.0, 0.4))
 )
