@@ -279,6 +279,7 @@ def run_mode(
                 f"speed:={SPEED}",
                 f"duration_s:={total_s}",
                 f"tick_s:={TICK_MS / 1e3}",
+                "wait_for_subscribers:=2",  # the identifier (or relay) and the listener: the session starts whole
             ],
         )
         deadline = time.time_ns() + int(30e9)

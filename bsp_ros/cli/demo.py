@@ -223,7 +223,10 @@ def run(args: argparse.Namespace) -> int:
         xyzw = quaternion_from_matrix(spec.sensor.rotation_world_from_sensor)
         identifier += ["-p", "wrench_frame_rotation_xyzw:=[" + ", ".join(repr(float(v)) for v in xyzw) + "]"]
     node_args = {
-        "cell_simulator": ["-p", f"speed:={args.speed}", "-p", f"subject:={args.subject}", "-p", f"seed:={args.seed}"],
+        "cell_simulator": [
+            *("-p", f"speed:={args.speed}", "-p", f"subject:={args.subject}", "-p", f"seed:={args.seed}"),
+            *("-p", "wait_for_subscribers:=1"),  # the session starts once the identifier takes the wrench
+        ],
         "joint_angle_estimator": ["-p", f"n_segments:={n_segments}"],
         "bsp_identifier": identifier,
     }

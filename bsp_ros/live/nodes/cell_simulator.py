@@ -86,7 +86,17 @@ PARAMETERS = (
     # A real sensor driver publishes each sample as it is measured; the default 1 ms tick comes close at
     # 1 kHz (a coarser tick publishes bursts, which delay the last sample of each burst downstream).
     Param("tick_s", 0.001, "publish the samples that fell due every this long", "s", lo=0.0005, hi=0.1),
+    Param(
+        "wait_for_subscribers",
+        0,
+        "start the session once the wrench topic has this many subscribers (at most 10 s later; 0: at once)",
+        lo=0,
+        hi=100,
+    ),
 )
+
+# How long the session waits for wait_for_subscribers before it starts anyway.
+SUBSCRIBER_WAIT_NS = 10_000_000_000
 
 
 @dataclasses.dataclass
@@ -129,7 +139,14 @@ class CellSimulatorNode(RosNode):
         rpy = p["sensor_roll_pitch_yaw_deg"]
         if len(rpy) != 3:
             raise InputError(f"{NAME}: sensor_roll_pitch_yaw_deg needs 3 angles, got {rpy}")
-        self.start_wall_ns = self.now_ns()
+        # The physics runs on its own clock from sim_start_ns; the session starts on the node clock at the first
+        # tick (start_wall_ns), once its subscribers are there, and every stamp is shifted by the difference.
+        # Building the simulator takes ~0.4 s: starting the clock before it made the first tick publish those
+        # 0.4 s of samples in one burst, while the subscribers had not matched yet.
+        self.sim_start_ns = self.now_ns()
+        self.start_wall_ns: int | None = None
+        self.created_ns = self.sim_start_ns
+        self.wait_for_subscribers = p["wait_for_subscribers"]
         base = sim.human_arm_cell() if p["subject"] == "human" else sim.paper_mechanical_arm_cell()
         hand_offset = p["hand_marker_offset_mm"]
         if len(hand_offset) != 2:
@@ -139,7 +156,7 @@ class CellSimulatorNode(RosNode):
         spec = dataclasses.replace(
             base,
             seed=p["seed"],
-            start_ns=self.start_wall_ns,
+            start_ns=self.sim_start_ns,
             duration_s=max(self.duration_s, 1.0),
             sensor=dataclasses.replace(
                 base.sensor,
@@ -182,8 +199,8 @@ class CellSimulatorNode(RosNode):
         self.frame_id = spec.sensor.frame_id
         self.wrench_period_ns = int(1e9 / wrench_hz)
         self.marker_period_ns = int(1e9 / marker_hz)
-        self.wrench_queue = _Queue(self.start_wall_ns)
-        self.marker_queue = _Queue(self.start_wall_ns)
+        self.wrench_queue = _Queue(self.sim_start_ns)
+        self.marker_queue = _Queue(self.sim_start_ns)
         self.types = message_class
         sensor_data = rclpy_qos("sensor_data")
         self.wrench_pub = self.create_publisher(
@@ -197,9 +214,10 @@ class CellSimulatorNode(RosNode):
             name: self.create_publisher(pose, p["marker_topic_prefix"] + name, sensor_data)
             for name in self.simulator.marker_names
         }
-        quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
+        self.quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
         self.turns = spec.sensor.turns_with_handle
         self.tf_pub = None  # /tf of a turning sensor, one transform per wrench sample
+        self.static_pub = None  # /tf_static of a fixed one, sent when the session starts
         self.transform_pub = None  # the same as TransformStamped (a robot publishing its flange pose)
         if p["transform_topic"] and self.turns:
             transform_type = message_class("geometry_msgs/msg/TransformStamped")
@@ -209,17 +227,16 @@ class CellSimulatorNode(RosNode):
             if self.turns:
                 self.tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf", 100)
             else:
-                tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
-                transform = TransformSample(self.start_wall_ns, "world", self.frame_id, np.zeros(3), quaternion)
-                tf_pub.publish(build_tf_message(message_class, [transform]))
+                self.static_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
+        xyzw = self.quaternion
         self.get_logger().info(
-            f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {[round(float(v), 9) for v in quaternion]} "
+            f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {[round(float(v), 9) for v in xyzw]} "
             + ("at the mean handle pitch; " if self.turns else "")
             + (f"on {where}" if has_message(TF_TYPE) else f"(not on {where}: {TF_TYPE} is not installed)")
         )
-        truth_pub = self.create_publisher(message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static"))
-        truth = {**self.simulator.truth.to_dict(), "start_time_ns": self.start_wall_ns}
-        truth_pub.publish(message_class("std_msgs/msg/String")(data=json.dumps(truth)))
+        self.truth_pub = self.create_publisher(
+            message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static")
+        )
         self.create_timer(p["tick_s"], self.tick)
         self.get_logger().info(
             f"simulating a {self.simulator.n_segments}-segment arm at {self.speed:.1f}x real time, "
@@ -230,25 +247,44 @@ class CellSimulatorNode(RosNode):
         """The node clock, ns."""
         return int(self.get_clock().now().nanoseconds)
 
-    def _sim_now_ns(self) -> int:
-        return self.start_wall_ns + int((self.now_ns() - self.start_wall_ns) * self.speed)
+    def start(self, now_ns: int) -> None:
+        """Start the session on the node clock: the transform of a fixed sensor and the truth go out."""
+        self.start_wall_ns = now_ns
+        if self.static_pub is not None:
+            transform = TransformSample(now_ns, "world", self.frame_id, np.zeros(3), self.quaternion)
+            self.static_pub.publish(build_tf_message(message_class, [transform]))
+        truth = {**self.simulator.truth.to_dict(), "start_time_ns": now_ns}
+        truth["simulation"] = {**truth["simulation"], "start_ns": now_ns}  # the trajectory's t = 0, as stamped
+        self.truth_pub.publish(message_class("std_msgs/msg/String")(data=json.dumps(truth)))
+
+    def _sim_now_ns(self, now_ns: int) -> int:
+        assert self.start_wall_ns is not None
+        return self.sim_start_ns + int((now_ns - self.start_wall_ns) * self.speed)
 
     def _stamp(self, t_ns: np.ndarray) -> np.ndarray:
-        """Apply the clock-jump fault to stamps (the physics keeps going)."""
+        """Simulated times (ns) -> stamps on the node clock, with the clock-jump fault (the physics keeps going)."""
+        assert self.start_wall_ns is not None
+        stamps = t_ns + np.int64(self.start_wall_ns - self.sim_start_ns)
         if self.jump_at_s > 0:
-            jumped = t_ns - self.start_wall_ns >= self.jump_at_s * 1e9
-            return np.where(jumped, t_ns - int(self.jump_s * 1e9), t_ns)
-        return t_ns
+            jumped = t_ns - self.sim_start_ns >= self.jump_at_s * 1e9
+            return np.where(jumped, stamps - int(self.jump_s * 1e9), stamps)
+        return stamps
 
     def tick(self) -> None:
-        """Publish every sample whose simulated time has come."""
-        now = self._sim_now_ns()
-        elapsed_s = (now - self.start_wall_ns) / 1e9
+        """Publish every sample whose simulated time has come (the first tick, with its subscribers, starts)."""
+        wall_ns = self.now_ns()
+        if self.start_wall_ns is None:
+            waited = wall_ns - self.created_ns >= SUBSCRIBER_WAIT_NS
+            if self.wrench_pub.get_subscription_count() < self.wait_for_subscribers and not waited:
+                return
+            self.start(wall_ns)
+        now = self._sim_now_ns(wall_ns)
+        elapsed_s = (now - self.sim_start_ns) / 1e9
         if self.die_at_s and elapsed_s >= self.die_at_s:
             self.get_logger().warning("fault: the simulated sensor dies now")
             os._exit(3)
         if self.duration_s and elapsed_s >= self.duration_s:
-            now = min(now, self.start_wall_ns + int(self.duration_s * 1e9))
+            now = min(now, self.sim_start_ns + int(self.duration_s * 1e9))
         stalled = bool(self.stall_at_s and elapsed_s >= self.stall_at_s)
         wrench_due = self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench)
         for wrench, transform, handle in wrench_due:
@@ -281,7 +317,7 @@ class CellSimulatorNode(RosNode):
         series = self.simulator.sample_wrench(t_ns)
         force, torque = series.force_n.copy(), series.torque_nm.copy()
         if self.nan_burst_period_s > 0:
-            phase = ((t_ns - self.start_wall_ns) / 1e9) % self.nan_burst_period_s
+            phase = ((t_ns - self.sim_start_ns) / 1e9) % self.nan_burst_period_s
             burst = phase > self.nan_burst_period_s - self.nan_burst_s
             force[burst] = np.nan
         stamps = self._stamp(series.t_ns)
@@ -314,7 +350,7 @@ class CellSimulatorNode(RosNode):
             stamps = self._stamp(series.t_ns)
             position_m = series.position_m
             if self.marker_jump_at_s > 0 and not self.marker_jumped and name == self.marker_jump_name:
-                due = np.flatnonzero(series.t_ns - self.start_wall_ns >= self.marker_jump_at_s * 1e9)
+                due = np.flatnonzero(series.t_ns - self.sim_start_ns >= self.marker_jump_at_s * 1e9)
                 if due.size:
                     position_m = position_m.copy()
                     position_m[due[0]] += self.marker_jump_m  # one frame only: a swapped or misread marker
