@@ -198,7 +198,8 @@ class BspIdentifierNode(RosNode):
         # Windowed estimates run on one worker thread, so that the wrench callbacks never wait for one: an update
         # refits the model its last check chose (~13 ms for 30 s at 1 kHz, the checks every elastic_check_every
         # updates ~25 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
-        # callbacks every switch interval (main() sets 0.2 ms). The recursive mode's ~1 ms estimate runs here.
+        # callbacks every switch interval (main() sets 0.2 ms). The recursive mode's ~2 ms estimate runs on the
+        # executor thread (_update_recursive).
         self.worker = LatestJobWorker(f"{NAME}-estimate")
         self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
         self.ready: tuple[int, jobs.EstimateOutputs] | None = None

@@ -228,9 +228,9 @@ class CellSimulatorNode(RosNode):
                 self.tf_pub = self.create_publisher(message_class(TF_TYPE), "/tf", 100)
             else:
                 self.static_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
-        xyzw = self.quaternion
+        xyzw = [round(float(v), 9) for v in self.quaternion]
         self.get_logger().info(
-            f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {[round(float(v), 9) for v in xyzw]} "
+            f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {xyzw} "
             + ("at the mean handle pitch; " if self.turns else "")
             + (f"on {where}" if has_message(TF_TYPE) else f"(not on {where}: {TF_TYPE} is not installed)")
         )
