@@ -485,9 +485,13 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
         published1 = min(published, max(0, (stamp1 - start) // PERIOD_NS + 1))
         warmup_short = published0 - received(counts0)
         measured_short = (published1 - published0) - (received(counts1) - received(counts0))
+        # Negative: samples still queued at the warm-up's end were taken during the measured run.
+        measured = (
+            f"{measured_short}" if measured_short >= 0 else f"0 (and {-measured_short} queued at the warm-up's end)"
+        )
         print(
             f"    not taken by the identifier: {warmup_short} of {published0} by the end of the warm-up (lost or"
-            f" queued), {measured_short} of {published1 - published0} during the measured run"
+            f" queued), {measured} of {published1 - published0} during the measured run"
         )
     targets.append(("zero loss over the whole run", published == got, f"{published - got} lost"))
     return targets
