@@ -229,8 +229,12 @@ class BspIdentifierNode(RosNode):
         )
         wrench = message_class("geometry_msgs/msg/WrenchStamped")
         self.create_subscription(wrench, p["wrench_topic"], self.on_wrench, rclpy_qos("sensor_input"))
-        self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, estimates)
-        self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, estimates)
+        # Only the angles the mode uses: each message costs the executor thread its deserialisation, and the
+        # estimator publishes both for every marker frame, right before the wrench that follows it.
+        if self.mode == "recursive" or self.support_fraction > 0.0:
+            self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, estimates)
+        if self.mode == "windowed":
+            self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, estimates)
         self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
         self.create_subscription(
             message_class("std_msgs/msg/String"), "arm/contact_point", self.on_contact_point, rclpy_qos("tf_static")
@@ -301,8 +305,6 @@ class BspIdentifierNode(RosNode):
     def on_raw_angles(self, msg: Any) -> None:
         """Unfiltered joint angles: the windowed mode filters them with zero phase, like `bsp identify`."""
         sample = read_joint_state(msg)
-        if self.mode != "windowed":
-            return
         self.last_receive["joint_states"] = self.now_ns()
         if sample.position.size != self.n:
             return
