@@ -145,7 +145,6 @@ class CellSimulatorNode(RosNode):
         # 0.4 s of samples in one burst, while the subscribers had not matched yet.
         self.sim_start_ns = self.now_ns()
         self.start_wall_ns: int | None = None
-        self.created_ns = self.sim_start_ns
         self.wait_for_subscribers = p["wait_for_subscribers"]
         base = sim.human_arm_cell() if p["subject"] == "human" else sim.paper_mechanical_arm_cell()
         hand_offset = p["hand_marker_offset_mm"]
@@ -274,7 +273,7 @@ class CellSimulatorNode(RosNode):
         """Publish every sample whose simulated time has come (the first tick, with its subscribers, starts)."""
         wall_ns = self.now_ns()
         if self.start_wall_ns is None:
-            waited = wall_ns - self.created_ns >= SUBSCRIBER_WAIT_NS
+            waited = wall_ns - self.sim_start_ns >= SUBSCRIBER_WAIT_NS
             if self.wrench_pub.get_subscription_count() < self.wait_for_subscribers and not waited:
                 return
             self.start(wall_ns)

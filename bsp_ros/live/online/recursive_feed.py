@@ -158,10 +158,7 @@ class RecursiveFeed:
             self._pending.append((t_ns, np.asarray(wrench_yzx, dtype=np.float64), lengths_m))
         # Usually the joint states have released everything before this wrench; not a wrench that came later
         # than the kinematics at its stamp, nor those left waiting when the joint states stopped.
-        known_until = self._stamps[-1] if self._stamps else None
-        first = self._pending[0][0] if self._pending else None
-        if first is not None and (first < t_ns - MAX_WAIT_NS or (known_until is not None and first <= known_until)):
-            self._release(known_until, t_ns - MAX_WAIT_NS)
+        self._release(self._stamps[-1] if self._stamps else None, t_ns - MAX_WAIT_NS)
         if not self._updated:
             return True, None
         self._updated = False
