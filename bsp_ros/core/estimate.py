@@ -122,6 +122,10 @@ def estimate_document(
         # Where the handle wrench's point of action came from: it sets the lever arms (and their placement std).
         "contact_point": CONTACT_FROM_ROBOT if data.contact_from_robot else CONTACT_FROM_MARKER,
     }
+    placement = result.diagnostics.get("marker_placement")
+    if placement:
+        # The skin markers' placement the std holds: as assumed, or wider where the data put them further off.
+        quality["marker_placement"] = placement
     sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
     if sensitivity:
         # What the data cannot test at one operating point, and what it would cost if false.

@@ -89,6 +89,11 @@ class IdentifyOptions:
             data.n_joints, self.marker_placement_sd_m, self.handle_pose_sd_m, data.contact_from_robot
         )
 
+    def placement_sd_used_m(self, result: IdentificationResult, data: IdentificationData) -> np.ndarray:
+        """(n + 1,) the placement sd ``result``'s std holds, m: the stacked method's (as assumed, or wider where the
+        data put the markers further off: ``placement_scale``), else :meth:`placement_sd_m`."""
+        return result.held.placement_sd_m if result.held is not None else self.placement_sd_m(data)
+
 
 def identify_data(
     data: IdentificationData,
@@ -241,7 +246,7 @@ def identify_recordings(
             for k, (r, tilt) in enumerate(zip(recordings, tilts, strict=True))
         ]
     document = estimate_document(
-        result, data, posterior, options.subject, info, marker_placement_sd_m=options.placement_sd_m(data)
+        result, data, posterior, options.subject, info, marker_placement_sd_m=options.placement_sd_used_m(result, data)
     )
     document["quality"].update(offsets)
     # --- stream timing and sensor rotation (timing.py, sensor_rotation.py) ---

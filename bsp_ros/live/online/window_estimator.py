@@ -220,7 +220,7 @@ class WindowEstimator:
             posterior,
             self.config.options.subject,
             info,
-            marker_placement_sd_m=self.config.options.placement_sd_m(data),
+            marker_placement_sd_m=self.config.options.placement_sd_used_m(result, data),
         )
         document["quality"]["timing"] = parameter_timing(self.config.options.wrench_delay_s)  # the node shifts stamps
         if quality is not None:

@@ -11,7 +11,7 @@ from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.elastic import ElasticReference
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.curves import curve_basis
-from bsp_ros.core.identification.joint.drift import drift_check
+from bsp_ros.core.identification.joint.drift import drift_check, drift_columns
 from bsp_ros.core.identification.joint.elastic_check import elastic_check
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
@@ -25,6 +25,7 @@ from bsp_ros.core.identification.joint.outliers import (
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
 from bsp_ros.core.identification.joint.placement_covariance import placement_covariance, placement_effect
+from bsp_ros.core.identification.joint.placement_scale import placement_scale
 from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.stribeck import stribeck_check
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
@@ -207,13 +208,12 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     # Whether the data or the prior decided a parameter, judged before the placement uncertainty is added.
     shares = prior_share(problem, fit.covariance)
     judged_residual = None
-    placement_sd = np.zeros(len(problem.names))
     placement_share = np.zeros_like(fit.covariance)
+    placement_fit = fit  # what the placement's share is computed at (before a drift is modelled)
     if placement_sd_m.any():
         placement = placement_effect(data, problem, fit, placement_sd_m)
         fit = dataclasses.replace(fit, covariance=fit.covariance + placement.covariance)
         judged_residual = placement.residual
-        placement_sd = np.sqrt(np.clip(np.diag(placement.covariance), 0.0, None))
         placement_share = placement.covariance
     model_spread = np.zeros_like(fit.covariance)
     if probed is not None:
@@ -317,6 +317,30 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "an elastic passive moment the model lacks is supported by the data and biases the static moments "
                 "(see warnings)"
             )
+    placement_check = None
+    springs = bool(config.passive.elastic) or "stiffness" in config.passive.terms or "offset" in config.passive.terms
+    if placement_sd_m.any() and not springs and not problems:
+        # Whether the data put the markers further off their joint centres than assumed (placement_scale.py). Last
+        # of the model checks, on the model they leave: free offsets take up what else the model lacks (an
+        # unmodelled spring, a drift, a low-speed friction), and those must change the model or the verdict, not
+        # only widen the std; where the checks found something, the offsets are no evidence of placement. Not
+        # with an elastic passive model either: on one posture its terms, gravity and the offsets are nearly one
+        # (MuJoCo arms with springs and their markers on the centres read as 6-10 mm off).
+        skin = np.ones(n + 1, dtype=bool)
+        skin[-1] = not data.contact_from_robot
+        # The offsets are fitted beside what else slowly bends the torques and the checks let pass as too small to
+        # matter (a spring, a drift): taken up by the offsets, it read as markers 10-20 mm off.
+        nuisance = build_problem(data, config.passive.with_terms(("offset", "stiffness")), problem.rows, widths, extras)
+        placement_check = placement_scale(
+            data, problem, placement_fit, placement_sd_m, skin, nuisance, drift_columns(data)[:2]
+        )
+        if placement_check.scale > 1.0:
+            wider = placement_covariance(data, problem, placement_fit, placement_check.sd_m)
+            fit = dataclasses.replace(fit, covariance=fit.covariance + wider - placement_share)
+            placement_share = wider
+            if placement_check.note:
+                warnings.append(placement_check.note)
+    placement_sd = np.sqrt(np.clip(np.diag(placement_share), 0.0, None))
     if config.check_elastic and extras is not None and not problems:
         # Last, with the model checks (live, they run beside the updates): a drift or an elastic term the checks
         # above name is the likelier cause of an off-axis moment.
@@ -352,6 +376,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         "coulomb_transition_spread_nm": {j: float(v) for j, v in zip(joints, spread, strict=True)},
         "prior_share": shares,
     }
+    if placement_check is not None:
+        diagnostics["marker_placement"] = placement_check.to_dict(placement_sd_m)
     return IdentificationResult(
         "joint",
         problem.names,
@@ -370,7 +396,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             dataclasses.replace(config.passive, select=False),
             widths,
             drift is not None,
-            placement_sd_m,
+            placement_sd_m if placement_check is None else placement_check.sd_m,
             fit.covariance - own_covariance - placement_share,
             basis,
             tuple(problems[:data_problems]),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +12,9 @@ from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import Fit, Problem, augmented, joint_products, reweighted_values
+
+# The measured torques are averaged over this long for the handle force the offset columns move (s).
+AVERAGE_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -28,9 +32,16 @@ class PlacementEffect:
     residual: np.ndarray
 
 
-def _columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
+def offset_columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
     """(N, n, 2 (n + 1)) how an offset of one sd of each marker (``sd_m``, (n + 1,) m) moves the torque equation at
-    this fit (``placement_columns``, scaled)."""
+    this fit (``placement_columns``, scaled).
+
+    The handle force the offsets move comes from the measured torques averaged over half a second, not from each
+    sample's: those carry the wrench noise into the columns, where it correlates with the residual's own (errors
+    in variables). On a simulated session with every marker on its joint centre, offsets fitted on the raw
+    torques came out 6-8 sd from zero, the same on every seed (``test_placement_scale.py``). The force changes
+    below 2 Hz; its average keeps it where the model's own torques would not (a model that misfits).
+    """
     n = data.n_joints
     if len(problem.names) >= 3 * n and problem.names[-1][0] == "grouped_inertia_kgm2":
         base_values = np.concatenate((fit.values[:n], fit.values[-2 * n :]))
@@ -39,9 +50,31 @@ def _columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndar
     zeros = np.zeros_like(data.q_rad)
     qd = zeros if data.qd_rad_s is None else data.qd_rad_s
     qdd = zeros if data.qdd_rad_s2 is None else data.qdd_rad_s2
-    columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, data.tau_nm, base_values)
+    columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, _averaged_torques(data), base_values)
     columns = columns * np.repeat(np.asarray(sd_m, dtype=np.float64), 2)
     return _per_recording(columns, data.recording_index if data.markers_moved else None)
+
+
+def _averaged_torques(data: IdentificationData) -> np.ndarray:
+    """(N, n) the measured torques, each the centred mean of the samples within :data:`AVERAGE_S` (fewer at a
+    recording's ends): the noise of one sample weighs 1/k in it."""
+    tau = np.asarray(data.tau_nm, dtype=np.float64)
+    if tau.shape[0] < 3:
+        return tau
+    period_s = float(np.median(np.diff(data.t_ns))) * 1e-9
+    half = int(0.5 * AVERAGE_S / period_s) if period_s > 0 else 0
+    if half < 1:
+        return tau
+    out = np.empty_like(tau)
+    index = data.recording_index
+    bounds = [0, tau.shape[0]] if index is None else [0, *(np.flatnonzero(np.diff(index)) + 1).tolist(), tau.shape[0]]
+    for start, stop in itertools.pairwise(bounds):
+        part = tau[start:stop]
+        sums = np.concatenate((np.zeros((1, part.shape[1])), np.cumsum(part, axis=0)))
+        k = np.arange(part.shape[0])
+        lo, hi = np.maximum(k - half, 0), np.minimum(k + half + 1, part.shape[0])
+        out[start:stop] = (sums[hi] - sums[lo]) / (hi - lo)[:, None]
+    return out
 
 
 def _per_recording(columns: np.ndarray, recording_index: np.ndarray | None) -> np.ndarray:
@@ -79,14 +112,14 @@ def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, s
     arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
     estimated: it is a known uncertainty of every session, different every day, and belongs in the std.
     """
-    return _covariance(problem, fit, _columns(data, problem, fit, sd_m))
+    return _covariance(problem, fit, offset_columns(data, problem, fit, sd_m))
 
 
 def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> PlacementEffect:
     """:func:`placement_covariance`, and the residual once offsets of that size (a Gaussian prior, ``sd_m``) have
     taken what they can explain: they also bend the torques in ways the model cannot follow (over a wide planned
     range, at the wrist), and a residual that offsets of a few mm explain is no misfit of the model."""
-    columns = _columns(data, problem, fit, sd_m)
+    columns = offset_columns(data, problem, fit, sd_m)
     # The offsets fitted with the parameters (not on the residual alone: much of their effect resembles a change
     # of the parameters, and only together do they explain it), each with its prior N(0, sd^2).
     m = columns.shape[2]

@@ -1,0 +1,121 @@
+"""Model check: whether the skin markers sit further off their joint centres than the placement sd assumes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.placement_covariance import offset_columns
+from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.identification.stacked import Fit, Problem, augmented, fit_problem
+
+# The widest placement the data may call for, in units of the assumed sd (2 cm at the default 2 mm).
+MAX_SCALE = 10.0
+# The offsets' prior precision in the free fit, per sd^2: a prior sd of 100 assumed sd keeps the directions no
+# data can see (offsets along the chain scale every lever arm, like the static moments) solvable, and leaves
+# the others to the data.
+_FREE_PRECISION = 1e-4
+# A wider placement is named in the warnings when its likelihood ratio against the assumed one is this large
+# (chi-square, 1 degree of freedom, p = 0.001); a smaller one still widens the std, by less.
+NOTE_LIKELIHOOD_RATIO = 10.83
+_GRID = np.exp(np.linspace(0.0, np.log(MAX_SCALE), 241))
+
+
+@dataclass(frozen=True)
+class PlacementScale:
+    """What the data say of the markers' placement.
+
+    Attributes
+    ----------
+    scale : the factor (>= 1) on the skin markers' assumed placement sd that the data support best: the
+        maximum of the offsets' marginal likelihood.
+    likelihood_ratio : ``2 log`` of that likelihood over the assumed placement's (0 when the scale is 1).
+    sd_m : (n + 1,) the placement sd of each chain point to use, m: the skin markers' scaled, a robot's contact
+        point (its registration) as assumed.
+    note : a warning when the data call for a clearly wider placement, else None.
+    """
+
+    scale: float
+    likelihood_ratio: float
+    sd_m: np.ndarray
+    note: str | None
+
+    def to_dict(self, assumed_sd_m: np.ndarray) -> dict[str, object]:
+        """The estimate's ``quality.marker_placement``: assumed and used sd per chain point (mm), the scale."""
+        return {
+            "assumed_sd_mm": [round(1e3 * float(v), 4) for v in assumed_sd_m],
+            "sd_mm": [round(1e3 * float(v), 4) for v in self.sd_m],
+            "scale_from_data": round(self.scale, 3),
+            "likelihood_ratio": round(self.likelihood_ratio, 2),
+        }
+
+
+def placement_scale(
+    data: IdentificationData,
+    problem: Problem,
+    fit: Fit,
+    sd_m: np.ndarray,
+    skin: np.ndarray,
+    nuisance: Problem | None = None,
+    modelled: tuple[np.ndarray, list[ParameterName]] | None = None,
+) -> PlacementScale:
+    """How far the data put the markers from their joint centres, against the assumed placement ``sd_m``.
+
+    The offsets of every chain point are fitted with the parameters, nearly free (``d``, in units of the assumed
+    sd, with its HAC covariance ``C``), beside ``nuisance``'s and ``modelled``'s columns. Offsets drawn with sd
+    ``s`` times the assumed one give ``d ~ N(0, s^2 I + C)`` (for the skin markers; a robot's contact point keeps
+    its own sd): the ``s >= 1`` of largest likelihood is taken. Where no data see an offset, ``C`` is large and it
+    weighs nothing. On simulated sessions with the markers on their centres ``s`` is 1; with skin markers 1 cm off
+    (5 times the default 2 mm), 2.1-4.3, and the std then holds the truth (``bench/realism.py``, "skin markers
+    1 cm"). What else the model lacks can also raise ``s`` (the offsets take up what they can of it): a spring or
+    a drift too small for their own checks is fitted beside them (``nuisance``, ``modelled``); the caller judges
+    the placement only where the model checks found nothing else.
+
+    Parameters
+    ----------
+    data, problem, fit : the identification's samples, its problem and its fit.
+    nuisance : a wider problem of the same samples whose extra columns are fitted beside the offsets (a linear
+        spring's), or None (``problem``).
+    sd_m : (n + 1,) the assumed placement sd per chain point (m).
+    skin : (n + 1,) bool, which chain points are skin markers (the scale applies to them).
+    modelled : extra columns (N, n, k) and their names fitted beside them too (a drift's), or None.
+
+    Returns
+    -------
+    PlacementScale
+    """
+    columns = offset_columns(data, problem, fit, sd_m)
+    m = columns.shape[2]
+    names: list[ParameterName] = [(f"marker_offset_{k}_sd", "markers") for k in range(m)]
+    base = nuisance or problem
+    base = base if modelled is None else augmented(base, *modelled)
+    free = fit_problem(augmented(base, columns, names, np.zeros(m), np.full(m, _FREE_PRECISION)))
+    p = len(base.names)
+    offsets, covariance = free.values[p:], free.covariance[p:, p:]
+    # Each chain point has an along and a normal offset (columns 2k, 2k + 1), per recording where markers moved.
+    scaled = np.tile(np.repeat(np.asarray(skin, dtype=bool), 2), m // (2 * len(skin)))
+    if not (np.isfinite(offsets).all() and np.isfinite(covariance).all()) or not scaled.any():
+        return PlacementScale(1.0, 0.0, np.asarray(sd_m, dtype=np.float64), None)
+    variance = np.where(scaled[None, :], _GRID[:, None] ** 2, 1.0)  # (grid, m) the offsets' prior variance
+    spread = covariance[None, :, :] + variance[:, :, None] * np.eye(m)[None, :, :]
+    _, log_det = np.linalg.slogdet(spread)
+    solved = np.linalg.solve(spread, np.broadcast_to(offsets[:, None], (_GRID.size, m, 1)))[..., 0]
+    mahalanobis = solved @ offsets
+    minus_log_likelihood = 0.5 * (log_det + mahalanobis)
+    best = int(np.argmin(minus_log_likelihood))
+    scale = float(_GRID[best])
+    ratio = float(2.0 * (minus_log_likelihood[0] - minus_log_likelihood[best]))
+    used = np.where(skin, np.asarray(sd_m, dtype=np.float64) * scale, sd_m)
+    note = None
+    if ratio > NOTE_LIKELIHOOD_RATIO:
+        assumed_mm = 1e3 * float(np.max(np.where(skin, sd_m, 0.0)))
+        widest = ", the most this check allows" if best == _GRID.size - 1 else ""
+        note = (
+            f"the markers sit further off their joint centres than the {assumed_mm:.3g} mm the std assumes: the "
+            f"torques bend as markers about {scale * assumed_mm:.2g} mm off would (1 sd per axis{widest}; or a passive "
+            "moment the model lacks looks like that), and the std holds it; check that the markers sit firmly on "
+            "their landmarks (docs/cell-guide.md)"
+        )
+    return PlacementScale(scale, ratio, used, note)
