@@ -47,13 +47,14 @@ def elastic_check(
     widths: np.ndarray,
     extras: Extras | None = None,
     covariance_of: Callable[[Problem, Fit], np.ndarray] | None = None,
+    wider_problem: Problem | None = None,
 ) -> list[str]:
     """Warn when a linear spring (offset, stiffness) the model lacks is supported by the data and moves the static
     moments: the fixed model would then be valid and wrong (with ``config.elastic_fallback`` the warning says the
     estimate uses the elastic terms the data choose instead). ``covariance_of`` gives the wider fit's covariance
     for the test (the marker placement's share included, as in ``select_passive``: a skin marker off its joint
     centre bends the torques like a spring, and a test on the sensor noise alone finds one in sessions with
-    re-placed markers)."""
+    re-placed markers). ``wider_problem``: the samples' problem with the spring's terms, when already built."""
     # A linear spring only. Polynomial terms tested against a model without a spring fit the smallest systematic
     # errors (of the angle filters, on noise-free data) against a gravity torque they can mimic; tested against a
     # fixed spring model, on our own simulator's linear springs with the dynamics, they were "supported" (chi2
@@ -63,7 +64,7 @@ def elastic_check(
         return []
     wider = config.passive.with_terms(("offset", "stiffness"))
     kinds = " and ".join(term for term in wider.terms if term not in config.passive.terms)
-    problem = build_problem(data, wider, rows, widths, extras)
+    problem = build_problem(data, wider, rows, widths, extras) if wider_problem is None else wider_problem
     solved = reweighted_values(problem)
     n = data.n_joints
     base_beta, wide_beta = base.values[:n], solved.values[:n]

@@ -24,7 +24,11 @@ from bsp_ros.core.identification.joint.outliers import (
     too_far_off,
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
-from bsp_ros.core.identification.joint.placement_covariance import placement_covariance, placement_effect
+from bsp_ros.core.identification.joint.placement_covariance import (
+    covariance_from_columns,
+    placement_covariance,
+    placement_effect,
+)
 from bsp_ros.core.identification.joint.placement_scale import placement_scale
 from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.stribeck import stribeck_check
@@ -209,6 +213,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     shares = prior_share(problem, fit.covariance)
     judged_residual = None
     placement_share = np.zeros_like(fit.covariance)
+    placement = None
     placement_fit = fit  # what the placement's share is computed at (before a drift is modelled)
     if placement_sd_m.any():
         placement = placement_effect(data, problem, fit, placement_sd_m)
@@ -303,8 +308,16 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             # Which friction law holds at low speed is open; the amplitudes of both join the Coulomb variance.
             covariance[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
         fit = dataclasses.replace(fit, covariance=covariance)
+    # The model with a linear spring's terms beside this one's: the elastic check's wider model, and what the
+    # placement check fits beside the offsets (built once, where either needs it).
+    springs = bool(config.passive.elastic) or "stiffness" in config.passive.terms or "offset" in config.passive.terms
+    with_springs = None
+    if not springs and not problems and (config.check_elastic or placement is not None):
+        with_springs = build_problem(
+            data, config.passive.with_terms(("offset", "stiffness")), problem.rows, widths, extras
+        )
     if config.check_elastic and selection is None and not problems:
-        elastic = elastic_check(data, config, problem.rows, fit, widths, extras, with_placement)
+        elastic = elastic_check(data, config, problem.rows, fit, widths, extras, with_placement, with_springs)
         if elastic and config.elastic_fallback:
             # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
             chosen = dataclasses.replace(config.passive, select=True)
@@ -318,8 +331,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "(see warnings)"
             )
     placement_check = None
-    springs = bool(config.passive.elastic) or "stiffness" in config.passive.terms or "offset" in config.passive.terms
-    if placement_sd_m.any() and not springs and not problems:
+    if placement is not None and with_springs is not None and not problems:
         # Whether the data put the markers further off their joint centres than assumed (placement_scale.py). Last
         # of the model checks, on the model they leave: free offsets take up what else the model lacks (an
         # unmodelled spring, a drift, a low-speed friction), and those must change the model or the verdict, not
@@ -330,12 +342,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         skin[-1] = not data.contact_from_robot
         # The offsets are fitted beside what else slowly bends the torques and the checks let pass as too small to
         # matter (a spring, a drift): taken up by the offsets, it read as markers 10-20 mm off.
-        nuisance = build_problem(data, config.passive.with_terms(("offset", "stiffness")), problem.rows, widths, extras)
         placement_check = placement_scale(
-            data, problem, placement_fit, placement_sd_m, skin, nuisance, drift_columns(data)[:2]
+            problem, placement.columns, placement_sd_m, skin, with_springs, drift_columns(data)[:2]
         )
         if placement_check.scale > 1.0:
-            wider = placement_covariance(data, problem, placement_fit, placement_check.sd_m)
+            wider = covariance_from_columns(problem, placement_fit, placement.columns * placement_check.column_factor)
             fit = dataclasses.replace(fit, covariance=fit.covariance + wider - placement_share)
             placement_share = wider
             if placement_check.note:

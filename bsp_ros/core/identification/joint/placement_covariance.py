@@ -26,10 +26,12 @@ class PlacementEffect:
     covariance : (p, p) of the estimate, from offsets of ``sd_m`` per axis.
     residual : (N, n) the residual (Nm, NaN where unused) of the fit that also takes marker offsets, each with a
         prior of its ``sd_m``: what is left once offsets of that size explain what they can.
+    columns : (N, n, m) the offsets' columns it was computed from (:func:`offset_columns`).
     """
 
     covariance: np.ndarray
     residual: np.ndarray
+    columns: np.ndarray
 
 
 def offset_columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
@@ -95,8 +97,8 @@ def _per_recording(columns: np.ndarray, recording_index: np.ndarray | None) -> n
     return np.concatenate(own, axis=2)
 
 
-def _covariance(problem: Problem, fit: Fit, columns: np.ndarray) -> np.ndarray:
-    """Covariance of the estimate from offsets of unit variance along ``columns``."""
+def covariance_from_columns(problem: Problem, fit: Fit, columns: np.ndarray) -> np.ndarray:
+    """Covariance (p, p) of the estimate from offsets of unit variance along ``columns`` (N, n, m)."""
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     response = design_inverse(fit.design) @ joint_products(problem.regressor, w, columns)
     return np.asarray(response @ response.T)
@@ -112,7 +114,7 @@ def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, s
     arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
     estimated: it is a known uncertainty of every session, different every day, and belongs in the std.
     """
-    return _covariance(problem, fit, offset_columns(data, problem, fit, sd_m))
+    return covariance_from_columns(problem, fit, offset_columns(data, problem, fit, sd_m))
 
 
 def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> PlacementEffect:
@@ -127,4 +129,4 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     # Offsets in units of their sd (the columns are scaled): each with the prior N(0, 1).
     with_offsets = augmented(problem, columns, names, np.zeros(m), np.ones(m))
     residual = np.where(problem.rows, reweighted_values(with_offsets).residual(with_offsets), np.nan)
-    return PlacementEffect(_covariance(problem, fit, columns), residual)
+    return PlacementEffect(covariance_from_columns(problem, fit, columns), residual, columns)

@@ -65,7 +65,7 @@ def test_offsets_fitted_with_the_parameters_are_near_zero_when_the_markers_sit_o
 def test_markers_on_their_centres_keep_the_assumed_placement(seed: int) -> None:
     data = identification_data_from_session(_simulated(seed, 0.0).session)
     problem, fit = _fit(data)
-    found = placement_scale(data, problem, fit, ASSUMED_SD_M, SKIN)
+    found = placement_scale(problem, offset_columns(data, problem, fit, ASSUMED_SD_M), ASSUMED_SD_M, SKIN)
     assert found.scale < 1.2 and found.note is None, (found.scale, found.likelihood_ratio)
     np.testing.assert_allclose(found.sd_m, ASSUMED_SD_M * found.scale)
 
@@ -111,7 +111,7 @@ def test_a_robot_contact_point_keeps_its_own_sd() -> None:
     problem, fit = _fit(data)
     skin = np.array([True, True, True, False])
     sd_m = np.array([0.002, 0.002, 0.002, 0.0005])
-    found = placement_scale(data, problem, fit, sd_m, skin)
+    found = placement_scale(problem, offset_columns(data, problem, fit, sd_m), sd_m, skin)
     assert found.scale > 2.0
     assert found.sd_m[-1] == 0.0005
     np.testing.assert_allclose(found.sd_m[:3], 0.002 * found.scale)
