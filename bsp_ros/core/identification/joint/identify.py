@@ -331,17 +331,16 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "(see warnings)"
             )
     placement_check = None
-    if placement is not None and with_springs is not None and not problems:
-        # Whether the data put the markers further off their joint centres than assumed (placement_scale.py). Last
-        # of the model checks, on the model they leave: free offsets take up what else the model lacks (an
-        # unmodelled spring, a drift, a low-speed friction), and those must change the model or the verdict, not
-        # only widen the std; where the checks found something, the offsets are no evidence of placement. Not
-        # with an elastic passive model either: on one posture its terms, gravity and the offsets are nearly one
-        # (MuJoCo arms with springs and their markers on the centres read as 6-10 mm off).
+    if placement is not None and not springs and not problems:
+        # Whether the data put the markers further off their joint centres than assumed (placement_scale.py): last
+        # of the model checks, since free offsets take up what else the model lacks (a spring, a drift, a low-speed
+        # friction), which must change the model or the verdict, not only widen the std. So it is not judged where
+        # a check found something, nor with an elastic model (on one posture its terms, gravity and the offsets are
+        # nearly one: MuJoCo arms with springs and their markers on the centres read as 6-10 mm off); and a spring
+        # or drift too small for its own check is fitted beside the offsets (taken up, it read as 10-20 mm).
+        assert with_springs is not None  # built above for the same conditions
         skin = np.ones(n + 1, dtype=bool)
         skin[-1] = not data.contact_from_robot
-        # The offsets are fitted beside what else slowly bends the torques and the checks let pass as too small to
-        # matter (a spring, a drift): taken up by the offsets, it read as markers 10-20 mm off.
         placement_check = placement_scale(
             problem, placement.columns, placement_sd_m, skin, with_springs, drift_columns(data)[:2]
         )
