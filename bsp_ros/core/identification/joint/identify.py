@@ -310,7 +310,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         fit = dataclasses.replace(fit, covariance=covariance)
     # The model with a linear spring's terms beside this one's: the elastic check's wider model, and what the
     # placement check fits beside the offsets (built once, where either needs it).
-    springs = bool(config.passive.elastic) or "stiffness" in config.passive.terms or "offset" in config.passive.terms
+    springs = "offset" in config.passive.terms  # an elastic model: every elastic term needs the offset (passive.py)
     with_springs = None
     if not springs and not problems and (config.check_elastic or placement is not None):
         with_springs = build_problem(

@@ -8,7 +8,13 @@ import numpy as np
 
 from bsp_ros.core.identification.covariance import design_inverse, hac_covariance
 from bsp_ros.core.identification.result import ParameterName
-from bsp_ros.core.identification.stacked import Problem, augmented, normal_equations, reweighted_values
+from bsp_ros.core.identification.stacked import (
+    Problem,
+    augmented,
+    joint_scores,
+    normal_equations,
+    reweighted_values,
+)
 
 # The widest placement the data may call for, in units of the assumed sd (2 cm at the default 2 mm).
 MAX_SCALE = 10.0
@@ -36,10 +42,7 @@ def _free_offsets(free: Problem, m: int) -> tuple[np.ndarray, np.ndarray]:
     scores, start = np.zeros((weighted.shape[0], m)), 0
     for block in free.blocks:
         k = block.shape[2]
-        block_scores = block[:, 0, :] * weighted[:, 0, None]
-        for i in range(1, block.shape[1]):
-            block_scores += block[:, i, :] * weighted[:, i, None]
-        scores += block_scores @ rows[:, start : start + k].T
+        scores += joint_scores(block, weighted) @ rows[:, start : start + k].T
         start += k
     scores = scores[free.rows.any(axis=1)]
     covariance, _ = hac_covariance(np.eye(m), scores)
