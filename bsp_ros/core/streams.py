@@ -46,6 +46,31 @@ class WrenchSeries:
     frame_id: str = "world"
 
 
+def common_frames(
+    t_a_ns: np.ndarray, t_b_ns: np.ndarray, assume_unique: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The stamps two streams share and where they sit in each (the first of repeated ones): ``np.intersect1d(t_a_ns,
+    t_b_ns, assume_unique, return_indices=True)``, the same arrays.
+
+    Markers of one capture system usually share every frame: then the stamps are returned as they are, without
+    intersect1d's sort (60 ms over a 10-minute session's markers).
+
+    Parameters
+    ----------
+    t_a_ns, t_b_ns : (M_a,), (M_b,) int64 stamps, ns.
+    assume_unique : each holds every stamp once (a cleaned stream's frames).
+
+    Returns
+    -------
+    common : (K,) the shared stamps, ns; i_a, i_b : (K,) their indices in ``t_a_ns`` and ``t_b_ns``.
+    """
+    if t_a_ns.shape == t_b_ns.shape and np.array_equal(t_a_ns, t_b_ns) and bool((np.diff(t_a_ns) > 0).all()):
+        index = np.arange(t_a_ns.size)
+        return t_a_ns.copy(), index, index.copy()
+    common, i_a, i_b = np.intersect1d(t_a_ns, t_b_ns, assume_unique=assume_unique, return_indices=True)
+    return common, i_a, i_b
+
+
 @dataclass(frozen=True)
 class MarkerSeries:
     """Positions of one marker in ``world`` (m): (M,) int64 stamps and (M, 3) positions.

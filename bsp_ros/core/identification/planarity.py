@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from bsp_ros.core.model import gravity_regressor
-from bsp_ros.core.streams import MarkerSeries
+from bsp_ros.core.streams import MarkerSeries, common_frames
 
 
 def out_of_plane_fraction(markers: dict[str, MarkerSeries], chain: Sequence[str]) -> np.ndarray:
@@ -30,11 +30,10 @@ def out_of_plane_fraction(markers: dict[str, MarkerSeries], chain: Sequence[str]
         a, b = markers.get(proximal), markers.get(distal)
         if a is None or b is None:
             continue
-        t_ns = np.intersect1d(a.t_ns, b.t_ns)
+        t_ns, i_a, i_b = common_frames(a.t_ns, b.t_ns, assume_unique=False)
         if t_ns.size < 10:
             continue
-        pa = a.position_m[np.searchsorted(a.t_ns, t_ns)]
-        pb = b.position_m[np.searchsorted(b.t_ns, t_ns)]
+        pa, pb = a.position_m[i_a], b.position_m[i_b]
         finite = np.isfinite(pa).all(axis=1) & np.isfinite(pb).all(axis=1)
         if finite.sum() < 10:
             continue

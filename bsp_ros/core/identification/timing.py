@@ -47,8 +47,6 @@ GRID_STEP_S = 0.02
 # A delay is compensated only when it differs from 0 by more than this many standard deviations: at 2 a
 # session without any delay would have a spurious one compensated once in 20 (seen on a simulated one).
 RESOLVED_SD = 3.0
-# The score's finite difference (s): small against the delays, large against float rounding.
-_DERIVATIVE_STEP_S = 0.001
 
 # ``fit_rss(data) -> float``: a chi-square-like misfit of one candidate delay's samples: the residual sum of
 # squares weighted by the inverse noise variance of each joint, with weights and rows fixed across delays
@@ -255,20 +253,19 @@ def _parabola(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     return float(-b / (2.0 * a)), 2.0 * float(a)
 
 
-def _autocorrelation_inflation(problem: DelayProblem, keep: np.ndarray, delay_s: float, passive: PassiveModel) -> float:
-    """How much correlated errors widen the delay's std beyond the curvature's (>= 1).
+def _autocorrelation_inflation(
+    minus: IdentificationData, centre: IdentificationData, plus: IdentificationData, h: float, passive: PassiveModel
+) -> float:
+    """How much correlated errors widen the delay's std beyond the curvature's (>= 1), from the samples at a delay
+    (``centre``) and at ``h`` s either side of it (``minus``, ``plus``).
 
     The delay's score per sample (summed over the joints), with the model's parameters partialled out,
     goes through the same Newey-West sandwich as the parameters' (``identify_joint``); its std over the
     curvature's ``1 / sqrt(information)`` is the inflation.
     """
-    h = _DERIVATIVE_STEP_S
-    centre, _ = problem.data(delay_s, keep)
     columns = _JointColumns.of(centre, passive)
     fit = _linear_fit(centre, passive, columns)
     values, residual = fit.solve(centre, columns)
-    plus = problem.data(delay_s + h, keep)[0]
-    minus = problem.data(delay_s - h, keep)[0]
     if plus.t_ns.size != centre.t_ns.size or minus.t_ns.size != centre.t_ns.size:
         return 1.0
     predicted = lambda d: d.tau_nm - _JointColumns.of(d, passive).predicted(values)  # noqa: E731
@@ -364,13 +361,23 @@ def estimate_wrench_delay(
     keep = problem.valid(-reach) & problem.valid(reach) & problem.valid(0.0)
     if keep.sum() < 50:
         raise DataError(f"only {int(keep.sum())} wrench samples have joint angles at every delay within +-{reach:g} s")
-    rss = fit_rss or linear_rss(problem.data(0.0, keep)[0], passive)
+    # Each candidate's samples, built once: the fit's reference (0), the profile and the inflation's slope share them
+    # (keyed by the shift in whole ns, as applied: the grid's 0 is 0 only to a float's rounding).
+    samples: dict[int, IdentificationData] = {}
+
+    def at(delay_s: float) -> IdentificationData:
+        shift_ns = round(delay_s * 1e9)
+        if shift_ns not in samples:
+            samples[shift_ns] = problem.data(delay_s, keep)[0]
+        return samples[shift_ns]
+
+    rss = fit_rss or linear_rss(at(0.0), passive)
     n_fits = 0
 
     def profile(delay_s: float) -> float:
         nonlocal n_fits
         n_fits += 1
-        return float(rss(problem.data(delay_s, keep)[0]))
+        return float(rss(at(delay_s)))
 
     grid = np.arange(-max_delay_s, max_delay_s + 0.5 * step_s, step_s)
     values = _descend(grid, profile)
@@ -387,19 +394,24 @@ def estimate_wrench_delay(
             ],
         )
     vertex, curvature = _parabola(grid[best - 1 : best + 2], values[best - 1 : best + 2])
-    if math.isfinite(vertex):
-        # Refine on a narrower parabola around the first vertex: the misfit is quadratic only near its minimum.
-        h = 0.25 * step_s
-        x = np.array([vertex - h, vertex, vertex + h])
-        y = np.array([profile(float(d)) for d in x])
-        refined, refined_curvature = _parabola(x, y)
-        if math.isfinite(refined) and abs(refined - vertex) <= step_s:
-            vertex, curvature = refined, refined_curvature
-    if not (math.isfinite(vertex) and curvature > 0):
+    if not math.isfinite(vertex):
         return WrenchDelay(
             0.0, math.nan, "none", n_fits=n_fits, warnings=["the wrench-marker delay is not identifiable"]
         )
-    inflation = _autocorrelation_inflation(problem, keep, vertex, passive)
+    # Refine on a narrower parabola around the first vertex: the misfit is quadratic only near its minimum.
+    h = 0.25 * step_s
+    x = [vertex - h, vertex, vertex + h]
+    refined, refined_curvature = _parabola(np.array(x), np.array([profile(d) for d in x]))
+    # The slope of the residuals for the std's inflation: on the refinement's samples (the first vertex and h
+    # either side), which the misfit's curvature comes from too.
+    minus, centre, plus = (at(d) for d in x)
+    if math.isfinite(refined) and abs(refined - vertex) <= step_s:
+        vertex, curvature = refined, refined_curvature
+    if not curvature > 0:
+        return WrenchDelay(
+            0.0, math.nan, "none", n_fits=n_fits, warnings=["the wrench-marker delay is not identifiable"]
+        )
+    inflation = _autocorrelation_inflation(minus, centre, plus, h, passive)
     std = math.sqrt(2.0 / curvature) * inflation
     n_fits += 4
     if abs(vertex) > resolved_sd * std:

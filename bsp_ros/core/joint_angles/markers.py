@@ -9,7 +9,7 @@ import numpy as np
 from bsp_ros.core.identification.robust import hampel_outliers, robust_sd
 from bsp_ros.core.joint_angles.config import KinematicsConfig
 from bsp_ros.core.joint_angles.geometry import sagittal_from_world
-from bsp_ros.core.streams import MarkerSeries
+from bsp_ros.core.streams import MarkerSeries, common_frames
 from bsp_ros.errors import DataError, InputError
 
 
@@ -83,7 +83,7 @@ def _rigid_chain_outliers(
     for proximal, distal in itertools.pairwise(names):
         t_a, p_a = cleaned[proximal]
         t_b, p_b = cleaned[distal]
-        common, i_a, i_b = np.intersect1d(t_a, t_b, assume_unique=True, return_indices=True)
+        common, i_a, i_b = common_frames(t_a, t_b)
         distance = np.linalg.norm(sagittal_from_world(p_b[i_b]) - sagittal_from_world(p_a[i_a]), axis=1)
         error = np.abs(distance - np.median(distance)) if distance.size else distance
         limit = max(config.max_length_error_m, config.outlier_sd * float(robust_sd(distance)) if distance.size else 0.0)
@@ -136,7 +136,7 @@ def segment_lengths(
     for proximal, distal in itertools.pairwise(names):
         t_a, p_a = cleaned[proximal]
         t_b, p_b = cleaned[distal]
-        common, i_a, i_b = np.intersect1d(t_a, t_b, assume_unique=True, return_indices=True)
+        common, i_a, i_b = common_frames(t_a, t_b)
         if common.size < 3:
             raise DataError(f"markers {proximal} and {distal} are never seen together: no segment length")
         distance = np.linalg.norm(sagittal_from_world(p_b[i_b]) - sagittal_from_world(p_a[i_a]), axis=1)
