@@ -47,18 +47,33 @@ def perpendicular(v: np.ndarray) -> np.ndarray:
     return np.stack((-v[..., 1], v[..., 0]), axis=-1)
 
 
-class _ChainFrames(NamedTuple):
-    """What every torque of a planar chain is built from, per sample: absolute rates (N, n), each segment's axis
-    and normal (N, n, 2), the joints' positions and accelerations (N, n, 2, from the shoulder), and each
-    segment's share of the acceleration of the joints beyond it (N, n - 1, 2)."""
+# A planar vector per sample as its two components, each (N,) contiguous: the chain's few segments times N samples
+# in (N, n, 2) arrays made every product a strided pass over pairs, 3-5 times slower (the same arithmetic).
+Vector = tuple[np.ndarray, np.ndarray]
 
-    omega: np.ndarray
-    alpha: np.ndarray
-    axis: np.ndarray
-    normal: np.ndarray
-    points: np.ndarray
-    accel: np.ndarray
-    steps: np.ndarray
+
+def pair_cross(a: Vector, b: Vector) -> np.ndarray:
+    """:func:`planar_cross` of component pairs."""
+    return a[0] * b[1] - a[1] * b[0]
+
+
+def pair_turned(v: Vector) -> Vector:
+    """:func:`perpendicular` of a component pair."""
+    return -v[1], v[0]
+
+
+class _ChainFrames(NamedTuple):
+    """What every torque of a planar chain is built from, per segment j (lists of n) and sample: absolute rates
+    (N,), the segment's axis and normal, the position and acceleration of its proximal joint (from the shoulder),
+    and its share of the acceleration of the joints beyond it (n - 1 of these), each vector a component pair."""
+
+    omega: list[np.ndarray]
+    alpha: list[np.ndarray]
+    axis: list[Vector]
+    normal: list[Vector]
+    points: list[Vector]
+    accel: list[Vector]
+    steps: list[Vector]
 
 
 def _chain_frames(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, lengths: npt.ArrayLike) -> _ChainFrames:
@@ -66,20 +81,28 @@ def _chain_frames(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, lengths: npt.A
     P_{j+1} = P_j + a_j e_j, and its acceleration gains a_j (alpha_j n_j - omega_j^2 e_j)."""
     count, n = q.shape
     segment_m = np.asarray(lengths, dtype=np.float64)
-    phi, omega, alpha = running_sum(q), running_sum(qd), running_sum(qdd)
-    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)  # (N, n, 2) unit vector along each segment
-    normal = perpendicular(axis)
-    points = np.zeros((count, n, 2))
-    accel = np.zeros((count, n, 2))
-    steps = np.zeros((count, max(n - 1, 0), 2))
+    # Absolute angles and rates segment by segment (running_sum's additions, in its order).
+    phi, omega, alpha = (running_sum(np.ascontiguousarray(x.T)[None])[0] for x in (q, qd, qdd))
+    cos, sin = np.cos(phi), np.sin(phi)
+    axis = [(cos[j], sin[j]) for j in range(n)]  # unit vector along each segment
+    normal = [pair_turned(a) for a in axis]
+    zero = np.zeros(count)
+    points, accel, steps = [(zero, zero)], [(zero, zero)], []
     for j in range(1, n):
         step = segment_m[j - 1]
-        steps[:, j - 1] = step * (
-            alpha[:, j - 1, None] * normal[:, j - 1] - omega[:, j - 1, None] ** 2 * axis[:, j - 1]
-        )
-        points[:, j] = points[:, j - 1] + step * axis[:, j - 1]
-        accel[:, j] = accel[:, j - 1] + steps[:, j - 1]
-    return _ChainFrames(omega, alpha, axis, normal, points, accel, steps)
+        w2, a = omega[j - 1] ** 2, alpha[j - 1]
+        (ey, ez), (ny, nz) = axis[j - 1], normal[j - 1]
+        steps.append((step * (a * ny - w2 * ey), step * (a * nz - w2 * ez)))
+        points.append((points[-1][0] + step * ey, points[-1][1] + step * ez))
+        accel.append((accel[-1][0] + steps[-1][0], accel[-1][1] + steps[-1][1]))
+    return _ChainFrames(list(omega), list(alpha), axis, normal, points, accel, steps)
+
+
+def _inertial_force(alpha: np.ndarray, omega: np.ndarray, h: Vector) -> Vector:
+    """The inertial force ``alpha x h - omega^2 h`` of a first moment ``h`` turning with the segment."""
+    w2 = omega**2
+    turned = pair_turned(h)
+    return alpha * turned[0] - w2 * h[0], alpha * turned[1] - w2 * h[1]
 
 
 def base_regressor(
@@ -113,14 +136,15 @@ def base_regressor(
     omega, alpha, axis, normal, points, accel, _ = _chain_frames(q, qd, qdd, lengths)
     regressor = np.zeros((count, n, 3 * n))
     for j in range(n):
-        for column, h in ((j, axis[:, j]), (n + j, normal[:, j])):
+        for column, h in ((j, axis[j]), (n + j, normal[j])):
             # A first moment h of segment j: its inertial force alpha x h - omega^2 h acts at P_j's lever
             # about joint i, h x a(P_j) is the moment of P_j's acceleration, and g h_y that of gravity.
-            force = alpha[:, j, None] * perpendicular(h) - omega[:, j, None] ** 2 * h
-            own = planar_cross(h, accel[:, j]) + gravity_m_s2 * h[:, 0]
+            force = _inertial_force(alpha[j], omega[j], h)
+            own = pair_cross(h, accel[j]) + gravity_m_s2 * h[0]
             for i in range(j + 1):
-                regressor[:, i, column] = planar_cross(points[:, j] - points[:, i], force) + own
-        regressor[:, : j + 1, 2 * n + j] = alpha[:, j, None]
+                lever = (points[j][0] - points[i][0], points[j][1] - points[i][1])
+                regressor[:, i, column] = pair_cross(lever, force) + own
+        regressor[:, : j + 1, 2 * n + j] = alpha[j][:, None]
     return regressor
 
 
@@ -203,24 +227,29 @@ def base_torque_angle_derivatives(
     """
     n = q_rad.shape[1]
     omega, alpha, axis, normal, points, accel, steps = _chain_frames(q_rad, qd_rad_s, qdd_rad_s2, lengths_m)
-    h = base_values[None, :n, None] * axis + base_values[None, n : 2 * n, None] * normal  # (N, n, 2)
-    force = alpha[..., None] * perpendicular(h) - omega[..., None] ** 2 * h
+    beta, gamma = base_values[:n], base_values[n : 2 * n]
+    h = [
+        (beta[j] * axis[j][0] + gamma[j] * normal[j][0], beta[j] * axis[j][1] + gamma[j] * normal[j][1])
+        for j in range(n)
+    ]
+    force = [_inertial_force(alpha[j], omega[j], h[j]) for j in range(n)]
     derivative = np.zeros((q_rad.shape[0], n, n))
     for s in range(n):
         # Segment s turned: its own first moment and force turn; the points and accelerations beyond it move.
-        turned_h, turned_force = perpendicular(h[:, s]), perpendicular(force[:, s])
-        moved = lengths_m[s] * normal[:, s]  # d points_j for j > s
-        moved_accel = perpendicular(steps[:, s]) if s < n - 1 else None  # d accel_j for j > s
+        turned_h, turned_force = pair_turned(h[s]), pair_turned(force[s])
+        moved = (lengths_m[s] * normal[s][0], lengths_m[s] * normal[s][1])  # d points_j for j > s
+        moved_accel = pair_turned(steps[s]) if s < n - 1 else None  # d accel_j for j > s
         for i in range(n):
             total = np.zeros(q_rad.shape[0])
             for j in range(i, n):
                 if i <= s < j:  # only the lever from joint i to a point beyond s moves (j >= i)
-                    total += planar_cross(moved, force[:, j])
+                    total += pair_cross(moved, force[j])
                 if j == s:
-                    total += planar_cross(points[:, j] - points[:, i], turned_force)
-                    total += planar_cross(turned_h, accel[:, j]) + gravity_m_s2 * turned_h[:, 0]
+                    lever = (points[j][0] - points[i][0], points[j][1] - points[i][1])
+                    total += pair_cross(lever, turned_force)
+                    total += pair_cross(turned_h, accel[j]) + gravity_m_s2 * turned_h[0]
                 if j > s and moved_accel is not None:
-                    total += planar_cross(h[:, j], moved_accel)
+                    total += pair_cross(h[j], moved_accel)
             derivative[:, i, s] = total
     return derivative
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsp_ros.core.dynamics import base_torque_angle_derivatives, perpendicular, planar_cross
+from bsp_ros.core.dynamics import base_torque_angle_derivatives, pair_cross, pair_turned
 from bsp_ros.core.model import running_sum
 
 
@@ -81,28 +81,29 @@ def placement_columns(
     """
     n = q_rad.shape[1]
     lengths = np.asarray(lengths_m, dtype=np.float64)
-    force = wrench_from_torques(q_rad, lengths, tau_nm)[:, :2]  # (N, 2) the handle's [F_y, F_z]
-    phi = running_sum(q_rad)
-    axis = np.stack((np.cos(phi), np.sin(phi)), axis=-1)  # (N, n, 2)
+    force = wrench_from_torques(q_rad, lengths, tau_nm)  # (N, 3) the handle's [F_y, F_z, M_x]
+    force_y, force_z = force[:, 0], force[:, 1]
+    phi = running_sum(np.ascontiguousarray(q_rad.T)[None])[0]  # (n, N): each segment's samples contiguous
+    axis = [(c, s) for c, s in zip(np.cos(phi), np.sin(phi), strict=True)]
     turning = base_torque_angle_derivatives(q_rad, qd_rad_s, qdd_rad_s2, lengths, base_values)  # (N, n, n)
     frame_of = [*range(n), n - 1]
     columns = np.zeros((q_rad.shape[0], n, 2 * (n + 1)))
     for k in range(n + 1):
-        along = axis[:, frame_of[k]]
-        for c, direction in enumerate((along, perpendicular(along))):
-            delta = -direction  # the true centre, if the marker sits o = +1 m off it
+        along = axis[frame_of[k]]
+        for c, direction in enumerate((along, pair_turned(along))):
+            delta = (-direction[0], -direction[1])  # the true centre, if the marker sits o = +1 m off it
             model = np.zeros((q_rad.shape[0], n))
             if k >= 1:  # the segment ending at the centre turns
-                model += turning[:, :, k - 1] * (planar_cross(axis[:, k - 1], delta) / lengths[k - 1])[:, None]
+                model += turning[:, :, k - 1] * (pair_cross(axis[k - 1], delta) / lengths[k - 1])[:, None]
             if k < n:  # the segment starting at it turns the other way
-                model -= turning[:, :, k] * (planar_cross(axis[:, k], delta) / lengths[k])[:, None]
-            # The handle's lever arm about joint i (contact point minus joint i) moves with either end.
-            lever = np.zeros((q_rad.shape[0], n, 2))
-            if k == n:
-                lever += delta[:, None, :]
-            else:
-                lever[:, k] -= delta
-            torque = -(lever[..., 0] * force[:, None, 1] - lever[..., 1] * force[:, None, 0])
+                model -= turning[:, :, k] * (pair_cross(axis[k], delta) / lengths[k])[:, None]
+            # The handle's lever arm about joint i (contact point minus joint i) moves with either end: with the
+            # contact point for every joint, with joint k's centre for joint k alone (the others' lever is 0).
             # tau_meas = Y theta + [d(Y theta)/do - d tau/do] o
-            columns[:, :, 2 * k + c] = model - torque
+            if k == n:
+                columns[:, :, 2 * k + c] = model + (delta[0] * force_z - delta[1] * force_y)[:, None]
+            else:
+                columns[:, :, 2 * k + c] = model
+                lever = (-delta[0], -delta[1])
+                columns[:, k, 2 * k + c] = model[:, k] + (lever[0] * force_z - lever[1] * force_y)
     return columns
