@@ -52,8 +52,16 @@ class Problem:
         statistics, the augmented problems of the model checks and their candidate profiles all pass over them."""
         cache: dict[int, tuple[np.ndarray, np.ndarray]] = self.__dict__.setdefault("_used_rows", {})
         if joint not in cache:
-            used = self.rows[:, joint]
-            cache[joint] = (self.regressor[used, joint, :], self.torque[used, joint])
+            used = self.used_index(joint)
+            cache[joint] = (self.regressor[:, joint, :].take(used, axis=0), self.torque[:, joint].take(used))
+        return cache[joint]
+
+    def used_index(self, joint: int) -> np.ndarray:
+        """(M,) the used rows of ``joint``, as indices, kept: ``take`` with them gathers rows twice as fast as the
+        boolean mask (the same values)."""
+        cache: dict[int, np.ndarray] = self.__dict__.setdefault("_used_index", {})
+        if joint not in cache:
+            cache[joint] = np.flatnonzero(self.rows[:, joint])
         return cache[joint]
 
     @functools.cached_property
@@ -242,7 +250,7 @@ def _augmented_statistics(problem: Problem, extra: np.ndarray) -> Statistics:
     n, p, m = grams.shape[0], grams.shape[1], extra.shape[2]
     out_grams, out_moments = np.empty((n, p + m, p + m)), np.empty((n, p + m))
     for j in range(n):
-        (x, y), e = problem.used_rows(j), extra[problem.rows[:, j], j, :]
+        (x, y), e = problem.used_rows(j), extra[:, j, :].take(problem.used_index(j), axis=0)
         cross = x.T @ e
         out_grams[j, :p, :p], out_grams[j, :p, p:], out_grams[j, p:, :p] = grams[j], cross, cross.T
         out_grams[j, p:, p:] = e.T @ e
@@ -427,7 +435,7 @@ def augmented(
 ) -> Problem:
     """``problem`` with extra unbounded columns ``extra`` (N, n, m), with Gaussian priors where given."""
     m = len(names)
-    return Problem(
+    wider = Problem(
         problem.names + names,
         (*problem.blocks, extra),
         problem.torque,
@@ -439,3 +447,5 @@ def augmented(
         problem.passive_end,
         _augmented_statistics(problem, extra),
     )
+    wider.__dict__["_used_index"] = problem.__dict__.get("_used_index", {})  # the same rows: their indices
+    return wider
