@@ -127,12 +127,16 @@ class DelayProblem:
         t = self.t_ns - np.int64(round(delay_s * 1e9))
         q, velocity, valid = resample_kinematics(self.kinematics, t)
         use = valid if keep is None else keep & valid
-        k = self.kinematics
-        tau = contact_torques_nm(q[use], k.lengths_m, self.wrench_yzx[use])
-        data = IdentificationData(
-            t[use], q[use], velocity[use], tau, k.lengths_m, k.lengths_std_m, k.direction_velocity_noise_rad_s
-        )
+        k, wrench = self.kinematics, self.wrench_yzx
+        if not use.all():
+            t, q, velocity, wrench = t[use], q[use], velocity[use], wrench[use]
+        tau = contact_torques_nm(q, k.lengths_m, wrench)
+        data = IdentificationData(t, q, velocity, tau, k.lengths_m, k.lengths_std_m, k.direction_velocity_noise_rad_s)
         return data, valid
+
+    def rows(self, keep: np.ndarray) -> DelayProblem:
+        """The problem on the wrench samples ``keep`` (N,) bool only."""
+        return self if keep.all() else DelayProblem(self.kinematics, self.t_ns[keep], self.wrench_yzx[keep])
 
 
 def delay_problem(
@@ -361,6 +365,7 @@ def estimate_wrench_delay(
     keep = problem.valid(-reach) & problem.valid(reach) & problem.valid(0.0)
     if keep.sum() < 50:
         raise DataError(f"only {int(keep.sum())} wrench samples have joint angles at every delay within +-{reach:g} s")
+    kept = problem.rows(keep)  # every candidate's samples are among these: selected once
     # Each candidate's samples, built once: the fit's reference (0), the profile and the inflation's slope share them
     # (keyed by the shift in whole ns, as applied: the grid's 0 is 0 only to a float's rounding).
     samples: dict[int, IdentificationData] = {}
@@ -368,7 +373,7 @@ def estimate_wrench_delay(
     def at(delay_s: float) -> IdentificationData:
         shift_ns = round(delay_s * 1e9)
         if shift_ns not in samples:
-            samples[shift_ns] = problem.data(delay_s, keep)[0]
+            samples[shift_ns] = kept.data(delay_s)[0]
         return samples[shift_ns]
 
     rss = fit_rss or linear_rss(at(0.0), passive)
