@@ -1,6 +1,6 @@
 """Issue 23: `bsp identify BAG` against rosbags' AnyReader deserialising the same bag, each a whole process.
 
-Usage: ``python bench/identify_vs_anyreader.py [--minutes 10] [--wrench-hz 100] [--marker-hz 50] [--repeat 3]
+Usage: ``python bench/identify_vs_anyreader.py [--minutes 10] [--wrench-hz 100] [--marker-hz 50] [--repeat 5]
 [--keep DIR]`` (with the worktree first on PYTHONPATH and its venv's ``bsp`` on PATH).
 
 Two bags of one simulated session (`bsp simulate --duration 60*MINUTES`): the one `bsp simulate` writes, and
@@ -16,6 +16,8 @@ best of ``--repeat``:
 
 Every command runs from compiled bytecode (the package is compiled first, PYTHONDONTWRITEBYTECODE unset), as
 `pip install` leaves both packages.
+
+The baseline and ours run in turns, ``--repeat`` times each (this machine's speed drifts between blocks of runs).
 
 Printed: seconds per command and bag, and ours / baseline (issue 23's target: <= 0.5).
 """
@@ -53,16 +55,32 @@ print(n)
 _ENV = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 
 
+def _timed(command: list[str]) -> tuple[float, int]:
+    """Wall time of one run of ``command`` (s), and its exit code."""
+    started = time.perf_counter()
+    code = subprocess.run(
+        command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False, env=_ENV
+    ).returncode
+    return time.perf_counter() - started, code
+
+
 def best_of(command: list[str], repeat: int) -> tuple[float, int]:
     """The shortest wall time of ``repeat`` runs of ``command`` (s), and its exit code."""
-    times, code = [], 0
+    runs = [_timed(command) for _ in range(repeat)]
+    return min(t for t, _ in runs), runs[-1][1]
+
+
+def best_of_alternating(first: list[str], second: list[str], repeat: int) -> tuple[float, float, int]:
+    """The shortest wall times of ``repeat`` runs of each command, run in turns (s), and ``second``'s exit code.
+
+    In turns, not one command's runs after the other's: this machine's speed drifts by 10-20 % over tens of
+    seconds, and a drift between two blocks of runs would show as a difference of the commands."""
+    a, b, code = [], [], 0
     for _ in range(repeat):
-        started = time.perf_counter()
-        code = subprocess.run(
-            command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False, env=_ENV
-        ).returncode
-        times.append(time.perf_counter() - started)
-    return min(times), code
+        a.append(_timed(first)[0])
+        elapsed, code = _timed(second)
+        b.append(elapsed)
+    return min(a), min(b), code
 
 
 def main() -> None:
@@ -70,7 +88,7 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=10.0)
     parser.add_argument("--wrench-hz", type=float, default=100.0)
     parser.add_argument("--marker-hz", type=float, default=50.0)
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--keep", type=Path, help="write the bags here and keep them")
     args = parser.parse_args()
     from bag_layouts import write_rosbags
@@ -111,8 +129,9 @@ def main() -> None:
     print(f"bsp --version                          {version:7.3f} s")
     print(f"{'bag':16s} {'AnyReader deserialise':>22s} {'bsp identify':>13s} {'ratio':>6s}  exit")
     for name, bag in (("bsp simulate", ours), ("rosbags Writer", theirs)):
-        baseline, _ = best_of([sys.executable, "-c", _ANYREADER, str(bag)], args.repeat)
-        identify, code = best_of([*bsp, "identify", str(bag), "--format", "none"], args.repeat)
+        baseline, identify, code = best_of_alternating(
+            [sys.executable, "-c", _ANYREADER, str(bag)], [*bsp, "identify", str(bag), "--format", "none"], args.repeat
+        )
         print(f"{name:16s} {baseline:20.3f} s {identify:11.3f} s {identify / baseline:6.2f}  {code}")
     if args.keep is None:
         shutil.rmtree(work)
