@@ -88,7 +88,7 @@ def test_a_bag_is_stored_with_its_options_tare_body_data_and_repeatability(
     digest = hashlib.sha256(b"".join(f.read_bytes() for f in sorted(bags["session"].glob("*.mcap")))).hexdigest()
     assert record.content_sha256 == digest
     # The same recording again, under another time: refused before it is identified, nothing added.
-    import bsp_ros.cli.sessions as sessions_cli
+    import bsp_ros.cli.session_actions as sessions_cli
 
     def identified(*_: object) -> None:
         raise AssertionError("a stored recording was identified again before being refused")

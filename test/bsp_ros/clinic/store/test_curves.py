@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bsp_ros.cli.sessions import record_to_json
+from bsp_ros.cli.session_actions import record_to_json
 from bsp_ros.clinic.store import open_store
 from bsp_ros.clinic.store.curves import angle_key, sample_curve
 from bsp_ros.clinic.store.samples import SAMPLE_START_NS, sample_estimate

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from bsp_ros.cli.sessions import record_to_json
+from bsp_ros.cli.session_actions import record_to_json
 from bsp_ros.clinic.store import SCHEMA_VERSION, open_store
 from bsp_ros.clinic.store.backends import connect
 from bsp_ros.clinic.store.samples import SAMPLE_START_NS, sample_estimate
