@@ -65,7 +65,12 @@ def drift_columns(data: IdentificationData) -> tuple[np.ndarray, list[ParameterN
     return extra[:, :, columns], names, DriftSpans(groups, spans_s, columns, jacobian)
 
 
-def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift | None:
+def drift_check(
+    data: IdentificationData,
+    problem: Problem,
+    fit: Fit,
+    terms: tuple[np.ndarray, list[ParameterName], DriftSpans] | None = None,
+) -> Drift | None:
     """A wrench offset that changes linearly over each recording (an F/T sensor drifting with temperature):
     the torques ``-J(q)^T d t`` it adds are tested as extra columns (``d`` along world y, z and x), one set per
     recording (recordings minutes apart are not one line: between them the sensor may have been re-tared, and a
@@ -74,9 +79,10 @@ def drift_check(data: IdentificationData, problem: Problem, fit: Fit) -> Drift |
     A drift that moves the static moments is modelled, not thrown away: the fit with the drift columns
     replaces ``fit``. Its rate is identified; its level at any moment is not (a tare holds when it was taken,
     and an offset is collinear with gravity at one posture), so the static moments' shift under an offset as
-    large as the drift over each recording joins their covariance."""
+    large as the drift over each recording joins their covariance. ``terms``: :func:`drift_columns` of ``data``,
+    when the caller has them."""
     n = data.n_joints
-    extra, names, spans = drift_columns(data)
+    extra, names, spans = terms or drift_columns(data)
     groups, spans_s, columns, jacobian = spans.groups, spans.spans_s, spans.columns, spans.jacobian
     p = len(problem.names)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -232,10 +233,12 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 "its data std): that spread is in its std"
             )
     drift = None
+    # A drift's columns, computed once where the drift check and the placement check both need them.
+    drift_terms = functools.cache(functools.partial(drift_columns, data))
     if (config.check_elastic or config.check_drift) and not problems:
         # Before the fit is judged: a drifting sensor leaves a slow residual that would otherwise read as a model
         # that does not fit (the quieter the sensor, the sooner). One refit: a live window runs it on every update.
-        drift = drift_check(data, problem, fit)
+        drift = drift_check(data, problem, fit, drift_terms())
         if drift is not None:
             if judged_residual is not None:
                 judged_residual = judged_residual - (fit.residual - drift.fit.residual)
@@ -342,7 +345,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         skin = np.ones(n + 1, dtype=bool)
         skin[-1] = not data.contact_from_robot
         placement_check = placement_scale(
-            problem, placement.columns, placement_sd_m, skin, with_springs, drift_columns(data)[:2]
+            problem, placement.columns, placement_sd_m, skin, with_springs, drift_terms()[:2]
         )
         if placement_check.scale > 1.0:
             wider = covariance_from_columns(problem, placement_fit, placement.columns * placement_check.column_factor)
