@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.bag.byte_windows import byte_windows
 from bsp_ros.bag.topics import POSE_TYPE, WRENCH_TYPE
 from bsp_ros.errors import InputError
 from msg_adapters.tf import TransformSample
@@ -22,11 +23,6 @@ FIXED_LAYOUT_FLOATS: dict[str, int] = {WRENCH_TYPE: 6, POSE_TYPE: 7}
 _STAMP = np.dtype([("sec", "<i4"), ("nanosec", "<u4")])
 _NS = np.int64(1_000_000_000)
 _HEADER = 16  # encapsulation (4) + sec (4) + nanosec (4) + string length (4)
-
-
-def _gather(buf: np.ndarray, starts: np.ndarray, width: int) -> np.ndarray:
-    """Bytes ``buf[s:s + width]`` for every start ``s``, as a C-contiguous (n, width) uint8 array."""
-    return buf[starts[:, None] + np.arange(width, dtype=np.int64)]
 
 
 @dataclass
@@ -70,7 +66,7 @@ def decode_fixed(
     ok = lengths >= _HEADER + 1 + 8 * n_floats
     idx = np.flatnonzero(ok)
     if idx.size:
-        head = _gather(buf, offsets[idx], _HEADER)
+        head = byte_windows(buf, offsets[idx], _HEADER)
         little = (head[:, 0] == 0) & (head[:, 1] == 1)
         str_len = head[:, 12:16].copy().view("<u4")[:, 0].astype(np.int64)
         float_at = 4 + ((12 + str_len + 7) & ~np.int64(7))
@@ -80,10 +76,10 @@ def decode_fixed(
         stamps = head[:, 4:12].copy().view(_STAMP)[:, 0]
         t_ns[keep] = stamps["sec"].astype(np.int64) * _NS + stamps["nanosec"].astype(np.int64)
         starts = offsets[keep]
-        values[keep] = _gather(buf, starts + float_at, 8 * n_floats).view("<f8")
+        values[keep] = byte_windows(buf, starts + float_at, 8 * n_floats).view("<f8")
         for size in np.unique(str_len):
             group = str_len == size
-            text = _gather(buf, starts[group] + _HEADER, int(size))
+            text = byte_windows(buf, starts[group] + _HEADER, int(size))
             terminated = text[:, -1] == 0
             ok[keep[group][~terminated]] = False
             names = text[terminated, :-1]

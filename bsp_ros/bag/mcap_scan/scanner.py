@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bsp_ros.bag.byte_windows import byte_windows
 from bsp_ros.bag.compression import decompress_cdr_messages
 from bsp_ros.bag.mcap_scan.interface import ChannelInfo, MessageSink, ScanResult
 from bsp_ros.bag.mcap_scan.records import OP_CHANNEL, OP_MESSAGE, OP_SCHEMA, RECORD, parse_channel, parse_schema
@@ -113,7 +114,7 @@ class Scanner:
     def feed(self, data: bytes, starts: np.ndarray) -> None:
         """Feed the message records starting at ``starts`` (byte offsets in ``data``) per wanted channel."""
         buf = np.frombuffer(data, dtype=np.uint8)
-        head = buf[starts[:, None] + np.arange(9 + 22, dtype=np.int64)]  # opcode, length, message header
+        head = byte_windows(buf, starts, 9 + 22)  # opcode, length, message header
         length = head[:, 1:9].copy().view("<u8")[:, 0].astype(np.int64) - 22
         channel = head[:, 9:11].copy().view("<u2")[:, 0]
         log_ns = head[:, 15:23].copy().view("<i8")[:, 0]
