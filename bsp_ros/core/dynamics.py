@@ -37,28 +37,18 @@ class ChainMotion:
     qdd_rad_s2: np.ndarray
 
 
-def planar_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Planar cross product (moment about +x) of (..., 2) vectors ``[y, z]``."""
-    return np.asarray(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
-
-
-def perpendicular(v: np.ndarray) -> np.ndarray:
-    """(..., 2) vectors turned 90 deg counter-clockwise (the angular velocity's cross product)."""
-    return np.stack((-v[..., 1], v[..., 0]), axis=-1)
-
-
 # A planar vector per sample as its two components, each (N,) contiguous: the chain's few segments times N samples
 # in (N, n, 2) arrays made every product a strided pass over pairs, 3-5 times slower (the same arithmetic).
 Vector = tuple[np.ndarray, np.ndarray]
 
 
 def pair_cross(a: Vector, b: Vector) -> np.ndarray:
-    """:func:`planar_cross` of component pairs."""
+    """Planar cross product (moment about +x) of vectors given as their components ``(y, z)``."""
     return a[0] * b[1] - a[1] * b[0]
 
 
 def pair_turned(v: Vector) -> Vector:
-    """:func:`perpendicular` of a component pair."""
+    """Vectors turned 90 deg counter-clockwise (the angular velocity's cross product), as components ``(y, z)``."""
     return -v[1], v[0]
 
 
