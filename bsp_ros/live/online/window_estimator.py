@@ -44,8 +44,8 @@ class WindowSettings:
 _PER_POINT = ("t_ns", "q_rad", "direction_velocity_rad_s", "velocity_rad_s", "acceleration_rad_s2")
 
 
-def _grid_points(*parts: tuple[MarkerKinematics, slice]) -> MarkerKinematics:
-    """The grid points ``keep`` (a slice) of each ``(kinematics, keep)`` part, joined in order; the other fields
+def _grid_points(*parts: tuple[MarkerKinematics, np.ndarray]) -> MarkerKinematics:
+    """The grid points ``keep`` (bool) of each ``(kinematics, keep)`` part, joined in order; the other fields
     (settings, noise, notes) are the last part's."""
 
     def joined(name: str) -> np.ndarray | None:
@@ -56,22 +56,6 @@ def _grid_points(*parts: tuple[MarkerKinematics, slice]) -> MarkerKinematics:
 
     points: dict[str, Any] = {name: joined(name) for name in _PER_POINT}
     return dataclasses.replace(parts[-1][0], **points)
-
-
-# The grid points of a part, as slices of its increasing stamps (views: a boolean mask would copy every field twice).
-def _until(t_ns: np.ndarray, last_ns: int) -> slice:
-    """The points at or before ``last_ns``."""
-    return slice(0, int(np.searchsorted(t_ns, last_ns, side="right")))
-
-
-def _from(t_ns: np.ndarray, first_ns: int) -> slice:
-    """The points at or after ``first_ns``."""
-    return slice(int(np.searchsorted(t_ns, first_ns, side="left")), None)
-
-
-def _after(t_ns: np.ndarray, first_ns: int) -> slice:
-    """The points after ``first_ns``."""
-    return slice(int(np.searchsorted(t_ns, first_ns, side="right")), None)
 
 
 class WindowEstimator:
@@ -123,7 +107,7 @@ class WindowEstimator:
             )
         else:
             kinematics, settings = self._held_kinematics(t_a, rows[:, : self.n], held), held
-        self._settled = _grid_points((kinematics, _until(kinematics.t_ns, int(t_a[-1]) - int(SETTLED_S * 1e9))))
+        self._settled = _grid_points((kinematics, kinematics.t_ns <= int(t_a[-1]) - int(SETTLED_S * 1e9)))
         # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
         q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
         if valid.sum() < 2:
@@ -170,9 +154,7 @@ class WindowEstimator:
         ):
             return filtered(0)
         tail = filtered(int(np.searchsorted(t_ns, settled.t_ns[-1] - int(TAIL_LEAD_S * 1e9))))
-        return _grid_points(
-            (settled, _from(settled.t_ns, int(t_ns[0]))), (tail, _after(tail.t_ns, int(settled.t_ns[-1])))
-        )
+        return _grid_points((settled, settled.t_ns >= t_ns[0]), (tail, tail.t_ns > settled.t_ns[-1]))
 
     def _due(self) -> bool:
         """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and every update
