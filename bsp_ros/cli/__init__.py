@@ -10,6 +10,7 @@ import sys
 from collections.abc import Sequence
 
 from bsp_ros import __version__
+from bsp_ros.allocator import reuse_freed_memory
 from bsp_ros.errors import BspError
 
 # What a shell reports for a Unix tool killed by SIGPIPE (128 + 13): `bsp ... | head -1` stops quietly with it.
@@ -65,6 +66,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             sys.stdout.flush()
             return 2
+        reuse_freed_memory()
         try:
             code = int(args._run(args) or 0)
         except BspError as error:
