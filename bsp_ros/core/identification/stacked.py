@@ -121,7 +121,10 @@ def build_problem(
     local = passive.local
     k = len(local)
     names = problem_names(passive, n, extras is not None)
-    regressor = np.zeros((data.t_ns.size, n, n + n * k))
+    # The dynamics' columns are written into the one regressor from the start: one array, gathered once per joint
+    # for the statistics (an augmented problem would gather its base's columns and the new ones apart first).
+    dynamics = 0 if extras is None else 2 * n
+    regressor = np.zeros((data.t_ns.size, n, n + n * k + dynamics))
     regressor[:, :, :n] = gravity_regressor(data.q_rad) if extras is None else extras.base[:, :, :n]
     passive_q = data.passive_q_rad  # the trunk's tilt turns gravity, not the passive moments
     for j in range(n):
@@ -131,22 +134,22 @@ def build_problem(
             regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
     if passive.elastic:
         reference = ElasticReference.from_angles(passive_q)
-        regressor = np.concatenate((regressor, elastic_columns(passive_q, passive.elastic, reference)), axis=2)
-    p = regressor.shape[2]
+        elastic = elastic_columns(passive_q, passive.elastic, reference)
+        regressor = np.concatenate((regressor[:, :, : n + n * k], elastic, regressor[:, :, n + n * k :]), axis=2)
+    p = regressor.shape[2] - dynamics
     lower = [0.0] * n + [TERMS[term][2] for _ in range(n) for term in local] + [-np.inf] * (p - n - n * k)
     precision = elastic_prior_precision(names[:p])
-    problem = Problem(
-        names[:p], (regressor,), data.tau_nm, rows, np.array(lower), np.full(p, np.inf), np.zeros(p), precision, p
+    mean = np.zeros(p)
+    if extras is not None:
+        regressor[:, :, p:] = extras.base[:, :, n:]
+        prior = extras.prior
+        mean = np.concatenate((mean, prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
+        sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
+        precision = np.concatenate((precision, np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)))
+        lower += [-np.inf] * dynamics
+    return Problem(
+        names, (regressor,), data.tau_nm, rows, np.array(lower), np.full(p + dynamics, np.inf), mean, precision, p
     )
-    if extras is None:
-        return problem
-    prior = extras.prior
-    mean = np.concatenate((prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
-    sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
-    precision = np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)
-    wide = augmented(problem, extras.base[:, :, n:], names[p:], mean, precision)
-    # Every fit of it passes over all its columns: joined once, as one block its augmentations keep.
-    return dataclasses.replace(wide, blocks=(wide.regressor,), statistics=wide.statistics)
 
 
 def problem_names(passive: PassiveModel, n: int, dynamics: bool) -> list[ParameterName]:
