@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from rosbags.typesys import Stores, get_typestore
 
 from bsp_ros.bag.cdr import FIXED_LAYOUT_FLOATS, decode_fixed, decode_tf_message
 from bsp_ros.bag.mcap_scan import ChannelInfo
@@ -53,6 +52,8 @@ class SessionSink:
     def typestore(self) -> Any:
         """rosbags' Jazzy type store, loaded only when a message needs it (a non-fixed layout or a damaged one)."""
         if self._typestore is None:
+            from rosbags.typesys import Stores, get_typestore  # 14 ms of imports most bags never need
+
             self._typestore = get_typestore(Stores.ROS2_JAZZY)
         return self._typestore
 
