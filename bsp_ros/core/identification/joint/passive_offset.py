@@ -18,10 +18,10 @@ def passive_offset_sensitivity(problem: Problem, fit: Fit, n: int) -> dict[str, 
     out: dict[str, dict[str, float]] = {}
     if any(key == "offset_nm" for key, _ in problem.names):
         return out  # the offset is modelled: nothing assumed
-    w = np.where(problem.rows, fit.weights[None, :], 0.0)
     try:
         for j, joint in enumerate(joints):
-            rhs = SENSITIVITY_OFFSET_NM * problem.regressor[:, j, :].T @ w[:, j]
+            # X^T W u over the joint's used rows: its weight times their column sums (the rows gathered once).
+            rhs = SENSITIVITY_OFFSET_NM * fit.weights[j] * problem.used_rows(j)[0].sum(axis=0)
             shift = np.linalg.solve(fit.design, rhs)[:n]
             out[joint] = {segment: float(v) for segment, v in zip(segments, shift, strict=True)}
     except np.linalg.LinAlgError:
