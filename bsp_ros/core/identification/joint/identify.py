@@ -26,7 +26,7 @@ from bsp_ros.core.identification.joint.outliers import (
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
 from bsp_ros.core.identification.joint.placement_covariance import (
-    covariance_from_columns,
+    covariance_from_products,
     placement_covariance,
     placement_effect,
 )
@@ -348,7 +348,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             problem, placement.columns, placement_sd_m, skin, with_springs, drift_terms()[:2]
         )
         if placement_check.scale > 1.0:
-            wider = covariance_from_columns(problem, placement_fit, placement.columns * placement_check.column_factor)
+            wider = covariance_from_products(placement_fit, placement.products * placement_check.column_factor)
             fit = dataclasses.replace(fit, covariance=fit.covariance + wider - placement_share)
             placement_share = wider
             if placement_check.note:

@@ -27,11 +27,13 @@ class PlacementEffect:
     residual : (N, n) the residual (Nm, NaN where unused) of the fit that also takes marker offsets, each with a
         prior of its ``sd_m``: what is left once offsets of that size explain what they can.
     columns : (N, n, m) the offsets' columns it was computed from (:func:`offset_columns`).
+    products : (p, m) ``X^T W D`` of the fit's weights and those columns (:func:`covariance_from_products`).
     """
 
     covariance: np.ndarray
     residual: np.ndarray
     columns: np.ndarray
+    products: np.ndarray
 
 
 def offset_columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
@@ -100,7 +102,13 @@ def _per_recording(columns: np.ndarray, recording_index: np.ndarray | None) -> n
 def covariance_from_columns(problem: Problem, fit: Fit, columns: np.ndarray) -> np.ndarray:
     """Covariance (p, p) of the estimate from offsets of unit variance along ``columns`` (N, n, m)."""
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    response = design_inverse(fit.design) @ joint_products(problem.regressor, w, columns)
+    return covariance_from_products(fit, joint_products(problem.regressor, w, columns))
+
+
+def covariance_from_products(fit: Fit, products: np.ndarray) -> np.ndarray:
+    """Covariance (p, p) of the estimate from offsets of unit variance whose columns ``D`` give ``X^T W D`` (p, m)
+    at the fit's weights: the response ``G = (A + P)^-1 X^T W D``, then ``G G^T``."""
+    response = design_inverse(fit.design) @ products
     return np.asarray(response @ response.T)
 
 
@@ -129,4 +137,8 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     # Offsets in units of their sd (the columns are scaled): each with the prior N(0, 1).
     with_offsets = augmented(problem, columns, names, np.zeros(m), np.ones(m))
     residual = np.where(problem.rows, reweighted_values(with_offsets).residual(with_offsets), np.nan)
-    return PlacementEffect(covariance_from_columns(problem, fit, columns), residual, columns)
+    # X^T W D from the wider problem's per-joint products of the used rows (its statistics): no second pass.
+    assert with_offsets.statistics is not None  # augmented() computes them
+    p = len(problem.names)
+    products = np.tensordot(fit.weights, with_offsets.statistics[0][:, :p, p:], axes=1)
+    return PlacementEffect(covariance_from_products(fit, products), residual, columns, products)
