@@ -64,8 +64,9 @@ def rolling_median(columns: np.ndarray, size: int) -> np.ndarray:
     """Centred rolling median (N, k) over ``size`` (odd) samples, the ends extended by their edge values: as
     ``scipy.ndimage.median_filter(columns, size=(size, 1), mode="nearest")``, bit for bit (the middle element)."""
     half = size // 2
-    padded = np.pad(columns, ((half, half), (0, 0)), mode="edge")
-    return np.asarray(np.partition(sliding_window_view(padded, size, axis=0), half, axis=-1)[..., half])
+    # Each column's samples contiguous: the windows' copy and selection run a fifth faster (the same values).
+    padded = np.pad(np.ascontiguousarray(columns.T), ((0, 0), (half, half)), mode="edge")
+    return np.asarray(np.partition(sliding_window_view(padded, size, axis=1), half, axis=-1)[..., half].T)
 
 
 def high_frequency_sd(residual: np.ndarray) -> np.ndarray:
