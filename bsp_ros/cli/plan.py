@@ -478,7 +478,10 @@ def _publish(plan: Any, args: argparse.Namespace) -> None:
             build_handle_path(get_message, start_ns, args.frame_id, samples["t_s"], samples["handle"], args.plane_x)
         )
         print(f"publishing {prefix}/joint_trajectory and {prefix}/handle_path (latched); Ctrl-C to stop", flush=True)
-        rclpy.spin(node)
+        # Not rclpy.spin: a SIGTERM that shuts the context down while its wait is being set up left spin() waiting
+        # for ever (1 in 6-10 runs on a loaded machine; `test_plan.py`'s publisher); a short wait sees it.
+        while rclpy.ok():
+            rclpy.spin_once(node, timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
