@@ -437,6 +437,10 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
             f"  RSS {first.rss_mb[name]:7.1f} -> {last.rss_mb[name]:7.1f} MB"
             f" (growth {growth:+6.2f} MB, of which 2nd half {half_growth:+6.2f} MB)"
         )
+        if name == "bsp_identifier" and len(series) > 12:
+            # The shape of the growth: a few steps that stop (a pool sized to the largest message) or a creep.
+            per_minute = " ".join(f"{v:.1f}" for v in series[::12])
+            print(f"      {name} RSS every minute of the measured run, MB: {per_minute}")
         if name != "listener":
             flat &= half_growth < FLAT_MB  # growth: a shrinking RSS is no leak
             growth_text.append(f"{half_growth:+.2f}")

@@ -44,9 +44,9 @@ class WindowSettings:
 _PER_POINT = ("t_ns", "q_rad", "direction_velocity_rad_s", "velocity_rad_s", "acceleration_rad_s2")
 
 
-def _grid_points(*parts: tuple[MarkerKinematics, np.ndarray]) -> MarkerKinematics:
-    """The grid points ``keep`` (bool) of each ``(kinematics, keep)`` part, joined in order; the other fields
-    (settings, noise, notes) are the last part's."""
+def _grid_points(*parts: tuple[MarkerKinematics, slice]) -> MarkerKinematics:
+    """The grid points ``keep`` (a range of them) of each ``(kinematics, keep)`` part, joined in order; the other
+    fields (settings, noise, notes) are the last part's."""
 
     def joined(name: str) -> np.ndarray | None:
         values = [getattr(kinematics, name) for kinematics, _ in parts]
@@ -56,6 +56,12 @@ def _grid_points(*parts: tuple[MarkerKinematics, np.ndarray]) -> MarkerKinematic
 
     points: dict[str, Any] = {name: joined(name) for name in _PER_POINT}
     return dataclasses.replace(parts[-1][0], **points)
+
+
+def _from(t_ns: np.ndarray, first_ns: int, inclusive: bool = True) -> slice:
+    """The grid points at or after (``inclusive``) or after ``first_ns``: the grid's stamps increase, so a range
+    (a slice copies nothing where a boolean mask gathered every field)."""
+    return slice(int(np.searchsorted(t_ns, first_ns, "left" if inclusive else "right")), None)
 
 
 class WindowEstimator:
@@ -107,7 +113,8 @@ class WindowEstimator:
             )
         else:
             kinematics, settings = self._held_kinematics(t_a, rows[:, : self.n], held), held
-        self._settled = _grid_points((kinematics, kinematics.t_ns <= int(t_a[-1]) - int(SETTLED_S * 1e9)))
+        settled_end = int(np.searchsorted(kinematics.t_ns, int(t_a[-1]) - int(SETTLED_S * 1e9), "right"))
+        self._settled = _grid_points((kinematics, slice(0, settled_end)))
         # As offline: the newest half second has no settled derivative yet and is left out (resample_with_motion).
         q, velocity, qd, qdd, valid = resample_with_motion(kinematics, t_w)
         if valid.sum() < 2:
@@ -154,7 +161,10 @@ class WindowEstimator:
         ):
             return filtered(0)
         tail = filtered(int(np.searchsorted(t_ns, settled.t_ns[-1] - int(TAIL_LEAD_S * 1e9))))
-        return _grid_points((settled, settled.t_ns >= t_ns[0]), (tail, tail.t_ns > settled.t_ns[-1]))
+        return _grid_points(
+            (settled, _from(settled.t_ns, int(t_ns[0]))),
+            (tail, _from(tail.t_ns, int(settled.t_ns[-1]), inclusive=False)),
+        )
 
     def _due(self) -> bool:
         """Whether this update runs the model checks: the first, every ``elastic_check_every``-th, and every update
