@@ -26,10 +26,17 @@ def robust_sd(values: np.ndarray, axis: int = 0) -> np.ndarray:
 
 
 def _nanmedian(x: np.ndarray, axis: int, keepdims: bool = False) -> np.ndarray:
-    """``np.nanmedian(x, axis)``: numpy's median where nothing is NaN (the same numbers, twice as fast)."""
-    if np.isnan(x).any():
+    """``np.nanmedian(x, axis)``: numpy's median where nothing is NaN (the same numbers, twice as fast); of a
+    (N, k) array with NaN, each column's finite values' median, as ``np.nanmedian`` takes it for N >= 600 without
+    its Python call per column (``apply_along_axis``)."""
+    nan = np.isnan(x)
+    if not nan.any():
+        return np.asarray(np.median(x, axis=axis, keepdims=keepdims))
+    if x.ndim != 2 or x.shape[axis] < 600:  # below 600 nanmedian takes another route (masked arrays)
         return np.asarray(np.nanmedian(x, axis=axis, keepdims=keepdims))
-    return np.asarray(np.median(x, axis=axis, keepdims=keepdims))
+    series, missing = (x.T, nan.T) if axis == 0 else (x, nan)
+    out = np.array([np.median(v[~m]) if not m.all() else np.nan for v, m in zip(series, missing, strict=True)])
+    return np.expand_dims(out, axis) if keepdims else out
 
 
 def hampel_outliers(values: np.ndarray, window: int = 11, n_sd: float = 8.0, floor: float = 0.0) -> np.ndarray:
