@@ -60,7 +60,7 @@ def _grid_points(*parts: tuple[MarkerKinematics, slice]) -> MarkerKinematics:
 
 def _from(t_ns: np.ndarray, first_ns: int, inclusive: bool = True) -> slice:
     """The grid points at or after (``inclusive``) or after ``first_ns``: the grid's stamps increase, so a range
-    (a slice copies nothing where a boolean mask gathered every field)."""
+    (a view of each field until the join copies it, where a boolean mask gathered a copy of each first)."""
     return slice(int(np.searchsorted(t_ns, first_ns, "left" if inclusive else "right")), None)
 
 
