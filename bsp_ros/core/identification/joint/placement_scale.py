@@ -11,6 +11,7 @@ from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import (
     Problem,
     augmented,
+    joint_scores,
     normal_equations,
     reweighted_values,
 )
@@ -38,19 +39,15 @@ def _free_offsets(free: Problem, m: int) -> tuple[np.ndarray, np.ndarray]:
     rows = design_inverse(design)[-m:, :]  # (m, P)
     weighted = np.where(free.rows, solved.weights[None, :] * solved.residual(free), 0.0)  # (N, n)
     # B s_t = sum_i (B x_ti) w_i r_ti: every sample's and joint's row projected on B in one BLAS product per block
-    # (N n, k) x (k, m), then weighted by its residual and summed over the joints (half the time of forming the
-    # (N, P) scores first).
+    # (N n, k) x (k, m), then the per-sample scores of those projected rows (half the time of forming the (N, P)
+    # scores first).
     count, n = weighted.shape
     projected, start = np.zeros((count * n, m)), 0
     for block in free.blocks:
         k = block.shape[2]
         projected += block.reshape(count * n, k) @ rows[:, start : start + k].T
         start += k
-    per_joint = projected.reshape(count, n, m)
-    scores = per_joint[:, 0] * weighted[:, 0, None]
-    for i in range(1, n):
-        scores += per_joint[:, i] * weighted[:, i, None]
-    scores = scores[free.rows.any(axis=1)]
+    scores = joint_scores(projected.reshape(count, n, m), weighted)[free.rows.any(axis=1)]
     covariance, _ = hac_covariance(np.eye(m), scores)
     covariance = covariance + rows @ (free.prior_precision[:, None] * rows.T)
     return solved.values[-m:], 0.5 * (covariance + covariance.T)
