@@ -411,7 +411,7 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
         )
         if all("update_cpu_ms_mean" in v for v in timing):
             print(
-                "    of which the worker thread's own CPU time: mean"
+                "    of which the thread's own CPU time: mean"
                 f" {np.mean([float(v['update_cpu_ms_mean']) for v in timing]):.1f} ms,"
                 f" max {max(float(v['update_cpu_ms_max']) for v in timing):.1f} ms (the rest: waiting for a core or"
                 " for the interpreter)"
@@ -435,7 +435,7 @@ def report(r: dict[str, Any], duration_s: float) -> list[tuple[str, bool, str]]:
     busy = (last.machine[0] - first.machine[0]) / ticks * cores
     stolen = (last.machine[2] - first.machine[2]) / ticks * cores
     ours = 0.0
-    print(f"  CPU (share of one core over {wall:.0f} s; other threads = Fast DDS's and the worker threads) and RSS")
+    print(f"  CPU (share of one core over {wall:.0f} s; other threads = Fast DDS's) and RSS")
     flat = True
     growth_text = []
     for name in [*NODES, "listener"]:

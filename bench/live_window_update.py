@@ -8,7 +8,7 @@ longest window) is fed to :class:`WindowedIdentifier` as the live node feeds it:
 unfiltered marker angles of the causal angle estimator. Then, for each window length, ``--updates`` updates
 (``estimate()``) are timed at 5 Hz steps of the session's clock (0.2 s more samples each), on one thread, nothing
 else running. The model checks run at their live rate (every ``elastic_check_every`` updates, the first update
-included), and the updates between them refit the model the last check chose, as in the node's worker thread.
+included), and the updates between them refit the model the last check chose, as in the node.
 
 Printed per window and rate: the number of samples identified, mean, p99 and max compute time (ms), the share of
 updates over the 5 Hz period, the updates' validity, and both error rates against the simulated truth (every

@@ -29,14 +29,12 @@ from bsp_ros.live.online.windowed import (
     WindowConfig,
     WindowedIdentifier,
     WindowEstimate,
-    WindowSamples,
 )
 from bsp_ros.live.online.wrench_input import WrenchInput
 from bsp_ros.live.runtime.parameters import Param, declare_parameters
 from bsp_ros.live.runtime.qos import rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
-from bsp_ros.live.runtime.worker import LatestJobWorker
 from msg_adapters.diagnostics import (
     ERROR,
     OK,
@@ -185,7 +183,7 @@ class BspIdentifierNode(RosNode):
             zero_sd_n=p["zero_sd_n"],
             zero_sd_nm=p["zero_sd_nm"],
         )
-        # Its buffers are the callbacks'; its estimator (the model checks' schedule) runs on the worker thread.
+        # Its buffers take the callbacks' samples; its estimator (the model checks' schedule) runs in the timer's.
         self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
         self.recursive = RecursiveFeed(self.n, self.options.passive, subject)
         self.lengths: np.ndarray | None = None
@@ -195,19 +193,16 @@ class BspIdentifierNode(RosNode):
         self.last_receive: dict[str, int | None] = {"wrench": None, "joint_states": None}
         self.counts = {"wrench": 0, "joint_states": 0, "refused": 0}
         self.published = 0
-        # Windowed estimates run on one worker thread, so that the wrench callbacks never wait for one: an update
-        # refits the model its last check chose (~13 ms for 30 s at 1 kHz, the checks every elastic_check_every
-        # updates ~25 ms: bench/live_window_update.py), and the thread gives the interpreter lock back to the
-        # callbacks every switch interval (main() sets 0.2 ms). The recursive mode's ~2 ms estimate runs on the
-        # executor thread (_update_recursive).
-        self.worker = LatestJobWorker(f"{NAME}-estimate")
-        self.generation = 0  # windowed: bumped by a verdict that supersedes estimates still computing
-        self.ready: tuple[int, jobs.EstimateOutputs] | None = None
+        # Every estimate is computed in the timer's callback, on the executor thread: a windowed update refits the
+        # model its last check chose (~8 ms for 30 s at 1 kHz, the checks every elastic_check_every updates ~25
+        # ms: bench/live_window_update.py), while the wrenches wait in their subscription's queue (1 s deep) and
+        # are taken right after it. A worker thread kept the callbacks going, but the two traded the interpreter
+        # lock every 0.2 ms and the update took a fifth longer in the node (bench/README.md, 21st session).
         self.support_fraction = float(p["support_fraction"])
-        self.support_estimate: dict[str, Any] | None = None  # set by the worker thread with each estimate
+        self.support_estimate: dict[str, Any] | None = None  # set with each estimate
         self.support_diagnostics: dict[str, str] = {}
-        # The last ~10 s of updates: compute time and the worker thread's own CPU time, s. Below the compute time,
-        # an update waited for a core or for the interpreter (the 1 kHz callbacks, the other nodes).
+        # The last ~10 s of updates: compute time and the thread's own CPU time in it, s. Below the compute time,
+        # an update waited for a core (the other nodes, Fast DDS's threads).
         self.update_s: deque[tuple[float, float]] = deque(maxlen=int(10 * p["update_hz"]) + 1)
         self.types = message_class
         estimates = rclpy_qos("estimates")
@@ -251,11 +246,6 @@ class BspIdentifierNode(RosNode):
     def now_ns(self) -> int:
         """The node clock (system time unless ``use_sim_time``), ns."""
         return int(self.get_clock().now().nanoseconds)
-
-    def destroy_node(self) -> None:
-        """Stop the worker thread, then the node."""
-        self.worker.close()
-        super().destroy_node()
 
     # -- inputs ---------------------------------------------------------------------------------------
     def on_tf_static(self, msg: Any) -> None:
@@ -383,11 +373,7 @@ class BspIdentifierNode(RosNode):
         return None
 
     def on_update(self) -> None:
-        """Publish the estimate (invalid if an input is stale) and the node's health.
-
-        The estimate runs on the worker thread, so that the wrench callbacks never wait for it; here, on the
-        executor thread, only what it needs is copied.
-        """
+        """Compute and publish the estimate (invalid if an input is stale) and the node's health."""
         reason = self.stale_reason()
         counts = dict(self.counts)
         if self.mode == "windowed":
@@ -396,13 +382,10 @@ class BspIdentifierNode(RosNode):
             self._update_recursive(reason, counts)
 
     def _update_windowed(self, reason: str | None, counts: dict[str, int]) -> None:
-        """Publish on the timer grid: the estimate computed since the last tick (of that tick's window), then
-        start the next one. Consumers get an update every period, one period after the window it describes
-        (its stamp says which). A quick verdict (stale, waiting) goes out at once and supersedes any estimate
-        still computing."""
+        """The newest window's estimate, published as soon as it is computed (stamped with the window's newest
+        wrench); a quick verdict (stale, waiting) goes out instead when there is no window to identify."""
         window = self.windowed.snapshot() if reason is None else None
         if window is None or isinstance(window, WindowEstimate):
-            self.generation += 1
             if window is None:
                 document, stamp = invalid_document(self.options.method, str(reason)), self.now_ns()
             else:
@@ -413,19 +396,10 @@ class BspIdentifierNode(RosNode):
         if self.tare is not None and self.wrench_rotation is not None:
             frame_id, rotation = self.wrench_rotation
             window = dataclasses.replace(window, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
-        ready, self.ready = self.ready, None
-        if ready is not None and ready[0] == self.generation:
-            self.publish(ready[1], counts)
-        generation = self.generation
-        self.worker.submit(lambda: self._compute_window(window, generation))
-
-    def _compute_window(self, window: WindowSamples, generation: int) -> None:
-        """On the worker thread: identify a window; keep it for the next tick."""
-        self.ready = (generation, self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)))
+        self.publish(self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)), counts)
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
-        """The filter's state, fused with the prior and published here, on the executor thread: it takes ~2 ms,
-        and on the worker thread it handed the interpreter lock back and forth with the callbacks for longer."""
+        """The filter's state, fused with the prior and published (~2 ms)."""
         job: Callable[[], jobs.EstimateOutputs]
         if reason is not None:
             document, now = invalid_document(self.options.method, reason), self.now_ns()
@@ -481,7 +455,6 @@ class BspIdentifierNode(RosNode):
         values = {
             **counts,
             "published": self.published,
-            "updates_dropped": self.worker.dropped,
             **timing,
             "wrench_frame_source": self.frame_source.description,
             **frames,
@@ -494,9 +467,6 @@ class BspIdentifierNode(RosNode):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros bsp_identifier``); ``args``: a command line like ``sys.argv``."""
-    # A callback thread waiting for the GIL waits up to the switch interval (5 ms by default) while
-    # another thread (the middleware, an estimate's worker) runs; 0.2 ms keeps a 1 kHz stream's latency low.
-    sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))
     return run_node(NAME, BspIdentifierNode, BspIdentifierNode.__doc__ or "", PARAMETERS, args)
 
 

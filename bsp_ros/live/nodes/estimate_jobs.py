@@ -1,4 +1,4 @@
-"""The estimates `bsp_identifier` computes on its worker thread, serialised for their topics."""
+"""The estimates `bsp_identifier` computes, serialised for their topics."""
 
 from __future__ import annotations
 
@@ -37,9 +37,8 @@ def _typestore() -> Any:
 
 @dataclass(frozen=True)
 class EstimateOutputs:
-    """One estimate, serialised for its topics: what the node's worker thread only has to write.
+    """One estimate, serialised for its topics (the rosbags type store: no message class per call).
 
-    Building and serialising the messages on the worker thread leaves the executor thread only the writes.
     ``cdr`` maps an output (``estimate``, ``json``, ``inertia/<segment>``,
     ``passive``) to serialised CDR, which rclpy's ``Publisher.publish`` takes as it is.
     """

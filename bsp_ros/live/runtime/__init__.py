@@ -1,1 +1,1 @@
-"""The middleware layer: rclpy (ROS 2 Jazzy), message classes by name, QoS profiles, parameters, the worker thread."""
+"""The middleware layer: rclpy (ROS 2 Jazzy), message classes by name, QoS profiles, parameters, spin."""
