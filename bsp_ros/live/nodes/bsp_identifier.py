@@ -467,6 +467,10 @@ class BspIdentifierNode(RosNode):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros bsp_identifier``); ``args``: a command line like ``sys.argv``."""
+    # A callback waiting for the interpreter lock waits up to the switch interval (5 ms by default) while another
+    # Python thread holds it; 0.2 ms kept the recursive mode's latency lower: p99 1.41-1.68 ms against 1.51-2.10
+    # without (bench/README.md, 21st session).
+    sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))
     return run_node(NAME, BspIdentifierNode, BspIdentifierNode.__doc__ or "", PARAMETERS, args)
 
 
