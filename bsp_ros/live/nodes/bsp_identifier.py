@@ -226,10 +226,11 @@ class BspIdentifierNode(RosNode):
         self.create_subscription(wrench, p["wrench_topic"], self.on_wrench, rclpy_qos("sensor_input"))
         # Only the angles the mode uses: each message costs the executor thread its deserialisation, and the
         # estimator publishes both for every marker frame, right before the wrench that follows it.
+        states = rclpy_qos("state_input")
         if self.mode == "recursive" or self.support_fraction > 0.0:
-            self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, estimates)
+            self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, states)
         if self.mode == "windowed":
-            self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, estimates)
+            self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, states)
         self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
         self.create_subscription(
             message_class("std_msgs/msg/String"), "arm/contact_point", self.on_contact_point, rclpy_qos("tf_static")

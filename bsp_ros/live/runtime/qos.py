@@ -37,6 +37,9 @@ PROFILES: dict[str, QosSpec] = {
     # A node's subscription to a sensor stream: best effort (matches any publisher) with a deep history,
     # so that a Python executor busy for a few ms behind a 1 kHz stream is not overtaken (depth 5 would be).
     "sensor_input": QosSpec(reliable=False, depth=1000),
+    # A node's subscription to another node's 100 Hz joint states: reliable like their publisher, 1 s deep, so that
+    # an executor busy with an estimate (tens of ms; bsp_identifier computes in its timer) is not overtaken.
+    "state_input": QosSpec(reliable=True, depth=100),
     "default": QosSpec(reliable=True, depth=10),
     "estimates": QosSpec(reliable=True, depth=10),
     "tf": QosSpec(reliable=True, depth=100),
