@@ -394,7 +394,9 @@ class BspIdentifierNode(RosNode):
             document["mode"] = self.mode
             self.publish(jobs.outputs_from_document(document, stamp, with_passive=True), counts)
             return
-        if self.tare is not None and self.wrench_rotation is not None:
+        if self.wrench_rotation is not None:
+            # The sensor's orientation rides with the window: the zero's uncertainty (the tare's, or zero_sd_n's
+            # without one) joins the std, as `bsp identify` adds it.
             frame_id, rotation = self.wrench_rotation
             window = dataclasses.replace(window, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
         self.publish(self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)), counts)
