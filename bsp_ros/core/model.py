@@ -110,13 +110,27 @@ def contact_torques_nm(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike, wrench_yz
     -------
     (N, n) torques (Nm); equal to ``tau_G + tau_p`` in quasi-static equilibrium.
     """
+    wrench = np.atleast_2d(np.asarray(wrench_yzx, dtype=np.float64))
+    dy, dz = contact_lever_sums(q_rad, lengths_m)
+    return -(dy * wrench[:, 0, None] + dz * wrench[:, 1, None] + wrench[:, 2, None])
+
+
+def contact_lever_sums(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """The contact Jacobian's position rows without the (N, 3, n) array: ``d y / d q`` and ``d z / d q``.
+
+    Parameters
+    ----------
+    q_rad : (N, n) joint angles (rad).
+    lengths_m : (n,) segment lengths (m).
+
+    Returns
+    -------
+    dy, dz : (N, n) each (m per rad): joint j's sums over the distal segments k >= j of ``-l_k sin(phi_k)`` and
+    ``l_k cos(phi_k)``; a unit ``F_y`` gives the torques ``-dy``, a unit ``F_z`` ``-dz`` (the moment row is 1).
+    """
     phi = absolute_angles_rad(q_rad)
     lengths = np.asarray(lengths_m, dtype=np.float64)
-    wrench = np.atleast_2d(np.asarray(wrench_yzx, dtype=np.float64))
-    # J^T F without the (N, 3, n) Jacobian: its rows d(y, z)/dq sum the distal segments, its phi row is 1.
-    dy = running_sum(-lengths * np.sin(phi), reverse=True)
-    dz = running_sum(lengths * np.cos(phi), reverse=True)
-    return -(dy * wrench[:, 0, None] + dz * wrench[:, 1, None] + wrench[:, 2, None])
+    return running_sum(-lengths * np.sin(phi), reverse=True), running_sum(lengths * np.cos(phi), reverse=True)
 
 
 def contact_torques_one_nm(q_rad: FloatVector, lengths_m: FloatVector, wrench_yzx: FloatVector) -> list[float]:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -10,6 +9,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from bsp_ros.core.identification.joint.held import HeldModel
+    from bsp_ros.core.identification.joint.torque_response import TorqueResponse
 
 # A parameter is named by (quantity key, segment or joint name), e.g. ("static_moment_kgm", "forearm")
 # or ("coulomb_nm", "elbow"): the same keys as the estimate JSON of docs/contract.md.
@@ -50,7 +50,7 @@ class IdentificationResult:
     residual_rms_nm: dict[str, float] = field(default_factory=dict)
     n_samples: int = 0
     diagnostics: dict[str, object] = field(default_factory=dict)
-    torque_response: Callable[[np.ndarray], np.ndarray] | None = field(default=None, repr=False, compare=False)
+    torque_response: TorqueResponse | None = field(default=None, repr=False, compare=False)
     held: HeldModel | None = field(default=None, repr=False, compare=False)
 
     @property

@@ -11,7 +11,7 @@ import numpy.typing as npt
 
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.model import contact_torques_nm
+from bsp_ros.core.model import contact_lever_sums
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import segments_for
 
@@ -48,12 +48,8 @@ def _mean_rotation(rotation: np.ndarray) -> np.ndarray:
 
 def _world_unit_torques(data: IdentificationData) -> np.ndarray:
     """(3, N, n) joint torques of a unit ``F_y`` (N), ``F_z`` (N) and ``M_x`` (Nm) in ``world``: ``-J^T e``."""
-    out = np.empty((3, *data.tau_nm.shape))
-    for k in range(3):
-        unit = np.zeros((data.t_ns.size, 3))
-        unit[:, k] = 1.0
-        out[k] = contact_torques_nm(data.q_rad, data.lengths_m, unit)
-    return out
+    dy, dz = contact_lever_sums(data.q_rad, data.lengths_m)
+    return np.stack((-dy, -dz, np.full_like(dy, -1.0)))
 
 
 def _world_from_sensor_offsets(rotation_world_from_sensor: npt.ArrayLike) -> np.ndarray:
@@ -134,7 +130,7 @@ def response_sensitivity(
     if result.torque_response is None:
         return None
     unit = _world_unit_torques(data)
-    g_world = np.column_stack([result.torque_response(unit[k]) for k in range(3)])
+    g_world = result.torque_response.columns(unit)
     return g_world @ _world_from_sensor_offsets(rotation_world_from_sensor)
 
 

@@ -31,8 +31,12 @@ class TorqueResponse:
 
     def __call__(self, delta_tau_nm: np.ndarray) -> np.ndarray:
         """(p,) parameter change for a torque change ``delta_tau_nm`` (N, n) Nm at the fit's samples."""
-        rhs = joint_products(self.regressor, self.row_weights, delta_tau_nm)
-        out = np.zeros(rhs.size)
-        free = self.free
-        out[free] = design_inverse(self.design[np.ix_(free, free)]) @ rhs[free]
+        return self.columns(delta_tau_nm[None])[:, 0]
+
+    def columns(self, deltas_tau_nm: np.ndarray) -> np.ndarray:
+        """(p, k) parameter changes for ``k`` torque changes ``deltas_tau_nm`` (k, N, n) Nm: one inverse for all."""
+        inverse = design_inverse(self.design[np.ix_(self.free, self.free)])
+        out = np.zeros((self.free.size, len(deltas_tau_nm)))
+        for k, delta in enumerate(deltas_tau_nm):
+            out[self.free, k] = inverse @ joint_products(self.regressor, self.row_weights, delta)[self.free]
         return out
