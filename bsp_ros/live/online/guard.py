@@ -1,10 +1,27 @@
-"""Input guard for live streams: finite values, increasing stamps, clock jumps; counts what it refuses."""
+"""Input guard for live streams: finite and physical values, increasing stamps, clock jumps; counts what it refuses."""
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from bsp_ros.core.identification.data import MAX_FORCE_N, MAX_TORQUE_NM
+
+
+def absurd_wrench_yzx(wrench_yzx: np.ndarray) -> bool:
+    """Whether a finite ``[F_y (N), F_z (N), M_x (Nm)]`` is beyond any arm's (a sensor's glitch), by the limits
+    `bsp identify` removes samples at (``MAX_FORCE_N``, ``MAX_TORQUE_NM``).
+
+    One such sample in a block mean or a fit's noise estimate makes every estimate of the window invalid where the
+    rest of its samples are sound.
+    """
+    return (
+        math.hypot(float(wrench_yzx[0]), float(wrench_yzx[1])) > MAX_FORCE_N
+        or abs(float(wrench_yzx[2])) > MAX_TORQUE_NM
+    )
 
 
 @dataclass
@@ -23,6 +40,8 @@ class StreamGuard:
     last_t_ns: int | None = None
     refused: dict[str, int] = field(default_factory=lambda: {"non_finite": 0, "out_of_order": 0, "bad_stamp": 0})
     clock_jumps: int = 0
+    # True for a finite sample no sensor of this stream could give (refused and counted as "absurd"), or None.
+    absurd: Callable[[np.ndarray], bool] | None = None
 
     def check(self, t_ns: int, values: np.ndarray) -> str:
         """``"ok"``, ``"refused"``, or ``"jump"`` / ``"gap"`` (the sample is accepted as the first of a new epoch)."""
@@ -31,6 +50,9 @@ class StreamGuard:
             return "refused"
         if not np.isfinite(values).all():
             self.refused["non_finite"] += 1
+            return "refused"
+        if self.absurd is not None and self.absurd(values):
+            self.refused["absurd"] = self.refused.get("absurd", 0) + 1
             return "refused"
         if self.last_t_ns is not None and t_ns <= self.last_t_ns:
             if self.last_t_ns - t_ns > self.jump_back_s * 1e9:

@@ -14,7 +14,7 @@ from bsp_ros.core.identification.priors import BasePrior, base_prior_for_subject
 from bsp_ros.core.identification.recursive import RecursiveConfig, RecursiveIdentifier
 from bsp_ros.core.model import contact_torques_one_nm, static_moments_kgm
 from bsp_ros.live.online.angle_track import AngleTrack
-from bsp_ros.live.online.guard import StreamGuard
+from bsp_ros.live.online.guard import StreamGuard, absurd_wrench_yzx
 
 __all__ = ["RecursiveFeed"]
 
@@ -27,8 +27,8 @@ MAX_WAIT_NS = 5_000_000_000
 class RecursiveFeed:
     """Feeds :class:`RecursiveIdentifier` one wrench at a time, with the joint kinematics at its stamp.
 
-    Non-finite, out-of-order and duplicate wrenches are refused (:class:`StreamGuard`); a backwards clock
-    jump or a long gap restarts the filter.
+    Non-finite, absurd (beyond any arm's force), out-of-order and duplicate wrenches are refused
+    (:class:`StreamGuard`); a backwards clock jump or a long gap restarts the filter.
 
     Angles, velocities (for the direction of friction) and accelerations come from fits centred on each joint
     state (:class:`AngleTrack`), so the filter runs half a fit window (0.5 s) behind the wrench stream: a
@@ -61,7 +61,7 @@ class RecursiveFeed:
         self.subject = subject or SubjectInfo()
         self.dynamics = dynamics
         self.identifier = RecursiveIdentifier(n_segments, RecursiveConfig(passive=passive))
-        self.guard = StreamGuard("wrench")
+        self.guard = StreamGuard("wrench", absurd=absurd_wrench_yzx)
         self.angles = AngleTrack(n_segments)
         self._terms = len(passive.local)
         self.passive_joints: tuple[str, ...] = tuple(name for key, name in self.identifier.names if key == "coulomb_nm")

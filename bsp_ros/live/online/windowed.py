@@ -6,7 +6,7 @@ import numpy as np
 
 from bsp_ros.core.estimate import invalid_document
 from bsp_ros.live.online.buffer import TimedBuffer
-from bsp_ros.live.online.guard import StreamGuard
+from bsp_ros.live.online.guard import StreamGuard, absurd_wrench_yzx
 from bsp_ros.live.online.window_estimator import WindowEstimator
 from bsp_ros.live.online.window_samples import WindowConfig, WindowEstimate, WindowSamples
 
@@ -18,8 +18,9 @@ class WindowedIdentifier:
 
     The angles are filtered here with zero phase over the window, exactly as `bsp identify` does offline.
 
-    Samples that are non-finite, out of order or duplicated are refused and counted; a backwards clock
-    jump clears both buffers, so no estimate mixes samples from either side of it.
+    Samples that are non-finite, out of order or duplicated, and wrenches beyond any arm's force (a glitch `bsp
+    identify` removes too), are refused and counted; a backwards clock jump clears both buffers, so no estimate
+    mixes samples from either side of it.
 
     The buffers and :meth:`snapshot` belong to the thread that receives the samples; :meth:`estimate_window`
     (``estimator``, :class:`WindowEstimator`) may run on another, one thread at a time.
@@ -34,7 +35,7 @@ class WindowedIdentifier:
         horizon_ns = int((self.config.window_s + 5.0) * 1e9)
         self.wrench = TimedBuffer(3, horizon_ns)
         self.angles = TimedBuffer(2 * n_segments, horizon_ns)
-        self.wrench_guard = StreamGuard("wrench")
+        self.wrench_guard = StreamGuard("wrench", absurd=absurd_wrench_yzx)
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
         self.contact_from_robot = False

@@ -28,6 +28,14 @@ def test_refuses_a_non_finite_wrench_and_a_repeated_stamp() -> None:
     assert feed.add_wrench(2_000_000, np.array([0.0, -5.0, 0.1]), LENGTHS_M) == (False, None)
 
 
+def test_refuses_a_wrench_beyond_any_arm_s_as_bsp_identify_removes_it() -> None:
+    feed = RecursiveFeed(3, PassiveModel.parse("coulomb"))
+    assert feed.add_wrench(1_000_000, np.array([0.0, 1e30, 0.1]), LENGTHS_M) == (False, None)
+    assert feed.add_wrench(2_000_000, np.array([0.0, -5.0, 600.0]), LENGTHS_M) == (False, None)  # 600 Nm
+    assert feed.guard.refused["absurd"] == 2
+    assert feed.add_wrench(3_000_000, np.array([3000.0, -3000.0, 0.1]), LENGTHS_M)[0]  # 4.2 kN: physical
+
+
 def test_takes_a_wrench_but_does_not_update_without_lengths_or_angles_near_it() -> None:
     feed = RecursiveFeed(3, PassiveModel.parse("coulomb"))
     assert feed.add_wrench(1_000_000, np.array([0.0, -5.0, 0.1]), None) == (True, None)

@@ -48,6 +48,24 @@ def test_nan_out_of_order_and_duplicate_samples_are_refused_and_counted(live_str
     assert identifier.estimate().valid
 
 
+def test_absurd_wrench_samples_are_refused_and_the_estimate_holds_the_truth(live_streams) -> None:
+    # A glitching sensor: 1e30 N in one sample of 500. Before these were refused, one such sample in the window made
+    # every estimate invalid ("the model does not fit") with every parameter within its std (bench/live_realism.py).
+    simulated, stamps, wrench, _, raw = live_streams
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=30.0))
+    _feed(identifier, stamps, wrench, raw, corrupt=lambda i, w: np.array([1e30, 0.0, 0.0]) if i % 500 == 7 else w)
+    assert identifier.wrench_guard.refused["absurd"] == len(range(7, len(stamps), 500))
+    estimate = identifier.estimate()
+    assert estimate.valid, estimate.document["quality"]["message"]
+    assert estimate.document["session"]["refused_samples"]["wrench_absurd"] > 0
+    truth = simulated.truth.to_dict()
+    for segment, q in estimate.document["segments"].items():
+        value, std = q["static_moment_kgm"]["value"], q["static_moment_kgm"]["std"]
+        assert abs(value - truth["segments"][segment]["static_moment_kgm"]) <= 3.0 * std
+    # A large but physical force (1 kN) is the model's to judge, not refused here.
+    assert identifier.add_wrench(identifier.wrench.last_t_ns + 1_000_000, np.array([1000.0, 0.0, 0.0]))
+
+
 def test_a_backwards_clock_jump_restarts_the_window(live_streams) -> None:
     _, stamps, wrench, _, raw = live_streams
     identifier = WindowedIdentifier(3)
