@@ -5,9 +5,10 @@ Usage: ``python bench/live_window_update.py [--windows 10 30 60] [--wrench-hz 10
 
 For each wrench rate, one simulated session (the human arm cell, ``--seed``, 100 Hz markers, 60 s longer than the
 longest window) is fed to :class:`WindowedIdentifier` as the live node feeds it: the wrench in ``world`` and the
-unfiltered marker angles of the causal angle estimator. Then, for each window length, ``--updates`` updates
-(``estimate()``) are timed at 5 Hz steps of the session's clock (0.2 s more samples each), on one thread, nothing
-else running. The model checks run at their live rate (every ``elastic_check_every`` updates, the first update
+unfiltered marker angles of the causal angle estimator, and with each window the wrench sensor's orientation (for
+the sensor zero's share of the std). Then, for each window length, ``--updates`` updates (``snapshot()`` and
+``estimate_window()``) are timed at 5 Hz steps of the session's clock (0.2 s more samples each), on one thread,
+nothing else running. The model checks run at their live rate (every ``elastic_check_every`` updates, the first update
 included), and the updates between them refit the model the last check chose, as in the node.
 
 Printed per window and rate: the number of samples identified, mean, p99 and max compute time (ms), the share of
@@ -29,7 +30,7 @@ import numpy as np
 from scoring import rates, verdict, z_scores
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "bsp_ros" / "live" / "online"))
 
@@ -46,10 +47,14 @@ def _streams(duration_s: float, wrench_hz: float, seed: int):
     from live_inputs import live_inputs  # the live tests' simulated inputs (test/bsp_ros/live/online)
 
     simulated, stamps, wrench, _, raw = live_inputs(spec)
-    return stamps, wrench, raw, simulated.truth.to_dict()
+    rotation = np.asarray(simulated.session.rotation_world_from_sensor, dtype=np.float64)
+    orientation = (rotation if rotation.ndim == 2 else rotation[-1], simulated.session.wrench.frame_id)
+    return stamps, wrench, raw, simulated.truth.to_dict(), orientation
 
 
-def _run(window_s: float, stamps, wrench, raw, updates: int) -> tuple[int, np.ndarray, list[bool], list[dict]]:
+def _run(
+    window_s: float, stamps, wrench, raw, updates: int, orientation=None
+) -> tuple[int, np.ndarray, list[bool], list[dict]]:
     identifier = WindowedIdentifier(3, WindowConfig(window_s=window_s))
     end_ns = int(stamps[-1]) - int(updates * PERIOD_S * 1e9)
     wrench_i, angle_i = 0, 0
@@ -68,7 +73,12 @@ def _run(window_s: float, stamps, wrench, raw, updates: int) -> tuple[int, np.nd
     for k in range(updates):
         feed_until(end_ns + int(k * PERIOD_S * 1e9))
         started = time.perf_counter()
-        estimate = identifier.estimate()
+        estimate = identifier.snapshot()
+        if not isinstance(estimate, WindowEstimate):
+            if orientation is not None:  # as the node: the sensor zero's share of the std needs its orientation
+                rotation, frame_id = orientation
+                estimate = dataclasses.replace(estimate, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
+            estimate = identifier.estimate_window(estimate)
         times.append(time.perf_counter() - started)
         valid.append(bool(estimate.valid))
         documents.append(estimate.document)
@@ -88,9 +98,9 @@ def main() -> None:
         "v&wrong inv&right worst|z|"
     )
     for rate in args.wrench_hz:
-        stamps, wrench, raw, truth = _streams(max(args.windows) + 60.0, rate, args.seed)
+        stamps, wrench, raw, truth, orientation = _streams(max(args.windows) + 60.0, rate, args.seed)
         for window_s in args.windows:
-            _, ms, valid, documents = _run(window_s, stamps, wrench, raw, args.updates)
+            _, ms, valid, documents = _run(window_s, stamps, wrench, raw, args.updates, orientation)
             late = 100.0 * float((ms > 1e3 * PERIOD_S).mean())
             worst = [max(z_scores(d, truth).values(), default=float("nan")) for d in documents]
             _, wrong, thrown = rates(verdict(v, z) for v, z in zip(valid, worst, strict=True))
