@@ -1,19 +1,25 @@
-"""Live realism benchmark: the windowed identifier's updates on the realism bench's nuisances, per identification rate.
+"""Live realism benchmark: the live identifier's estimates on the realism bench's nuisances, both error rates.
 
-Usage: ``python bench/live_realism.py [--seeds 2] [--duration 90] [--window 30] [--span 10] [--rates 50 25]
-[--only NAME ...]`` (with the worktree first on PYTHONPATH).
+Usage: ``python bench/live_realism.py [--seeds 3] [--duration 90] [--window 30] [--span 10] [--rates 50]
+[--recursive] [--only NAME ...]`` (with the worktree first on PYTHONPATH).
 
 For every nuisance of ``bench/realism.py`` (its sessions without a tare: the live node tares from its own recording)
 and seed, a 3-segment human-arm session is simulated at the node's rates (1 kHz wrench, 100 Hz markers), its markers
 go through the live causal angle estimator, and the stream is fed to :class:`WindowedIdentifier` (``--window`` s,
-body mass and height given, as the realism bench) as the node feeds it. Over the last ``--span`` s, one update every
-0.2 s (the node's 5 Hz, the model checks at their live cadence) is scored against the simulated truth, once per
-wrench rate in ``--rates`` (``WindowConfig.max_rate_hz``: the rate the window's wrench is block-averaged to).
+the node's options: the passive model as named, no elastic fallback; body mass and height given, as the realism
+bench does) as ``bsp_identifier`` feeds it, the wrench sensor's orientation with each window. Over the last
+``--span`` s, one update every 0.2 s (the node's 5 Hz, the model checks at their live cadence) is scored against the
+simulated truth, once per wrench rate in ``--rates`` (``WindowConfig.max_rate_hz``: the rate the window's wrench is
+block-averaged to). With ``--recursive`` the recursive mode as the node runs it (``live_inputs.recursive_mode``:
+:class:`RecursiveFeed` on the causal joint states and every wrench, its window identified with every model check
+every 10 s, the filter's 5 Hz estimate held to it) is scored at the same instants (rows "rec"); with
+``--recursive-alone`` the filter's estimate without its window (rows "filt": the node before 2026-11-27).
 
-Per nuisance and rate: updates valid, both error rates over the updates (valid with some |z| > 3: "v&wrong";
-invalid with every |z| <= 3: "inv&right"), the worst |z| of a valid update, and the mean compute time per update
-(ms, in process, one thread). The totals close the table. Updates 0.2 s apart share most of their samples: the
-rates count updates, not independent sessions.
+Per nuisance and mode: updates valid, both error rates over the updates (valid with some |z| > 3: "v&wrong";
+invalid with every |z| <= 3: "inv&right"), the worst |z| of a valid update, the mean compute time per update
+(ms, in process, one thread; the recursive mode's: its estimate document only) and the most frequent message of an
+invalid one. The totals close the table. Updates 0.2 s apart share most of their samples: the rates count updates,
+not independent sessions.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from bsp_ros.core.simulation import human_arm_cell
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "bsp_ros" / "live" / "online"))
+from live_inputs import live_inputs, orientation, recursive_mode  # the live tests' shared inputs
 
 PERIOD_S = 0.2  # the identifier's default 5 Hz
 
@@ -46,12 +53,8 @@ def _updates(
     the invalid updates' messages)."""
     simulated, stamps, wrench, _, raw = inputs
     truth = simulated.truth.to_dict()
-    session = simulated.session
-    rotation = np.asarray(session.rotation_world_from_sensor, dtype=np.float64)
-    rotation = rotation if rotation.ndim == 2 else rotation[-1]
-    frame_id = session.wrench.frame_id
-    # As the node's (bsp_identifier): the passive model as named, a missing elastic moment a verdict, not a refit.
-    options = IdentifyOptions(subject=SubjectInfo(75.0, 1.78, "male"), elastic_fallback=False)
+    frame_id, rotation = orientation(simulated)
+    options = _node_options()
     identifier = WindowedIdentifier(3, WindowConfig(window_s=window_s, options=options, max_rate_hz=rate_hz))
     end_ns = int(stamps[-1])
     first_ns = end_ns - int(span_s * 1e9)
@@ -80,6 +83,27 @@ def _updates(
     return valid, worst, ms, messages
 
 
+def _recursive_updates(
+    inputs, window_s: float, span_s: float, checked: bool = True
+) -> tuple[list[bool], list[float], list[float], list[str]]:
+    """The recursive mode as the node runs it (``live_inputs.recursive_mode``), scored every 0.2 s over the last
+    ``span_s`` s as :func:`_updates` scores the windowed one (the time: the estimate's, its window checks included)."""
+    simulated, stamps = inputs[0], inputs[1]
+    truth = simulated.truth.to_dict()
+    from_ns = int(stamps[-1]) - int(span_s * 1e9)
+    documents, seconds = recursive_mode(inputs, _node_options(), window_s, from_ns, checked)
+    valid = [bool(d["quality"]["valid"]) for d in documents]
+    worst = [max(z_scores(d, truth).values(), default=float("nan")) for d in documents]
+    messages = [_NUMBER.sub("#", str(d["quality"]["message"]))[:70] for d in documents if not d["quality"]["valid"]]
+    return valid, worst, [1e3 * t for t in seconds], messages
+
+
+def _node_options() -> IdentifyOptions:
+    """As the node's (bsp_identifier): the passive model as named, a missing elastic moment a verdict, not a refit;
+    body mass and height given, as the realism bench does."""
+    return IdentifyOptions(subject=SubjectInfo(75.0, 1.78, "male"), elastic_fallback=False)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=int, default=2)
@@ -87,10 +111,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=90.0, help="session length, s")
     parser.add_argument("--window", type=float, default=30.0, help="the identifier's window, s")
     parser.add_argument("--span", type=float, default=10.0, help="the session's last seconds scored, s")
-    parser.add_argument("--rates", type=float, nargs="+", default=[50.0, 25.0], help="max_rate_hz values")
+    parser.add_argument("--rates", type=float, nargs="+", default=[50.0], help="max_rate_hz values")
+    parser.add_argument("--recursive", action="store_true", help="also score the recursive mode (rows 'rec')")
+    parser.add_argument(
+        "--recursive-alone",
+        action="store_true",
+        help="also score the recursive filter's estimate without its window's check (rows 'filt': before 2026-11-27)",
+    )
     parser.add_argument("--only", nargs="+", metavar="NAME", help="nuisances whose name contains one of these")
     args = parser.parse_args(argv)
-    from live_inputs import live_inputs  # the live tests' simulated inputs (test/bsp_ros/live/online)
 
     names = [n for n in NUISANCES if not args.only or any(o.lower() in n.lower() for o in args.only)]
     header = (
@@ -99,8 +128,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(header)
     print("-" * len(header))
-    totals: dict[float, list[str]] = {rate: [] for rate in args.rates}
-    times: dict[float, list[float]] = {rate: [] for rate in args.rates}
+    modes: list[float | str] = [
+        *args.rates,
+        *(["rec"] if args.recursive else []),
+        *(["filt"] if args.recursive_alone else []),
+    ]
+    totals: dict[float | str, list[str]] = {mode: [] for mode in modes}
+    times: dict[float | str, list[float]] = {mode: [] for mode in modes}
     started = time.perf_counter()
     for name in names:
         sessions = []
@@ -112,30 +146,34 @@ def main(argv: list[str] | None = None) -> int:
                 markers=dataclasses.replace(spec.markers, marker_hz=100.0),
             )
             sessions.append(live_inputs(spec))
-        for rate in args.rates:
+        for mode in modes:
             valid, worst, ms, messages = [], [], [], []
             for inputs in sessions:
-                v, z, t, m = _updates(inputs, rate, args.window, args.span)
+                if mode in ("rec", "filt"):
+                    v, z, t, m = _recursive_updates(inputs, args.window, args.span, checked=mode == "rec")
+                else:
+                    v, z, t, m = _updates(inputs, float(mode), args.window, args.span)
                 valid += v
                 worst += z
                 ms += t
                 messages += m
             verdicts = [verdict(v, z) for v, z in zip(valid, worst, strict=True)]
-            totals[rate] += verdicts
-            times[rate] += ms
+            totals[mode] += verdicts
+            times[mode] += ms
             _, wrong, thrown = rates(verdicts)
             worst_valid = max((z for v, z in zip(valid, worst, strict=True) if v), default=float("nan"))
             print(
-                f"{name:28s} {rate:4.0f} {sum(valid):>4d}/{len(valid):<3d} {wrong:>7d} {thrown:>9d} {worst_valid:8.2f}"
+                f"{name:28s} {mode:>4} {sum(valid):>4d}/{len(valid):<3d} {wrong:>7d} {thrown:>9d} {worst_valid:8.2f}"
                 f" {np.mean(ms):5.1f}  {collections.Counter(messages).most_common(1)[0][0] if messages else '-'}",
                 flush=True,
             )
-    for rate in args.rates:
-        total, wrong, thrown = rates(totals[rate])
+    for mode in modes:
+        total, wrong, thrown = rates(totals[mode])
+        label = {"rec": "recursive", "filt": "recursive filter alone"}.get(str(mode), f"windowed {mode} Hz")
         print(
-            f"{rate:g} Hz: valid-and-wrong {wrong}/{total} updates ({100 * wrong / max(total, 1):.1f} %), "
+            f"{label}: valid-and-wrong {wrong}/{total} updates ({100 * wrong / max(total, 1):.1f} %), "
             f"invalid-and-right {thrown}/{total} ({100 * thrown / max(total, 1):.1f} %), "
-            f"compute mean {np.mean(times[rate]):.1f} ms, max {np.max(times[rate]):.1f} ms"
+            f"compute mean {np.mean(times[mode]):.1f} ms, max {np.max(times[mode]):.1f} ms"
         )
     print(
         f"({len(names) * args.seeds} sessions in {time.perf_counter() - started:.0f} s; seeds {args.first_seed}..."

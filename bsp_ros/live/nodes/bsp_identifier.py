@@ -24,6 +24,7 @@ from bsp_ros.core.weight_support import live_support
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.nodes import estimate_jobs as jobs
 from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue, frame_source, rotation_from_quaternion_xyzw
+from bsp_ros.live.online.recursive_check import WindowCheck
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
 from bsp_ros.live.online.windowed import (
     WindowConfig,
@@ -184,7 +185,13 @@ class BspIdentifierNode(RosNode):
             zero_sd_nm=p["zero_sd_nm"],
         )
         # Its buffers take the callbacks' samples; its estimator (the model checks' schedule) runs in the timer's.
-        self.windowed = WindowedIdentifier(self.n, WindowConfig(p["window_s"], 60.0, self.options))
+        # The recursive mode identifies its window every recursive_check.CHECK_EVERY updates, each time with every
+        # model check (its std and verdict join the filter's estimate).
+        check_every = 1 if self.mode == "recursive" else WindowConfig.elastic_check_every
+        self.windowed = WindowedIdentifier(
+            self.n, WindowConfig(p["window_s"], 60.0, self.options, elastic_check_every=check_every)
+        )
+        self.window_check = WindowCheck(self.windowed)
         self.recursive = RecursiveFeed(self.n, self.options.passive, subject)
         self.lengths: np.ndarray | None = None
         # Unfiltered angles that came before the first segment lengths (a topic of their own, which can match
@@ -229,8 +236,8 @@ class BspIdentifierNode(RosNode):
         states = rclpy_qos("state_input")
         if self.mode == "recursive" or self.support_fraction > 0.0:
             self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, states)
-        if self.mode == "windowed":
-            self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, states)
+        # The unfiltered angles fill the window: the windowed mode's estimate, the recursive mode's model checks.
+        self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, states)
         self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
         self.create_subscription(
             message_class("std_msgs/msg/String"), "arm/contact_point", self.on_contact_point, rclpy_qos("tf_static")
@@ -294,7 +301,8 @@ class BspIdentifierNode(RosNode):
                 self.add_raw_angles(*self.early_angles.popleft())
 
     def on_raw_angles(self, msg: Any) -> None:
-        """Unfiltered joint angles: the windowed mode filters them with zero phase, like `bsp identify`."""
+        """Unfiltered joint angles: the window filters them with zero phase, like `bsp identify` (the windowed mode's
+        estimate, the recursive mode's model checks)."""
         sample = read_joint_state(msg)
         self.last_receive["joint_states"] = self.now_ns()
         if sample.position.size != self.n:
@@ -308,7 +316,9 @@ class BspIdentifierNode(RosNode):
         """Unfiltered angles into the window, with the newest segment lengths."""
         assert self.lengths is not None
         accepted = self.windowed.add_joint_state(t_ns, q_rad, self.lengths)
-        self.counts["joint_states" if accepted else "refused"] += 1
+        # The recursive mode counts its joint states on arm/joint_states; these only fill its checks' window.
+        key = ("joint_states" if self.mode == "windowed" else "raw_angles") if accepted else "refused"
+        self.counts[key] = self.counts.get(key, 0) + 1
 
     def on_joint_state(self, msg: Any) -> None:
         """Causally filtered joint angles and direction velocities: the weight support, and the recursive mode."""
@@ -347,6 +357,7 @@ class BspIdentifierNode(RosNode):
             if coulomb_nm is not None and len(joints) == coulomb_nm.size:
                 passive = JointStateSample(sample.t_ns, "", joints, np.zeros(0), np.zeros(0), coulomb_nm)
                 self.passive_pub.publish(build_joint_state(self.types, passive))
+            self.windowed.add_wrench(t_ns, wrench_yzx)  # after the passive moments went out: for the checks
         self.counts["wrench" if accepted else "refused"] += 1
 
     # -- outputs ---------------------------------------------------------------------------------------
@@ -402,7 +413,8 @@ class BspIdentifierNode(RosNode):
         self.publish(self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)), counts)
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
-        """The filter's state, fused with the prior and published (~2 ms)."""
+        """The filter's state, held to its window's checked estimate, fused with the prior and published (~2 ms;
+        every 10 s the window's model checks, 20-40 ms)."""
         job: Callable[[], jobs.EstimateOutputs]
         if reason is not None:
             document, now = invalid_document(self.options.method, reason), self.now_ns()
@@ -410,10 +422,14 @@ class BspIdentifierNode(RosNode):
             job = lambda: jobs.outputs_from_document(document, now, with_passive=False)  # noqa: E731 - in order
         else:
             assert self.lengths is not None  # stale_reason() waits for them
-            result, lengths = self.recursive.identifier.result(), self.lengths.copy()
-            stamp = self.recursive.guard.last_t_ns or 0
+            lengths, stamp = self.lengths.copy(), self.recursive.guard.last_t_ns or 0
             robot = self.windowed.contact_from_robot
-            job = lambda: jobs.recursive_estimate(result, lengths, self.options, stamp, robot)  # noqa: E731
+
+            def job() -> jobs.EstimateOutputs:
+                self.window_check.tick(self.wrench_rotation)  # the window's model checks, when due (timed with it)
+                result = self.window_check.checked(self.recursive.identifier.result())
+                return jobs.recursive_estimate(result, lengths, self.options, stamp, robot)
+
         self.publish(self._timed(job), counts)
 
     def _timed(self, job: Callable[[], jobs.EstimateOutputs]) -> jobs.EstimateOutputs:
