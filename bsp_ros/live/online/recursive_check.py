@@ -71,11 +71,14 @@ class WindowCheck:
         self.every = every
         self.document: dict[str, Any] | None = None
         self._since = every  # the first update with a window checks it
+        self._epoch = windowed.epoch
 
     def tick(self, orientation: tuple[str, np.ndarray] | None) -> None:
         """One 5 Hz update: identify the window when due (``orientation``: the wrench's frame and rotation, for the
         sensor zero's share of the std)."""
         self._since += 1
+        if self.windowed.epoch != self._epoch:  # the buffers were cleared (a clock jump, a new contact point)
+            self._epoch, self.document, self._since = self.windowed.epoch, None, self.every
         if self._since < self.every:
             return
         window = self.windowed.snapshot()

@@ -10,7 +10,8 @@ from live_inputs import live_inputs, recursive_mode
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.pipeline import IdentifyOptions
-from bsp_ros.live.online.recursive_check import checked_result
+from bsp_ros.live.online.recursive_check import WindowCheck, checked_result
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
 
 NAMES = [("static_moment_kgm", "upper_arm"), ("coulomb_nm", "shoulder")]
 
@@ -55,6 +56,22 @@ def test_before_the_first_check_the_estimate_waits_and_the_filter_s_own_verdict_
 def test_a_window_without_a_parameter_s_std_leaves_the_estimate_invalid_naming_it() -> None:
     checked = checked_result(_filter_result(), _window(coulomb_std=None))
     assert not checked.valid and "coulomb_nm of the shoulder" in checked.message
+
+
+def test_a_check_from_before_the_buffers_were_cleared_no_longer_holds(live_streams) -> None:
+    _, stamps, wrench, _, raw = live_streams
+    window = WindowedIdentifier(3, WindowConfig(window_s=30.0, elastic_check_every=1))
+    for t_ns, q_rad, lengths_m in raw:
+        window.add_joint_state(t_ns, q_rad, lengths_m)
+    for t_ns, w in zip(stamps.tolist(), wrench, strict=True):
+        window.add_wrench(t_ns, w)
+    check = WindowCheck(window)
+    check.tick(None)
+    assert check.document is not None and check.document["quality"]["valid"]
+    window.reset()  # as a clock jump does
+    check.tick(None)  # nothing in the buffers to check yet
+    assert check.document is None
+    assert "waiting for the first model check" in check.checked(_filter_result()).message
 
 
 def _worst_z(document: dict, truth: dict) -> tuple[float, str]:
