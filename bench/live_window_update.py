@@ -44,12 +44,10 @@ def _streams(duration_s: float, wrench_hz: float, seed: int):
         sensor=dataclasses.replace(spec.sensor, wrench_hz=wrench_hz),
         markers=dataclasses.replace(spec.markers, marker_hz=100.0),
     )
-    from live_inputs import live_inputs  # the live tests' simulated inputs (test/bsp_ros/live/online)
+    from live_inputs import live_inputs, orientation  # the live tests' simulated inputs (test/bsp_ros/live/online)
 
     simulated, stamps, wrench, _, raw = live_inputs(spec)
-    rotation = np.asarray(simulated.session.rotation_world_from_sensor, dtype=np.float64)
-    orientation = (rotation if rotation.ndim == 2 else rotation[-1], simulated.session.wrench.frame_id)
-    return stamps, wrench, raw, simulated.truth.to_dict(), orientation
+    return stamps, wrench, raw, simulated.truth.to_dict(), orientation(simulated)
 
 
 def _run(
@@ -76,7 +74,7 @@ def _run(
         estimate = identifier.snapshot()
         if not isinstance(estimate, WindowEstimate):
             if orientation is not None:  # as the node: the sensor zero's share of the std needs its orientation
-                rotation, frame_id = orientation
+                frame_id, rotation = orientation
                 estimate = dataclasses.replace(estimate, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
             estimate = identifier.estimate_window(estimate)
         times.append(time.perf_counter() - started)
