@@ -89,12 +89,8 @@ def contact_jacobian(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> np.ndarr
     -------
     (N, 3, n): rows d(y, z, phi)/dq, with phi = q1 + ... + qn the orientation of the last segment.
     """
-    phi = absolute_angles_rad(q_rad)
-    lengths = np.asarray(lengths_m, dtype=np.float64)
-    # d p / d q_i sums the distal segments k >= i: a reversed cumulative sum.
-    dy = running_sum(-lengths * np.sin(phi), reverse=True)
-    dz = running_sum(lengths * np.cos(phi), reverse=True)
-    return np.stack((dy, dz, np.ones_like(phi)), axis=1)
+    dy, dz = contact_lever_sums(q_rad, lengths_m)
+    return np.stack((dy, dz, np.ones_like(dy)), axis=1)
 
 
 def contact_torques_nm(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike, wrench_yzx: npt.ArrayLike) -> np.ndarray:
@@ -130,6 +126,7 @@ def contact_lever_sums(q_rad: npt.ArrayLike, lengths_m: npt.ArrayLike) -> tuple[
     """
     phi = absolute_angles_rad(q_rad)
     lengths = np.asarray(lengths_m, dtype=np.float64)
+    # d p / d q_j sums the distal segments k >= j: a reversed cumulative sum.
     return running_sum(-lengths * np.sin(phi), reverse=True), running_sum(lengths * np.cos(phi), reverse=True)
 
 
