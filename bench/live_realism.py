@@ -38,10 +38,10 @@ from scoring import rates, verdict, z_scores
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.core.simulation import human_arm_cell
-from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "bsp_ros" / "live" / "online"))
-from live_inputs import live_inputs, orientation, recursive_mode  # the live tests' shared inputs
+from live_inputs import WindowFeed, live_inputs, orientation, recursive_mode  # the live tests' shared inputs
 
 PERIOD_S = 0.2  # the identifier's default 5 Hz
 
@@ -53,28 +53,15 @@ def _updates(
     the invalid updates' messages)."""
     simulated, stamps, wrench, _, raw = inputs
     truth = simulated.truth.to_dict()
-    frame_id, rotation = orientation(simulated)
-    options = _node_options()
-    identifier = WindowedIdentifier(3, WindowConfig(window_s=window_s, options=options, max_rate_hz=rate_hz))
-    end_ns = int(stamps[-1])
-    first_ns = end_ns - int(span_s * 1e9)
-    wrench_i = angle_i = 0
+    frame = orientation(simulated)
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=window_s, options=_node_options(), max_rate_hz=rate_hz))
+    feed = WindowFeed(identifier, stamps, wrench, raw)
+    first_ns = int(stamps[-1]) - int(span_s * 1e9)
     valid, worst, ms, messages = [], [], [], []
     for k in range(round(span_s / PERIOD_S) + 1):
-        t_ns = first_ns + int(k * PERIOD_S * 1e9)
-        while angle_i < len(raw) and raw[angle_i][0] <= t_ns:
-            identifier.add_joint_state(raw[angle_i][0], raw[angle_i][1], raw[angle_i][2])
-            angle_i += 1
-        while wrench_i < len(stamps) and stamps[wrench_i] <= t_ns:
-            identifier.add_wrench(int(stamps[wrench_i]), wrench[wrench_i])
-            wrench_i += 1
+        feed.until(first_ns + int(k * PERIOD_S * 1e9))
         started = time.perf_counter()
-        window = identifier.snapshot()
-        if not isinstance(window, WindowEstimate):
-            # As the node: the wrench's orientation rides with the window, for the sensor zero's share of the std.
-            window = dataclasses.replace(window, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
-            window = identifier.estimate_window(window)
-        estimate = window
+        estimate = identifier.estimate(orientation=frame)  # as the node: the orientation rides with the window
         ms.append(1e3 * (time.perf_counter() - started))
         valid.append(bool(estimate.valid))
         worst.append(max(z_scores(estimate.document, truth).values(), default=float("nan")))

@@ -30,7 +30,7 @@ import numpy as np
 from scoring import rates, verdict, z_scores
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimate
+from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "bsp_ros" / "live" / "online"))
 
@@ -53,30 +53,16 @@ def _streams(duration_s: float, wrench_hz: float, seed: int):
 def _run(
     window_s: float, stamps, wrench, raw, updates: int, orientation=None
 ) -> tuple[int, np.ndarray, list[bool], list[dict]]:
+    from live_inputs import WindowFeed  # the live tests' simulated inputs (test/bsp_ros/live/online)
+
     identifier = WindowedIdentifier(3, WindowConfig(window_s=window_s))
+    feed = WindowFeed(identifier, stamps, wrench, raw)
     end_ns = int(stamps[-1]) - int(updates * PERIOD_S * 1e9)
-    wrench_i, angle_i = 0, 0
     times, valid, samples, documents = [], [], 0, []
-
-    def feed_until(t_ns: int) -> None:
-        nonlocal wrench_i, angle_i
-        while angle_i < len(raw) and raw[angle_i][0] <= t_ns:
-            identifier.add_joint_state(raw[angle_i][0], raw[angle_i][1], raw[angle_i][2])
-            angle_i += 1
-        while wrench_i < len(stamps) and stamps[wrench_i] <= t_ns:
-            identifier.add_wrench(int(stamps[wrench_i]), wrench[wrench_i])
-            wrench_i += 1
-
-    feed_until(end_ns)
     for k in range(updates):
-        feed_until(end_ns + int(k * PERIOD_S * 1e9))
+        feed.until(end_ns + int(k * PERIOD_S * 1e9))
         started = time.perf_counter()
-        estimate = identifier.snapshot()
-        if not isinstance(estimate, WindowEstimate):
-            if orientation is not None:  # as the node: the sensor zero's share of the std needs its orientation
-                frame_id, rotation = orientation
-                estimate = dataclasses.replace(estimate, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
-            estimate = identifier.estimate_window(estimate)
+        estimate = identifier.estimate(orientation=orientation)  # as the node: the orientation rides with the window
         times.append(time.perf_counter() - started)
         valid.append(bool(estimate.valid))
         documents.append(estimate.document)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import sys
 import time
 import traceback
@@ -231,12 +230,12 @@ class BspIdentifierNode(RosNode):
         )
         wrench = message_class("geometry_msgs/msg/WrenchStamped")
         self.create_subscription(wrench, p["wrench_topic"], self.on_wrench, rclpy_qos("sensor_input"))
-        # Only the angles the mode uses: each message costs the executor thread its deserialisation, and the
-        # estimator publishes both for every marker frame, right before the wrench that follows it.
+        # The causal joint states only where they are used (each message costs the executor thread its
+        # deserialisation); the unfiltered angles always: they fill the window, the windowed mode's estimate and the
+        # recursive mode's model checks.
         states = rclpy_qos("state_input")
         if self.mode == "recursive" or self.support_fraction > 0.0:
             self.create_subscription(joint_state, "arm/joint_states", self.on_joint_state, states)
-        # The unfiltered angles fill the window: the windowed mode's estimate, the recursive mode's model checks.
         self.create_subscription(joint_state, "arm/joint_angles_raw", self.on_raw_angles, states)
         self.create_subscription(joint_state, "arm/segment_lengths", self.on_lengths, estimates)
         self.create_subscription(
@@ -396,7 +395,9 @@ class BspIdentifierNode(RosNode):
     def _update_windowed(self, reason: str | None, counts: dict[str, int]) -> None:
         """The newest window's estimate, published as soon as it is computed (stamped with the window's newest
         wrench); a quick verdict (stale, waiting) goes out instead when there is no window to identify."""
-        window = self.windowed.snapshot() if reason is None else None
+        # The sensor's orientation rides with the window: the zero's uncertainty (the tare's, or zero_sd_n's without
+        # one) joins the std, as `bsp identify` adds it.
+        window = self.windowed.snapshot(orientation=self.wrench_rotation) if reason is None else None
         if window is None or isinstance(window, WindowEstimate):
             if window is None:
                 document, stamp = invalid_document(self.options.method, str(reason)), self.now_ns()
@@ -405,11 +406,6 @@ class BspIdentifierNode(RosNode):
             document["mode"] = self.mode
             self.publish(jobs.outputs_from_document(document, stamp, with_passive=True), counts)
             return
-        if self.wrench_rotation is not None:
-            # The sensor's orientation rides with the window: the zero's uncertainty (the tare's, or zero_sd_n's
-            # without one) joins the std, as `bsp identify` adds it.
-            frame_id, rotation = self.wrench_rotation
-            window = dataclasses.replace(window, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
         self.publish(self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)), counts)
 
     def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:

@@ -81,12 +81,9 @@ class WindowCheck:
             self._epoch, self.document, self._since = self.windowed.epoch, None, self.every
         if self._since < self.every:
             return
-        window = self.windowed.snapshot()
+        window = self.windowed.snapshot(orientation=orientation)
         if isinstance(window, WindowEstimate):  # no window yet (waiting, stale): the next update tries again
             return
-        if orientation is not None:
-            frame_id, rotation = orientation
-            window = dataclasses.replace(window, rotation_world_from_sensor=rotation, wrench_frame_id=frame_id)
         self.document = self.windowed.estimate_window(window).document
         self._since = 0
 

@@ -78,17 +78,20 @@ class WindowedIdentifier:
         document = invalid_document(self.config.options.method, message)
         return WindowEstimate(document, False, self.wrench.last_t_ns)
 
-    def estimate(self, now_ns: int | None = None) -> WindowEstimate:
+    def estimate(self, now_ns: int | None = None, orientation: tuple[str, np.ndarray] | None = None) -> WindowEstimate:
         """Identify over the newest window: :meth:`snapshot` then :meth:`estimate_window`.
 
         Parameters
         ----------
         now_ns : the caller's clock, in the stamps' time base; None judges staleness between the inputs only.
+        orientation : as for :meth:`snapshot`.
         """
-        window = self.snapshot(now_ns)
+        window = self.snapshot(now_ns, orientation)
         return window if isinstance(window, WindowEstimate) else self.estimate_window(window)
 
-    def snapshot(self, now_ns: int | None = None) -> WindowSamples | WindowEstimate:
+    def snapshot(
+        self, now_ns: int | None = None, orientation: tuple[str, np.ndarray] | None = None
+    ) -> WindowSamples | WindowEstimate:
         """Copy the newest window's samples (cheap), or an invalid estimate when an input is missing or stale.
 
         The copy can be identified on another thread (:meth:`estimate_window`) while samples keep arriving.
@@ -96,6 +99,8 @@ class WindowedIdentifier:
         Parameters
         ----------
         now_ns : the caller's clock, in the stamps' time base; None judges staleness between the inputs only.
+        orientation : the wrench sensor's frame and rotation (3, 3) ``world <- sensor``, when known: the window
+            carries them, and the sensor zero's uncertainty (a tare's, or the assumed ``zero_sd_n``) joins its std.
         """
         last_wrench, last_angle = self.wrench.last_t_ns, self.angles.last_t_ns
         if last_wrench is None or last_angle is None:
@@ -110,11 +115,14 @@ class WindowedIdentifier:
             **{f"wrench_{k}": v for k, v in self.wrench_guard.refused.items()},
             **{f"joint_states_{k}": v for k, v in self.angle_guard.refused.items()},
         }
+        frame_id, rotation = orientation if orientation is not None else ("", None)
         return WindowSamples(
             *self.wrench.since(start),
             *self.angles.since(start - int(2e9)),
             refused,
             self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
+            rotation_world_from_sensor=rotation,
+            wrench_frame_id=frame_id,
             contact_from_robot=self.contact_from_robot,
             epoch=self.epoch,
         )

@@ -44,6 +44,25 @@ def live_inputs(spec: sim.CellSpec):
     return simulated, session.wrench.t_ns, wrench, angles, raw
 
 
+class WindowFeed:
+    """Feeds a :class:`WindowedIdentifier` the unfiltered angles and wrenches of :func:`live_inputs`, in order, up to a
+    stamp at a time (as the node's callbacks take them between two updates)."""
+
+    def __init__(self, identifier: WindowedIdentifier, stamps: np.ndarray, wrench: np.ndarray, raw: list) -> None:
+        self.identifier, self.stamps, self.wrench, self.raw = identifier, stamps, wrench, raw
+        self._wrench_i = self._angle_i = 0
+
+    def until(self, t_ns: int) -> None:
+        """Add every sample stamped at or before ``t_ns`` not added yet."""
+        raw, stamps = self.raw, self.stamps
+        while self._angle_i < len(raw) and raw[self._angle_i][0] <= t_ns:
+            self.identifier.add_joint_state(*raw[self._angle_i])
+            self._angle_i += 1
+        while self._wrench_i < len(stamps) and stamps[self._wrench_i] <= t_ns:
+            self.identifier.add_wrench(int(stamps[self._wrench_i]), self.wrench[self._wrench_i])
+            self._wrench_i += 1
+
+
 def orientation(simulated: sim.SimulatedSession) -> tuple[str, np.ndarray]:
     """The wrench sensor's frame and rotation into ``world`` (its last, if it turns), as the node passes them."""
     rotation = np.asarray(simulated.session.rotation_world_from_sensor, dtype=np.float64)

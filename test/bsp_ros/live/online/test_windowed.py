@@ -108,7 +108,6 @@ def test_block_means_slow_a_fast_stream_and_keep_its_mean() -> None:
 
 
 def test_a_tare_s_uncertainty_joins_the_window_estimate(live_streams) -> None:
-    import dataclasses
 
     from bsp_ros.core.pipeline import IdentifyOptions
     from bsp_ros.core.simulation import SensorSpec, TareSpec, human_arm_cell, simulate_tare, tare_rotations
@@ -125,8 +124,7 @@ def test_a_tare_s_uncertainty_joins_the_window_estimate(live_streams) -> None:
     for identifier in (plain, tared):
         _feed(identifier, stamps, wrench, raw)
     rotation = simulated.session.rotation_world_from_sensor
-    window = dataclasses.replace(tared.snapshot(), rotation_world_from_sensor=rotation, wrench_frame_id=w.frame_id)
-    with_tare = tared.estimate_window(window).document
+    with_tare = tared.estimate(orientation=(w.frame_id, rotation)).document
     without = plain.estimate_window(plain.snapshot()).document
     assert with_tare["quality"]["tare"]["applied"] is True
     for segment, q in with_tare["segments"].items():
