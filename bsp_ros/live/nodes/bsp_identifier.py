@@ -390,6 +390,7 @@ class BspIdentifierNode(RosNode):
         if self.mode == "windowed":
             self._update_windowed(reason, counts)
         else:
+            counts["wrench_spikes"] = self.recursive.spike_gate.spikes  # taken, kept out of the filter
             self._update_recursive(reason, counts)
 
     def _update_windowed(self, reason: str | None, counts: dict[str, int]) -> None:

@@ -15,6 +15,7 @@ from bsp_ros.core.identification.recursive import RecursiveConfig, RecursiveIden
 from bsp_ros.core.model import contact_torques_one_nm, static_moments_kgm
 from bsp_ros.live.online.angle_track import AngleTrack
 from bsp_ros.live.online.guard import StreamGuard, absurd_wrench_yzx
+from bsp_ros.live.online.spike_gate import SpikeGate
 
 __all__ = ["RecursiveFeed"]
 
@@ -28,7 +29,9 @@ class RecursiveFeed:
     """Feeds :class:`RecursiveIdentifier` one wrench at a time, with the joint kinematics at its stamp.
 
     Non-finite, absurd (beyond any arm's force), out-of-order and duplicate wrenches are refused
-    (:class:`StreamGuard`); a backwards clock jump or a long gap restarts the filter.
+    (:class:`StreamGuard`); a backwards clock jump or a long gap restarts the filter. Spikes (far off the median of
+    the wrenches around them, :class:`SpikeGate`) are taken but kept out of the filter, as `bsp identify` drops them:
+    the filter weighs every sample it takes, and no later check can take one back.
 
     Angles, velocities (for the direction of friction) and accelerations come from fits centred on each joint
     state (:class:`AngleTrack`), so the filter runs half a fit window (0.5 s) behind the wrench stream: a
@@ -62,6 +65,7 @@ class RecursiveFeed:
         self.dynamics = dynamics
         self.identifier = RecursiveIdentifier(n_segments, RecursiveConfig(passive=passive))
         self.guard = StreamGuard("wrench", absurd=absurd_wrench_yzx)
+        self.spike_gate: SpikeGate[tuple[int, np.ndarray, np.ndarray]] = SpikeGate()
         self.angles = AngleTrack(n_segments)
         self._terms = len(passive.local)
         self.passive_joints: tuple[str, ...] = tuple(name for key, name in self.identifier.names if key == "coulomb_nm")
@@ -155,7 +159,10 @@ class RecursiveFeed:
         if verdict == "refused":
             return False, None
         if lengths_m is not None:
-            self._pending.append((t_ns, np.asarray(wrench_yzx, dtype=np.float64), lengths_m))
+            wrench = np.asarray(wrench_yzx, dtype=np.float64)
+            judged = self.spike_gate.push(wrench.tolist(), (t_ns, wrench, lengths_m))
+            if judged is not None and not judged[1]:
+                self._pending.append(judged[0])
         # Usually the joint states have released everything before this wrench; not a wrench that came later
         # than the kinematics at its stamp, nor those left waiting when the joint states stopped.
         self._release(self._stamps[-1] if self._stamps else None, t_ns - MAX_WAIT_NS)
@@ -185,5 +192,6 @@ class RecursiveFeed:
     def reset(self) -> None:
         """Restart the filter (e.g. the wrench frame's rotation changed)."""
         self.identifier.reset()
+        self.spike_gate.reset()
         self._pending.clear()
         self._updated = False
