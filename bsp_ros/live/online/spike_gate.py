@@ -79,6 +79,4 @@ class SpikeGate(Generic[Item]):
             self._scale = (MAD_TO_SD * spread).tolist()
         if self._scale is None:
             return False
-        return any(
-            abs(d) > max(N_SD * s, floor) for d, s, floor in zip(deviation, self._scale, FLOOR_YZX, strict=True)
-        )
+        return any(abs(d) > max(N_SD * s, floor) for d, s, floor in zip(deviation, self._scale, FLOOR_YZX, strict=True))
