@@ -26,7 +26,9 @@ def checked_result(result: IdentificationResult, window: dict[str, Any] | None) 
     std falls far below its error over a session (``bench/live_realism.py --recursive``: the shoulder's Coulomb
     moment 18 std off after 80 s on the clean cell). The window's estimate holds all of those and the model checks'
     verdict: its variances are added to the filter's, and an invalid window makes the filter's estimate invalid with
-    its reason.
+    its reason. Where the filter's value departs from the window's (its simpler model: the prior's inertias, its own
+    dead band and weights), that distance joins the variance too, as the spread between candidate models does
+    offline: the filter may be wrong by as much as it disagrees with its checked window.
 
     Parameters
     ----------
@@ -53,11 +55,11 @@ def checked_result(result: IdentificationResult, window: dict[str, Any] | None) 
     for k, (key, owner) in enumerate(result.names):
         entry = window.get(_GROUP.get(key, "joints"), {}).get(owner, {}).get(key)
         std = entry.get("std") if isinstance(entry, dict) else None
-        if std is None:
+        if std is None or entry.get("value") is None:
             return dataclasses.replace(
                 result, valid=False, message=f"the window's estimate has no std for {key} of the {owner}"
             )
-        variance[k] = float(std) ** 2
+        variance[k] = float(std) ** 2 + (float(result.values[k]) - float(entry["value"])) ** 2
     return dataclasses.replace(result, covariance=result.covariance + np.diag(variance), warnings=warnings)
 
 

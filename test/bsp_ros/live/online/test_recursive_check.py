@@ -32,10 +32,11 @@ def _window(valid: bool = True, coulomb_std: float | None = 0.02) -> dict:
     }
 
 
-def test_the_window_s_variances_join_the_filter_s() -> None:
+def test_the_window_s_variances_and_its_distance_from_the_window_s_values_join_the_filter_s() -> None:
     checked = checked_result(_filter_result(), _window())
     assert checked.valid
-    np.testing.assert_allclose(np.diag(checked.covariance), [1e-8 + 0.03**2, 1e-8 + 0.02**2])
+    # The filter's 0.8 and 0.5 against the window's 0.81 and 0.49.
+    np.testing.assert_allclose(np.diag(checked.covariance), [1e-8 + 0.03**2 + 0.01**2, 1e-8 + 0.02**2 + 0.01**2])
     np.testing.assert_array_equal(checked.values, [0.8, 0.5])  # the filter's values
     assert checked.warnings == ["a drift"]
 
