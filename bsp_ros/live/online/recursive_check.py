@@ -43,7 +43,7 @@ def checked_result(result: IdentificationResult, window: dict[str, Any] | None) 
         return result
     if window is None:
         return dataclasses.replace(
-            result, valid=False, message="waiting for the first model check of the window (every 10 s)"
+            result, valid=False, message="waiting for the first model check of the window"
         )
     quality = window["quality"]
     warnings = [*result.warnings, *(w for w in quality.get("warnings", []) if w not in result.warnings)]
