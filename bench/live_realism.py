@@ -8,7 +8,8 @@ and seed, a 3-segment human-arm session is simulated at the node's rates (1 kHz 
 go through the live causal angle estimator, and the stream is fed to :class:`WindowedIdentifier` (``--window`` s,
 the node's options: the passive model as named, no elastic fallback; body mass and height given, as the realism
 bench does) as ``bsp_identifier`` feeds it, the wrench sensor's orientation with each window. Over the last
-``--span`` s, one update every 0.2 s (the node's 5 Hz, the model checks at their live cadence) is scored against the
+``--span`` s, one update every 0.2 s (the node's 5 Hz from the stream's start, the model checks at their live cadence:
+what the checks before the span found holds into it) is scored against the
 simulated truth, once per wrench rate in ``--rates`` (``WindowConfig.max_rate_hz``: the rate the window's wrench is
 block-averaged to). With ``--recursive`` the recursive mode as the node runs it (``live_inputs.recursive_mode``:
 :class:`RecursiveFeed` on the causal joint states and every wrench, its window identified with every model check
@@ -57,7 +58,13 @@ def _updates(
     identifier = WindowedIdentifier(3, WindowConfig(window_s=window_s, options=_node_options(), max_rate_hz=rate_hz))
     feed = WindowFeed(identifier, stamps, wrench, raw)
     first_ns = int(stamps[-1]) - int(span_s * 1e9)
+    # As the node, from the stream's start: what the model checks before the scored span found holds into it.
+    tick_ns = first_ns - int(first_ns - int(stamps[0])) // int(PERIOD_S * 1e9) * int(PERIOD_S * 1e9)
     valid, worst, ms, messages = [], [], [], []
+    while tick_ns < first_ns:
+        feed.until(tick_ns)
+        identifier.estimate(orientation=frame)
+        tick_ns += int(PERIOD_S * 1e9)
     for k in range(round(span_s / PERIOD_S) + 1):
         feed.until(first_ns + int(k * PERIOD_S * 1e9))
         started = time.perf_counter()

@@ -18,6 +18,7 @@ from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinema
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.pipeline import fuse, identify_data, refit_options
 from bsp_ros.errors import BspError
+from bsp_ros.live.online.finding_hold import FindingHold
 from bsp_ros.live.online.window_samples import WindowConfig, WindowEstimate, WindowSamples
 
 # A zero-phase filtered angle this far behind the newest is settled: what the backward pass brings from the end has
@@ -76,6 +77,7 @@ class WindowEstimator:
         self.config = config or WindowConfig()
         self._since_check = 0
         self._held: HeldModel | None = None
+        self._hold = FindingHold()  # what a check found holds through one check that misses it
         # What the window the last check identified was prepared with (lengths, cutoffs, grid, noise).
         self._held_settings: WindowSettings | None = None
         # The last update's kinematics older than SETTLED_S before its newest angle (on the held grid).
@@ -88,6 +90,7 @@ class WindowEstimator:
         self._held = None
         self._held_settings = None
         self._settled = None
+        self._hold.reset()
 
     def _invalid(self, message: str, last_wrench_t_ns: int) -> WindowEstimate:
         document = invalid_document(self.config.options.method, message)
@@ -192,7 +195,9 @@ class WindowEstimator:
             if isinstance(data, str):
                 return self._invalid(data, last_wrench)
             if check:
-                result = identify_data(data, self.config.options, check_elastic=True, check_drift=True)
+                result = self._hold.checked(
+                    identify_data(data, self.config.options, check_elastic=True, check_drift=True)
+                )
                 self._held, self._held_settings, self._since_check = result.held, settings, 1
             else:
                 result = identify_data(data, self.config.options, held=self._held)
