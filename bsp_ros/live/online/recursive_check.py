@@ -42,9 +42,7 @@ def checked_result(result: IdentificationResult, window: dict[str, Any] | None) 
     if not result.valid:  # the filter's own verdict first (too few samples, a joint that moved one way)
         return result
     if window is None:
-        return dataclasses.replace(
-            result, valid=False, message="waiting for the first model check of the window"
-        )
+        return dataclasses.replace(result, valid=False, message="waiting for the first model check of the window")
     quality = window["quality"]
     warnings = [*result.warnings, *(w for w in quality.get("warnings", []) if w not in result.warnings)]
     if not quality["valid"]:
