@@ -6,7 +6,7 @@ import dataclasses
 import math
 
 import numpy as np
-from live_inputs import live_inputs, orientation
+from live_inputs import WindowFeed, live_inputs, orientation
 
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.fusion import SubjectInfo
@@ -86,16 +86,11 @@ def test_an_elbow_spring_missed_by_one_window_s_check_leaves_no_valid_wrong_upda
     # As bsp_identifier identifies: a missing elastic moment is a verdict, not a refit with the data's passive model.
     options = IdentifyOptions(subject=SubjectInfo(75.0, 1.78, "male"), elastic_fallback=False)
     identifier = WindowedIdentifier(3, WindowConfig(window_s=30.0, options=options))
-    frame = orientation(simulated)
-    a = 0
+    frame, feed = orientation(simulated), WindowFeed(identifier, stamps, wrench, raw)
     verdicts = []
-    for i, t_ns in enumerate(stamps.tolist()):
-        while a < len(raw) and raw[a][0] <= t_ns:
-            identifier.add_joint_state(*raw[a])
-            a += 1
-        identifier.add_wrench(t_ns, wrench[i])
-        if i >= 40_000 and i % 200 == 0:  # 5 Hz from 40 s on
-            verdicts.append(identifier.estimate(orientation=frame))
+    for i in range(40_000, len(stamps), 200):  # 5 Hz from 40 s on
+        feed.until(int(stamps[i]))
+        verdicts.append(identifier.estimate(orientation=frame))
     found = [not v.valid and "elastic passive moment" in v.document["quality"]["message"] for v in verdicts]
     assert any(found)
     assert not any(v.valid for v in verdicts[found.index(True) :])

@@ -139,31 +139,6 @@ TWO_SINES = sim.MultiSineTrajectory.within_speed(
 )
 
 
-@pytest.mark.parametrize("motion", [None, TWO_SINES], ids=["one sine x4", "two sines 0.15 rad/s"])
-def test_friction_amplitudes_of_a_fast_session_are_not_lagged_low(motion: sim.JointTrajectory | None) -> None:
-    # The causal direction velocity keeps the old sign for about 0.3 s after each reversal: fed on it, the
-    # Coulomb amplitudes of this session came out 19-32 % low at 10-12 std, marked valid. The inertia-exciting
-    # two sines per joint (bsp plan --excite-inertia; periods from 2.1 s) reverse faster still.
-    _, simulated, states = _fast_session(6, 120.0, motion)
-    wrench = wrench_world_yzx(simulated.session.wrench, simulated.session.rotation_world_from_sensor)
-    feed = RecursiveFeed(3, PassiveModel.parse("coulomb"))
-    k = 0
-    for i, t in enumerate(simulated.session.wrench.t_ns.tolist()):
-        while k < len(states) and states[k][0] <= t:
-            stamp, sample = states[k]
-            feed.add_joint_state(stamp, sample.q_rad, sample.velocity_rad_s, sample.lengths_m)
-            k += 1
-        feed.add_wrench(t, wrench[i], states[k - 1][1].lengths_m if k else None)
-    result = feed.identifier.result()
-    assert result.valid, result.message
-    truth = simulated.truth.to_dict()
-    std = np.sqrt(np.diag(result.covariance))
-    for i, (key, owner) in enumerate(result.names):
-        true = truth["segments" if key == "static_moment_kgm" else "joints"][owner][key]
-        assert abs(result.values[i] - true) < 3 * std[i], (key, owner, result.values[i], true, std[i])
-        assert abs(result.values[i] - true) < 0.02 * true, (key, owner, result.values[i], true)
-
-
 def _fed(simulated: sim.SimulatedSession, states: list, wrench: np.ndarray) -> RecursiveFeed:
     feed = RecursiveFeed(3, PassiveModel.parse("coulomb"))
     k = 0
@@ -174,6 +149,23 @@ def _fed(simulated: sim.SimulatedSession, states: list, wrench: np.ndarray) -> R
             k += 1
         feed.add_wrench(t, wrench[i], states[k - 1][1].lengths_m if k else None)
     return feed
+
+
+@pytest.mark.parametrize("motion", [None, TWO_SINES], ids=["one sine x4", "two sines 0.15 rad/s"])
+def test_friction_amplitudes_of_a_fast_session_are_not_lagged_low(motion: sim.JointTrajectory | None) -> None:
+    # The causal direction velocity keeps the old sign for about 0.3 s after each reversal: fed on it, the
+    # Coulomb amplitudes of this session came out 19-32 % low at 10-12 std, marked valid. The inertia-exciting
+    # two sines per joint (bsp plan --excite-inertia; periods from 2.1 s) reverse faster still.
+    _, simulated, states = _fast_session(6, 120.0, motion)
+    wrench = wrench_world_yzx(simulated.session.wrench, simulated.session.rotation_world_from_sensor)
+    result = _fed(simulated, states, wrench).identifier.result()
+    assert result.valid, result.message
+    truth = simulated.truth.to_dict()
+    std = np.sqrt(np.diag(result.covariance))
+    for i, (key, owner) in enumerate(result.names):
+        true = truth["segments" if key == "static_moment_kgm" else "joints"][owner][key]
+        assert abs(result.values[i] - true) < 3 * std[i], (key, owner, result.values[i], true, std[i])
+        assert abs(result.values[i] - true) < 0.02 * true, (key, owner, result.values[i], true)
 
 
 def test_wrench_spikes_are_kept_out_of_the_filter_as_bsp_identify_drops_them() -> None:
