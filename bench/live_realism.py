@@ -59,12 +59,13 @@ def _updates(
     feed = WindowFeed(identifier, stamps, wrench, raw)
     first_ns = int(stamps[-1]) - int(span_s * 1e9)
     # As the node, from the stream's start: what the model checks before the scored span found holds into it.
-    tick_ns = first_ns - int(first_ns - int(stamps[0])) // int(PERIOD_S * 1e9) * int(PERIOD_S * 1e9)
+    period_ns = int(PERIOD_S * 1e9)
+    tick_ns = first_ns - (first_ns - int(stamps[0])) // period_ns * period_ns  # the first tick on the span's grid
     valid, worst, ms, messages = [], [], [], []
     while tick_ns < first_ns:
         feed.until(tick_ns)
         identifier.estimate(orientation=frame)
-        tick_ns += int(PERIOD_S * 1e9)
+        tick_ns += period_ns
     for k in range(round(span_s / PERIOD_S) + 1):
         feed.until(first_ns + int(k * PERIOD_S * 1e9))
         started = time.perf_counter()
