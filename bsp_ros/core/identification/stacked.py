@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,7 +17,7 @@ from bsp_ros.core.identification.elastic import (
 from bsp_ros.core.identification.passive import TERMS, PassiveModel
 from bsp_ros.core.identification.priors import BasePrior
 from bsp_ros.core.identification.result import ParameterName
-from bsp_ros.core.model import gravity_regressor
+from bsp_ros.core.model import GRAVITY_M_S2, absolute_angles_rad
 from bsp_ros.core.streams import joints_for, segments_for
 
 # Per joint: X^T X (n, p, p), X^T y (n, p), y^T y (n,).
@@ -27,14 +26,16 @@ Statistics = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 @dataclass(frozen=True)
 class Problem:
-    """The joint model stacked over samples and joints: ``torque[t, i] = sum_k regressor[t, i, k] theta_k`` on the
+    """The joint model stacked over samples and joints: ``torque[t, i] = sum_k X_i[t, k] theta_k`` on joint ``i``'s
     used rows, with bounds and Gaussian priors on some parameters (``p`` of them, ``n`` joints, ``N`` samples)."""
 
     names: list[ParameterName]
-    # (N, n, p_k) the regressor's column blocks, in order: a problem augmented with a few columns keeps its base's
-    # regressor and the new columns apart, and joins them (``regressor``) only when a pass over them needs it
-    # (a model check that looks at a wider fit's values alone solves from the statistics, and never does).
-    blocks: tuple[np.ndarray, ...]
+    # The regressor's column blocks, in order, each as one (N, p_k) array per joint ``i`` whose rows the joint does
+    # not use are 0: every pass runs over one joint's contiguous rows (the stacked (N, n, p) array's are strided),
+    # none gathers them, and a row of zeros adds nothing to a sum. A problem augmented with a few columns keeps its
+    # base's arrays and the new columns apart, and joins them per joint (``joint_rows``) only when a pass over
+    # them needs it (a model check that looks at a wider fit's values alone solves from the statistics).
+    blocks: tuple[tuple[np.ndarray, ...], ...]
     torque: np.ndarray  # (N, n)
     rows: np.ndarray  # (N, n) bool: row used
     lower: np.ndarray
@@ -46,37 +47,37 @@ class Problem:
     # augmented problem solves from them. The arrays above are never changed after construction.
     statistics: Statistics | None = field(default=None, compare=False, repr=False)
 
-    def used_rows(self, joint: int) -> tuple[np.ndarray, np.ndarray]:
-        """The regressor's (M, p) and the torques' (M,) used rows of ``joint``, gathered once and kept: the
-        statistics, the augmented problems of the model checks and their candidate profiles all pass over them."""
-        cache: dict[int, tuple[np.ndarray, np.ndarray]] = self.__dict__.setdefault("_used_rows", {})
+    def joint_rows(self, joint: int) -> tuple[np.ndarray, np.ndarray]:
+        """``joint``'s regressor (N, p) and torques (N,), both 0 off its used rows, the blocks joined once and
+        kept: the statistics, the augmented problems of the model checks and their candidate profiles use them."""
+        cache: dict[int, tuple[np.ndarray, np.ndarray]] = self.__dict__.setdefault("_joint_rows", {})
         if joint not in cache:
-            used = self.used_index(joint)
-            cache[joint] = (self.regressor[:, joint, :].take(used, axis=0), self.torque[:, joint].take(used))
+            parts = [block[joint] for block in self.blocks]
+            x = parts[0] if len(parts) == 1 else np.hstack(parts)
+            cache[joint] = (x, self.joint_torque(joint))
         return cache[joint]
 
-    def used_index(self, joint: int) -> np.ndarray:
-        """(M,) the used rows of ``joint``, as indices, kept: ``take`` with them gathers rows twice as fast as the
-        boolean mask (the same values)."""
-        cache: dict[int, np.ndarray] = self.__dict__.setdefault("_used_index", {})
+    def joint_torque(self, joint: int) -> np.ndarray:
+        """(N,) ``joint``'s torques, 0 off its used rows, kept."""
+        cache: dict[int, np.ndarray] = self.__dict__.setdefault("_joint_torque", {})
         if joint not in cache:
-            cache[joint] = np.flatnonzero(self.rows[:, joint])
+            cache[joint] = np.where(self.rows[:, joint], self.torque[:, joint], 0.0)
         return cache[joint]
 
-    @functools.cached_property
-    def regressor(self) -> np.ndarray:
-        """(N, n, p) the blocks joined (the one block itself when there is one)."""
-        return self.blocks[0] if len(self.blocks) == 1 else np.concatenate(self.blocks, axis=2)
-
-    def predicted(self, values: np.ndarray) -> np.ndarray:
-        """(N, n) the model's torques ``regressor @ values``, block by block (the blocks are not joined)."""
-        if len(self.blocks) == 1 or "regressor" in self.__dict__:
-            return np.asarray(self.regressor @ values)
-        out, start = None, 0
-        for block in self.blocks:
-            part = block @ values[start : start + block.shape[2]]
-            out, start = part if out is None else out + part, start + block.shape[2]
-        return np.asarray(out)
+    def residual(self, values: np.ndarray) -> np.ndarray:
+        """(N, n) the torques less the model's at ``values`` on the used rows, 0 elsewhere (block by block: an
+        augmented problem's columns are not joined for it)."""
+        out = np.empty(self.torque.shape)
+        for j in range(self.torque.shape[1]):
+            if len(self.blocks) == 1 or j in self.__dict__.get("_joint_rows", {}):
+                predicted = self.joint_rows(j)[0] @ values
+            else:
+                predicted, start = 0.0, 0
+                for block in self.blocks:
+                    predicted = predicted + block[j] @ values[start : start + block[j].shape[1]]
+                    start += block[j].shape[1]
+            out[:, j] = self.joint_torque(j) - predicted
+        return out
 
 
 @dataclass(frozen=True)
@@ -120,34 +121,39 @@ def build_problem(
     local = passive.local
     k = len(local)
     names = problem_names(passive, n, extras is not None)
-    # The dynamics' columns are written into the one regressor from the start: one array, gathered once per joint
-    # for the statistics (an augmented problem would gather its base's columns and the new ones apart first).
     dynamics = 0 if extras is None else 2 * n
-    regressor = np.zeros((data.t_ns.size, n, n + n * k + dynamics))
-    regressor[:, :, :n] = gravity_regressor(data.q_rad) if extras is None else extras.base[:, :, :n]
+    # Joint i's gravity columns are g cos(phi_j) for the segments j >= i it carries (gravity_regressor's row i).
+    gravity = GRAVITY_M_S2 * np.cos(absolute_angles_rad(data.q_rad))
     passive_q = data.passive_q_rad  # the trunk's tilt turns gravity, not the passive moments
-    for j in range(n):
-        regressor[:, j, n + j * k : n + (j + 1) * k] = passive.columns(passive_q, data.velocity_rad_s, j)
-        if widths is not None and widths[j] > 0 and "coulomb" in local:
-            column = n + j * k + local.index("coulomb")
-            regressor[:, j, column] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
+    elastic = None
     if passive.elastic:
-        reference = ElasticReference.from_angles(passive_q)
-        elastic = elastic_columns(passive_q, passive.elastic, reference)
-        regressor = np.concatenate((regressor[:, :, : n + n * k], elastic, regressor[:, :, n + n * k :]), axis=2)
-    p = regressor.shape[2] - dynamics
+        elastic = elastic_columns(passive_q, passive.elastic, ElasticReference.from_angles(passive_q))
+    p = n + n * k + (0 if elastic is None else elastic.shape[2])
+    columns = []
+    for j in range(n):
+        x = np.zeros((data.t_ns.size, p + dynamics))
+        if extras is not None:
+            x[:, :n], x[:, p:] = extras.base[:, j, :n], extras.base[:, j, n:]
+        else:
+            x[:, j:n] = gravity[:, j:]
+        x[:, n + j * k : n + (j + 1) * k] = passive.columns(passive_q, data.velocity_rad_s, j)
+        if widths is not None and widths[j] > 0 and "coulomb" in local:
+            x[:, n + j * k + local.index("coulomb")] = np.tanh(data.velocity_rad_s[:, j] / widths[j])
+        if elastic is not None:
+            x[:, n + n * k : p] = elastic[:, j, :]
+        x[~rows[:, j]] = 0.0
+        columns.append(x)
     lower = [0.0] * n + [TERMS[term][2] for _ in range(n) for term in local] + [-np.inf] * (p - n - n * k)
     precision = elastic_prior_precision(names[:p])
     mean = np.zeros(p)
     if extras is not None:
-        regressor[:, :, p:] = extras.base[:, :, n:]
         prior = extras.prior
         mean = np.concatenate((mean, prior.perpendicular_mean_kgm, prior.inertia_mean_kgm2))
         sd = np.concatenate((prior.perpendicular_sd_kgm, prior.inertia_sd_kgm2))
         precision = np.concatenate((precision, np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)))
         lower += [-np.inf] * dynamics
     return Problem(
-        names, (regressor,), data.tau_nm, rows, np.array(lower), np.full(p + dynamics, np.inf), mean, precision, p
+        names, (tuple(columns),), data.tau_nm, rows, np.array(lower), np.full(p + dynamics, np.inf), mean, precision, p
     )
 
 
@@ -187,23 +193,24 @@ def prior_rows(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
     return rows, root * problem.prior_mean[picks]
 
 
-def joint_products(a: np.ndarray, w: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``sum_t sum_i a[t, i]^T w[t, i] b[t, i]`` of per-joint rows: (p, m) for ``b`` (N, n, m), (p,) for ``b`` (N, n).
-
-    One BLAS product per joint (a three-operand einsum over N samples runs ten times slower).
+def joint_products(problem: Problem, weights: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``sum_i X_i^T w_i b[:, i]`` over each joint's used rows: (p, m) for ``b`` (N, n, m), (p,) for ``b`` (N, n).
+    One BLAS product per joint and block.
 
     Parameters
     ----------
-    a : (N, n, p) e.g. a regressor.
-    w : (N, n) row weights (0 off the used rows).
-    b : (N, n, m) or (N, n).
+    problem : whose columns ``X_i`` (0 off joint ``i``'s used rows).
+    weights : (n,) per-joint weights (1 / sigma^2).
+    b : (N, n, m) or (N, n), finite.
     """
-    total = None
-    for i in range(a.shape[1]):
-        weighted = w[:, i, None] * b[:, i] if b.ndim == 3 else w[:, i] * b[:, i]
-        product = a[:, i].T @ weighted
-        total = product if total is None else total + product
-    return np.asarray(total)
+    total = np.zeros((len(problem.names), *b.shape[2:]))
+    for i in range(problem.torque.shape[1]):
+        weighted, start = weights[i] * b[:, i], 0
+        for block in problem.blocks:
+            end = start + block[i].shape[1]
+            total[start:end] += block[i].T @ weighted
+            start = end
+    return total
 
 
 def candidate_products(
@@ -214,17 +221,37 @@ def candidate_products(
 
     Parameters
     ----------
-    regressor_j : (N, p) the joint's used rows; weights_j, torque_j : (N,) their weights and torques.
-    candidates : (N, m) one column per candidate, on the same rows.
+    regressor_j : (N, p) the joint's columns; weights_j, torque_j : (N,) the rows' weights and torques (0 off its
+        used rows).
+    candidates : (N, m) one column per candidate, finite.
     """
     weighted = weights_j[:, None] * candidates
     return regressor_j.T @ weighted, (weighted * candidates).sum(axis=0), torque_j @ weighted
 
 
-def joint_scores(regressor: np.ndarray, weighted_residual: np.ndarray) -> np.ndarray:
-    """(N, p) per-sample scores ``sum_i x_ti r_ti`` (summed over the joints of each sample): one stacked product
-    ``r_t^T X_t`` of (1, n) by (n, p) per sample, a fifth of the time of adding the joints' (N, p) products."""
-    return np.asarray(np.matmul(weighted_residual[:, None, :], regressor)[:, 0, :])
+def joint_scores(problem: Problem, weighted_residual: np.ndarray, columns: np.ndarray | None = None) -> np.ndarray:
+    """(N, m) per-sample scores ``sum_i x_ti r_ti`` summed over the joints of each sample (0 where no joint uses
+    the sample), of the columns ``X_i`` or, given ``columns`` (p, m), of the projected rows ``X_i columns``.
+
+    Parameters
+    ----------
+    problem : whose columns (0 off each joint's used rows).
+    weighted_residual : (N, n) the weighted residual (read on the used rows).
+    columns : (p, m) a projection of the parameters, or None for all p of them.
+    """
+    count = weighted_residual.shape[0]
+    out = np.zeros((count, len(problem.names) if columns is None else columns.shape[1]))
+    for i in range(weighted_residual.shape[1]):
+        r = weighted_residual[:, i, None]
+        start = 0  # block by block: an augmented problem's columns are never joined for this pass
+        for block in problem.blocks:
+            x, end = block[i], start + block[i].shape[1]
+            if columns is None:
+                out[:, start:end] += x * r
+            else:
+                out += (x @ columns[start:end]) * r
+            start = end
+    return out
 
 
 def joint_statistics(problem: Problem) -> Statistics:
@@ -234,23 +261,23 @@ def joint_statistics(problem: Problem) -> Statistics:
     cost (one pass over the samples, BLAS products). Computed once per problem and kept on it."""
     if problem.statistics is not None:
         return problem.statistics
-    n, p = problem.torque.shape[1], problem.regressor.shape[2]
+    n, p = problem.torque.shape[1], len(problem.names)
     grams, moments, totals = np.empty((n, p, p)), np.empty((n, p)), np.empty(n)
     for j in range(n):
-        x, y = problem.used_rows(j)
+        x, y = problem.joint_rows(j)
         grams[j], moments[j], totals[j] = x.T @ x, x.T @ y, y @ y
     object.__setattr__(problem, "statistics", (grams, moments, totals))  # a cache of the frozen problem's arrays
     return grams, moments, totals
 
 
-def _augmented_statistics(problem: Problem, extra: np.ndarray) -> Statistics:
-    """:func:`joint_statistics` of ``problem`` with the columns ``extra`` (N, n, m) appended, from its own: only
-    the products with the new columns pass over the samples."""
+def _augmented_statistics(problem: Problem, extra: tuple[np.ndarray, ...]) -> Statistics:
+    """:func:`joint_statistics` of ``problem`` with the columns ``extra`` (per joint (N, m), 0 off its used rows)
+    appended, from its own: only the products with the new columns pass over the samples."""
     grams, moments, totals = joint_statistics(problem)
-    n, p, m = grams.shape[0], grams.shape[1], extra.shape[2]
+    n, p, m = grams.shape[0], grams.shape[1], extra[0].shape[1]
     out_grams, out_moments = np.empty((n, p + m, p + m)), np.empty((n, p + m))
     for j in range(n):
-        (x, y), e = problem.used_rows(j), extra[:, j, :].take(problem.used_index(j), axis=0)
+        (x, y), e = problem.joint_rows(j), extra[j]
         cross = x.T @ e
         out_grams[j, :p, :p], out_grams[j, :p, p:], out_grams[j, p:, :p] = grams[j], cross, cross.T
         out_grams[j, p:, p:] = e.T @ e
@@ -285,11 +312,12 @@ def _scaled_cholesky(design: np.ndarray, moment: np.ndarray) -> tuple[np.ndarray
 
 
 def _tall(problem: Problem, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The weighted used rows and the prior rows as one tall system ``a x ~ b``."""
-    root = np.sqrt(weights)[None, :, None]
+    """The weighted used rows, joint by joint, and the prior rows as one tall system ``a x ~ b``."""
+    root = np.sqrt(weights)
     prior_a, prior_b = prior_rows(problem)
-    a = np.vstack(((problem.regressor * root)[problem.rows], prior_a))
-    b = np.concatenate(((problem.torque * root[..., 0])[problem.rows], prior_b))
+    joints = [problem.joint_rows(j) for j in range(root.size)]
+    a = np.vstack([x * root[j] for j, (x, _) in enumerate(joints)] + [prior_a])
+    b = np.concatenate([y * root[j] for j, (_, y) in enumerate(joints)] + [prior_b])
     return a, b
 
 
@@ -370,9 +398,9 @@ class Reweighted:
     statistics: Statistics
 
     def residual(self, problem: Problem) -> np.ndarray:
-        """(N, n) the residual of ``problem`` (the one solved) on every row: one pass over the samples, which the
-        model checks that look at the values alone do without."""
-        return np.asarray(problem.torque - problem.predicted(self.values))
+        """(N, n) the residual of ``problem`` (the one solved) on its used rows, 0 elsewhere: one pass over the
+        samples, which the model checks that look at the values alone do without."""
+        return problem.residual(self.values)
 
 
 def reweighted_values(problem: Problem) -> Reweighted:
@@ -402,9 +430,8 @@ def fit_problem(problem: Problem, solved: Reweighted | None = None) -> Fit:
     could matter)."""
     solved = reweighted_values(problem) if solved is None else solved
     values, weights, residual = solved.values, solved.weights, solved.residual(problem)
-    w = np.where(problem.rows, weights[None, :], 0.0)
     design, moment, _ = normal_equations(problem, weights, solved.statistics)
-    scores = joint_scores(problem.regressor, w * np.where(problem.rows, residual, 0.0))
+    scores = joint_scores(problem, weights[None, :] * residual)
     used_samples = problem.rows.any(axis=1)
     covariance, lags = hac_covariance(design, scores[used_samples])
     if problem.prior_precision.any():
@@ -435,9 +462,10 @@ def augmented(
 ) -> Problem:
     """``problem`` with extra unbounded columns ``extra`` (N, n, m), with Gaussian priors where given."""
     m = len(names)
+    own = tuple(np.where(problem.rows[:, j, None], extra[:, j], 0.0) for j in range(problem.torque.shape[1]))
     wider = Problem(
         problem.names + names,
-        (*problem.blocks, extra),
+        (*problem.blocks, own),
         problem.torque,
         problem.rows,
         np.concatenate((problem.lower, np.full(m, -np.inf))),
@@ -445,7 +473,7 @@ def augmented(
         np.concatenate((problem.prior_mean, np.zeros(m) if prior_mean is None else prior_mean)),
         np.concatenate((problem.prior_precision, np.zeros(m) if prior_precision is None else prior_precision)),
         problem.passive_end,
-        _augmented_statistics(problem, extra),
+        _augmented_statistics(problem, own),
     )
-    wider.__dict__["_used_index"] = problem.__dict__.get("_used_index", {})  # the same rows: their indices
+    wider.__dict__["_joint_torque"] = problem.__dict__.get("_joint_torque", {})  # the same rows and torques
     return wider

@@ -85,7 +85,6 @@ def drift_check(
     extra, names, spans = terms or drift_columns(data)
     groups, spans_s, columns, jacobian = spans.groups, spans.spans_s, spans.columns, spans.jacobian
     p = len(problem.names)
-    w = np.where(problem.rows, fit.weights[None, :], 0.0)
     std = np.sqrt(np.clip(np.diag(fit.covariance)[:n], 1e-300, None))
 
     # The last values' effect: the test's values come again once it went on to the wider fit.
@@ -104,7 +103,7 @@ def drift_check(
             for k, rows in enumerate(groups):
                 delta_torque[rows] = -np.einsum("tki,k->ti", jacobian[rows], rate[k] * spans_s[k])
             computed.clear()
-            computed[key] = rate, design_inverse(fit.design) @ joint_products(problem.regressor, w, delta_torque)
+            computed[key] = rate, design_inverse(fit.design) @ joint_products(problem, fit.weights, delta_torque)
         return computed[key]
 
     def can_count(values: np.ndarray) -> bool:

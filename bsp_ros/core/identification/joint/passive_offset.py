@@ -20,8 +20,8 @@ def passive_offset_sensitivity(problem: Problem, fit: Fit, n: int) -> dict[str, 
         return out  # the offset is modelled: nothing assumed
     try:
         for j, joint in enumerate(joints):
-            # X^T W u over the joint's used rows: its weight times their column sums (the rows gathered once).
-            rhs = SENSITIVITY_OFFSET_NM * fit.weights[j] * problem.used_rows(j)[0].sum(axis=0)
+            # X^T W u over the joint's used rows: its weight times their column sums (0 off them).
+            rhs = SENSITIVITY_OFFSET_NM * fit.weights[j] * problem.joint_rows(j)[0].sum(axis=0)
             shift = np.linalg.solve(fit.design, rhs)[:n]
             out[joint] = {segment: float(v) for segment, v in zip(segments, shift, strict=True)}
     except np.linalg.LinAlgError:

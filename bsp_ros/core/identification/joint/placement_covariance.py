@@ -101,8 +101,7 @@ def _per_recording(columns: np.ndarray, recording_index: np.ndarray | None) -> n
 
 def covariance_from_columns(problem: Problem, fit: Fit, columns: np.ndarray) -> np.ndarray:
     """Covariance (p, p) of the estimate from offsets of unit variance along ``columns`` (N, n, m)."""
-    w = np.where(problem.rows, fit.weights[None, :], 0.0)
-    return covariance_from_products(fit, joint_products(problem.regressor, w, columns))
+    return covariance_from_products(fit, joint_products(problem, fit.weights, columns))
 
 
 def covariance_from_products(fit: Fit, products: np.ndarray) -> np.ndarray:

@@ -37,17 +37,10 @@ def _free_offsets(free: Problem, m: int) -> tuple[np.ndarray, np.ndarray]:
     solved = reweighted_values(free)
     design, _, _ = normal_equations(free, solved.weights, solved.statistics)
     rows = design_inverse(design)[-m:, :]  # (m, P)
-    weighted = np.where(free.rows, solved.weights[None, :] * solved.residual(free), 0.0)  # (N, n)
-    # B s_t = sum_i (B x_ti) w_i r_ti: every sample's and joint's row projected on B in one BLAS product per block
-    # (N n, k) x (k, m), then the per-sample scores of those projected rows (half the time of forming the (N, P)
-    # scores first).
-    count, n = weighted.shape
-    projected, start = np.zeros((count * n, m)), 0
-    for block in free.blocks:
-        k = block.shape[2]
-        projected += block.reshape(count * n, k) @ rows[:, start : start + k].T
-        start += k
-    scores = joint_scores(projected.reshape(count, n, m), weighted)[free.rows.any(axis=1)]
+    weighted = solved.weights[None, :] * solved.residual(free)  # (N, n), 0 off the used rows
+    # B s_t = sum_i (B x_ti) w_i r_ti: each joint's rows projected on B in one BLAS product, then the per-sample
+    # scores of those projected rows (half the time of forming the (N, P) scores first).
+    scores = joint_scores(free, weighted, rows.T)[free.rows.any(axis=1)]
     covariance, _ = hac_covariance(np.eye(m), scores)
     covariance = covariance + rows @ (free.prior_precision[:, None] * rows.T)
     return solved.values[-m:], 0.5 * (covariance + covariance.T)

@@ -79,10 +79,11 @@ def stribeck_check(
         column = n + j * k + config.passive.local.index("coulomb")
         # The speed by a profile on the bordered normal equations, every candidate's column at once (one BLAS
         # product over the used rows), then one full fit.
-        used = problem.rows[:, j]  # the fit's weights are positive: its weighted rows
-        (x_j, y_j), w_j = problem.used_rows(j), w[used, j]
+        used = problem.rows[:, j, None]  # the fit's weights are positive: its weighted rows
+        (x_j, y_j), w_j = problem.joint_rows(j), w[:, j]  # 0 off the used rows
         speeds = np.asarray(STRIBECK_SPEEDS_RAD_S)
-        bumps = np.sign(data.velocity_rad_s[used, j, None]) * np.exp(-((speed[used, None] / speeds[None, :]) ** 2))
+        bumps = np.sign(data.velocity_rad_s[:, j, None]) * np.exp(-((speed[:, None] / speeds[None, :]) ** 2))
+        bumps = np.where(used, bumps, 0.0)
         crosses, squares, targets = candidate_products(x_j, w_j, y_j, bumps)
         try:
             base = float(moment @ np.linalg.solve(design, moment))

@@ -17,8 +17,8 @@ class TorqueResponse:
     torques changed by a little gives, without re-running it (its discrete choices, outliers, friction
     transitions and passive model, are those of the estimate)."""
 
-    regressor: np.ndarray  # (N, n, p) the final problem's columns
-    row_weights: np.ndarray  # (N, n) the fit's weight of every used row, 0 elsewhere
+    problem: Problem  # the final problem: its used rows and columns
+    weights: np.ndarray  # (n,) the fit's per-joint weights
     design: np.ndarray  # (p, p) A + P
     free: np.ndarray  # (p,) bool: parameters off their bounds
 
@@ -26,8 +26,7 @@ class TorqueResponse:
     def of(cls, problem: Problem, fit: Fit) -> TorqueResponse:
         """The response of ``fit``, the weighted bounded fit of ``problem``."""
         at_bound = (fit.values <= problem.lower + 1e-12) | (fit.values >= problem.upper - 1e-12)
-        row_weights = np.where(problem.rows, fit.weights[None, :], 0.0)
-        return cls(problem.regressor, row_weights, fit.design, ~at_bound)
+        return cls(problem, fit.weights, fit.design, ~at_bound)
 
     def __call__(self, delta_tau_nm: np.ndarray) -> np.ndarray:
         """(p,) parameter change for a torque change ``delta_tau_nm`` (N, n) Nm at the fit's samples."""
@@ -38,5 +37,5 @@ class TorqueResponse:
         inverse = design_inverse(self.design[np.ix_(self.free, self.free)])
         out = np.zeros((self.free.size, len(deltas_tau_nm)))
         for k, delta in enumerate(deltas_tau_nm):
-            out[self.free, k] = inverse @ joint_products(self.regressor, self.row_weights, delta)[self.free]
+            out[self.free, k] = inverse @ joint_products(self.problem, self.weights, delta)[self.free]
         return out

@@ -52,10 +52,10 @@ def transition_widths(
     base, base_x = solve(design, moment)
     for j in range(n):
         column = n + j * k + config.passive.local.index("coulomb")
-        used = problem.rows[:, j]  # the fit's weights are positive: its weighted rows
-        (x_j, y_j), w_j = problem.used_rows(j), w[used, j]
-        # Every candidate width's column at once (N, widths).
-        c = np.tanh(data.velocity_rad_s[used, j, None] / TRANSITION_WIDTHS_RAD_S[None, :])
+        used = problem.rows[:, j, None]  # the fit's weights are positive: its weighted rows
+        (x_j, y_j), w_j = problem.joint_rows(j), w[:, j]  # 0 off the used rows
+        # Every candidate width's column at once (N, widths), 0 off the used rows.
+        c = np.where(used, np.tanh(data.velocity_rad_s[:, j, None] / TRANSITION_WIDTHS_RAD_S[None, :]), 0.0)
         crosses, squares, targets = candidate_products(x_j, w_j, y_j, c)
         # Each candidate's normal equations: the Coulomb row and column swapped for the candidate's.
         crosses[column] = squares
