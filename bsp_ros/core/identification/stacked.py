@@ -236,7 +236,7 @@ def joint_scores(problem: Problem, weighted_residual: np.ndarray, columns: np.nd
     Parameters
     ----------
     problem : whose columns (0 off each joint's used rows).
-    weighted_residual : (N, n) the weighted residual (read on the used rows).
+    weighted_residual : (N, n) the weighted residual, finite (what lies off the used rows meets 0 columns).
     columns : (p, m) a projection of the parameters, or None for all p of them.
     """
     count = weighted_residual.shape[0]
