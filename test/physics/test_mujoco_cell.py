@@ -16,7 +16,7 @@ from mujoco_cell import CellOptions, draw_arm, paper_sine, run_engine
 
 from bsp_ros.cli import main
 from bsp_ros.core import model
-from bsp_ros.core.planning import handle_poses_world, trajectory_from_points
+from bsp_ros.core.planning import handle_poses_world, planned_trajectory_from_file, trajectory_from_points
 from bsp_ros.core.simulation import (
     GRAVITY_M_S2,
     CellSimulator,
@@ -178,6 +178,37 @@ def test_two_sines_per_joint_in_the_engine_identify_its_inertias(tmp_path) -> No
     for segment, quantities in estimate["segments"].items():
         q, true = quantities["static_moment_kgm"], truth["segments"][segment]["static_moment_kgm"]
         assert abs(q["value"] - true) < 3.0 * q["std"], segment
+
+
+def test_springs_the_fixed_model_does_not_fit_are_taken_up_by_the_elastic_family(tmp_path) -> None:
+    """A planned session of the engine's arm with joint springs (seed 303, 1 kHz): the default Coulomb model leaves
+    a residual at the wrist far above the sensor noise, so its elastic check never runs; given explicitly it is
+    invalid and its static moments are off. By default `bsp identify` then fits the elastic family the data choose
+    (--passive auto), says so, and is valid within 3 std of the engine's truth."""
+    plan = tmp_path / "plan.json"
+    assert main(["plan", "--shoulder", "0", "1.2", "--shoulder-range", "-70", "-10", "--elbow-range", "10", "100",
+                 "--wrist-range", "-20", "20", "--duration", "120", "--json", str(plan)]) in (0, 1)  # fmt: skip
+    options = CellOptions(trajectory=planned_trajectory_from_file(plan), duration_s=120.0, wrench_hz=1000.0, seed=303)
+    bag = write_bag(tmp_path / "springs", record(draw_arm(303, springs=True), options))
+    truth = json.loads((bag / "truth.json").read_text())
+
+    def identify(*extra: str) -> tuple[int, dict]:
+        out = tmp_path / f"e{len(extra)}.json"
+        code = main(["identify", str(bag), "--json", str(out), "--format", "none", *extra])
+        return code, json.loads(out.read_text())
+
+    def z(estimate: dict, segment: str) -> float:
+        q = estimate["segments"][segment]["static_moment_kgm"]
+        return abs(q["value"] - truth["segments"][segment]["static_moment_kgm"]) / q["std"]
+
+    code, fixed = identify("--passive", "coulomb")
+    assert code == 1 and "does not fit at the wrist" in fixed["quality"]["message"]
+    assert max(z(fixed, s) for s in fixed["segments"]) > 3.0  # the fixed model is wrong here: right to refuse it
+    code, chosen = identify()
+    assert code == 0, chosen["quality"]["message"]
+    assert "does not fit" in chosen["quality"]["warnings"][0] and "--passive auto" in chosen["quality"]["warnings"][0]
+    assert chosen["diagnostics"]["passive_model"] != "coulomb"
+    assert max(z(chosen, s) for s in chosen["segments"]) < 3.0
 
 
 def test_the_engine_follows_a_planned_trajectory_and_its_handle_is_the_planner_s_handle_pose() -> None:
