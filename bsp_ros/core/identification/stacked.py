@@ -64,6 +64,15 @@ class Problem:
             cache[joint] = np.where(self.rows[:, joint], self.torque[:, joint], 0.0)
         return cache[joint]
 
+    def joint_blocks(self, joint: int) -> list[tuple[slice, np.ndarray]]:
+        """``joint``'s column blocks (N, p_k), each with the slice of the parameters it holds: for the passes that
+        need not join them."""
+        out, start = [], 0
+        for block in self.blocks:
+            out.append((slice(start, start + block[joint].shape[1]), block[joint]))
+            start += block[joint].shape[1]
+        return out
+
     def residual(self, values: np.ndarray) -> np.ndarray:
         """(N, n) the torques less the model's at ``values`` on the used rows, 0 elsewhere (block by block: an
         augmented problem's columns are not joined for it)."""
@@ -72,10 +81,7 @@ class Problem:
             if len(self.blocks) == 1 or j in self.__dict__.get("_joint_rows", {}):
                 predicted = self.joint_rows(j)[0] @ values
             else:
-                predicted, start = 0.0, 0
-                for block in self.blocks:
-                    predicted = predicted + block[j] @ values[start : start + block[j].shape[1]]
-                    start += block[j].shape[1]
+                predicted = sum(x @ values[cols] for cols, x in self.joint_blocks(j))
             out[:, j] = self.joint_torque(j) - predicted
         return out
 
@@ -205,11 +211,9 @@ def joint_products(problem: Problem, weights: np.ndarray, b: np.ndarray) -> np.n
     """
     total = np.zeros((len(problem.names), *b.shape[2:]))
     for i in range(problem.torque.shape[1]):
-        weighted, start = weights[i] * b[:, i], 0
-        for block in problem.blocks:
-            end = start + block[i].shape[1]
-            total[start:end] += block[i].T @ weighted
-            start = end
+        weighted = weights[i] * b[:, i]
+        for cols, x in problem.joint_blocks(i):
+            total[cols] += x.T @ weighted
     return total
 
 
@@ -243,14 +247,11 @@ def joint_scores(problem: Problem, weighted_residual: np.ndarray, columns: np.nd
     out = np.zeros((count, len(problem.names) if columns is None else columns.shape[1]))
     for i in range(weighted_residual.shape[1]):
         r = weighted_residual[:, i, None]
-        start = 0  # block by block: an augmented problem's columns are never joined for this pass
-        for block in problem.blocks:
-            x, end = block[i], start + block[i].shape[1]
+        for cols, x in problem.joint_blocks(i):  # block by block: an augmented problem's columns are never joined
             if columns is None:
-                out[:, start:end] += x * r
+                out[:, cols] += x * r
             else:
-                out += (x @ columns[start:end]) * r
-            start = end
+                out += (x @ columns[cols]) * r
     return out
 
 

@@ -86,6 +86,13 @@ def failed_result(
     )
 
 
+def _family_result(data: IdentificationData, config: JointConfig) -> IdentificationResult:
+    """``data`` identified with the elastic family the data choose from (``--passive auto``) in place of ``config``'s
+    fixed passive model, and no further fallback."""
+    chosen = dataclasses.replace(config.passive, select=True)
+    return identify_joint(data, dataclasses.replace(config, passive=chosen, elastic_fallback=False))
+
+
 def _elastic_family_fit(
     data: IdentificationData, config: JointConfig, misfits: list[tuple[str, str]]
 ) -> IdentificationResult | None:
@@ -100,8 +107,7 @@ def _elastic_family_fit(
     """
     if "offset" in config.passive.terms:  # an elastic model already: nothing wider to choose from
         return None
-    chosen = dataclasses.replace(config.passive, select=True)
-    family = identify_joint(data, dataclasses.replace(config, passive=chosen, elastic_fallback=False))
+    family = _family_result(data, config)
     if not family.valid:
         return None
     where = "; ".join(f"at the {joint}, {how}" for joint, how in misfits)
@@ -361,8 +367,7 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         elastic = elastic_check(data, config, problem.rows, fit, widths, extras, with_placement, with_springs)
         if elastic and config.elastic_fallback:
             # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
-            chosen = dataclasses.replace(config.passive, select=True)
-            fallback = identify_joint(data, dataclasses.replace(config, passive=chosen, elastic_fallback=False))
+            fallback = _family_result(data, config)
             fallback.warnings = elastic + fallback.warnings
             return fallback
         warnings += elastic
