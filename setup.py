@@ -40,6 +40,7 @@ setup(
         "lz4>=4.0",
         "zstandard>=0.21",
         "matplotlib>=3.6",
+        "threadpoolctl>=3.1",
     ],
     extras_require={
         # Real Jazzy rclpy with Fast DDS and the message packages, from PyPI wheels (Linux x86_64, CPython

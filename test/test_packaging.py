@@ -32,6 +32,9 @@ DECLARED: dict[str, tuple[str | None, str | None]] = {
     "mcap_ros2": ("mcap-ros2-support", "mcap-ros2-support"),
     "lz4": ("lz4", "mcap-ros2-support"),
     "zstandard": ("zstandard", "mcap-ros2-support"),
+    # One BLAS thread per node (bsp_ros.live.runtime.threads); rosdep has no key for it, and a node without it
+    # keeps BLAS's default threads.
+    "threadpoolctl": ("threadpoolctl", None),
     # The optional PostgreSQL store (extra `postgres`); rosdep has no key for psycopg 3.
     "psycopg": ("psycopg", None),
     "rclpy": ("ros-jazzy-rclpy", "rclpy"),

@@ -8,6 +8,7 @@ from typing import Any
 from bsp_ros.errors import BspError
 from bsp_ros.live.runtime.parameters import Param, help_text, wants_help
 from bsp_ros.live.runtime.ros import log_error, make_executor, require_rclpy
+from bsp_ros.live.runtime.threads import single_threaded_blas
 
 __all__ = ["run_node"]
 
@@ -47,6 +48,7 @@ def run_node(
     except BspError as exc:
         log_error(name, exc)
         return exc.exit_code
+    single_threaded_blas()
     node = None
     executor = None
     try:

@@ -1,0 +1,31 @@
+"""A node's BLAS: one thread, since the cell's nodes share the machine's cores."""
+
+from __future__ import annotations
+
+import os
+
+__all__ = ["BLAS_THREAD_ENV", "single_threaded_blas"]
+
+# Any of these set by the user (or a launch file) is their choice of BLAS threads, kept as it is.
+BLAS_THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+
+
+def single_threaded_blas() -> bool:
+    """Limit the BLAS libraries loaded so far (numpy's, scipy's) to one thread; True if limited.
+
+    A node's products are small (a 30 s window, a few columns): OpenBLAS's second thread on a 2-core cell took
+    no time off them and, waiting busily for work, took a core from the simulator and the other nodes. The
+    windowed identifier's update max was 33.7-63.9 ms with it, 28.8-44.6 without, the mean 11.3-14.0 against
+    11.2-11.8 (three 60 s runs each; bench/README.md, twenty-fifth session).
+    Call after the node's modules are imported (a library loaded later keeps its default). Without threadpoolctl
+    (pip installs it with bsp_ros; rosdep has no key for it) BLAS keeps its default.
+    """
+    if any(os.environ.get(name) for name in BLAS_THREAD_ENV):
+        return False
+    try:  # here: only a node's process needs it; a cell from apt may lack it (rosdep has no key for it)
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        return False
+
+    threadpool_limits(limits=1, user_api="blas")
+    return True
