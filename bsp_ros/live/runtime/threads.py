@@ -13,10 +13,11 @@ BLAS_THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
 def single_threaded_blas() -> bool:
     """Limit the BLAS libraries loaded so far (numpy's, scipy's) to one thread; True if limited.
 
-    A node's products are small (a 30 s window, a few columns): OpenBLAS's second thread on a 2-core cell took
-    no time off them and, waiting busily for work, took a core from the simulator and the other nodes. The
-    windowed identifier's update max was 33.7-63.9 ms with it, 28.8-44.6 without, the mean 11.3-14.0 against
-    11.2-11.8 (three 60 s runs each; bench/README.md, twenty-fifth session).
+    A node's products are small (a 30 s window, a few columns): OpenBLAS's second thread on a 2-core cell takes
+    no time off them and, waiting busily for work, takes CPU from the simulator and the other nodes (the
+    identifier's threads other than its executor's: 2.8-2.9 % of a core against 3.8-4.4 %). The windowed update's
+    mean is the same either way; its max over five runs each (60 and 120 s) 28.8-44.6 ms against 33.7-63.9
+    (bench/README.md, twenty-second and twenty-fifth sessions).
     Call after the node's modules are imported (a library loaded later keeps its default). Without threadpoolctl
     (pip installs it with bsp_ros; rosdep has no key for it) BLAS keeps its default.
     """
