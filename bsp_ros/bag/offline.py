@@ -9,6 +9,8 @@ from typing import Any
 from bsp_ros.bag import TopicMap, read_session
 from bsp_ros.bag.fingerprint import content_sha256, recordings_sha256
 from bsp_ros.bag.reader import BagRead
+from bsp_ros.core.estimate import add_finding
+from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.pipeline import IdentifyOptions, identify_recordings, identify_session
 
 
@@ -50,35 +52,44 @@ def _attach_read(document: dict[str, Any], read: BagRead, recording: int | None 
     """What the read of one bag found (damage, the rotation's source, implausible samples) into ``document``:
     its ``bag`` section (appended to ``bags`` for ``recording`` k of several) and the warnings."""
     report = read.report
-    prefix = "" if recording is None else f"recording {recording + 1}: "
-    warnings = document["quality"]["warnings"]
-    if report.damaged:
-        warnings.insert(
-            0,
-            f"{prefix}bag damaged: {report.crc_errors} chunk CRC errors, truncated={report.truncated}, "
-            f"{report.lost_messages if report.lost_messages is not None else 'unknown'} messages lost; "
-            "identified from the intact part",
-        )
-    warnings[1:1] = [prefix + w for w in report.warnings if prefix + w not in warnings]
     quality = document["quality"]
+    warnings = quality["warnings"]
+
+    def in_recording(finding: Finding) -> Finding:
+        return finding if recording is None else finding.in_recording(recording + 1)
+
+    if report.damaged:
+        values = {
+            "crc_errors": report.crc_errors,
+            "truncated": bool(report.truncated),
+            "lost_messages": report.lost_messages,
+        }
+        add_finding(quality, in_recording(Finding(code=FindingCode.BAG_DAMAGED, values=values)), at=0)
+    at = 1
+    for text in report.warnings:
+        finding = in_recording(note(FindingCode.BAG_NOTE, text))
+        if finding.text not in warnings:
+            add_finding(quality, finding, at=at)
+            at += 1
     if "rotation" in quality:  # where the bag's sensor orientation came from (the pipeline knows only its shape)
         sources = [] if not recording else str(quality["rotation"].get("source", "")).split(", ")
         quality["rotation"]["source"] = ", ".join(dict.fromkeys([*sources, report.rotation_source]))
     if report.rotation_source == "assumed" and not quality["valid"]:
         frame = read.session.wrench.frame_id
-        quality["message"] = (
-            f"missing transform world -> {frame} (/tf_static lost or never recorded): the wrench was taken as "
-            f"given in world; {quality['message']}"
-        )
+        add_finding(quality, Finding(code=FindingCode.ROTATION_ASSUMED, values={"frame": frame}))
     # Samples implausible in themselves (not merely off the model's fit): the signature of bit damage.
     implausible = {k: v for k, v in quality.get("removed_samples", {}).items() if k.startswith(("wrench", "marker"))}
     if report.chunks_without_crc and implausible:
         # Without chunk CRCs, bit damage shows only as implausible values: say how many were removed.
-        total = sum(implausible.values())
-        warnings.insert(
-            0,
-            f"{prefix}possible undetected bag damage: chunks carry no CRC and {total} implausible samples were removed "
-            f"({', '.join(f'{k} {v}' for k, v in implausible.items())})",
+        add_finding(
+            quality,
+            in_recording(
+                Finding(
+                    code=FindingCode.BAG_POSSIBLY_DAMAGED,
+                    values={"implausible": tuple((k, v) for k, v in implausible.items())},
+                )
+            ),
+            at=0,
         )
     section = {
         "files": [Path(f).name for f in report.files],

@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-# METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
 from bsp_ros.cli.identify_options import (  # noqa: F401
     METHODS,
     add_identify_arguments,
@@ -17,6 +16,10 @@ from bsp_ros.cli.identify_options import (  # noqa: F401
     topics_from_args,
     trunk_tilts_rad,
 )
+
+# METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.quantities import passive_curves_of, quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
 
@@ -100,17 +103,16 @@ def tare_line(quality: dict[str, Any]) -> str:
     return f"tare: none applied{worst}{assumed} (bsp tare, then --tare FILE)"
 
 
-# Problems that mean the recording cannot be used at all (exit 3), as opposed to an estimate of doubtful quality.
-_DATA_PROBLEMS = ("too few samples", "too few usable samples", "no motion at the ")
+# Findings that mean the recording cannot be used at all (exit 3), as opposed to an estimate of doubtful quality.
+DATA_PROBLEMS = frozenset({FindingCode.TOO_FEW_SAMPLES, FindingCode.TOO_FEW_USABLE_SAMPLES, FindingCode.NO_MOTION})
 
 
 def data_problems(document: dict[str, Any]) -> list[str]:
-    """The parts of an invalid estimate's message that say the data are too few or do not move (exit 3)."""
+    """The texts of an invalid estimate's findings that say the data are too few or do not move (exit 3)."""
     quality = document["quality"]
     if quality["valid"]:
         return []
-    parts = [part.strip() for part in str(quality.get("message", "")).split(";")]
-    return [part for part in parts if part.startswith(_DATA_PROBLEMS)]
+    return [f.text for f in findings_of(quality) if f.code in DATA_PROBLEMS]
 
 
 def _cell(value: Any) -> str:

@@ -9,6 +9,7 @@ import numpy as np
 
 from bsp_ros import __version__
 from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
+from bsp_ros.core.findings import Finding, FindingCode, Severity, note
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
@@ -27,8 +28,8 @@ def quantity(value: float, std: float, source: str) -> dict[str, Any]:
     return {"value": clean(value), "std": clean(std), "source": source}
 
 
-def invalid_document(method: str, message: str) -> dict[str, Any]:
-    """An estimate document with no parameters, marked invalid with ``message`` (live inputs not usable)."""
+def invalid_document(method: str, finding: Finding) -> dict[str, Any]:
+    """An estimate document with no parameters, made invalid by ``finding`` (live inputs not usable)."""
     return {
         "schema": SCHEMA,
         "method": method,
@@ -40,10 +41,34 @@ def invalid_document(method: str, message: str) -> dict[str, Any]:
             "condition_number": None,
             "residual_rms_nm": {},
             "warnings": [],
-            "message": message,
+            "message": finding.text,
+            "findings": [finding.to_json()],
             "level": "invalid",
         },
     }
+
+
+def add_finding(quality: dict[str, Any], finding: Finding, at: int | None = None) -> None:
+    """Add ``finding`` to an estimate document's ``quality`` block, in place: to ``findings``, and its text to the
+    ``message`` (an invalid one, first) or to the ``warnings`` (at index ``at``, else last)."""
+    quality.setdefault("findings", []).append(finding.to_json())
+    if finding.severity is Severity.INVALID:
+        quality["message"] = finding.text + (f"; {quality['message']}" if not quality["valid"] else "")
+        quality["valid"], quality["level"] = False, "invalid"
+        return
+    warnings = quality.setdefault("warnings", [])
+    warnings.insert(len(warnings) if at is None else at, finding.text)
+
+
+def findings_of(quality: dict[str, Any]) -> list[Finding]:
+    """The findings of an estimate document's ``quality`` block (none for a document without them)."""
+    out = []
+    for block in quality.get("findings") or []:
+        try:
+            out.append(Finding.from_json(block))
+        except (KeyError, TypeError, ValueError):
+            continue  # a code from a newer version: its text stays in the message and warnings
+    return out
 
 
 def estimate_document(
@@ -117,6 +142,8 @@ def estimate_document(
         "residual_rms_nm": {k: float(v) for k, v in result.residual_rms_nm.items()},
         "warnings": list(result.warnings) + (list(posterior.notes) if posterior else []),
         "message": result.message,
+        "findings": [f.to_json() for f in result.findings]
+        + [note(FindingCode.PRIOR_NOTE, text).to_json() for text in (posterior.notes if posterior else [])],
         "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
         "removed_samples": removed_samples(result, data),
         # Where the handle wrench's point of action came from: it sets the lever arms (and their placement std).

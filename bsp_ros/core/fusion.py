@@ -14,6 +14,7 @@ from bsp_ros.core.anthropometry import (
     check_sex,
     segment_norm,
 )
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.model import static_moments_jacobian, static_moments_kgm
 from bsp_ros.core.streams import segments_for
 from bsp_ros.validation import check_finite_array
@@ -213,7 +214,7 @@ def implausible_static_moments(
     beta_kgm: np.ndarray,
     factor: float = PLAUSIBLE_FACTOR,
     beta_std_kgm: np.ndarray | None = None,
-) -> list[str]:
+) -> list[Finding]:
     """What is physically implausible in identified static moments, judged against the anthropometric prior.
 
     Parameters
@@ -239,8 +240,6 @@ def implausible_static_moments(
         segments_for(n), np.asarray(beta_kgm, dtype=np.float64), expected, 3.0 * std, strict=True
     ):
         if not (np.isfinite(value) and typical / factor <= value + margin and value - margin <= typical * factor):
-            problems.append(
-                f"implausible {segment} static moment {value:.3g} kgm: the anthropometric prior expects about "
-                f"{typical:.3g} kgm (plausible {typical / factor:.2g} to {typical * factor:.2g})"
-            )
+            values = {"value_kgm": float(value), "typical_kgm": float(typical), "factor": float(factor)}
+            problems.append(Finding(code=FindingCode.STATIC_MOMENT_IMPLAUSIBLE, where=segment, values=values))
     return problems

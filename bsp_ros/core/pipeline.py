@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
-from bsp_ros.core.estimate import estimate_document
+from bsp_ros.core.estimate import add_finding, estimate_document
+from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.fusion import (
     Posterior,
     SubjectInfo,
@@ -128,9 +129,7 @@ def identify_data(
         _, beta, beta_cov = result.block("static_moment_kgm")
         std = np.sqrt(np.clip(np.diag(beta_cov), 0.0, None))
         implausible = implausible_static_moments(options.subject, data.lengths_m, beta, beta_std_kgm=std)
-        if implausible:
-            result.valid = False
-            result.message = "; ".join(implausible)
+        result = result.with_findings(*implausible, first=True)
     return result
 
 
@@ -145,14 +144,22 @@ def refit_options(result: IdentificationResult, options: IdentifyOptions) -> Ide
 
 def fuse(result: IdentificationResult, data: IdentificationData, subject: SubjectInfo) -> Posterior | None:
     """Masses and COMs from the prior and the identified static moments; None if they are not usable."""
+    return fused(result, data, subject)[0]
+
+
+def fused(
+    result: IdentificationResult, data: IdentificationData, subject: SubjectInfo
+) -> tuple[Posterior | None, IdentificationResult]:
+    """:func:`fuse`, and ``result`` with a finding where the fusion failed (a numerical failure, not the data's)."""
     _, beta, beta_cov = result.block("static_moment_kgm")
     if not (np.isfinite(beta).all() and np.isfinite(beta_cov).all()):
-        return None
+        return None, result
     try:
-        return fuse_static_moments(anthropometric_prior(subject, data.lengths_m), data.lengths_m, beta, beta_cov)
+        prior = anthropometric_prior(subject, data.lengths_m)
+        return fuse_static_moments(prior, data.lengths_m, beta, beta_cov), result
     except (np.linalg.LinAlgError, ValueError) as error:
-        result.warnings.append(f"masses and COMs could not be fused with the prior: {error}")
-        return None
+        failed = Finding(code=FindingCode.FUSION_FAILED, values={"error": str(error)})
+        return None, result.with_findings(failed)
 
 
 def identify_session(
@@ -214,7 +221,7 @@ def identify_recordings(
     refit = refit_options(result, options)
     rotations = [np.asarray(s.rotation_world_from_sensor, dtype=np.float64) for s in prepared]
     rotation = rotations[0] if len(rotations) == 1 else np.concatenate([r.reshape(-1, 3, 3) for r in rotations])
-    offsets = account_for_tare(
+    result, offsets = account_for_tare(
         result,
         data,
         rotation,
@@ -223,7 +230,7 @@ def identify_recordings(
         lambda d: identify_data(d, refit, check_elastic=False),
         (options.zero_sd_n, options.zero_sd_nm),
     )
-    posterior = fuse(result, data, options.subject) if result.valid else None
+    posterior, result = fused(result, data, options.subject) if result.valid else (None, result)
     info = {
         "start_time_ns": int(data.t_ns[0]),
         "end_time_ns": int(data.t_ns[-1]),
@@ -253,10 +260,21 @@ def identify_recordings(
     quality = document["quality"]
     quality["timing"] = timings[0].quality() if len(timings) == 1 else {"recordings": [t.quality() for t in timings]}
     for timing in timings:
-        quality["warnings"].extend(w for w in timing.warnings if w not in quality["warnings"])
+        for text in timing.warnings:
+            if text not in quality["warnings"]:
+                add_finding(quality, note(FindingCode.TIMING_NOTE, text))
     quality["rotation"] = rotation_quality(rotation, "session")
     # --- end stream timing and sensor rotation ---
     return document
 
 
-__all__ = ["METHODS", "BspError", "IdentifyOptions", "fuse", "identify_data", "identify_recordings", "identify_session"]
+__all__ = [
+    "METHODS",
+    "BspError",
+    "IdentifyOptions",
+    "fuse",
+    "fused",
+    "identify_data",
+    "identify_recordings",
+    "identify_session",
+]

@@ -5,8 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-# Quality messages of `bsp_identifier` that mean its inputs stopped (see BspIdentifierNode.stale_reason).
-INPUT_STOPPED = ("stale input", "waiting for")
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode, Severity
+
+# Findings of `bsp_identifier` that mean its inputs stopped or have not started (BspIdentifierNode.stale_reason).
+INPUT_STOPPED = frozenset({FindingCode.INPUT_STALE, FindingCode.INPUT_WAITING, FindingCode.WAITING_FOR_CHECK})
 
 
 @dataclass
@@ -42,8 +45,9 @@ class SessionEndDetector:
         counts as silence, not as activity.
         """
         quality = document.get("quality") if isinstance(document, dict) else None
-        message = quality.get("message", "") if isinstance(quality, dict) else ""
-        if not (isinstance(message, str) and message.startswith(INPUT_STOPPED)):
+        found = findings_of(quality) if isinstance(quality, dict) else []
+        verdict = next((f for f in found if f.severity is Severity.INVALID), None)
+        if verdict is None or verdict.code not in INPUT_STOPPED:
             self.last_seen_ns = now_ns
         if isinstance(document, dict) and isinstance(quality := document.get("quality"), dict) and quality.get("valid"):
             if self.stored:

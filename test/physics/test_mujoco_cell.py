@@ -16,6 +16,8 @@ from mujoco_cell import CellOptions, draw_arm, paper_sine, run_engine
 
 from bsp_ros.cli import main
 from bsp_ros.core import model
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.planning import handle_poses_world, planned_trajectory_from_file, trajectory_from_points
 from bsp_ros.core.simulation import (
     GRAVITY_M_S2,
@@ -202,11 +204,14 @@ def test_springs_the_fixed_model_does_not_fit_are_taken_up_by_the_elastic_family
         return abs(q["value"] - truth["segments"][segment]["static_moment_kgm"]) / q["std"]
 
     code, fixed = identify("--passive", "coulomb")
-    assert code == 1 and "does not fit at the wrist" in fixed["quality"]["message"]
+    misfits = [f for f in findings_of(fixed["quality"]) if f.code is FindingCode.MODEL_MISFIT]
+    assert code == 1 and "wrist" in [f.where for f in misfits]
     assert max(z(fixed, s) for s in fixed["segments"]) > 3.0  # the fixed model is wrong here: right to refuse it
     code, chosen = identify()
     assert code == 0, chosen["quality"]["message"]
-    assert "does not fit" in chosen["quality"]["warnings"][0] and "--passive auto" in chosen["quality"]["warnings"][0]
+    (family,) = [f for f in findings_of(chosen["quality"]) if f.code is FindingCode.ELASTIC_FAMILY_CHOSEN]
+    assert family.values["model"] == "coulomb" and "wrist" in family.values["joints"]
+    assert chosen["quality"]["warnings"][0] == family.text
     assert chosen["diagnostics"]["passive_model"] != "coulomb"
     assert max(z(chosen, s) for s in chosen["segments"]) < 3.0
 

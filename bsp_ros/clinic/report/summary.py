@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -160,50 +159,14 @@ def error_source(analysis: Analysis) -> str:
     )
 
 
-_CAUSES = (
-    (r"too few (usable )?samples", "the recording was too short or mostly unusable", "record a full session again"),
-    (r"no motion at the (\w+)", "the {0} did not move", "check that the robot runs the planned movement, then repeat"),
-    (
-        r"moved in one direction only",
-        "a joint moved in one direction only",
-        "repeat with the full back-and-forth movement",
-    ),
-    (
-        r"poor excitation",
-        "the movement did not separate the arm's weight from joint resistance",
-        "repeat with the planned movement",
-    ),
-    (
-        r"implausible (\w+) static moment",
-        "the measured weight of the arm is implausible",
-        "check the force sensor (zero it) and the markers, then repeat",
-    ),
-    (
-        r"does not fit",
-        "the measurement does not match the arm model",
-        "check the force sensor and the marker placement, then repeat",
-    ),
-    (r"drifts", "the force sensor drifted during the session", "let the sensor warm up, zero it and repeat"),
-    (
-        r"elastic|an effect the model lacks",
-        "the arm resisted in a way the chosen model does not describe",
-        "repeat; if it recurs, ask for the stiffness model",
-    ),
-    (r"bound", "a part of the arm could not be measured", "repeat the session"),
-    (r"marker|occlu", "markers were lost or misplaced", "check the markers and repeat"),
-    (r"transform|tf", "the force sensor's orientation was not recorded", "check the recording setup and repeat"),
-)
-
-
 def invalid_cause(record: SessionRecord) -> tuple[str, str]:
-    """Why a session could not be evaluated and what to do, in plain words."""
-    text = " ".join([record.quality.message, *record.quality.warnings]).lower()
-    for pattern, cause, action in _CAUSES:
-        found = re.search(pattern, text)
-        if found:
-            joint = found.group(1) if found.groups() and found.group(1) else ""
-            return cause.format(PART_NAMES.get(joint, joint).lower()), action
-    return "the measurement could not be evaluated", "repeat the session"
+    """Why a session could not be evaluated and what to do, in plain words: the cause and action of the estimator's
+    first finding that made it invalid (a session stored without findings gives a general line)."""
+    verdict = record.quality.verdict()
+    if verdict is None or not verdict.spec.cause:
+        return "the measurement could not be evaluated", "repeat the session"
+    where = PART_NAMES.get(verdict.where, verdict.where).lower()
+    return verdict.spec.cause.format(where=where), verdict.spec.action or "repeat the session"
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from typing import Any
 from bsp_ros.clinic.store.curves import CURVE_KEY, passive_curves
 from bsp_ros.clinic.store.records import ARMS, GROUPS, SOURCES, ParamKey, Quality, Quantity, SessionRecord
 from bsp_ros.clinic.store.subject import check_subject_id
+from bsp_ros.core.estimate import findings_of
 from bsp_ros.errors import InputError, StoreError
 
 ESTIMATE_SCHEMA = "bsp_ros/core/estimate/1"
@@ -337,6 +338,9 @@ def _quality(block: Any) -> Quality:
         raise StoreError(f"quality.tare must be an object with 'applied': true or false, got {tare!r:.80}")
     tare_file = tare.get("file")
     message = block.get("message", "")
+    findings = block.get("findings", []) or []
+    if not isinstance(findings, list) or not all(isinstance(f, dict) for f in findings):
+        raise StoreError("quality.findings must be a list of objects")
     return Quality(
         message=message[:2000] if isinstance(message, str) else "",
         valid=valid,
@@ -346,6 +350,7 @@ def _quality(block: Any) -> Quality:
         condition_number=_finite_or_none(block.get("condition_number"), "quality.condition_number"),
         residual_rms_nm={k: v for k, v in rms.items() if v is not None},
         warnings=tuple(warnings),
+        findings=tuple(findings_of({"findings": findings})),
     )
 
 

@@ -6,6 +6,8 @@ import datetime as dt
 from dataclasses import dataclass, field
 from typing import Any
 
+from bsp_ros.core.findings import Finding, Severity
+
 SOURCES = ("data", "prior", "data+prior")
 GROUPS = ("segments", "joints")
 ARMS = ("left", "right")
@@ -47,6 +49,7 @@ class Quality:
     tare_applied : whether a tare (sensor offset and handle payload) was subtracted; False when not recorded.
     tare_file : the tare file's name, if one was applied.
     message : the estimator's one-line verdict (why it is not valid, if it is not).
+    findings : the estimator's typed findings (none for sessions stored before it gave them).
     """
 
     valid: bool
@@ -57,6 +60,11 @@ class Quality:
     tare_applied: bool = False
     tare_file: str | None = None
     message: str = ""
+    findings: tuple[Finding, ...] = ()
+
+    def verdict(self) -> Finding | None:
+        """The first finding that made the estimate invalid, or None."""
+        return next((f for f in self.findings if f.severity is Severity.INVALID), None)
 
 
 @dataclass(frozen=True)

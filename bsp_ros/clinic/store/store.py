@@ -26,6 +26,7 @@ from bsp_ros.clinic.store.records import (
 )
 from bsp_ros.clinic.store.schema import APPLICATION, SCHEMA_VERSION, migration_statements
 from bsp_ros.clinic.store.subject import check_subject_id
+from bsp_ros.core.estimate import findings_of
 from bsp_ros.errors import InputError, StoreError
 
 _MIGRATION_LOCK = 0x6273_7073  # PostgreSQL advisory lock key ("bsps") serialising migrations
@@ -136,6 +137,7 @@ class Store:
             "warnings": list(record.quality.warnings),
             "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
             "message": record.quality.message,
+            "findings": [f.to_json() for f in record.quality.findings],
         }
         duplicate = StoreError(
             f"duplicate session: subject {record.subject} already has a session at "
@@ -461,6 +463,7 @@ def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> Sessi
             tare_applied=tare.get("applied") is True,
             tare_file=tare.get("file") if isinstance(tare.get("file"), str) else None,
             message=str(extra.get("message", "")),
+            findings=tuple(findings_of(extra)),
         ),
         parameters=parameters,
         id=int(sid),

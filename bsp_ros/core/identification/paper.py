@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.stacked import bounded_least_squares
@@ -118,24 +119,27 @@ def identify_paper(data: IdentificationData, config: PaperConfig | None = None) 
     # Eq. 11's mean |residual| has the standard error of a mean of |r|.
     passive_std = [float(np.std(np.abs(r))) / np.sqrt(n_samples) for r in _residuals(data, values, n)]
     covariance = np.diag(np.concatenate((static_std, passive_std)) ** 2)
-    valid = n_samples >= 2 * len(names) and bool(np.isfinite(values).all())
-    warnings = [
-        *data.warnings,
-        "paper method: m2 and m3 are not identifiable from gravity; the bounded solver's split is arbitrary",
-        "paper method: std are classical per-joint errors, ignoring errors carried down the chain",
-    ]
+    problems = []
+    if n_samples < 2 * len(names):
+        problems.append(Finding(code=FindingCode.TOO_FEW_SAMPLES))
+    elif not np.isfinite(values).all():
+        problems.append(Finding(code=FindingCode.NON_FINITE))
+    findings = (
+        *problems,
+        *(note(FindingCode.DATA_NOTE, w) for w in data.warnings),
+        Finding(code=FindingCode.PAPER_SPLIT_ARBITRARY),
+        Finding(code=FindingCode.PAPER_STD_CLASSICAL),
+    )
     return IdentificationResult(
-        "paper",
-        names,
-        values,
-        covariance,
-        valid,
-        f"identified from {n_samples} samples (sequential, Eq. 6-11)" if valid else "too few samples",
-        warnings,
-        float("nan"),
-        residual_rms,
-        n_samples,
-        {"paper_pi": {k: float(v) for k, v in pi.items()}},
+        method="paper",
+        names=names,
+        values=values,
+        covariance=covariance,
+        findings=findings,
+        summary=f"identified from {n_samples} samples (sequential, Eq. 6-11)",
+        residual_rms_nm=residual_rms,
+        n_samples=n_samples,
+        diagnostics={"paper_pi": {k: float(v) for k, v in pi.items()}},
     )
 
 

@@ -11,6 +11,7 @@ import numpy.typing as npt
 
 from bsp_ros.core.anthropometry import GYRATION_REL_SD, segment_norm
 from bsp_ros.core.dynamics import base_parameters
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior
 from bsp_ros.core.streams import segments_for
 
@@ -104,7 +105,7 @@ def implausible_perpendicular_moments(
     prior: BasePrior,
     model_sd_kgm: np.ndarray | None = None,
     family_chosen: bool = False,
-) -> list[str]:
+) -> list[Finding]:
     """Why the identified perpendicular moments (kg m, (n,)) cannot be a real COM offset; empty when they can.
 
     Parameters
@@ -124,19 +125,10 @@ def implausible_perpendicular_moments(
         segments, values_kgm, prior.perpendicular_mean_kgm, prior.perpendicular_sd_kgm, spread, strict=True
     ):
         if sd > 0 and abs(value - mean) > PERPENDICULAR_MAX_PRIOR_SD * math.hypot(sd, extra):
-            problems.append(
-                f"the {name}'s centre of mass would sit {abs(value - mean) / sd:.1f} prior sd off its axis "
-                f"(perpendicular moment {value:.3g} kg m): "
-                + (
-                    "an angle-dependent moment that even the coupled, nonlinear passive terms (up to cubic) do not "
-                    "follow over these ranges looks like gravity on an off-axis mass: the arm's passive moments are "
-                    "more nonlinear than the model over this motion; narrower ranges, where the terms follow them, "
-                    "keep the estimate valid"
-                    if family_chosen
-                    else "an angle-dependent moment the model lacks (a two-joint muscle?) looks like gravity on an "
-                    "off-axis mass on this trajectory: --passive auto chooses the coupled and nonlinear passive "
-                    "terms, and a protocol that moves the shoulder and the elbow independently (bsp plan) separates "
-                    "them"
-                )
-            )
+            values = {
+                "prior_sd_off": float(abs(value - mean) / sd),
+                "value_kgm": float(value),
+                "family_chosen": bool(family_chosen),
+            }
+            problems.append(Finding(code=FindingCode.PERPENDICULAR_IMPLAUSIBLE, where=name, values=values))
     return problems

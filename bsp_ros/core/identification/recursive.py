@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg.lapack import dposv
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.passive import TERMS, PassiveModel
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.model import FloatVector, gravity_regressor_one
@@ -183,20 +184,18 @@ class RecursiveIdentifier:
         problems = []
         beta, beta_std = self.theta[: self.n], std[: self.n]
         if self.n_updates < 100:
-            problems.append(f"too few samples: {self.n_updates} updates")
+            problems.append(Finding(code=FindingCode.TOO_FEW_SAMPLES, values={"updates": self.n_updates}))
         elif (beta_std > self.config.max_relative_std * np.maximum(beta, 1e-6)).any():
-            problems.append("poor excitation: static moments not yet determined")
+            problems.append(Finding(code=FindingCode.NOT_YET_DETERMINED))
         if "coulomb" in self.config.passive.terms and (self._directions.min(axis=1) < 10).any():
-            problems.append("each joint must move both ways")
+            problems.append(Finding(code=FindingCode.ONE_DIRECTION))
         return IdentificationResult(
-            "recursive",
-            list(self.names),
-            self.theta.copy(),
-            covariance,
-            not problems,
-            "; ".join(problems) if problems else f"{self.n_updates} recursive updates",
-            [],
-            float("nan"),
-            {j: float(np.sqrt(v)) for j, v in zip(joints_for(self.n), self._noise_var, strict=True)},
-            self.n_updates,
+            method="recursive",
+            names=list(self.names),
+            values=self.theta.copy(),
+            covariance=covariance,
+            findings=tuple(problems),
+            summary=f"{self.n_updates} recursive updates",
+            residual_rms_nm={j: float(np.sqrt(v)) for j, v in zip(joints_for(self.n), self._noise_var, strict=True)},
+            n_samples=self.n_updates,
         )

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from bsp_ros.core.findings import Finding, Severity, invalid_texts, note_texts
 
 if TYPE_CHECKING:
     from bsp_ros.core.identification.joint.held import HeldModel
@@ -16,19 +19,20 @@ if TYPE_CHECKING:
 ParameterName = tuple[str, str]
 
 
-@dataclass
+@dataclass(frozen=True, kw_only=True)
 class IdentificationResult:
     """What an identification found, and how far to trust it.
 
+    Its verdict is its findings: ``valid``, ``weak``, ``message`` and ``warnings`` are derived from them.
+
     Attributes
     ----------
-    method : ``"joint"`` (ours) or ``"paper"`` (the method paper's sequential procedure).
+    method : ``"joint"`` (ours), ``"paper"`` (the method paper's sequential procedure) or ``"recursive"``.
     names : (p,) parameter names.
     values : (p,) estimates (SI units of each key).
     covariance : (p, p) covariance of the estimates.
-    valid : False when the data cannot support the estimate (poor excitation, too few samples, ...).
-    message : why not valid, or a one-line summary.
-    warnings : plain-language notes (confounding, bounds, removed samples).
+    findings : what the identification found, in order: an invalid one makes the estimate invalid.
+    summary : the one-line summary of a valid estimate (``identified from 4000 samples``).
     condition_number : of the column-scaled weighted regressor.
     residual_rms_nm : joint -> RMS of the torque residual (Nm).
     n_samples : samples (time instants) used.
@@ -43,9 +47,8 @@ class IdentificationResult:
     names: list[ParameterName]
     values: np.ndarray
     covariance: np.ndarray
-    valid: bool
-    message: str
-    warnings: list[str] = field(default_factory=list)
+    findings: tuple[Finding, ...] = ()
+    summary: str = ""
     condition_number: float = float("nan")
     residual_rms_nm: dict[str, float] = field(default_factory=dict)
     n_samples: int = 0
@@ -59,9 +62,29 @@ class IdentificationResult:
         return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
 
     @property
+    def valid(self) -> bool:
+        """Whether the data support the estimate: no finding makes it invalid."""
+        return not any(f.severity is Severity.INVALID for f in self.findings)
+
+    @property
     def weak(self) -> bool:
-        """Valid, but with a warning that qualifies it (confounding, large uncertainty)."""
-        return self.valid and any(w.startswith(("confounded", "uncertain", "elastic")) for w in self.warnings)
+        """Valid, but with a finding that qualifies it (confounding, large uncertainty, a data-chosen model)."""
+        return self.valid and any(f.severity is Severity.WEAK for f in self.findings)
+
+    @property
+    def message(self) -> str:
+        """Why the estimate is not valid (the invalid findings' texts), or its one-line summary."""
+        return "; ".join(invalid_texts(self.findings)) or self.summary
+
+    @property
+    def warnings(self) -> list[str]:
+        """The texts of the findings that qualify or annotate the estimate, in order."""
+        return note_texts(self.findings)
+
+    def with_findings(self, *findings: Finding, first: bool = False) -> IdentificationResult:
+        """A copy with ``findings`` added after (or, ``first``, before) its own."""
+        joined = (*findings, *self.findings) if first else (*self.findings, *findings)
+        return dataclasses.replace(self, findings=joined)
 
     def index(self, quantity: str, owner: str) -> int:
         """Position of a parameter in ``names``."""

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.model import contact_lever_sums
@@ -134,19 +135,20 @@ def response_sensitivity(
     return g_world @ _world_from_sensor_offsets(rotation_world_from_sensor)
 
 
-def add_tare_covariance(result: IdentificationResult, g: np.ndarray, wrench_covariance: np.ndarray) -> np.ndarray:
-    """Add the tare's uncertainty ``G Sigma G^T`` to ``result.covariance`` (in place); return the added term.
+def add_tare_covariance(
+    result: IdentificationResult, g: np.ndarray, wrench_covariance: np.ndarray
+) -> tuple[IdentificationResult, np.ndarray]:
+    """``result`` with the tare's uncertainty ``G Sigma G^T`` added to its covariance, and the added term.
 
     Parameters
     ----------
-    result : the identification (its covariance is updated).
+    result : the identification.
     g : (p, 6) from :func:`offset_sensitivity`.
     wrench_covariance : (6, 6) covariance of the wrench the tare subtracted (force N, moment Nm).
     """
     added = g @ np.asarray(wrench_covariance, dtype=np.float64) @ g.T
     added = 0.5 * (added + added.T)
-    result.covariance = result.covariance + added
-    return added
+    return dataclasses.replace(result, covariance=result.covariance + added), added
 
 
 def zero_covariance(zero_sd_n: float, zero_sd_nm: float) -> np.ndarray:
@@ -207,15 +209,15 @@ def account_for_tare(
     tare: Any,
     refit: Refit,
     zero_sd: tuple[float, float] | None = (ZERO_SD_N, ZERO_SD_NM),
-) -> dict[str, Any]:
-    """Sensitivity to a sensor offset, and the uncertainty of the wrench's zero added to ``result`` (in place).
+) -> tuple[IdentificationResult, dict[str, Any]]:
+    """Sensitivity to a sensor offset, and ``result`` with the uncertainty of the wrench's zero added.
 
     With a tare, its own uncertainty; without, the assumed ``zero_sd`` (force N, moment Nm; 1 SD per sensor
     axis; None or zeros: none). The sensitivity is the estimate's own ``torque_response`` where it has one.
 
     Parameters
     ----------
-    result : the identification of ``data`` (covariance and warnings updated when a tare was applied).
+    result : the identification of ``data``.
     data : the samples identified (already corrected by the tare, if any).
     rotation_world_from_sensor : (3, 3) the sensor's orientation in the session.
     frame_id : the wrench frame.
@@ -225,7 +227,8 @@ def account_for_tare(
 
     Returns
     -------
-    ``{"tare": {...}, "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
+    ``result`` with the zero's share in its covariance and a tare's notes in its findings; ``{"tare": {...},
+    "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
     """
     from bsp_ros.core.tare import recording_warnings, tare_warnings
 
@@ -238,11 +241,12 @@ def account_for_tare(
             g, _ = offset_sensitivity(data, rotation, refit)
     added = None
     if tare is not None:
-        result.warnings.extend(recording_warnings(tare) + tare_warnings(tare, rotation))
+        notes = recording_warnings(tare) + tare_warnings(tare, rotation)
+        result = result.with_findings(*(note(FindingCode.TARE_NOTE, w) for w in notes))
         if g is not None:
             h = tare.wrench_jacobian(rotation)
-            added = add_tare_covariance(result, g, h @ tare.covariance @ h.T)
+            result, added = add_tare_covariance(result, g, h @ tare.covariance @ h.T)
     elif g is not None and zero_sd is not None and max(zero_sd) > 0.0:
-        added = add_tare_covariance(result, g, zero_covariance(*zero_sd))
+        result, added = add_tare_covariance(result, g, zero_covariance(*zero_sd))
     source = (tare.file or tare.source or "tare") if tare is not None else None
-    return tare_quality(result, g, frame_id, source, added, zero_sd)
+    return result, tare_quality(result, g, frame_id, source, added, zero_sd)

@@ -13,6 +13,7 @@ import numpy as np
 
 from bsp_ros.core.contact_point import CONTACT_FROM_ROBOT
 from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.pipeline import IdentifyOptions
@@ -126,6 +127,10 @@ PARAMETERS = (
         hi=60.0,
     ),
 )
+
+
+# Invalid estimates that wait for a session to start (a warning on /diagnostics, not an error).
+WAITING = frozenset({FindingCode.INPUT_WAITING, FindingCode.WAITING_FOR_CHECK})
 
 
 class BspIdentifierNode(RosNode):
@@ -371,16 +376,16 @@ class BspIdentifierNode(RosNode):
         support = WrenchSample(sample.t_ns, self.world_frame, np.array([0.0, f_y, f_z]), np.array([m_x, 0.0, 0.0]))
         self.support_pub.publish(build_wrench_stamped(self.types, support))
 
-    def stale_reason(self) -> str | None:
+    def stale_reason(self) -> Finding | None:
         """Why no estimate can be made now (an input never came or fell silent for ``stale_s``), or None."""
         now = self.now_ns()
         for name, last in self.last_receive.items():
             if last is None:
-                return f"waiting for {name}"
+                return Finding(code=FindingCode.INPUT_WAITING, values={"what": name})
             if now - last > self.stale_s * 1e9:
-                return f"stale input: no {name} for {(now - last) / 1e9:.2f} s"
+                return Finding(code=FindingCode.INPUT_STALE, values={"what": name, "silent_s": (now - last) / 1e9})
         if self.lengths is None:
-            return "waiting for segment lengths"
+            return Finding(code=FindingCode.INPUT_WAITING, values={"what": "segment lengths"})
         return None
 
     def on_update(self) -> None:
@@ -393,7 +398,7 @@ class BspIdentifierNode(RosNode):
             counts["wrench_spikes"] = self.recursive.spike_gate.spikes  # taken, kept out of the filter
             self._update_recursive(reason, counts)
 
-    def _update_windowed(self, reason: str | None, counts: dict[str, int]) -> None:
+    def _update_windowed(self, reason: Finding | None, counts: dict[str, int]) -> None:
         """The newest window's estimate, published as soon as it is computed (stamped with the window's newest
         wrench); a quick verdict (stale, waiting) goes out instead when there is no window to identify."""
         # The sensor's orientation rides with the window: the zero's uncertainty (the tare's, or zero_sd_n's without
@@ -401,7 +406,8 @@ class BspIdentifierNode(RosNode):
         window = self.windowed.snapshot(orientation=self.wrench_rotation) if reason is None else None
         if window is None or isinstance(window, WindowEstimate):
             if window is None:
-                document, stamp = invalid_document(self.options.method, str(reason)), self.now_ns()
+                assert reason is not None  # a snapshot is taken only without one
+                document, stamp = invalid_document(self.options.method, reason), self.now_ns()
             else:
                 document, stamp = window.document, window.last_wrench_t_ns or self.now_ns()
             document["mode"] = self.mode
@@ -409,7 +415,7 @@ class BspIdentifierNode(RosNode):
             return
         self.publish(self._timed(lambda: jobs.window_estimate(self.windowed.estimator, window)), counts)
 
-    def _update_recursive(self, reason: str | None, counts: dict[str, int]) -> None:
+    def _update_recursive(self, reason: Finding | None, counts: dict[str, int]) -> None:
         """The filter's state, held to its window's checked estimate, fused with the prior and published (~2 ms;
         every 10 s the window's model checks, 20-40 ms)."""
         job: Callable[[], jobs.EstimateOutputs]
@@ -437,7 +443,7 @@ class BspIdentifierNode(RosNode):
             outputs = job()
         except Exception as exc:
             self.get_logger().error(f"estimate failed: {traceback.format_exc()}")
-            document = invalid_document(self.options.method, f"internal error: {exc!r}")
+            document = jobs.internal_error_document(self.options.method, exc)
             document["mode"] = self.mode
             outputs = jobs.outputs_from_document(document, self.now_ns(), with_passive=False)
         self.update_s.append((time.perf_counter() - started, time.thread_time() - started_cpu))
@@ -454,7 +460,8 @@ class BspIdentifierNode(RosNode):
             self.passive_pub.publish(outputs.cdr["passive"])
         self.published += 1
         self.support_estimate = outputs.support
-        level = OK if outputs.valid else (WARN if "waiting" in outputs.message else ERROR)
+        waiting = any(f.code in WAITING for f in outputs.findings)
+        level = OK if outputs.valid else (WARN if waiting else ERROR)
         timing = {}
         if self.update_s:  # how long an update takes: near the period, the node cannot keep up
             wall_cpu_ms = 1e3 * np.array(self.update_s)

@@ -9,10 +9,11 @@ from typing import Any
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
-from bsp_ros.core.estimate import estimate_document
+from bsp_ros.core.estimate import estimate_document, findings_of, invalid_document
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.pipeline import IdentifyOptions, fuse
+from bsp_ros.core.pipeline import IdentifyOptions, fused
 from bsp_ros.core.weight_support import estimate_from_document
 from bsp_ros.live.estimate_messages import (
     diagnostics_from_estimate,
@@ -46,8 +47,15 @@ class EstimateOutputs:
     valid: bool
     message: str
     cdr: dict[str, bytes]
+    # The estimate's findings (what the node's diagnostics level is decided on).
+    findings: tuple[Finding, ...] = ()
     # The static moments and their covariance for the weight support (bsp_ros.core.weight_support), or None.
     support: dict[str, Any] | None = None
+
+
+def internal_error_document(method: str, error: BaseException) -> dict[str, Any]:
+    """The invalid estimate published when computing one failed unexpectedly (the error is logged beside it)."""
+    return invalid_document(method, Finding(code=FindingCode.INTERNAL_ERROR, values={"error": repr(error)}))
 
 
 def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive: bool) -> EstimateOutputs:
@@ -75,7 +83,11 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
         passive = passive_moments_from_estimate(document, stamp_ns)
         if passive is not None and with_passive:
             out["passive"] = cdr(build_joint_state(types, passive), "sensor_msgs/msg/JointState")
-    return EstimateOutputs(valid, str(document["quality"]["message"]), out, estimate_from_document(document))
+    quality = document["quality"]
+    findings = tuple(findings_of(quality))
+    return EstimateOutputs(
+        valid, str(quality["message"]), out, findings=findings, support=estimate_from_document(document)
+    )
 
 
 def window_estimate(estimator: WindowEstimator, window: WindowSamples) -> EstimateOutputs:
@@ -115,6 +127,6 @@ def recursive_document(
         np.zeros(n),
         contact_from_robot=contact_from_robot,
     )
-    posterior = fuse(result, data, options.subject) if result.valid else None
+    posterior, result = fused(result, data, options.subject) if result.valid else (None, result)
     placement_sd_m = options.placement_sd_m(data)
     return estimate_document(result, data, posterior, options.subject, marker_placement_sd_m=placement_sd_m)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.result import IdentificationResult
 
 __all__ = ["FindingHold"]
@@ -11,10 +12,7 @@ __all__ = ["FindingHold"]
 # Checks in a row that must miss a finding before it is cleared.
 CLEAR_AFTER = 2
 
-HELD_NOTE = (
-    "held from the previous model check, which found it: one check that misses it does not clear it (the windows "
-    "the checks judge share most of their samples); the next check decides"
-)
+HELD_NOTE = Finding(code=FindingCode.HELD_FROM_CHECK)
 
 
 class FindingHold:
@@ -29,7 +27,7 @@ class FindingHold:
     """
 
     def __init__(self) -> None:
-        self.findings: tuple[str, ...] = ()
+        self.findings: tuple[Finding, ...] = ()
         self._missed = 0
 
     def reset(self) -> None:
@@ -52,8 +50,6 @@ class FindingHold:
             return result
         return dataclasses.replace(
             result,
-            valid=False,
-            message="; ".join(self.findings),
-            warnings=[*result.warnings, HELD_NOTE],
+            findings=(*self.findings, *result.findings, HELD_NOTE),
             held=dataclasses.replace(held, check_problems=self.findings),
         )

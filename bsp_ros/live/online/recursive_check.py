@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import Finding, FindingCode, Severity
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.live.online.windowed import WindowedIdentifier, WindowEstimate
 
@@ -42,23 +44,20 @@ def checked_result(result: IdentificationResult, window: dict[str, Any] | None) 
     if not result.valid:  # the filter's own verdict first (too few samples, a joint that moved one way)
         return result
     if window is None:
-        return dataclasses.replace(result, valid=False, message="waiting for the first model check of the window")
-    quality = window["quality"]
-    warnings = [*result.warnings, *(w for w in quality.get("warnings", []) if w not in result.warnings)]
-    if not quality["valid"]:
-        return dataclasses.replace(
-            result, valid=False, message=f"the window's model check: {quality['message']}", warnings=warnings
-        )
+        return result.with_findings(Finding(code=FindingCode.WAITING_FOR_CHECK))
+    # The window's findings: its verdict (why it is invalid) and its notes, each once.
+    found = [f for f in findings_of(window["quality"]) if f not in result.findings]
+    checked = result.with_findings(*found)
+    if any(f.severity is Severity.INVALID for f in found):
+        return checked
     variance = np.zeros(len(result.names))
     for k, (key, owner) in enumerate(result.names):
         entry = window.get(_GROUP.get(key, "joints"), {}).get(owner, {}).get(key)
         std = entry.get("std") if isinstance(entry, dict) else None
         if std is None or entry.get("value") is None:
-            return dataclasses.replace(
-                result, valid=False, message=f"the window's estimate has no std for {key} of the {owner}"
-            )
+            return checked.with_findings(Finding(code=FindingCode.WINDOW_WITHOUT_STD, where=owner, values={"key": key}))
         variance[k] = float(std) ** 2 + (float(result.values[k]) - float(entry["value"])) ** 2
-    return dataclasses.replace(result, covariance=result.covariance + np.diag(variance), warnings=warnings)
+    return dataclasses.replace(checked, covariance=result.covariance + np.diag(variance))
 
 
 class WindowCheck:

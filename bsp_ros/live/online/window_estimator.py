@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.estimate import estimate_document, invalid_document
+from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.rate import block_means, identification_rate_hz
@@ -16,7 +17,7 @@ from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import parameter_timing
 from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_angles, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
-from bsp_ros.core.pipeline import fuse, identify_data, refit_options
+from bsp_ros.core.pipeline import fused, identify_data, refit_options
 from bsp_ros.errors import BspError
 from bsp_ros.live.online.finding_hold import FindingHold
 from bsp_ros.live.online.window_samples import WindowConfig, WindowEstimate, WindowSamples
@@ -92,8 +93,8 @@ class WindowEstimator:
         self._settled = None
         self._hold.reset()
 
-    def _invalid(self, message: str, last_wrench_t_ns: int) -> WindowEstimate:
-        document = invalid_document(self.config.options.method, message)
+    def _invalid(self, detail: str, last_wrench_t_ns: int) -> WindowEstimate:
+        document = invalid_document(self.config.options.method, note(FindingCode.INPUT_UNUSABLE, detail))
         return WindowEstimate(document, False, last_wrench_t_ns)
 
     def _window_data(
@@ -208,7 +209,7 @@ class WindowEstimator:
                 # response to a torque change (no refits).
                 options = self.config.options
                 refit = refit_options(result, options)
-                quality = account_for_tare(
+                result, quality = account_for_tare(
                     result,
                     data,
                     window.rotation_world_from_sensor,
@@ -219,7 +220,7 @@ class WindowEstimator:
                 )
         except BspError as error:
             return self._invalid(str(error), last_wrench)
-        posterior = fuse(result, data, self.config.options.subject) if result.valid else None
+        posterior, result = fused(result, data, self.config.options.subject) if result.valid else (None, result)
         info = {
             "start_time_ns": int(data.t_ns[0]),
             "end_time_ns": int(data.t_ns[-1]),

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.online.buffer import TimedBuffer
 from bsp_ros.live.online.guard import StreamGuard, absurd_wrench_yzx
 from bsp_ros.live.online.window_estimator import WindowEstimator
@@ -74,8 +75,8 @@ class WindowedIdentifier:
         """Forget what the model checks chose: the next :meth:`estimate_window` runs them again."""
         self.estimator.restart_checks()
 
-    def _invalid(self, message: str) -> WindowEstimate:
-        document = invalid_document(self.config.options.method, message)
+    def _invalid(self, finding: Finding) -> WindowEstimate:
+        document = invalid_document(self.config.options.method, finding)
         return WindowEstimate(document, False, self.wrench.last_t_ns)
 
     def estimate(self, now_ns: int | None = None, orientation: tuple[str, np.ndarray] | None = None) -> WindowEstimate:
@@ -104,12 +105,13 @@ class WindowedIdentifier:
         """
         last_wrench, last_angle = self.wrench.last_t_ns, self.angles.last_t_ns
         if last_wrench is None or last_angle is None:
-            return self._invalid("waiting for wrench and joint states")
+            return self._invalid(Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench and joint states"}))
         stale_ns = self.config.stale_s * 1e9
         newest = max(last_wrench, last_angle) if now_ns is None else now_ns
         for name, last in (("wrench", last_wrench), ("joint states", last_angle)):
             if newest - last > stale_ns:
-                return self._invalid(f"stale input: newest {name} is {(newest - last) / 1e9:.2f} s old")
+                values = {"what": name, "silent_s": (newest - last) / 1e9, "newest": True}
+                return self._invalid(Finding(code=FindingCode.INPUT_STALE, values=values))
         start = last_wrench - int(self.config.window_s * 1e9)
         refused = {
             **{f"wrench_{k}": v for k, v in self.wrench_guard.refused.items()},

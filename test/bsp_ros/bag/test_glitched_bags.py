@@ -11,6 +11,8 @@ from bag_surgery import flip_bit_of_value, rewrite_without_crcs
 from bsp_ros.bag import write_session_bag
 from bsp_ros.bag.offline import identify_bag
 from bsp_ros.core import glitches
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.simulation import SimulatedSession, human_arm_cell, simulate_cell
 
 
@@ -40,7 +42,7 @@ def test_a_clean_bag_without_crcs_reports_no_implausible_samples(clean: dict[str
     assert clean["quality"]["valid"]
     assert clean["bag"]["chunks_without_crc"] >= 1
     assert clean["bag"]["implausible_samples_removed"] == {}
-    assert not any("undetected bag damage" in w for w in clean["quality"]["warnings"])
+    assert FindingCode.BAG_POSSIBLY_DAMAGED not in [f.code for f in findings_of(clean["quality"])]
 
 
 def test_a_bit_flip_in_a_marker_coordinate_is_removed_and_reported(
@@ -54,8 +56,9 @@ def test_a_bit_flip_in_a_marker_coordinate_is_removed_and_reported(
     within_3_std(clean, document)
     assert document["bag"]["implausible_samples_removed"] == {"marker_elbow": 1}
     assert document["bag"]["crc_errors"] == 0
-    warnings = document["quality"]["warnings"]
-    assert any("undetected bag damage" in w and "marker_elbow 1" in w for w in warnings), warnings
+    damage = [f for f in findings_of(document["quality"]) if f.code is FindingCode.BAG_POSSIBLY_DAMAGED]
+    assert [list(pair) for f in damage for pair in f.values["implausible"]] == [["marker_elbow", 1]]
+    assert document["quality"]["warnings"][0] == damage[0].text  # first: what to trust least
 
 
 @pytest.mark.parametrize(
@@ -86,5 +89,9 @@ def test_a_rotated_sensor_without_tf_static_is_invalid_and_names_the_transform(
     quality = document["quality"]
     assert document["bag"]["rotation_source"] == "assumed"
     assert not quality["valid"] and quality["level"] == "invalid"
+    assert FindingCode.ROTATION_ASSUMED in [f.code for f in findings_of(quality)]
     assert "missing transform world -> ft_sensor" in quality["message"]
     assert "does not fit" in quality["message"]
+    # The read's own note on the rotation, and the prior's notes, come as findings too.
+    codes = [f.code for f in findings_of(quality)]
+    assert FindingCode.BAG_NOTE in codes and FindingCode.TIMING_NOTE in codes

@@ -9,6 +9,8 @@ from pathlib import Path
 import pytest
 
 from bsp_ros.cli import main
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +52,7 @@ def test_the_paper_method_runs_from_the_cli(human_bag, tmp_path) -> None:
     code, estimate = _identify(human_bag, tmp_path / "p.json", "--method", "paper")
     assert code == 0
     assert estimate["method"] == "paper"
-    assert any("not identifiable" in w for w in estimate["quality"]["warnings"])
+    assert FindingCode.PAPER_SPLIT_ARBITRARY in [f.code for f in findings_of(estimate["quality"])]
 
 
 def test_a_missing_bag_has_its_own_exit_code(tmp_path) -> None:
@@ -79,6 +81,7 @@ def test_a_truncated_bag_is_identified_from_its_intact_part_and_says_so(human_ba
     assert estimate["bag"]["truncated"]
     assert estimate["bag"]["lost_messages"] > 0
     assert estimate["quality"]["warnings"][0].startswith("bag damaged")
+    assert FindingCode.BAG_DAMAGED in [f.code for f in findings_of(estimate["quality"])]
 
 
 @pytest.mark.parametrize(("option", "value"), [("--body-mass", "-70"), ("--height", "nan"), ("--passive", "foo")])
@@ -140,7 +143,8 @@ def test_a_rotated_sensor_bag_without_tf_static_is_invalid_naming_the_transform(
     code, estimate = _identify(lost, tmp_path / "l.json")
     assert code == 1
     assert not estimate["quality"]["valid"]
-    assert "missing transform world -> ft_sensor" in estimate["quality"]["message"]
+    assert findings_of(estimate["quality"])[-1].code is FindingCode.ROTATION_ASSUMED
+    assert estimate["quality"]["message"].startswith("missing transform world -> ft_sensor")
 
 
 def test_a_bit_flip_in_a_bag_without_crcs_is_counted_and_harmless(human_bag, tmp_path) -> None:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.fusion import SubjectInfo, anthropometric_prior, fuse_static_moments, implausible_static_moments
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.errors import InputError
@@ -86,8 +87,8 @@ def test_a_static_moment_is_implausible_only_beyond_its_std() -> None:
     lengths = np.array([0.30, 0.27])
     assert implausible_static_moments(subject, lengths, np.array([1.0, 0.3])) == []
     high = implausible_static_moments(subject, lengths, np.array([1.0, 3.0]))
-    assert len(high) == 1 and "forearm" in high[0]
-    limit = float(high[0].split(" to ")[1].rstrip(")"))  # the plausible upper limit the message names
+    assert [(f.code, f.where) for f in high] == [(FindingCode.STATIC_MOMENT_IMPLAUSIBLE, "forearm")]
+    limit = high[0].values["typical_kgm"] * high[0].values["factor"]  # the plausible upper limit
     wide, narrow = (3.0 - limit) / 2.9, (3.0 - limit) / 3.1  # 3 std reach into the range / stop short of it
     assert implausible_static_moments(subject, lengths, np.array([1.0, 3.0]), beta_std_kgm=np.array([0.0, wide])) == []
     assert implausible_static_moments(subject, lengths, np.array([1.0, 3.0]), beta_std_kgm=np.array([0.0, narrow]))

@@ -9,6 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.core.simulation import (
     SensorSpec,
     TareSpec,
@@ -225,3 +228,14 @@ def test_a_load_that_changes_during_the_tare_is_called_unsteady() -> None:
     (warning,) = recording_warnings(unsteady)
     assert unsteady.unsteadiness > 20 and "the load changed during the recording" in warning
     assert unsteady.force_offset_n[1][1] > 0.1  # and its std says how little it is worth
+
+
+def test_a_tare_s_note_reaches_the_estimate_as_a_finding() -> None:
+    """A tare taken in another orientation than the session's (here: a session without its sensor rotation)."""
+    tare, _ = _tare()
+    session = simulate_cell(human_arm_cell(sensor=SENSOR, seed=0, duration_s=40.0)).session
+    unrotated = dataclasses.replace(session, rotation_world_from_sensor=np.eye(3))
+    document = identify_session(unrotated, IdentifyOptions(tare=tare))
+    notes = [f for f in findings_of(document["quality"]) if f.code is FindingCode.TARE_NOTE]
+    assert any("lost or wrong world -> sensor transform" in f.text for f in notes), document["quality"]["warnings"]
+    assert all(f.text in document["quality"]["warnings"] for f in notes)

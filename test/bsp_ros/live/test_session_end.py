@@ -7,6 +7,8 @@ from typing import Any
 
 import pytest
 
+from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.session_end import SessionEndDetector
 
 S = 1_000_000_000  # ns per s
@@ -23,13 +25,17 @@ def _valid(value: float, start_ns: int = T0, end_ns: int = T0 + 30 * S) -> dict[
     }
 
 
-def _invalid(message: str = "stale input: no wrench for 0.50 s") -> dict[str, Any]:
-    return {
-        "schema": "bsp_ros/core/estimate/1",
-        "segments": {},
-        "joints": {},
-        "quality": {"valid": False, "message": message},
-    }
+WAITING = Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench"})
+STALE = Finding(code=FindingCode.INPUT_STALE, values={"what": "wrench", "silent_s": 0.5})
+POOR = Finding(code=FindingCode.NOT_YET_DETERMINED)
+NOT_IDENTIFIED = Finding(code=FindingCode.NOT_IDENTIFIABLE, values={"condition": 2e9})
+ONE_WAY_ELBOW = Finding(code=FindingCode.ONE_DIRECTION, where="elbow", values={"other_percent": 0.0})
+ONE_WAY_WRIST = Finding(code=FindingCode.ONE_DIRECTION, where="wrist", values={"other_percent": 0.0})
+
+
+def _invalid(finding: Finding = STALE) -> dict[str, Any]:
+    """An invalid estimate as the identifier publishes it (``STALE``: its inputs stopped)."""
+    return invalid_document("joint", finding)
 
 
 def _feed(detector: SessionEndDetector, documents: list[Any], t_ns: int, period_ns: int = S // 5) -> int:
@@ -49,11 +55,11 @@ def test_defaults() -> None:
 def test_silence_hands_out_the_last_valid_estimate_once_after_the_timeout() -> None:
     detector = SessionEndDetector(end_timeout_s=1.0)
     documents = [
-        _invalid("waiting for wrench"),
+        _invalid(WAITING),
         _valid(1.0),
-        _invalid("poor excitation"),
+        _invalid(POOR),
         _valid(2.0),
-        _invalid("the elbow moved in one direction only"),
+        _invalid(ONE_WAY_ELBOW),
     ]
     last = _feed(detector, documents, T0)
     assert detector.due(last) is None
@@ -69,7 +75,7 @@ def test_the_timeout_counts_from_the_last_estimate_built_on_live_input() -> None
     detector = SessionEndDetector(end_timeout_s=1.0)
     detector.on_estimate(_valid(1.0), T0)
     # 4 s of invalid estimates on live but poor data (the arm held still): the session goes on.
-    last = _feed(detector, [_invalid("poor excitation: condition number 2e4 > 1e4")] * 20, T0 + S // 5)
+    last = _feed(detector, [_invalid(NOT_IDENTIFIED)] * 20, T0 + S // 5)
     for t in range(T0, last + 1, S // 10):
         assert detector.due(t) is None
     assert detector.due(last + S + 1) == _valid(1.0)
@@ -92,7 +98,7 @@ def test_an_end_request_hands_it_out_at_once() -> None:
 
 def test_invalid_estimates_alone_are_never_stored() -> None:
     detector = SessionEndDetector(end_timeout_s=1.0)
-    last = _feed(detector, [_invalid("waiting for wrench"), _invalid("poor excitation"), _invalid()], T0)
+    last = _feed(detector, [_invalid(WAITING), _invalid(POOR), _invalid()], T0)
     assert detector.due(last + 10 * S) is None
     assert detector.due(last + 10 * S, end_requested=True) is None
 

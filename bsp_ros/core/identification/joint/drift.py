@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_P, MODEL_CHECK_SHIFT_SD, shift_bound_sd, term_test
@@ -20,7 +21,7 @@ class Drift:
     """A drift the data show: what to tell the user, and the fit that models it (the problem's parameters only;
     the drift rates' uncertainty and the unknown offset level's effect in its covariance)."""
 
-    note: str
+    note: Finding
     fit: Fit
     # The wider fit's own covariance of the problem's parameters (without the unknown level's share).
     own_covariance: np.ndarray
@@ -122,13 +123,15 @@ def drift_check(
         shift, worst = float(offset_shift.max()), int(np.argmax(offset_shift))
     force_rates = np.hypot(rate[:, 0], rate[:, 1])
     k = int(np.argmax(force_rates))
-    where = f" in recording {k + 1}" if len(groups) > 1 else " during the session"
     covariance = wide.covariance[:p, :p] + np.outer(delta, delta)
     modelled = dataclasses.replace(wide, values=wide.values[:p], covariance=covariance, design=wide.design[:p, :p])
-    note = (
-        f"the wrench drifts{where} (an F/T sensor offset changing by about {1e3 * force_rates[k]:.2g} mN/s, "
-        f"{force_rates[k] * spans_s[k]:.2g} N over {spans_s[k]:.0f} s; it would move the {problem.names[worst][1]} "
-        f"static moment by {shift:.1f} std): modelled as a linear drift, with what its unknown level leaves open in "
-        "the std; let the sensor warm up and re-tare for a precise session"
-    )
+    values = {
+        "drift_recording": k + 1 if len(groups) > 1 else 0,
+        "rate_mn_s": float(1e3 * force_rates[k]),
+        "amount_n": float(force_rates[k] * spans_s[k]),
+        "span_s": float(spans_s[k]),
+        "segment": problem.names[worst][1],
+        "shift_sd": float(shift),
+    }
+    note = Finding(code=FindingCode.DRIFT_MODELLED, values=values)
     return Drift(note, modelled, wide.covariance[:p, :p])

@@ -6,6 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.chi2 import chi2_sf
 from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
@@ -48,7 +49,7 @@ def elastic_check(
     extras: Extras | None = None,
     covariance_of: Callable[[Problem, Fit], np.ndarray] | None = None,
     wider_problem: Problem | None = None,
-) -> list[str]:
+) -> list[Finding]:
     """Warn when a linear spring (offset, stiffness) the model lacks is supported by the data and moves the static
     moments: the fixed model would then be valid and wrong (with ``config.elastic_fallback`` the warning says the
     estimate uses the elastic terms the data choose instead). ``covariance_of`` gives the wider fit's covariance
@@ -94,19 +95,14 @@ def elastic_check(
         if chi2_sf(statistic, len(picks)) < ELASTIC_P:
             worst = int(np.argmax(shift_sd))
             corr = float(np.max(np.abs(correlation[np.ix_(picks, range(n))])))
-            notes.append(
-                f"elastic passive moment at the {joint}: {kinds} terms the model lacks are supported by "
-                f"the data (chi2 {statistic:.0f}) and confounded with gravity (|corr| {corr:.2f}); modelling them "
-                f"moves the {problem.names[worst][1]} static moment by {100 * change[worst]:.1f}% "
-                f"({shift_sd[worst]:.1f} std): "
-                + (
-                    "the estimate uses the elastic terms the data choose (--passive auto), and what that choice "
-                    "leaves open is in its std"
-                    if config.elastic_fallback
-                    else "the static moments may be biased (try --passive auto, which chooses the elastic terms and "
-                    "puts what the choice leaves open in the std"
-                )
-                + "; an F/T sensor offset no tare removed looks like an elastic offset: apply one with --tare"
-                + ("" if config.elastic_fallback else ")")
-            )
+            values = {
+                "kinds": kinds,
+                "chi2": statistic,
+                "corr": corr,
+                "segment": problem.names[worst][1],
+                "change_percent": float(100 * change[worst]),
+                "shift_sd": float(shift_sd[worst]),
+                "fallback": bool(config.elastic_fallback),
+            }
+            notes.append(Finding(code=FindingCode.ELASTIC_TERM, where=joint, values=values))
     return notes

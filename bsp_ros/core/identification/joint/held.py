@@ -6,12 +6,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding
 from bsp_ros.core.identification.joint.curves import CurveBasis
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import ParameterName
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class HeldModel:
     """The choices and verdict of one identification with its model checks (:func:`identify_joint`).
 
@@ -34,7 +35,7 @@ class HeldModel:
         judges its own samples' instead.
     check_problems : what the model checks found the model lacks (an elastic term, Stribeck-like friction, an
         implausible off-axis moment): the verdict a refit holds.
-    warnings : the estimate's notes on its model.
+    warnings : the estimate's notes on its model (weak and note findings).
     diagnostics : the estimate's diagnostics.
     """
 
@@ -45,7 +46,7 @@ class HeldModel:
     placement_sd_m: np.ndarray
     systematic_covariance: np.ndarray
     curves: CurveBasis | None
-    data_problems: tuple[str, ...]
-    check_problems: tuple[str, ...]
-    warnings: tuple[str, ...]
+    data_problems: tuple[Finding, ...]
+    check_problems: tuple[Finding, ...]
+    warnings: tuple[Finding, ...]
     diagnostics: dict[str, object]

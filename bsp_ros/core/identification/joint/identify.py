@@ -7,6 +7,7 @@ import functools
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.elastic import ElasticReference
@@ -45,12 +46,9 @@ from bsp_ros.core.streams import joints_for
 UNIDENTIFIABLE_CONDITION = 1e8
 
 
-def unidentifiable_problem(condition: float) -> str:
+def unidentifiable_problem(condition: float) -> Finding:
     """The problem of a fit whose column-scaled condition number is above :data:`UNIDENTIFIABLE_CONDITION`."""
-    return (
-        f"not identifiable: condition number {condition:.3g} (the motion cannot tell some parameters apart; move "
-        "each joint over a wider range: bsp plan)"
-    )
+    return Finding(code=FindingCode.NOT_IDENTIFIABLE, values={"condition": float(condition)})
 
 
 def prior_share(problem: Problem, covariance: np.ndarray) -> dict[str, float]:
@@ -70,18 +68,16 @@ def _unbounded_static_moments(problem: Problem) -> np.ndarray:
 
 
 def failed_result(
-    data: IdentificationData, names: list[ParameterName], problems: list[str], warnings: list[str]
+    data: IdentificationData, names: list[ParameterName], problems: list[Finding], warnings: list[Finding]
 ) -> IdentificationResult:
-    """An invalid result: NaN values and covariance, the problems as its message."""
+    """An invalid result: NaN values and covariance, with ``problems`` (invalid findings) and ``warnings``."""
     p = len(names)
     return IdentificationResult(
-        "joint",
-        names,
-        np.full(p, np.nan),
-        np.full((p, p), np.nan),
-        False,
-        "; ".join(problems),
-        warnings,
+        method="joint",
+        names=names,
+        values=np.full(p, np.nan),
+        covariance=np.full((p, p), np.nan),
+        findings=(*problems, *warnings),
         n_samples=int(data.t_ns.size),
     )
 
@@ -94,9 +90,9 @@ def _family_result(data: IdentificationData, config: JointConfig) -> Identificat
 
 
 def _elastic_family_fit(
-    data: IdentificationData, config: JointConfig, misfits: list[tuple[str, str]]
+    data: IdentificationData, config: JointConfig, misfits: list[Finding]
 ) -> IdentificationResult | None:
-    """Where the fixed passive model does not fit (``misfits``: per joint, how; nothing else is wrong), the elastic
+    """Where the fixed passive model does not fit (``misfits``: per joint; nothing else is wrong), the elastic
     family the data choose from (``--passive auto``), if it fits and is valid; None otherwise.
 
     A spring the fixed model lacks leaves a residual far above the sensor noise: the elastic check, which would
@@ -110,13 +106,12 @@ def _elastic_family_fit(
     family = _family_result(data, config)
     if not family.valid:
         return None
-    where = "; ".join(f"at the {joint}, {how}" for joint, how in misfits)
-    note = (
-        f"the {config.passive.label} passive model does not fit ({where}); with the elastic terms the data choose "
-        "(--passive auto) the model fits: the estimate uses them, and what that choice leaves open is in its std"
-    )
-    family.warnings = [note, *family.warnings]
-    return family
+    values = {
+        "model": config.passive.label,
+        "joints": tuple(f.where for f in misfits),
+        **{key: tuple(float(f.values[key]) for f in misfits) for key in ("rms_nm", "ratio", "noise_nm")},
+    }
+    return family.with_findings(Finding(code=FindingCode.ELASTIC_FAMILY_CHOSEN, values=values), first=True)
 
 
 def identify_joint(data: IdentificationData, config: JointConfig | None = None) -> IdentificationResult:
@@ -144,10 +139,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     placement_sd_m = config.placement_sd_m(n, data.contact_from_robot)
     samples = usable_samples(data, config)
     rows, spikes, extras, problem = samples.rows, samples.spikes, samples.extras, samples.problem
-    problems, warnings = samples.problems, samples.warnings
+    problems, warnings = list(samples.problems), list(samples.warnings)
     # The notes so far are the samples'; those added below are the model's (held between a live window's checks),
     # but for the samples' own notes among them (``sample_notes``).
-    data_notes, sample_notes = len(warnings), []
+    data_notes: int = len(warnings)
+    sample_notes: list[Finding] = []
     if samples.too_few is not None:
         return failed_result(data, problem.names, problems or [samples.too_few], warnings)
     usable = samples.usable
@@ -156,8 +152,9 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             share = rows[:, j].sum() / max(usable, 1)
             if share < config.min_row_share:
                 problems.append(
-                    f"most samples of the {joint} were dropped: only {100 * share:.0f}% move clearly enough to "
-                    "tell the direction of motion"
+                    Finding(
+                        code=FindingCode.DIRECTION_UNCLEAR, where=joint, values={"share_percent": float(100 * share)}
+                    )
                 )
     fit = fit_problem(problem)
     widths, spread, span = transition_widths(problem, fit, data, config)
@@ -169,16 +166,20 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 continue
             beyond = float((np.abs(data.velocity_rad_s[rows[:, j], j]) > 3 * widths[j]).sum()) / max(usable, 1)
             warnings.append(
-                f"friction at the {joint} changes direction smoothly (tanh width about {1e3 * widths[j]:.2g} mrad/s, "
-                f"modelled); {100 * beyond:.0f}% of samples move faster than 3 widths"
+                Finding(
+                    code=FindingCode.FRICTION_SMOOTH,
+                    where=joint,
+                    values={"width_mrad_s": float(1e3 * widths[j]), "beyond_percent": 100 * beyond},
+                )
             )
             if beyond < config.min_row_share:
                 # Weakly identified, not wrong: every width from the sign step to the chosen one stays plausible,
                 # and the amplitudes over them join its std.
                 spread[j] = max(spread[j], span[j])
                 warnings.append(
-                    f"the {joint} hardly leaves its friction transition ({100 * beyond:.0f}% of samples beyond 3 "
-                    f"widths): its Coulomb amplitude is weakly identified, and its std says by how much"
+                    Finding(
+                        code=FindingCode.FRICTION_TRANSITION_WEAK, where=joint, values={"beyond_percent": 100 * beyond}
+                    )
                 )
     selection = None
     fitted_widths = widths if widths.any() else None
@@ -212,23 +213,22 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         std = np.sqrt(np.clip(np.maximum(np.diag(refit.covariance), np.diag(fit.covariance)), 0.0, None))
         shift = np.abs(refit.values - fit.values) / np.maximum(std, 1e-300)
         near_gap = int((far & near_gaps(data.t_ns, GAP_EDGE_S)).sum())
-        where = (
-            f"; {near_gap} of them within {GAP_EDGE_S:g} s of a gap in the joint angles (marker dropouts: the "
-            "direction of motion, hence the sign of friction, is least certain there)"
-            if near_gap
-            else ""
-        )
         sample_notes.append(
-            f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over "
-            f"{config.outlier_sd:g} robust sd){where}"
+            Finding(
+                code=FindingCode.FIT_OUTLIERS_REMOVED,
+                values={"n": n_far, "outlier_sd": config.outlier_sd, "near_gap": near_gap, "gap_edge_s": GAP_EDGE_S},
+            )
         )
         warnings.append(sample_notes[-1])
         if shift.max() > config.max_outlier_shift:
             worst = int(np.argmax(shift))
             key, owner = problem.names[worst]
             problems.append(
-                f"the fit hangs on a few samples: removing {n_far} far off it moves {key} at the {owner} by "
-                f"{shift[worst]:.1f} std"
+                Finding(
+                    code=FindingCode.HANGS_ON_FEW_SAMPLES,
+                    where=owner,
+                    values={"n_far": n_far, "key": key, "shift_sd": float(shift[worst])},
+                )
             )
         problem, fit, n_removed = kept, refit, n_far
     # The fit's own covariance: what is added to it below (friction shape, placement, model choice) must survive
@@ -261,9 +261,11 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         fit = dataclasses.replace(fit, covariance=fit.covariance + model_spread)
         for index in np.flatnonzero(model_shift[:n] > 0.5).tolist():
             warnings.append(
-                f"the {problem.names[index][1]} static moment depends on the passive model the data cannot choose "
-                f"between or on the passive curves' assumed shape (they differ by up to {model_shift[index]:.1f} of "
-                "its data std): that spread is in its std"
+                Finding(
+                    code=FindingCode.MODEL_CHOICE_SPREAD,
+                    where=problem.names[index][1],
+                    values={"shift_sd": float(model_shift[index])},
+                )
             )
     drift = None
     # A drift's columns, computed once where the drift check and the placement check both need them.
@@ -285,9 +287,10 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     noise, misfit = misfit_against_noise(fit, judged_residual)
     # Per joint that does not fit: how (its residual RMS against the sensor noise).
     misfits = [
-        (
-            joint,
-            f"residual RMS {misfit[j] * noise[j]:.3g} Nm is {misfit[j]:.1f} times the sensor noise ({noise[j]:.2g} Nm)",
+        Finding(
+            code=FindingCode.MODEL_MISFIT,
+            where=joint,
+            values={"rms_nm": float(misfit[j] * noise[j]), "ratio": float(misfit[j]), "noise_nm": float(noise[j])},
         )
         for j, joint in enumerate(joints)
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM
@@ -296,16 +299,17 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         family = _elastic_family_fit(data, config, misfits)
         if family is not None:
             return family
-    for joint, how in misfits:
-        problems.append(
-            f"the model does not fit at the {joint}: {how} the data shows (a missing or wrong sensor transform, an "
-            "unmodelled load or passive moment?)"
-        )
+    problems += misfits
     if fit.condition > UNIDENTIFIABLE_CONDITION:
         problems.append(unidentifiable_problem(fit.condition))
     elif fit.condition > config.max_condition:
         # An honest std is large here, not wrong: the estimate stays, its std says what the motion leaves open.
-        warnings.append(f"poorly excited: condition number {fit.condition:.3g} > {config.max_condition:g}")
+        warnings.append(
+            Finding(
+                code=FindingCode.POORLY_EXCITED,
+                values={"condition": float(fit.condition), "max_condition": config.max_condition},
+            )
+        )
     correlation = correlation_from_covariance(fit.covariance)
     all_std = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
     max_corr_with_gravity = {}
@@ -319,10 +323,16 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             rel_std = all_std[partner] / value if value > 0 else np.inf
             if corr > config.confounded_corr and rel_std > config.confounded_rel_std:
                 warnings.append(
-                    f"confounded: {key} at the {owner} is correlated with gravity (|corr| {corr:.3f}); the "
-                    f"{problem.names[partner][1]} static moment is uncertain by {rel_std:.1%} "
-                    "(wider ranges separate them, best a second recording with the trunk tilted: bsp plan "
-                    "--trunk-tilt-deg 0 25, then bsp identify UPRIGHT TILTED --trunk-tilt-deg 0 25)"
+                    Finding(
+                        code=FindingCode.CONFOUNDED,
+                        where=owner,
+                        values={
+                            "key": key,
+                            "corr": corr,
+                            "segment": problem.names[partner][1],
+                            "rel_std": float(rel_std),
+                        },
+                    )
                 )
         std = all_std[i]
         at_bound = np.isfinite(problem.lower[i]) and fit.values[i] <= problem.lower[i] + 1e-12
@@ -331,25 +341,36 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
                 unbounded = _unbounded_static_moments(problem)
             own = unbounded[i]
             if own + 3.0 * std < 0.0:
-                problems.append(f"the {owner} static moment sits at its bound 0: the data do not support it")
+                problems.append(Finding(code=FindingCode.STATIC_MOMENT_AT_BOUND, where=owner))
             else:
                 # The data's own (unbounded) estimate lies within 3 std of 0: the motion leaves this static moment
                 # open (one posture, the elastic family), which its std says; no evidence of a fault.
                 warnings.append(
-                    f"the {owner} static moment sits at its bound 0, within 3 std of the data's own estimate "
-                    f"({own:.3g} kgm): the motion does not determine it"
+                    Finding(code=FindingCode.STATIC_MOMENT_OPEN, where=owner, values={"own_kgm": float(own)})
                 )
         elif at_bound and std > 0:
-            warnings.append(f"{key} at the {owner} sits at its bound {problem.lower[i]:g}")
+            warnings.append(
+                Finding(
+                    code=FindingCode.PARAMETER_AT_BOUND,
+                    where=owner,
+                    values={"key": key, "lower": float(problem.lower[i])},
+                )
+            )
         if i < n and fit.values[i] > 0 and std > 0.5 * fit.values[i]:
-            warnings.append(f"uncertain: {owner} static moment {fit.values[i]:.4g} +- {std:.2g} kgm")
+            warnings.append(
+                Finding(
+                    code=FindingCode.UNCERTAIN_STATIC_MOMENT,
+                    where=owner,
+                    values={"value_kgm": float(fit.values[i]), "std_kgm": float(std)},
+                )
+            )
     data_problems = len(problems)  # those below come from the model checks (held between a live window's checks)
     if config.check_elastic and not problems:
         stribeck = stribeck_check(data, problem, fit, config, widths)
         unmodelled = [f.note for f in stribeck if f.biases_estimate]
         warnings += unmodelled + [f.note for f in stribeck if not f.biases_estimate]
         if unmodelled:
-            problems.append("the data show an effect the model lacks that biases the estimate (see warnings)")
+            problems.append(Finding(code=FindingCode.UNMODELLED_EFFECT))
         covariance = fit.covariance.copy()
         for finding in (f for f in stribeck if not f.biases_estimate):
             # Which friction law holds at low speed is open; the amplitudes of both join the Coulomb variance.
@@ -367,15 +388,10 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
         elastic = elastic_check(data, config, problem.rows, fit, widths, extras, with_placement, with_springs)
         if elastic and config.elastic_fallback:
             # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
-            fallback = _family_result(data, config)
-            fallback.warnings = elastic + fallback.warnings
-            return fallback
+            return _family_result(data, config).with_findings(*elastic, first=True)
         warnings += elastic
         if elastic:
-            problems.append(
-                "an elastic passive moment the model lacks is supported by the data and biases the static moments "
-                "(see warnings)"
-            )
+            problems.append(Finding(code=FindingCode.ELASTIC_LACKING))
     placement_check = None
     if placement is not None and not springs and not problems:
         # Whether the data put the markers further off their joint centres than assumed (placement_scale.py): last
@@ -411,8 +427,8 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
             family_chosen=config.passive.select,
         )
     sensitivity = passive_offset_sensitivity(problem, fit, n)
-    valid = not problems and bool(np.isfinite(fit.values).all())
-    message = "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples"
+    if not problems and not np.isfinite(fit.values).all():
+        problems.append(Finding(code=FindingCode.NON_FINITE))
     residual_rms = {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)}
     used = problem.rows.sum(axis=0)
     removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": n_removed}
@@ -435,29 +451,28 @@ def identify_joint(data: IdentificationData, config: JointConfig | None = None) 
     if placement_check is not None:
         diagnostics["marker_placement"] = placement_check.to_dict(placement_sd_m)
     return IdentificationResult(
-        "joint",
-        problem.names,
-        fit.values,
-        fit.covariance,
-        valid,
-        message,
-        warnings,
-        fit.condition,
-        residual_rms,
-        int(data.t_ns.size),
-        diagnostics,
+        method="joint",
+        names=problem.names,
+        values=fit.values,
+        covariance=fit.covariance,
+        findings=(*problems, *warnings),
+        summary=f"identified from {data.t_ns.size} samples",
+        condition_number=fit.condition,
+        residual_rms_nm=residual_rms,
+        n_samples=int(data.t_ns.size),
+        diagnostics=diagnostics,
         torque_response=TorqueResponse.of(problem, fit),
         held=HeldModel(
-            problem.names,
-            dataclasses.replace(config.passive, select=False),
-            widths,
-            drift is not None,
-            placement_sd_m if placement_check is None else placement_check.sd_m,
-            fit.covariance - own_covariance - placement_share,
-            basis,
-            tuple(problems[:data_problems]),
-            tuple(problems[data_problems:]),
-            tuple(w for w in warnings[data_notes:] if w not in sample_notes),
-            diagnostics,
+            names=problem.names,
+            passive=dataclasses.replace(config.passive, select=False),
+            widths_rad_s=widths,
+            drift=drift is not None,
+            placement_sd_m=placement_sd_m if placement_check is None else placement_check.sd_m,
+            systematic_covariance=fit.covariance - own_covariance - placement_share,
+            curves=basis,
+            data_problems=tuple(problems[:data_problems]),
+            check_problems=tuple(problems[data_problems:]),
+            warnings=tuple(w for w in warnings[data_notes:] if w not in sample_notes),
+            diagnostics=diagnostics,
         ),
     )

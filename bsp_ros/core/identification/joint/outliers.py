@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.robust import hampel_outliers, robust_sd
@@ -14,7 +15,7 @@ from bsp_ros.core.identification.stacked import Fit
 MIN_OUTLIER_NM = 1e-3
 
 
-def wrench_spikes(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[str]]:
+def wrench_spikes(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[Finding]]:
     """Samples whose torques jump off the rolling median of their neighbours (wrench spikes), or not finite."""
     finite = np.isfinite(data.tau_nm).all(axis=1)
     flags = ~finite
@@ -25,10 +26,8 @@ def wrench_spikes(data: IdentificationData, config: JointConfig) -> tuple[np.nda
     count = int(flags.sum())
     if not count:
         return flags, []
-    return flags, [
-        f"removed {count} wrench sample{'s' if count > 1 else ''} off the local robust spread (joint torques more "
-        f"than {config.outlier_sd:g} robust sd from the rolling median of {config.spike_window} samples)"
-    ]
+    values = {"n": count, "outlier_sd": config.outlier_sd, "window": config.spike_window}
+    return flags, [Finding(code=FindingCode.WRENCH_SPIKES_REMOVED, values=values)]
 
 
 def fit_outliers(fit: Fit, config: JointConfig) -> np.ndarray:
@@ -48,9 +47,10 @@ def too_far_off(n_far: int, usable: int) -> bool:
     return n_far > MAX_FAR_SHARE * usable
 
 
-def far_off_problem(n_far: int, usable: int, config: JointConfig) -> str:
+def far_off_problem(n_far: int, usable: int, config: JointConfig) -> Finding:
     """The problem of a fit that too many samples lie far off (:func:`too_far_off`)."""
-    return f"the model does not fit: {n_far} of {usable} samples lie over {config.outlier_sd:g} robust sd off it"
+    values = {"n_far": n_far, "usable": usable, "outlier_sd": config.outlier_sd}
+    return Finding(code=FindingCode.FAR_OFF_SAMPLES, values=values)
 
 
 # Samples this close to a gap in the data (angles lost to marker dropouts) sit where the direction filter

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.covariance import design_inverse, hac_covariance
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import (
@@ -64,7 +65,7 @@ class PlacementScale:
     scale: float
     likelihood_ratio: float
     sd_m: np.ndarray
-    note: str | None
+    note: Finding | None
     column_factor: np.ndarray
 
     def to_dict(self, assumed_sd_m: np.ndarray) -> dict[str, object]:
@@ -137,11 +138,6 @@ def placement_scale(
     note = None
     if ratio > NOTE_LIKELIHOOD_RATIO:
         assumed_mm = 1e3 * float(np.max(np.where(skin, sd_m, 0.0)))
-        widest = ", the most this check allows" if best == _GRID.size - 1 else ""
-        note = (
-            f"the markers sit further off their joint centres than the {assumed_mm:.3g} mm the std assumes: the "
-            f"torques bend as markers about {scale * assumed_mm:.2g} mm off would (1 sd per axis{widest}; or a passive "
-            "moment the model lacks looks like that), and the std holds it; check that the markers sit firmly on "
-            "their landmarks (docs/cell-guide.md)"
-        )
+        values = {"assumed_mm": assumed_mm, "apparent_mm": scale * assumed_mm, "at_limit": best == _GRID.size - 1}
+        note = Finding(code=FindingCode.PLACEMENT_WIDER, values=values)
     return PlacementScale(scale, ratio, used, note, np.where(scaled, scale, 1.0))

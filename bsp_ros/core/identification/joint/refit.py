@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.drift import drift_columns
@@ -52,11 +53,13 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
     widths = held.widths_rad_s if held.widths_rad_s.any() else None
     samples = usable_samples(data, config, widths)
     rows, spikes, problem, usable = samples.rows, samples.spikes, samples.problem, samples.usable
-    problems, warnings = samples.problems, samples.warnings
+    problems, warnings = list(samples.problems), list(samples.warnings)
     if problem.names != held.names:
-        problems.append("the samples are not of the arm the model was chosen for (its parameters differ)")
-    if problems or samples.too_few is not None:
-        return failed_result(data, problem.names, problems or [str(samples.too_few)], warnings)
+        problems.append(Finding(code=FindingCode.NOT_SAME_ARM))
+    if samples.too_few is not None and not problems:
+        problems.append(samples.too_few)
+    if problems:
+        return failed_result(data, problem.names, problems, warnings)
     fit = fit_problem(problem)
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
@@ -65,10 +68,8 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
     elif n_far:
         problem = build_problem(data, config.passive, rows & ~far[:, None], widths, samples.extras)
         fit = fit_problem(problem)
-        warnings.append(
-            f"removed {n_far} sample{'s' if n_far > 1 else ''} far off the fit (residual over {config.outlier_sd:g} "
-            "robust sd)"
-        )
+        values = {"n": n_far, "outlier_sd": config.outlier_sd}
+        warnings.append(Finding(code=FindingCode.FIT_OUTLIERS_REMOVED, values=values))
     own = fit.covariance
     placement = np.zeros_like(own)
     if held.placement_sd_m.any():
@@ -85,7 +86,8 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
     if fit.condition > UNIDENTIFIABLE_CONDITION:
         problems.append(unidentifiable_problem(fit.condition))
     problems += list(held.check_problems)
-    valid = not problems and bool(np.isfinite(fit.values).all())
+    if not problems and not np.isfinite(fit.values).all():
+        problems.append(Finding(code=FindingCode.NON_FINITE))
     used = problem.rows.sum(axis=0)
     removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": 0 if too_far_off(n_far, usable) else n_far}
     diagnostics = {
@@ -96,19 +98,17 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         "removed_samples": {k: v for k, v in removed.items() if v},
         "prior_share": shares,
     }
-    result = IdentificationResult(
-        "joint",
-        problem.names,
-        fit.values,
-        fit.covariance,
-        valid,
-        "; ".join(problems) if problems else f"identified from {data.t_ns.size} samples",
-        warnings + [w for w in held.warnings if w not in warnings],
-        fit.condition,
-        {joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)},
-        int(data.t_ns.size),
-        diagnostics,
+    return IdentificationResult(
+        method="joint",
+        names=problem.names,
+        values=fit.values,
+        covariance=fit.covariance,
+        findings=(*problems, *warnings, *(w for w in held.warnings if w not in warnings)),
+        summary=f"identified from {data.t_ns.size} samples",
+        condition_number=fit.condition,
+        residual_rms_nm={joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)},
+        n_samples=int(data.t_ns.size),
+        diagnostics=diagnostics,
         torque_response=TorqueResponse.of(problem, fit),
         held=held,
     )
-    return result

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.excitation import excitation_problems, motion_rows
@@ -30,9 +31,9 @@ class Samples:
     spikes: np.ndarray
     extras: Extras | None
     problem: Problem
-    problems: list[str]
-    warnings: list[str]
-    too_few: str | None
+    problems: list[Finding]
+    warnings: list[Finding]
+    too_few: Finding | None
 
     @property
     def usable(self) -> int:
@@ -57,6 +58,6 @@ def usable_samples(data: IdentificationData, config: JointConfig, widths: np.nda
         extras,
         problem,
         excitation_problems(data, rows, config),
-        list(data.warnings) + spike_notes + notes,
-        f"too few usable samples: {fewest}" if too_few else None,
+        [note(FindingCode.DATA_NOTE, w) for w in data.warnings] + spike_notes + notes,
+        Finding(code=FindingCode.TOO_FEW_USABLE_SAMPLES, values={"fewest": fewest}) if too_few else None,
     )

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.unmodelled import (
@@ -43,7 +44,7 @@ class StribeckFinding:
     coulomb_column: int
     coulomb_shift_nm: float
     static_shift_sd: float
-    note: str
+    note: Finding
 
     coulomb_shift_sd: float
 
@@ -118,23 +119,26 @@ def stribeck_check(
         coulomb_shift = float(wide.values[column] - fit.values[column])
         coulomb_sd = float(shifts_sd(fit, wide, [column])[0])
         if worst != column:
-            moved = f"moves the {problem.names[worst][1]} static moment by {shift:.1f} std"
+            moves = "static_moment"
         elif coulomb_sd > STRIBECK_WIDEN_MAX_SD:
-            moved = f"moves its Coulomb amplitude by {coulomb_sd:.1f} std"
+            moves = "coulomb"
         else:
-            moved = (
-                f"moves its Coulomb amplitude by {abs(coulomb_shift):.2g} Nm ({coulomb_sd:.1f} std), which its std "
-                "includes"
-            )
+            moves = "coulomb_in_std"
+        values = {
+            "speed_mrad_s": float(1e3 * best_speed),
+            "moves": moves,
+            "segment": problem.names[worst][1],
+            "shift_sd": float(shift),
+            "coulomb_shift_nm": coulomb_shift,
+            "coulomb_sd": coulomb_sd,
+        }
         notes.append(
             StribeckFinding(
                 j,
                 column,
                 coulomb_shift,
                 static_shift,
-                f"friction at the {joint} depends on speed (Stribeck-like, larger below about "
-                f"{1e3 * best_speed:.2g} mrad/s): modelling it {moved}; the amplitude of a sign step is a "
-                "speed-dependent average here",
+                Finding(code=FindingCode.FRICTION_SPEED_DEPENDENT, where=joint, values=values),
                 coulomb_sd,
             )
         )

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.passive import PassiveModel
@@ -99,13 +100,14 @@ def test_unmodelled_elbow_stiffness_is_flagged_as_confounded_with_gravity() -> N
     )
     session = sim.simulate_cell(sim.human_arm_cell(seed=5, passive=passive))
     result = identify_joint(identification_data_from_session(session.session))
-    assert any(w.startswith("elastic passive moment at the elbow") for w in result.warnings), result.warnings
-    assert not result.valid and "elastic passive moment" in result.message
+    elastic = [f for f in result.findings if f.code is FindingCode.ELASTIC_TERM]
+    assert [f.where for f in elastic] == ["elbow"], result.warnings
+    assert not result.valid and FindingCode.ELASTIC_LACKING in [f.code for f in result.findings]
 
 
 def test_no_elastic_warning_without_stiffness_in_the_truth(human_session) -> None:
     result = identify_joint(identification_data_from_session(human_session.session))
-    assert not any(w.startswith("elastic") for w in result.warnings), result.warnings
+    assert FindingCode.ELASTIC_TERM not in [f.code for f in result.findings], result.warnings
 
 
 def test_zero_motion_is_invalid_with_a_message() -> None:
@@ -118,14 +120,14 @@ def test_zero_motion_is_invalid_with_a_message() -> None:
     session = sim.simulate_cell(sim.human_arm_cell(seed=2, trajectory=still, duration_s=30.0))
     result = identify_joint(identification_data_from_session(session.session))
     assert not result.valid
-    assert "no motion at the shoulder" in result.message
+    assert any(f.code is FindingCode.NO_MOTION and f.where == "shoulder" for f in result.findings), result.message
 
 
 def test_too_few_samples_is_invalid_with_a_message(human_session) -> None:
     data = identification_data_from_session(human_session.session)
     result = identify_joint(data.window(0, 50))
     assert not result.valid
-    assert "too few samples" in result.message
+    assert FindingCode.TOO_FEW_SAMPLES in [f.code for f in result.findings], result.message
 
 
 def test_nan_wrench_samples_are_removed_and_reported(human_session) -> None:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.joint.outliers import near_gaps
@@ -47,7 +48,8 @@ def test_a_drifting_force_sensor_is_named_and_modelled_within_its_std() -> None:
     data = identification_data_from_session(simulated.session)
     result = identify_joint(data, JointConfig(marker_placement_sd_m=0.0))
     assert result.valid, result.message
-    assert any("the wrench drifts during the session" in w and "modelled" in w for w in result.warnings)
+    drifts = [f for f in result.findings if f.code is FindingCode.DRIFT_MODELLED]
+    assert drifts and not drifts[0].values["drift_recording"], result.warnings
     _, beta, cov = result.block("static_moment_kgm")
     truth = np.asarray(simulated.truth.static_moments_kgm)
     z = np.abs(beta - truth) / np.sqrt(np.diag(cov))
@@ -58,7 +60,8 @@ def test_stribeck_like_friction_makes_the_estimate_invalid_and_names_the_joint()
     """Friction 1.5 times larger below 10 mrad/s: a sign step's amplitude is then a speed-dependent average."""
     result = identified(3, passive__stribeck_ratio=1.5, passive__stribeck_speed_rad_s=0.01)
     assert not result.valid
-    assert any("friction at the elbow depends on speed (Stribeck-like" in w for w in result.warnings)
+    assert any(f.code is FindingCode.FRICTION_SPEED_DEPENDENT and f.where == "elbow" for f in result.findings)
+    assert FindingCode.UNMODELLED_EFFECT in [f.code for f in result.findings] or result.valid
 
 
 def test_samples_far_off_the_fit_next_to_marker_gaps_are_named_as_such() -> None:
@@ -70,7 +73,7 @@ def test_samples_far_off_the_fit_next_to_marker_gaps_are_named_as_such() -> None
     )
     result = identify_joint(identification_data_from_session(sim.simulate_cell(spec).session))
     assert result.valid, result.message
-    far = [w for w in result.warnings if "far off the fit" in w]
+    far = [f.text for f in result.findings if f.code is FindingCode.FIT_OUTLIERS_REMOVED]
     assert len(far) == 1 and "of a gap in the joint angles (marker dropouts" in far[0], result.warnings
     # A note on these samples, not on the model: a live refit of newer samples does not inherit it.
     assert result.held is not None and far[0] not in result.held.warnings
@@ -163,4 +166,4 @@ def test_the_elastic_check_skips_the_placement_share_only_where_it_cannot_change
     if elbow_stiffness_nm_per_rad == 0.0:
         assert gated == [] and gated_calls == 0
     else:
-        assert any(note.startswith("elastic passive moment at the elbow") for note in gated), gated
+        assert any(note.code is FindingCode.ELASTIC_TERM and note.where == "elbow" for note in gated), gated

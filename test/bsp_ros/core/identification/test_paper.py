@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.identification.paper import identify_paper
 from bsp_ros.core.paper_comparison import compare_on_mechanical_arm
@@ -40,6 +41,8 @@ def test_paper_method_splits_unidentifiable_masses_arbitrarily(paper_arm_session
     grouped = pi["m1l1"] + truth.lengths_m[0] * pi["m2"]
     assert grouped == pytest.approx(truth.static_moments_kgm[0], rel=0.01)
     assert any("not identifiable" in w for w in result.warnings)
+    codes = [f.code for f in result.findings]
+    assert FindingCode.PAPER_SPLIT_ARBITRARY in codes and FindingCode.PAPER_STD_CLASSICAL in codes
 
 
 def test_paper_method_passive_moments_follow_eq_11(paper_arm_session) -> None:

@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.joint.config import JointConfig
@@ -86,7 +88,7 @@ def test_markers_1_cm_off_widen_the_placement_and_the_std_holds_the_truth(seed: 
     placement = quality["marker_placement"]
     assert placement["scale_from_data"] > 2.0, placement
     assert placement["assumed_sd_mm"] == [2.0] * 4
-    assert any(w.startswith("the markers sit further off their joint centres") for w in quality["warnings"])
+    assert FindingCode.PLACEMENT_WIDER in [f.code for f in findings_of(quality)], quality["warnings"]
     truth = simulated.truth.to_dict()
     z = {}
     for group, owner, key, q in quantities_of(document):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.priors import (
     PERPENDICULAR_MAX_PRIOR_SD,
@@ -30,7 +31,8 @@ def test_an_off_axis_moment_beyond_the_prior_is_named_and_one_within_is_not() ->
     beyond = within.copy()
     beyond[1] = -1.2 * PERPENDICULAR_MAX_PRIOR_SD * sd[1]
     problems = implausible_perpendicular_moments(SEGMENTS, beyond, prior)
-    assert len(problems) == 1 and problems[0].startswith("the forearm's centre of mass") and "two-joint" in problems[0]
+    assert [(f.code, f.where) for f in problems] == [(FindingCode.PERPENDICULAR_IMPLAUSIBLE, "forearm")]
+    assert "two-joint" in problems[0].text and not problems[0].values["family_chosen"]
     # Where the data already chose among the coupled and nonlinear terms (--passive auto), choosing them is no advice.
     (chosen,) = implausible_perpendicular_moments(SEGMENTS, beyond, prior, family_chosen=True)
-    assert "--passive auto chooses" not in chosen and "more nonlinear than the model" in chosen
+    assert "--passive auto chooses" not in chosen.text and "more nonlinear than the model" in chosen.text

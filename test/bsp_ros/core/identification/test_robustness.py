@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import glitches
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.pipeline import identify_session
 from bsp_ros.core.simulation import SimulatedSession, human_arm_cell, simulate_cell
@@ -94,4 +96,5 @@ def test_implausible_static_moments_are_invalid(simulated: SimulatedSession) -> 
         session.rotation_world_from_sensor,
     )
     quality = identify_session(heavy)["quality"]
-    assert not quality["valid"] and "implausible" in quality["message"], quality["message"]
+    codes = [f.code for f in findings_of(quality)]
+    assert not quality["valid"] and FindingCode.STATIC_MOMENT_IMPLAUSIBLE in codes, quality["message"]

@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import (
@@ -36,9 +37,8 @@ def _regressor(d: IdentificationData) -> np.ndarray:
 
 def _ols(d: IdentificationData) -> IdentificationResult:
     values = np.linalg.lstsq(_regressor(d), d.tau_nm.reshape(-1), rcond=None)[0]
-    return IdentificationResult(
-        "ols", [("static_moment_kgm", "x")] * values.size, values, np.eye(values.size), True, ""
-    )
+    names = [("static_moment_kgm", "x")] * values.size
+    return IdentificationResult(method="ols", names=names, values=values, covariance=np.eye(values.size))
 
 
 def test_finite_differences_equal_the_least_squares_closed_form(data: IdentificationData) -> None:
@@ -106,23 +106,28 @@ def test_an_untared_handle_is_held_by_the_std_of_the_assumed_zero() -> None:
 
 
 def test_tare_covariance_adds_g_sigma_g_transpose() -> None:
-    result = IdentificationResult("x", [("static_moment_kgm", "upper_arm")] * 2, np.zeros(2), np.eye(2), True, "")
+    names = [("static_moment_kgm", "upper_arm")] * 2
+    result = IdentificationResult(method="x", names=names, values=np.zeros(2), covariance=np.eye(2))
     g = np.arange(12.0).reshape(2, 6)
     sigma = np.diag([1.0, 2.0, 3.0, 4.0, 5.0, 6.0])
-    added = add_tare_covariance(result, g, sigma)
-    np.testing.assert_allclose(result.covariance, np.eye(2) + g @ sigma @ g.T)
+    widened, added = add_tare_covariance(result, g, sigma)
+    np.testing.assert_allclose(widened.covariance, np.eye(2) + g @ sigma @ g.T)
+    np.testing.assert_array_equal(result.covariance, np.eye(2))  # the result it was given is left as it was
     np.testing.assert_allclose(added, g @ sigma @ g.T)
 
 
 def test_quality_says_null_where_the_estimate_could_not_be_differentiated() -> None:
     names = [("static_moment_kgm", "upper_arm"), ("static_moment_kgm", "forearm"), ("coulomb_nm", "shoulder")]
-    result = IdentificationResult("x", names, np.array([0.8, 0.2, 0.5]), np.eye(3), False, "")
+    not_yet = (Finding(code=FindingCode.NOT_YET_DETERMINED),)
+    result = IdentificationResult(
+        method="x", names=names, values=np.array([0.8, 0.2, 0.5]), covariance=np.eye(3), findings=not_yet
+    )
     block = tare_quality(result, None, "ft_sensor", None)
     assert block["tare"] == {"applied": False, "file": None}
     assert block["offset_sensitivity"]["static_moment_kgm"] == {"upper_arm": None, "forearm": None}
     g = np.zeros((3, 6))
     g[1, 1] = -0.05  # kgm per N
-    block = tare_quality(dataclasses.replace(result, valid=True), g, "ft_sensor", "cell.tare.yaml")
+    block = tare_quality(dataclasses.replace(result, findings=()), g, "ft_sensor", "cell.tare.yaml")
     assert block["tare"]["applied"] and block["tare"]["file"] == "cell.tare.yaml"
     assert block["offset_sensitivity"]["static_moment_kgm"]["forearm"] == pytest.approx([0.0, -0.005, 0.0])
     assert block["offset_sensitivity"]["static_moment_percent"]["forearm"] == pytest.approx(2.5)

@@ -8,6 +8,8 @@ import functools
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.pipeline import identify_session
 from bsp_ros.core.planning import JointLimits, NominalArm, PlanRequest, plan_protocol
 from bsp_ros.core.quantities import quantities_of
@@ -90,7 +92,7 @@ def test_on_the_fast_plan_re_placed_markers_are_no_spring_and_a_real_one_is_foun
     simulated = sim.simulate_cell(spec)
     document = identify_session(simulated.session)
     quality = document["quality"]
-    found = [w for w in quality["warnings"] if w.startswith("elastic passive moment")]
+    found = [f.text for f in findings_of(quality) if f.code is FindingCode.ELASTIC_TERM]
     assert quality["valid"], quality["message"]
     z = _z(document, simulated.truth.to_dict())
     assert max(z.values()) <= 3.0, sorted(z.items(), key=lambda kv: -kv[1])[:3]

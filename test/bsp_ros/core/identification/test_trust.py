@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.joint import identify_joint
 from bsp_ros.core.identification.passive import PassiveModel
@@ -42,7 +44,7 @@ def test_a_narrow_friction_transition_is_modelled_and_the_coulomb_amplitudes_cov
     data, truth = data_with_transition(0.001)
     result = identify_joint(data)
     assert result.valid, result.message
-    assert any("changes direction smoothly" in w for w in result.warnings)
+    assert FindingCode.FRICTION_SMOOTH in [f.code for f in result.findings]
     _assert_within_3_std(result, truth)
 
 
@@ -52,7 +54,7 @@ def test_a_joint_that_never_leaves_the_transition_keeps_its_estimate_with_the_st
     data, truth = data_with_transition(0.002)
     result = identify_joint(data)
     assert result.valid, result.message
-    assert any("wrist hardly leaves its friction transition" in w for w in result.warnings)
+    assert any(f.code is FindingCode.FRICTION_TRANSITION_WEAK and f.where == "wrist" for f in result.findings)
     _assert_within_3_std(result, truth)
 
 
@@ -96,7 +98,8 @@ def test_by_default_an_elastic_offset_lets_the_data_choose_the_elastic_terms_and
     simulated, truth = elastic_session
     document = identify_session(simulated.session)
     quality = document["quality"]
-    assert any(w.startswith("elastic passive moment at the") and "--passive auto" in w for w in quality["warnings"])
+    elastic = [f for f in findings_of(quality) if f.code is FindingCode.ELASTIC_TERM]
+    assert elastic and all(f.values["fallback"] for f in elastic), quality["warnings"]
     assert document["diagnostics"]["passive_selection"], "the elastic terms were not chosen by the data"
     assert quality["valid"], quality["message"]
     for segment, q in document["segments"].items():
@@ -111,8 +114,8 @@ def test_an_elastic_offset_makes_a_model_the_user_fixed_invalid_with_its_cause_n
     options = IdentifyOptions(passive=PassiveModel.parse("coulomb"), elastic_fallback=False)
     quality = identify_session(simulated.session, options)["quality"]
     assert not quality["valid"]
-    assert "elastic passive moment" in quality["message"]
-    assert any(w.startswith("elastic passive moment at the") for w in quality["warnings"])
+    assert FindingCode.ELASTIC_LACKING in [f.code for f in findings_of(quality)]
+    assert FindingCode.ELASTIC_TERM in [f.code for f in findings_of(quality)]
 
 
 def test_the_tare_uncertainty_joins_the_estimate_of_the_elastic_terms_the_data_chose() -> None:

@@ -7,6 +7,7 @@ import pytest
 from planning_cases import ELASTIC_TRUTH
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.passive import PassiveModel
@@ -72,12 +73,12 @@ def test_planned_session_is_not_flagged_confounded(planned_result) -> None:
     # Offsets and stiffness still correlate with gravity above 0.95 on a planned session, but the session
     # pins the static moments down to well under 1 %: nothing is confounded.
     result, _ = planned_result
-    assert not [w for w in result.warnings if w.startswith("confounded")], result.warnings
+    assert FindingCode.CONFOUNDED not in [f.code for f in result.findings], result.warnings
 
 
 def test_paper_protocol_with_the_same_truth_is_flagged_confounded() -> None:
     result, truth = _identify(sim.human_arm_cell().trajectory, seed=3)
-    confounded = [w for w in result.warnings if w.startswith("confounded")]
+    confounded = [f for f in result.findings if f.code is FindingCode.CONFOUNDED]
     assert confounded, result.warnings
     assert result.weak or not result.valid
     # flagged, and not valid-and-wrong: every estimate is within 3 of its (large) std

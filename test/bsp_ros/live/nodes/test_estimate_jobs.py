@@ -47,9 +47,12 @@ def test_recursive_outputs_decode_to_the_same_estimate() -> None:
 
 def test_an_invalid_document_has_no_inertia_or_passive_outputs() -> None:
     from bsp_ros.core.estimate import invalid_document
+    from bsp_ros.core.findings import Finding, FindingCode
 
-    outputs = jobs.outputs_from_document(invalid_document("joint", "stale input"), 7, with_passive=True)
-    assert not outputs.valid and outputs.message == "stale input" and set(outputs.cdr) == {"estimate", "json"}
+    stale = Finding(code=FindingCode.INPUT_STALE, values={"what": "wrench", "silent_s": 0.5})
+    outputs = jobs.outputs_from_document(invalid_document("joint", stale), 7, with_passive=True)
+    assert not outputs.valid and outputs.message == stale.text and set(outputs.cdr) == {"estimate", "json"}
+    assert [f.code for f in outputs.findings] == [FindingCode.INPUT_STALE]
 
 
 def test_a_recursive_estimate_with_the_robot_contact_point_holds_the_robot_placement_sd() -> None:
@@ -63,3 +66,11 @@ def test_a_recursive_estimate_with_the_robot_contact_point_holds_the_robot_place
     np.testing.assert_allclose(hand_std, [np.hypot(0.002, 0.002), np.hypot(0.002, 0.0005)], rtol=0.05)
     forearm = [d["segments"]["forearm"]["length_m"]["std"] for d in (by_marker, by_robot)]
     assert forearm[0] == forearm[1]
+
+
+def test_an_estimate_that_failed_is_published_invalid_with_its_error() -> None:
+    from bsp_ros.core.findings import FindingCode
+
+    outputs = jobs.outputs_from_document(jobs.internal_error_document("joint", ValueError("x")), 7, with_passive=True)
+    assert not outputs.valid and [f.code for f in outputs.findings] == [FindingCode.INTERNAL_ERROR]
+    assert outputs.message == "internal error: ValueError('x')"

@@ -13,6 +13,8 @@ import pytest
 from node_processes import NodeProcesses, Peer, domain_id
 
 from bsp_ros.clinic.store import SessionRecord, open_store
+from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.pipeline import identify_session
 from bsp_ros.core.simulation import human_arm_cell, simulate_cell
 
@@ -44,24 +46,17 @@ def _estimate(base: dict[str, Any], start_ns: int, scale: float) -> dict[str, An
     return document
 
 
-def _invalid(message: str) -> dict[str, Any]:
+WAITING = Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench"})
+STALE = Finding(code=FindingCode.INPUT_STALE, values={"what": "wrench", "silent_s": 0.5})
+POOR = Finding(code=FindingCode.NOT_YET_DETERMINED)
+NOT_IDENTIFIED = Finding(code=FindingCode.NOT_IDENTIFIABLE, values={"condition": 2e9})
+ONE_WAY_ELBOW = Finding(code=FindingCode.ONE_DIRECTION, where="elbow", values={"other_percent": 0.0})
+ONE_WAY_WRIST = Finding(code=FindingCode.ONE_DIRECTION, where="wrist", values={"other_percent": 0.0})
+
+
+def _invalid(finding: Finding) -> dict[str, Any]:
     """An invalid estimate as the identifier publishes it when an input is stale or excitation is poor."""
-    return {
-        "schema": "bsp_ros/core/estimate/1",
-        "method": "joint",
-        "segments": {},
-        "joints": {},
-        "quality": {
-            "valid": False,
-            "n_samples": 0,
-            "condition_number": None,
-            "residual_rms_nm": {},
-            "warnings": [],
-            "message": message,
-            "level": "invalid",
-        },
-        "mode": "windowed",
-    }
+    return invalid_document("joint", finding)
 
 
 def _stored_values(record: SessionRecord) -> dict[str, float]:
@@ -139,16 +134,14 @@ def recorder(tmp_path: Path) -> Iterator[Callable[[int], Recorder]]:
         r.close()
 
 
-def _keep_alive(
-    r: Recorder, seconds: float, message: str = "poor excitation: static moments not yet determined"
-) -> None:
+def _keep_alive(r: Recorder, seconds: float, finding: Finding = POOR) -> None:
     """Invalid estimates on live input at the identifier's rate for ``seconds``: the session goes on.
 
     (Estimates saying the input is stale count as silence: see test_session_end.)
     """
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
-        r.estimate(_invalid(message))
+        r.estimate(_invalid(finding))
         time.sleep(PERIOD_S)
 
 
@@ -159,14 +152,14 @@ def test_silence_stores_the_last_valid_estimate_and_session_end_ends_the_next_se
     first = [_estimate(base_estimate, T0_NS, 1.0 + k / 100) for k in range(3)]
     # Session 1: valid estimates among invalid ones and garbage; the last valid one is not the last message.
     for message in (
-        _invalid("waiting for wrench"),
+        _invalid(WAITING),
         first[0],
-        _invalid("the elbow moved in one direction only"),
+        _invalid(ONE_WAY_ELBOW),
         first[1],
         "not json {",
         first[2],
-        _invalid("the wrist moved in one direction only"),
-        _invalid("poor excitation: condition number 2e4 > 1e4"),
+        _invalid(ONE_WAY_WRIST),
+        _invalid(NOT_IDENTIFIED),
     ):
         r.estimate(message)
         time.sleep(PERIOD_S)
@@ -212,7 +205,7 @@ def test_invalid_only_and_malformed_estimates_store_nothing_and_do_not_stop_the_
     recorder: Callable[[int], Recorder], base_estimate: dict[str, Any]
 ) -> None:
     r = recorder(2)
-    for message in (_invalid("waiting for wrench"), "", "[1, 2]", "3", '{"quality": null}', _invalid("stale")):
+    for message in (_invalid(WAITING), "", "[1, 2]", "3", '{"quality": null}', _invalid(STALE)):
         r.estimate(message)
         time.sleep(PERIOD_S)
     r.publish_end("")

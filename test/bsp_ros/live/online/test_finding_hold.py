@@ -9,6 +9,8 @@ import numpy as np
 from live_inputs import WindowFeed, live_inputs, orientation
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.passive import PassiveModel
@@ -17,28 +19,34 @@ from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.live.online.finding_hold import HELD_NOTE, FindingHold
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
 
-SPRING = "an elastic passive moment the model lacks is supported by the data and biases the static moments"
+SPRING = Finding(code=FindingCode.ELASTIC_LACKING)
+POOR = Finding(code=FindingCode.NOT_YET_DETERMINED)
+A_NOTE = note(FindingCode.DATA_NOTE, "a note")
 
 
-def _check(found: tuple[str, ...] = (), data_problems: tuple[str, ...] = ()) -> IdentificationResult:
+def _check(found: tuple[Finding, ...] = (), data_problems: tuple[Finding, ...] = ()) -> IdentificationResult:
     """A check's result whose model checks found ``found`` (the verdict as identify_joint gives it)."""
     held = HeldModel(
-        [("static_moment_kgm", "upper_arm")],
-        PassiveModel(),
-        np.zeros(1),
-        False,
-        np.zeros(2),
-        np.zeros((1, 1)),
-        None,
-        data_problems,
-        found,
-        (),
-        {},
+        names=[("static_moment_kgm", "upper_arm")],
+        passive=PassiveModel(),
+        widths_rad_s=np.zeros(1),
+        drift=False,
+        placement_sd_m=np.zeros(2),
+        systematic_covariance=np.zeros((1, 1)),
+        curves=None,
+        data_problems=data_problems,
+        check_problems=found,
+        warnings=(),
+        diagnostics={},
     )
-    problems = (*data_problems, *found)
-    message = "; ".join(problems) if problems else "identified"
     return IdentificationResult(
-        "joint", list(held.names), np.ones(1), np.eye(1), not problems, message, ["a note"], held=held
+        method="joint",
+        names=list(held.names),
+        values=np.ones(1),
+        covariance=np.eye(1),
+        findings=(*data_problems, *found, A_NOTE),
+        summary="identified",
+        held=held,
     )
 
 
@@ -47,8 +55,8 @@ def test_a_finding_holds_through_one_check_that_misses_it_and_two_clear_it() -> 
     assert hold.checked(_check()).valid  # nothing found, nothing held
     assert not hold.checked(_check((SPRING,))).valid
     missed = hold.checked(_check())
-    assert not missed.valid and missed.message == SPRING
-    assert missed.warnings == ["a note", HELD_NOTE]
+    assert not missed.valid and [f.code for f in missed.findings if f.severity == "invalid"] == [SPRING.code]
+    assert missed.warnings == ["a note", HELD_NOTE.text] and HELD_NOTE.code is FindingCode.HELD_FROM_CHECK
     assert missed.held is not None and missed.held.check_problems == (SPRING,)  # the refits until the next check
     assert hold.checked(_check()).valid  # the second miss in a row clears it
     assert hold.checked(_check()).valid
@@ -60,8 +68,8 @@ def test_a_check_that_finds_it_again_starts_the_count_anew_and_samples_without_a
     assert not hold.checked(_check()).valid
     assert not hold.checked(_check((SPRING,))).valid
     assert not hold.checked(_check()).valid  # one miss after the new finding: held
-    poor = hold.checked(_check(data_problems=("poor excitation",)))
-    assert poor.message == "poor excitation"  # its own verdict, and no count
+    poor = hold.checked(_check(data_problems=(POOR,)))
+    assert poor.message == POOR.text  # its own verdict, and no count
     assert hold.checked(_check()).valid
     hold.checked(_check((SPRING,)))
     hold.reset()
@@ -91,6 +99,9 @@ def test_an_elbow_spring_missed_by_one_window_s_check_leaves_no_valid_wrong_upda
     for i in range(40_000, len(stamps), 200):  # 5 Hz from 40 s on
         feed.until(int(stamps[i]))
         verdicts.append(identifier.estimate(orientation=frame))
-    found = [not v.valid and "elastic passive moment" in v.document["quality"]["message"] for v in verdicts]
+    found = [
+        not v.valid and FindingCode.ELASTIC_LACKING in [f.code for f in findings_of(v.document["quality"])]
+        for v in verdicts
+    ]
     assert any(found)
     assert not any(v.valid for v in verdicts[found.index(True) :])

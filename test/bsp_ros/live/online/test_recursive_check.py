@@ -8,6 +8,7 @@ import numpy as np
 from live_inputs import live_inputs, recursive_mode
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.live.online.recursive_check import WindowCheck, checked_result
@@ -16,17 +17,27 @@ from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
 NAMES = [("static_moment_kgm", "upper_arm"), ("coulomb_nm", "shoulder")]
 
 
+MISFIT = Finding(code=FindingCode.MODEL_MISFIT, where="shoulder", values={"rms_nm": 0.2, "ratio": 6, "noise_nm": 0.03})
+DRIFT = note(FindingCode.DATA_NOTE, "a drift")
+
+
 def _filter_result(valid: bool = True) -> IdentificationResult:
-    message = "500 recursive updates" if valid else "each joint must move both ways"
     return IdentificationResult(
-        "recursive", list(NAMES), np.array([0.8, 0.5]), np.diag([1e-8, 1e-8]), valid, message, [], float("nan"), {}, 500
+        method="recursive",
+        names=list(NAMES),
+        values=np.array([0.8, 0.5]),
+        covariance=np.diag([1e-8, 1e-8]),
+        findings=() if valid else (Finding(code=FindingCode.ONE_DIRECTION),),
+        summary="500 recursive updates",
+        n_samples=500,
     )
 
 
 def _window(valid: bool = True, coulomb_std: float | None = 0.02) -> dict:
     coulomb = {} if coulomb_std is None else {"coulomb_nm": {"value": 0.49, "std": coulomb_std}}
+    findings = [MISFIT.to_json(), DRIFT.to_json()] if not valid else [DRIFT.to_json()]
     return {
-        "quality": {"valid": valid, "message": "the model does not fit at the shoulder", "warnings": ["a drift"]},
+        "quality": {"valid": valid, "message": MISFIT.text, "warnings": ["a drift"], "findings": findings},
         "segments": {"upper_arm": {"static_moment_kgm": {"value": 0.81, "std": 0.03}}},
         "joints": {"shoulder": coulomb},
     }
@@ -44,19 +55,20 @@ def test_the_window_s_variances_and_its_distance_from_the_window_s_values_join_t
 def test_an_invalid_window_makes_the_estimate_invalid_with_its_reason() -> None:
     checked = checked_result(_filter_result(), _window(valid=False))
     assert not checked.valid
-    assert "the model does not fit at the shoulder" in checked.message
+    assert checked.findings[0].code is FindingCode.MODEL_MISFIT and checked.message == MISFIT.text
 
 
 def test_before_the_first_check_the_estimate_waits_and_the_filter_s_own_verdict_comes_first() -> None:
     waiting = checked_result(_filter_result(), None)
-    assert not waiting.valid and "waiting for the first model check" in waiting.message
+    assert not waiting.valid and [f.code for f in waiting.findings] == [FindingCode.WAITING_FOR_CHECK]
     own = checked_result(_filter_result(valid=False), _window())
-    assert not own.valid and own.message == "each joint must move both ways"
+    assert not own.valid and [f.code for f in own.findings] == [FindingCode.ONE_DIRECTION]
 
 
 def test_a_window_without_a_parameter_s_std_leaves_the_estimate_invalid_naming_it() -> None:
     checked = checked_result(_filter_result(), _window(coulomb_std=None))
-    assert not checked.valid and "coulomb_nm of the shoulder" in checked.message
+    (missing,) = [f for f in checked.findings if f.code is FindingCode.WINDOW_WITHOUT_STD]
+    assert not checked.valid and missing.where == "shoulder" and missing.values["key"] == "coulomb_nm"
 
 
 def test_a_check_from_before_the_buffers_were_cleared_no_longer_holds(live_streams) -> None:
@@ -72,7 +84,7 @@ def test_a_check_from_before_the_buffers_were_cleared_no_longer_holds(live_strea
     window.reset()  # as a clock jump does
     check.tick(None)  # nothing in the buffers to check yet
     assert check.document is None
-    assert "waiting for the first model check" in check.checked(_filter_result()).message
+    assert FindingCode.WAITING_FOR_CHECK in [f.code for f in check.checked(_filter_result()).findings]
 
 
 def _worst_z(document: dict, truth: dict) -> tuple[float, str]:

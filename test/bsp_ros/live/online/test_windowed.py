@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimator, WindowSamples
 
@@ -74,6 +76,7 @@ def test_a_backwards_clock_jump_restarts_the_window(live_streams) -> None:
     assert len(identifier.wrench) == 1 and len(identifier.angles) == 0
     estimate = identifier.estimate()
     assert not estimate.valid
+    assert [f.code for f in findings_of(estimate.document["quality"])] == [FindingCode.INPUT_WAITING]
 
 
 def test_stale_joint_states_make_the_estimate_invalid(live_streams) -> None:
@@ -83,7 +86,8 @@ def test_stale_joint_states_make_the_estimate_invalid(live_streams) -> None:
     _feed(identifier, stamps, wrench, cut)
     estimate = identifier.estimate()
     assert not estimate.valid
-    assert "stale input: newest joint states" in estimate.document["quality"]["message"]
+    (stale,) = findings_of(estimate.document["quality"])
+    assert stale.code is FindingCode.INPUT_STALE and stale.values["what"] == "joint states"
 
 
 def test_block_means_slow_a_fast_stream_and_keep_its_mean() -> None:
@@ -208,7 +212,7 @@ def test_a_drift_found_by_a_check_is_modelled_by_the_updates_after_it(live_strea
         estimate = identifier.estimate_window(window)
         quality = estimate.document["quality"]
         assert estimate.valid, quality["message"]
-        assert any("the wrench drifts" in w and "modelled" in w for w in quality["warnings"]), quality["warnings"]
+        assert FindingCode.DRIFT_MODELLED in [f.code for f in findings_of(quality)], quality["warnings"]
         for k, (segment, q) in enumerate(estimate.document["segments"].items()):
             assert q["static_moment_kgm"]["value"] == pytest.approx(beta[k], rel=1e-9), update
             z = (
@@ -225,7 +229,7 @@ def test_a_failed_model_check_holds_for_the_updates_between_checks(elastic_live_
     identifier, window = _window(elastic_live_streams, options=IdentifyOptions(elastic_fallback=False))
     checked = identifier.estimate_window(window)  # the first update runs the checks
     quality = checked.document["quality"]
-    assert not checked.valid and any("elastic passive moment" in w for w in quality["warnings"]), quality
+    assert not checked.valid and FindingCode.ELASTIC_TERM in [f.code for f in findings_of(quality)], quality
     held = identifier.estimate_window(window)  # the next refits: the verdict holds
     assert not held.valid and held.document["quality"]["message"] == quality["message"]
     assert all(w in held.document["quality"]["warnings"] for w in quality["warnings"] if "elastic" in w)
@@ -268,7 +272,7 @@ def test_a_window_whose_samples_cannot_support_an_estimate_is_checked_again_at_t
     assert identifier.estimator._due()
     identifier.estimate_window(window)
     identifier.estimator._held = dataclasses.replace(
-        identifier.estimator._held, data_problems=("the elbow moved in one direction only",)
+        identifier.estimator._held, data_problems=(Finding(code=FindingCode.ONE_DIRECTION, where="elbow"),)
     )
     assert identifier.estimator._due()
 
@@ -344,3 +348,19 @@ def test_a_window_copied_after_the_buffers_were_cleared_is_checked_afresh(live_s
     new = WindowEstimator(3, identifier.config).estimate_window(window)
     assert again.valid and new.valid and not identifier.estimator._held.drift
     assert _documented(again.document) == _documented(new.document)
+
+
+def test_wrenches_only_where_the_angles_are_not_yet_settled_give_no_estimate(live_streams) -> None:
+    """Five seconds of joint states and wrenches only in their newest 0.3 s, which has no settled angles yet."""
+    _, stamps, wrench, _, raw = live_streams
+    start = int(raw[0][0])
+    identifier = WindowedIdentifier(3, WindowConfig(window_s=30.0))
+    for t_ns, q_rad, lengths_m in raw:
+        if t_ns <= start + 5_000_000_000:
+            identifier.add_joint_state(t_ns, q_rad, lengths_m)
+    for t_ns, w in zip(stamps.tolist(), wrench, strict=True):
+        if start + 4_700_000_000 < t_ns <= start + 5_000_000_000:
+            identifier.add_wrench(t_ns, w)
+    estimate = identifier.estimate()
+    assert not estimate.valid
+    assert [f.code for f in findings_of(estimate.document["quality"])] == [FindingCode.INPUT_UNUSABLE]

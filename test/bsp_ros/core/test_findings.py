@@ -1,0 +1,201 @@
+"""Typed findings: the table is total, texts render from codes, the verdict derives from severities, JSON round-trips,
+and every code is asserted by some test of the estimator or its consumers."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bsp_ros.clinic.report.summary import invalid_cause
+from bsp_ros.clinic.store.records import Quality, SessionRecord
+from bsp_ros.core.estimate import add_finding, findings_of, invalid_document
+from bsp_ros.core.findings import Finding, FindingCode, Severity, note
+from bsp_ros.core.findings_specs import SPECS
+from bsp_ros.core.identification.result import IdentificationResult
+
+TEST_ROOT = Path(__file__).resolve().parents[2]
+
+# Values that render every code (the units its keys name).
+SAMPLE_VALUES: dict[FindingCode, dict[str, object]] = {
+    FindingCode.TOO_FEW_SAMPLES: {"n": 198, "min_samples": 200},
+    FindingCode.TOO_FEW_USABLE_SAMPLES: {"fewest": 3},
+    FindingCode.NO_MOTION: {"range_deg": 0.01, "min_range_deg": 2.0},
+    FindingCode.ONE_DIRECTION: {"other_percent": 1.5},
+    FindingCode.DIRECTION_UNCLEAR: {"share_percent": 4.0},
+    FindingCode.NOT_IDENTIFIABLE: {"condition": 3e9},
+    FindingCode.FAR_OFF_SAMPLES: {"n_far": 900, "usable": 4000, "outlier_sd": 8.0},
+    FindingCode.HANGS_ON_FEW_SAMPLES: {"n_far": 12, "key": "coulomb_nm", "shift_sd": 2.5},
+    FindingCode.MODEL_MISFIT: {"rms_nm": 0.186, "ratio": 5.8, "noise_nm": 0.032},
+    FindingCode.PERPENDICULAR_IMPLAUSIBLE: {"prior_sd_off": 7.5, "value_kgm": 0.05, "family_chosen": False},
+    FindingCode.STATIC_MOMENT_IMPLAUSIBLE: {"value_kgm": 3.0, "typical_kgm": 0.3, "factor": 3.0},
+    FindingCode.ROTATION_ASSUMED: {"frame": "ft_sensor"},
+    FindingCode.INPUT_WAITING: {"what": "wrench"},
+    FindingCode.INPUT_STALE: {"what": "wrench", "silent_s": 0.52},
+    FindingCode.INTERNAL_ERROR: {"error": "ValueError('x')"},
+    FindingCode.INPUT_UNUSABLE: {"detail": "no wrench sample in the window has joint angles"},
+    FindingCode.WINDOW_WITHOUT_STD: {"key": "coulomb_nm"},
+    FindingCode.CONFOUNDED: {"key": "coulomb_nm", "corr": 0.97, "segment": "forearm", "rel_std": 0.31},
+    FindingCode.UNCERTAIN_STATIC_MOMENT: {"value_kgm": 0.02, "std_kgm": 0.015},
+    FindingCode.ELASTIC_TERM: {
+        "kinds": "offset and stiffness",
+        "chi2": 85.0,
+        "corr": 0.93,
+        "segment": "forearm",
+        "change_percent": 12.0,
+        "shift_sd": 4.1,
+        "fallback": True,
+    },
+    FindingCode.DIRECTION_NOISY: {"noise_rad_s": 0.01, "typical_rad_s": 0.012},
+    FindingCode.FRICTION_SMOOTH: {"width_mrad_s": 3.0, "beyond_percent": 80.0},
+    FindingCode.FRICTION_TRANSITION_WEAK: {"beyond_percent": 2.0},
+    FindingCode.FIT_OUTLIERS_REMOVED: {"n": 3, "outlier_sd": 8.0, "near_gap": 2, "gap_edge_s": 0.25},
+    FindingCode.WRENCH_SPIKES_REMOVED: {"n": 1, "outlier_sd": 8.0, "window": 11},
+    FindingCode.MODEL_CHOICE_SPREAD: {"shift_sd": 1.2},
+    FindingCode.DRIFT_MODELLED: {
+        "drift_recording": 0,
+        "rate_mn_s": 4.0,
+        "amount_n": 0.16,
+        "span_s": 40.0,
+        "segment": "upper_arm",
+        "shift_sd": 3.2,
+    },
+    FindingCode.POORLY_EXCITED: {"condition": 2e4, "max_condition": 1e4},
+    FindingCode.STATIC_MOMENT_OPEN: {"own_kgm": -0.01},
+    FindingCode.PARAMETER_AT_BOUND: {"key": "coulomb_nm", "lower": 0.0},
+    FindingCode.FRICTION_SPEED_DEPENDENT: {
+        "speed_mrad_s": 10.0,
+        "moves": "coulomb_in_std",
+        "segment": "forearm",
+        "shift_sd": 0.4,
+        "coulomb_shift_nm": -0.02,
+        "coulomb_sd": 0.8,
+    },
+    FindingCode.PLACEMENT_WIDER: {"assumed_mm": 2.0, "apparent_mm": 6.0, "at_limit": False},
+    FindingCode.ELASTIC_FAMILY_CHOSEN: {
+        "model": "coulomb",
+        "joints": ["wrist"],
+        "rms_nm": [0.05],
+        "ratio": [6.1],
+        "noise_nm": [0.008],
+    },
+    FindingCode.FUSION_FAILED: {"error": "singular matrix"},
+    FindingCode.BAG_DAMAGED: {"crc_errors": 2, "truncated": True, "lost_messages": None},
+    FindingCode.BAG_POSSIBLY_DAMAGED: {"implausible": [["wrench_absurd", 3]]},
+}
+for _code in (
+    FindingCode.DATA_NOTE,
+    FindingCode.BAG_NOTE,
+    FindingCode.TIMING_NOTE,
+    FindingCode.TARE_NOTE,
+    FindingCode.PRIOR_NOTE,
+):
+    SAMPLE_VALUES[_code] = {"detail": "a note written below the estimator"}
+
+
+def sample(code: FindingCode, where: str = "elbow") -> Finding:
+    """A finding of ``code`` with :data:`SAMPLE_VALUES`."""
+    return Finding(code=code, where=where, values=SAMPLE_VALUES.get(code, {}))
+
+
+@pytest.mark.parametrize("code", list(FindingCode))
+def test_every_code_renders_a_sentence_and_round_trips_through_json(code: FindingCode) -> None:
+    finding = sample(code)
+    text = finding.text
+    assert text and "{" not in text and "None" not in text.replace("None)", ""), text
+    back = Finding.from_json(finding.to_json())
+    assert back.code is code and back.text == text and back.severity is SPECS[code].severity
+
+
+def test_texts_are_rendered_from_the_values() -> None:
+    assert sample(FindingCode.TOO_FEW_SAMPLES).text == "too few samples: 198 < 200"
+    assert Finding(code=FindingCode.TOO_FEW_SAMPLES, values={"updates": 37}).text == "too few samples: 37 updates"
+    assert sample(FindingCode.NO_MOTION, "wrist").text == "no motion at the wrist: range 0.010 deg < 2.0 deg"
+    assert Finding(code=FindingCode.ONE_DIRECTION).text == "each joint must move both ways"
+    removed = Finding(code=FindingCode.FIT_OUTLIERS_REMOVED, values={"n": 1, "outlier_sd": 8.0})
+    assert removed.text == "removed 1 sample far off the fit (residual over 8 robust sd)"
+    assert sample(FindingCode.BAG_NOTE).in_recording(2).text == "recording 2: a note written below the estimator"
+
+
+def test_validity_weakness_and_message_derive_from_the_findings() -> None:
+    names = [("static_moment_kgm", "upper_arm")]
+    base = IdentificationResult(method="joint", names=names, values=np.ones(1), covariance=np.eye(1), summary="ok")
+    assert base.valid and not base.weak and base.message == "ok" and base.warnings == []
+    weak = base.with_findings(sample(FindingCode.CONFOUNDED), sample(FindingCode.DRIFT_MODELLED))
+    assert weak.valid and weak.weak and weak.message == "ok" and len(weak.warnings) == 2
+    invalid = weak.with_findings(sample(FindingCode.MODEL_MISFIT), sample(FindingCode.NO_MOTION))
+    assert not invalid.valid and not invalid.weak
+    assert invalid.message == f"{sample(FindingCode.MODEL_MISFIT).text}; {sample(FindingCode.NO_MOTION).text}"
+    assert invalid.warnings == weak.warnings  # notes stay notes
+    noted = base.with_findings(sample(FindingCode.POORLY_EXCITED))
+    assert noted.valid and not noted.weak
+
+
+def test_a_document_gains_findings_in_its_message_and_warnings() -> None:
+    document = invalid_document("joint", Finding(code=FindingCode.INPUT_WAITING, values={"what": "markers"}))
+    quality = document["quality"]
+    assert quality["message"] == "waiting for markers" and [f.code for f in findings_of(quality)] == [
+        FindingCode.INPUT_WAITING
+    ]
+    add_finding(quality, note(FindingCode.BAG_NOTE, "first"), at=0)
+    add_finding(quality, sample(FindingCode.ROTATION_ASSUMED))
+    assert quality["warnings"] == ["first"]
+    assert (
+        quality["message"].startswith("missing transform world -> ft_sensor")
+        and "; waiting for markers" in (quality["message"])
+    )
+    valid = {"valid": True, "message": "identified from 10 samples", "warnings": [], "level": "ok"}
+    add_finding(valid, sample(FindingCode.STATIC_MOMENT_IMPLAUSIBLE, "forearm"))
+    assert not valid["valid"] and valid["level"] == "invalid" and valid["message"].startswith("implausible forearm")
+
+
+def test_findings_of_skips_a_code_it_does_not_know() -> None:
+    quality = {"findings": [{"code": "from_a_newer_version"}, sample(FindingCode.NO_MOTION).to_json()]}
+    assert [f.code for f in findings_of(quality)] == [FindingCode.NO_MOTION]
+
+
+@pytest.mark.parametrize("code", [c for c in FindingCode if SPECS[c].severity is Severity.INVALID])
+def test_every_invalid_code_gives_the_report_a_cause_and_an_action(code: FindingCode) -> None:
+    finding = sample(code, "elbow")
+    record = SessionRecord(
+        subject="P001",
+        session_time_ns=1_700_000_000_000_000_000,
+        source="s.mcap",
+        method="joint",
+        config={},
+        subject_info={},
+        estimate_schema="bsp_ros/core/estimate/1",
+        quality=Quality(valid=False, message=finding.text, findings=(finding,)),
+        parameters={},
+    )
+    cause, action = invalid_cause(record)
+    assert cause == SPECS[code].cause.format(where="elbow") and action == SPECS[code].action
+    assert cause and action and "{" not in cause
+
+
+def test_a_session_stored_without_findings_gets_a_general_cause() -> None:
+    record = SessionRecord(
+        subject="P001",
+        session_time_ns=1_700_000_000_000_000_000,
+        source="s.mcap",
+        method="joint",
+        config={},
+        subject_info={},
+        estimate_schema="bsp_ros/core/estimate/1",
+        quality=Quality(valid=False, message="the model does not fit at the elbow"),
+        parameters={},
+    )
+    assert invalid_cause(record) == ("the measurement could not be evaluated", "repeat the session")
+
+
+def test_every_code_is_asserted_by_a_test() -> None:
+    """Each code appears as ``FindingCode.<NAME>`` in a test other than this module's table."""
+    used: set[str] = set()
+    for path in TEST_ROOT.rglob("test_*.py"):
+        if path.name == Path(__file__).name:
+            continue
+        used |= set(re.findall(r"FindingCode\.([A-Z_]+)", path.read_text(encoding="utf-8")))
+    missing = sorted(c.name for c in FindingCode if c.name not in used)
+    assert not missing, f"finding codes no test asserts: {missing}"
