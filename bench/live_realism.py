@@ -17,10 +17,14 @@ every 10 s, the filter's 5 Hz estimate held to it) is scored at the same instant
 ``--recursive-alone`` the filter's estimate without its window (rows "filt": the node before 2026-11-27).
 
 Per nuisance and mode: updates valid, both error rates over the updates (valid with some |z| > 3: "v&wrong";
-invalid with every |z| <= 3: "inv&right"), the worst |z| of a valid update, the mean compute time per update
+invalid with every |z| <= 3: "inv&right"), the worst |z| of a valid update, two-sided calibration over the
+data-sourced parameters of the valid updates (``bench/calibration.py``: z RMS, 1 for an honest std; the shares within
+1 and 2 std, 68 % and 95 % for an honest std) and the sharpness (per parameter the median std over the RMS error
+across the valid updates of every seed, one arm re-simulated, 1 ideal; per kind, static moments "SM", Coulomb
+amplitudes "C", masses "m", the median and range over its parameters), the mean compute time per update
 (ms, in process, one thread; the recursive mode's: its estimate document only) and the most frequent message of an
 invalid one. The totals close the table. Updates 0.2 s apart share most of their samples: the rates count updates,
-not independent sessions.
+not independent sessions (nor do they give the sharpness more than one error per seed).
 """
 
 from __future__ import annotations
@@ -33,8 +37,16 @@ import time
 from pathlib import Path
 
 import numpy as np
+from calibration import (
+    Tally,
+    calibration_columns,
+    calibration_header,
+    sharpness_columns,
+    sharpness_header,
+    summary_line,
+)
 from realism import _NUMBER, NUISANCES
-from scoring import rates, verdict, z_scores
+from scoring import rates, residuals, verdict, z_scores
 
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions
@@ -48,10 +60,10 @@ PERIOD_S = 0.2  # the identifier's default 5 Hz
 
 
 def _updates(
-    inputs, rate_hz: float, window_s: float, span_s: float
+    inputs, rate_hz: float, window_s: float, span_s: float, tally: Tally
 ) -> tuple[list[bool], list[float], list[float], list[str]]:
     """Feed one session's live inputs and identify every 0.2 s over its last ``span_s`` s: (valid, worst |z|, ms,
-    the invalid updates' messages)."""
+    the invalid updates' messages); the valid updates' residuals go to ``tally``."""
     simulated, stamps, wrench, _, raw = inputs
     truth = simulated.truth.to_dict()
     frame = orientation(simulated)
@@ -73,22 +85,26 @@ def _updates(
         ms.append(1e3 * (time.perf_counter() - started))
         valid.append(bool(estimate.valid))
         worst.append(max(z_scores(estimate.document, truth).values(), default=float("nan")))
+        tally.add(residuals(estimate.document, truth), bool(estimate.valid))
         if not estimate.valid:
             messages.append(_NUMBER.sub("#", str(estimate.document["quality"].get("message", "")))[:70])
     return valid, worst, ms, messages
 
 
 def _recursive_updates(
-    inputs, window_s: float, span_s: float, checked: bool = True
+    inputs, window_s: float, span_s: float, tally: Tally, checked: bool = True
 ) -> tuple[list[bool], list[float], list[float], list[str]]:
     """The recursive mode as the node runs it (``live_inputs.recursive_mode``), scored every 0.2 s over the last
-    ``span_s`` s as :func:`_updates` scores the windowed one (the time: the estimate's, its window checks included)."""
+    ``span_s`` s as :func:`_updates` scores the windowed one (the time: the estimate's, its window checks included;
+    the valid updates' residuals go to ``tally``)."""
     simulated, stamps = inputs[0], inputs[1]
     truth = simulated.truth.to_dict()
     from_ns = int(stamps[-1]) - int(span_s * 1e9)
     documents, seconds = recursive_mode(inputs, _node_options(), window_s, from_ns, checked)
     valid = [bool(d["quality"]["valid"]) for d in documents]
     worst = [max(z_scores(d, truth).values(), default=float("nan")) for d in documents]
+    for d in documents:
+        tally.add(residuals(d, truth), bool(d["quality"]["valid"]))
     messages = [_NUMBER.sub("#", str(d["quality"]["message"]))[:70] for d in documents if not d["quality"]["valid"]]
     return valid, worst, [1e3 * t for t in seconds], messages
 
@@ -118,8 +134,8 @@ def main(argv: list[str] | None = None) -> int:
 
     names = [n for n in NUISANCES if not args.only or any(o.lower() in n.lower() for o in args.only)]
     header = (
-        f"{'nuisance':28s} {'Hz':>4s} {'valid':>8s} {'v&wrong':>7s} {'inv&right':>9s} {'worst|z|':>8s} {'ms':>5s}"
-        "  most frequent invalid message"
+        f"{'nuisance':28s} {'Hz':>4s} {'valid':>8s} {'v&wrong':>7s} {'inv&right':>9s} {'worst|z|':>8s}"
+        f" {calibration_header()} {sharpness_header()} {'ms':>5s}  most frequent invalid message"
     )
     print(header)
     print("-" * len(header))
@@ -130,6 +146,7 @@ def main(argv: list[str] | None = None) -> int:
     ]
     totals: dict[float | str, list[str]] = {mode: [] for mode in modes}
     times: dict[float | str, list[float]] = {mode: [] for mode in modes}
+    pooled: dict[float | str, Tally] = {mode: Tally() for mode in modes}
     started = time.perf_counter()
     for name in names:
         sessions = []
@@ -143,11 +160,12 @@ def main(argv: list[str] | None = None) -> int:
             sessions.append(live_inputs(spec))
         for mode in modes:
             valid, worst, ms, messages = [], [], [], []
+            tally = Tally()
             for inputs in sessions:
                 if mode in ("rec", "filt"):
-                    v, z, t, m = _recursive_updates(inputs, args.window, args.span, checked=mode == "rec")
+                    v, z, t, m = _recursive_updates(inputs, args.window, args.span, tally, checked=mode == "rec")
                 else:
-                    v, z, t, m = _updates(inputs, float(mode), args.window, args.span)
+                    v, z, t, m = _updates(inputs, float(mode), args.window, args.span, tally)
                 valid += v
                 worst += z
                 ms += t
@@ -155,10 +173,12 @@ def main(argv: list[str] | None = None) -> int:
             verdicts = [verdict(v, z) for v, z in zip(valid, worst, strict=True)]
             totals[mode] += verdicts
             times[mode] += ms
+            pooled[mode].extend(tally)
             _, wrong, thrown = rates(verdicts)
             worst_valid = max((z for v, z in zip(valid, worst, strict=True) if v), default=float("nan"))
             print(
                 f"{name:28s} {mode:>4} {sum(valid):>4d}/{len(valid):<3d} {wrong:>7d} {thrown:>9d} {worst_valid:8.2f}"
+                f" {calibration_columns(tally.calibration())} {sharpness_columns(tally.sharpness())}"
                 f" {np.mean(ms):5.1f}  {collections.Counter(messages).most_common(1)[0][0] if messages else '-'}",
                 flush=True,
             )
@@ -170,6 +190,8 @@ def main(argv: list[str] | None = None) -> int:
             f"invalid-and-right {thrown}/{total} ({100 * thrown / max(total, 1):.1f} %), "
             f"compute mean {np.mean(times[mode]):.1f} ms, max {np.max(times[mode]):.1f} ms"
         )
+        # No pooled sharpness: over nuisances one parameter's errors would mix them.
+        print(summary_line(f"{label}, pooled over the valid updates", pooled[mode], sharpness=False))
     print(
         f"({len(names) * args.seeds} sessions in {time.perf_counter() - started:.0f} s; seeds {args.first_seed}..."
         f"{args.first_seed + args.seeds - 1}, {args.duration:g} s sessions, {args.window:g} s window, last "

@@ -14,10 +14,15 @@ data-sourced quantity (source ``data`` / ``data+prior``) that the truth has is s
 ``|z| = |value - truth| / std``: the static moments (with ``--all-quantities`` also lengths, masses, COMs, first
 moments, inertias and the joints' Coulomb level, whose truth is 0) and, where the estimate has
 ``joints.<joint>.passive_curve``, its points against the truth's curve. Per row: runs, valid, valid-and-wrong
-(some |z| > 3), invalid-and-right (every |z| <= 3), the worst |z| over valid runs and over all, the median over
-valid runs of the largest static-moment error (% of the truth) and of the largest passive-curve error (RMS over
-the truth curve's range, % of its RMS), how many runs are "accurate" (issue 20's target: valid, static moments
-within 3 % and 3 std, curves within 10 % RMS), the most common message of the invalid ones.
+(some |z| > 3), invalid-and-right (every |z| <= 3), two-sided calibration over the scored quantities of the valid
+runs but not the curves, whose points are not independent (``bench/calibration.py``: z RMS with
+z = (value - truth) / std, 1 for an honest std; the shares within 1 and 2 std, 68 % and 95 % for an honest std),
+the sharpness over the seeds (arm26 is one arm, a seed re-draws the noise: per quantity the median std over the RMS
+error across the valid runs, 1 ideal; per kind, static moments "SM", Coulomb amplitudes "C" and masses "m" with
+``--all-quantities``, the median and range over its quantities), the worst |z| over valid runs and over all, the
+median over valid runs of the largest static-moment error (% of the truth) and of the largest passive-curve error
+(RMS over the truth curve's range, % of its RMS), how many runs are "accurate" (issue 20's target: valid, static
+moments within 3 % and 3 std, curves within 10 % RMS), the most common message of the invalid ones.
 ``--quick``: one seed, 60 s, rigid and three strengths, three models (and suggestions). ``--planar``: arm26 with
 both joint axes made exactly lateral. ``--trunk-tilt-deg DEG``: each session is also recorded with arm26's ground
 (the trunk, with the shoulder and the muscles' origins) turned by DEG about world x, the same motion relative to it,
@@ -43,6 +48,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from calibration import Tally, calibration_columns, calibration_header, sharpness_columns, sharpness_header
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "test" / "physics"))
@@ -120,9 +126,24 @@ def _curve_z(estimate: dict[str, Any], truth: dict[str, Any]) -> list[float]:
     return (np.abs(value[inside] - reference) / std[inside]).tolist()
 
 
-def score(document: dict[str, Any], truth: dict[str, Any], all_quantities: bool) -> dict[str, float]:
-    """``{"<owner>.<key>": |z|}`` for every data-sourced quantity with a truth (passive curves: the worst point)."""
-    z = {}
+def residuals(document: dict[str, Any], truth: dict[str, Any], all_quantities: bool) -> dict[str, tuple[float, float]]:
+    """(value - truth, std) of every scored data-sourced quantity with a truth and a std, keyed ``<key>/<owner>``.
+
+    Parameters
+    ----------
+    document : dict
+        The estimate (``bsp identify --json``).
+    truth : dict
+        The session's truth.json.
+    all_quantities : bool
+        Every quantity of ``ALL_SEGMENT_KEYS`` and ``ALL_JOINT_KEYS``; else the static moments alone.
+
+    Returns
+    -------
+    dict
+        ``key/owner -> (signed error, std)`` in the quantity's unit (the passive curves are not included).
+    """
+    out = {}
     groups = (
         ("segments", ALL_SEGMENT_KEYS if all_quantities else SEGMENT_KEYS),
         ("joints", ALL_JOINT_KEYS if all_quantities else ()),
@@ -136,7 +157,16 @@ def score(document: dict[str, Any], truth: dict[str, Any], all_quantities: bool)
                     continue
                 if q.get("value") is None or not q.get("std"):
                     continue
-                z[f"{owner}.{key}"] = abs(q["value"] - true_owner[key]) / q["std"]
+                out[f"{key}/{owner}"] = (float(q["value"]) - float(true_owner[key]), float(q["std"]))
+    return out
+
+
+def score(document: dict[str, Any], truth: dict[str, Any], all_quantities: bool) -> dict[str, float]:
+    """``{"<owner>.<key>": |z|}`` for every data-sourced quantity with a truth (passive curves: the worst point)."""
+    z = {}
+    for name, (error, std) in residuals(document, truth, all_quantities).items():
+        key, owner = name.split("/", 1)
+        z[f"{owner}.{key}"] = abs(error) / std
     for joint, quantities in document.get("joints", {}).items():
         curve, true_curve = quantities.get("passive_curve"), truth["joints"].get(joint, {}).get("passive_curve")
         if isinstance(curve, dict) and true_curve:
@@ -236,10 +266,14 @@ def _row_text(key: tuple[float, str, str], runs: list[dict[str, Any]]) -> str:
         values = [r["worst_z"] for r in rows if r["z"]]
         return f"{max(values):.1f}" if values else "-"
 
+    tally = Tally()
+    for r in valid:
+        tally.add(r["residuals"])
+    two_sided = f"{calibration_columns(tally.calibration())} {sharpness_columns(tally.sharpness())}"
     label = f"{100 * share:.3g}%" if share > 0 else "rigid"
     return (
         f"{label:>7s} {protocol:10s} {model:34s} {len(runs):4d} {len(valid):5d} {len(wrong):11d} "
-        f"{len(right_invalid):13d} {worst(valid):>9s} {worst(runs):>7s} {median(valid, 'static_pct'):>8s} "
+        f"{len(right_invalid):13d} {two_sided} {worst(valid):>9s} {worst(runs):>7s} {median(valid, 'static_pct'):>8s} "
         f"{median(valid, 'curve_rms_pct'):>8s} {len(accurate):8d}  {common}"
     )
 
@@ -299,6 +333,7 @@ def main(argv: list[str] | None = None) -> int:
                     done.add(model)
                     document = identify(bags, model, where / "estimate.json", arguments)
                     z = {} if "error" in document else score(document, truth, args.all_quantities)
+                    signed = {} if "error" in document else residuals(document, truth, args.all_quantities)
                     valid = bool(document.get("quality", {}).get("valid", False))
                     errors = {"static_pct": math.nan, "curve_rms_pct": math.nan}
                     if "error" not in document:
@@ -311,6 +346,7 @@ def main(argv: list[str] | None = None) -> int:
                             "valid": valid,
                             "z": z,
                             "worst_z": max(z.values(), default=math.nan),
+                            "residuals": signed,
                             "message": "" if valid else _message(document),
                             **errors,
                         }
@@ -324,8 +360,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"arm26 (OpenSim, {shape}), {duration:g} s sessions, {seeds} seed(s); |z| over {scored} and passive curves")
     print(
         f"{'passive':>7s} {'protocol':10s} {'model':34s} {'runs':>4s} {'valid':>5s} {'valid+wrong':>11s} "
-        f"{'invalid+right':>13s} {'worst|z|v':>9s} {'all':>7s} {'static%':>8s} {'curve%':>8s} {'accurate':>8s}  "
-        "most common invalid message"
+        f"{'invalid+right':>13s} {calibration_header()} {sharpness_header()} {'worst|z|v':>9s} {'all':>7s} "
+        f"{'static%':>8s} {'curve%':>8s} {'accurate':>8s}  most common invalid message"
     )
     for key in sorted(rows, key=lambda k: (k[0], k[1], k[2] != DEFAULT, len(k[2]), k[2])):
         print(_row_text(key, rows[key]))

@@ -12,8 +12,13 @@ sensor fixed in world (``/tf_static``) or turning with the handle (per-sample ``
 every ``--passive MODEL`` its warnings suggest (and every ``--also-passive MODEL``). Every data-sourced
 parameter (``source`` "data" or "data+prior") is scored against truth.json: |z| = |value - truth| / std. Per
 scenario and model: runs, valid, valid-and-wrong (valid, some |z| > 3), invalid-and-right (invalid, every
-|z| <= 3), the worst |z| and its parameter, the most common reason for invalid, and the engine's inertial / gravity
-torque per joint (RMS over RMS, peak over peak).
+|z| <= 3), the worst |z| and its parameter, two-sided calibration over the data-sourced parameters of its valid
+runs (``bench/calibration.py``: z RMS with z = (value - truth) / std, 1 for an honest std; the shares within 1 and 2
+std, 68 % and 95 % for an honest std), the sharpness (per parameter the median std over the RMS error across the
+valid runs, 1 ideal; per kind, static moments "SM", Coulomb amplitudes "C", masses "m", the median and range over
+its parameters), the most common reason for invalid, and the engine's inertial / gravity torque per joint (RMS over
+RMS, peak over peak). Each seed draws its own arm unless ``--arm-seed`` fixes one (the seeds then vary the noise
+only): the sharpness is meant over one arm, and over arms drawn per seed it mixes their errors.
 
 How it was run for the issue-19 report (the estimator of main at 3f2534c, 2 shared cores, 1078 s):
 ``bsp plan --shoulder 0 1.2 --shoulder-range -70 -10 --elbow-range 10 100 --wrist-range -20 20 --duration 120
@@ -42,17 +47,18 @@ import re
 import sys
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+import calibration
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine
-from scoring import z_scores
+from scoring import residuals, z_scores
 
 from bsp_ros.cli import main as bsp_main
 from bsp_ros.core.identification.passive import PassiveModel
@@ -92,6 +98,7 @@ class Tally:
     worst_param: str = ""
     messages: collections.Counter[str] = field(default_factory=collections.Counter)
     failures: collections.Counter[str] = field(default_factory=collections.Counter)
+    two_sided: calibration.Tally = field(default_factory=calibration.Tally)
 
 
 def _identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
@@ -141,7 +148,7 @@ def run_scenario(
     """Simulate and identify ``scenario`` for each seed; add to ``tallies`` (keyed by scenario and model)."""
     ratios: dict[str, list[float]] = collections.defaultdict(list)
     for seed in seeds:
-        arm = draw_arm(seed, springs=scenario.springs)
+        arm = draw_arm(seed if args.arm_seed is None else args.arm_seed, springs=scenario.springs)
         options = CellOptions(
             trajectory=_trajectory(scenario.motion, args.plan),
             duration_s=args.duration,
@@ -171,6 +178,7 @@ def run_scenario(
                 continue
             z = z_scores(estimate_m, cell.truth)
             valid = bool(estimate_m["quality"]["valid"])
+            tally.two_sided.add(residuals(estimate_m, cell.truth), valid)
             wrong = any(v > 3.0 for v in z.values())
             tally.valid += valid
             tally.valid_wrong += valid and wrong
@@ -200,8 +208,12 @@ def _row(name: str, t: Tally) -> str:
     common = t.messages.most_common(1)
     reason = f"{common[0][1]}x {common[0][0]}" if common else "-"
     fail = f" failed {dict(t.failures)}" if t.failures else ""
+    two_sided = (
+        f"{calibration.calibration_columns(t.two_sided.calibration())}"
+        f" {calibration.sharpness_columns(t.two_sided.sharpness())}"
+    )
     return (
-        f"{name:52} {t.runs:4} {t.valid:5} {t.valid_wrong:7} {t.invalid_right:9}  {t.worst_z:8.3g} "
+        f"{name:52} {t.runs:4} {t.valid:5} {t.valid_wrong:7} {t.invalid_right:9} {two_sided}  {t.worst_z:8.3g} "
         f"({t.worst_param})  {reason}{fail}"
     )
 
@@ -215,6 +227,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--plan", type=Path, help="a `bsp plan --json` file: adds the planned-trajectory rows")
     parser.add_argument(
         "--also-passive", action="append", default=[], metavar="MODEL", help="try this --passive model on every run too"
+    )
+    parser.add_argument(
+        "--arm-seed",
+        type=int,
+        help="draw every run's arm from this seed (one arm; the seeds vary the noise only), for the sharpness",
     )
     parser.add_argument("--only", default="", help="only scenarios whose key (e.g. 0.03/none/fixed) contains this")
     parser.add_argument("--quick", action="store_true", help="2 seeds of 40 s at 250 Hz, 0.03 rad/s fixed sensor")
@@ -246,8 +263,11 @@ def main(argv: list[str] | None = None) -> int:
                 print("  " + _row(name, tallies[name]), flush=True)
     print(f"\n{args.seeds} seeds, {args.duration:g} s, wrench {args.wrench_hz:g} Hz, {time.monotonic() - start:.0f} s")
     header = (
-        f"{'motion sens sensor  model':52} runs valid v&wrong inv&right  worst|z| (parameter)   most common invalid"
+        f"{'motion sens sensor  model':52} runs valid v&wrong inv&right {calibration.calibration_header()}"
+        f" {calibration.sharpness_header()}  worst|z| (parameter)   most common invalid"
     )
+    arms = "one arm" if args.arm_seed is not None else "an arm drawn per seed: the sharpness mixes arms"
+    print(f"sharpness over the valid runs of a row ({arms}); calibration over their data-sourced parameters")
     print(header)
     for name, t in tallies.items():
         print(_row(name, t))
@@ -263,6 +283,8 @@ def main(argv: list[str] | None = None) -> int:
                             **{f: getattr(t, f) for f in ("runs", "valid", "valid_wrong", "invalid_right")},
                             "worst_z": t.worst_z,
                             "worst_param": t.worst_param,
+                            "calibration": asdict(t.two_sided.calibration()),
+                            "sharpness": {k: asdict(v) for k, v in t.two_sided.sharpness().items()},
                             "messages": dict(t.messages),
                         }
                         for k, t in tallies.items()

@@ -10,7 +10,12 @@ mode the table shows, over the seeds: the worst static-moment error (% of the tr
 seed), the worst Coulomb error (%), the largest |z| = |estimate - truth| / std over every data-sourced parameter
 (``source`` data or data+prior, invalid estimates included), how many estimates were valid, both error rates:
 valid yet some parameter beyond 3 std ("v&wrong") and invalid with every parameter within 3 std ("inv&right": a
-right result thrown away), and the most frequent warning kinds; the totals of both rates close the table.
+right result thrown away), two-sided calibration over the data-sourced parameters of the valid estimates
+(``bench/calibration.py``): z RMS with z = (estimate - truth) / std (1 for an honest std) and the shares within 1
+and 2 std (68 %, 95 % for an honest std), the sharpness over the seeds (one arm, re-simulated; the nuisance's
+seeded directions change with it): per parameter the median std over the RMS error across the seeds (1 ideal),
+per kind (static moments "SM", Coulomb amplitudes "C", masses "m") the median (range) over its parameters, and
+the most frequent warning kinds; the totals of both rates and the pooled calibration close the table.
 Sensor nuisances (offset, drift, handle) pick a seeded random direction per seed.
 """
 
@@ -28,7 +33,15 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from scoring import rates, verdict, z_scores
+from calibration import (
+    Tally,
+    calibration_columns,
+    calibration_header,
+    sharpness_columns,
+    sharpness_header,
+    summary_line,
+)
+from scoring import rates, residuals, verdict, z_scores
 
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
@@ -136,6 +149,7 @@ def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
         if coulomb_err and not np.isnan(coulomb_err).all()
         else math.nan,
         "max_z": float(np.nanmax(z)) if not np.isnan(z).all() else math.nan,
+        "residuals": residuals(document, truth),
         "warnings": [_kind(w) for w in document["quality"]["warnings"]],
         "message": document["quality"].get("message", ""),
     }
@@ -153,9 +167,10 @@ def main(argv: list[str] | None = None) -> int:
     names = [n for n in NUISANCES if not args.only or any(o.lower() in n.lower() for o in args.only)]
     modes = (False,) if args.no_tare else (False, True)
     rows, runs = [], []
+    pooled = Tally()
     header = (
         f"{'nuisance':28s} {'tare':4s} {'moment %':>9s} {'Coulomb %':>9s} {'max|z|':>7s} {'valid':>6s}"
-        f" {'v&wrong':>7s} {'inv&right':>9s}"
+        f" {'v&wrong':>7s} {'inv&right':>9s} {calibration_header()} {sharpness_header()}"
         "  warnings (runs)"
     )
     print(header)
@@ -174,12 +189,17 @@ def main(argv: list[str] | None = None) -> int:
                         "moment_err_pct": math.nan,
                         "coulomb_err_pct": math.nan,
                         "max_z": math.nan,
+                        "residuals": {},
                         "warnings": [f"error: {type(error).__name__}"],
                         "message": str(error),
                     }
                 results.append(result)
                 runs.append({"nuisance": name, "tare": tare, "seed": seed, "result": result})
             valid = [r for r in results if r["valid"]]
+            tally = Tally()
+            for r in valid:
+                tally.add(r["residuals"])
+            pooled.extend(tally)
             for r in results:
                 r["verdict"] = verdict(r["valid"], r["max_z"])
             _, wrong, thrown = rates(r["verdict"] for r in results)
@@ -189,7 +209,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"{name:28s} {'yes' if tare else 'no':4s} "
                 f"{max(r['moment_err_pct'] for r in results):9.3g} {max(r['coulomb_err_pct'] for r in results):9.3g} "
                 f"{max(r['max_z'] for r in results):7.3g} {len(valid):>3d}/{len(results):<2d} {wrong:>7d}"
-                f" {thrown:>9d}  {common}"
+                f" {thrown:>9d} {calibration_columns(tally.calibration())} {sharpness_columns(tally.sharpness())}"
+                f"  {common}"
             )
             rows.append(row)
             print(row, flush=True)
@@ -198,6 +219,8 @@ def main(argv: list[str] | None = None) -> int:
         f"valid-and-wrong {wrong}/{total} runs ({100 * wrong / max(total, 1):.1f} %), "
         f"invalid-and-right {thrown}/{total} ({100 * thrown / max(total, 1):.1f} %)"
     )
+    # No pooled sharpness: over nuisances one parameter's errors would mix them.
+    print(summary_line("pooled over the valid runs", pooled, sharpness=False))
     print(
         f"({len(runs)} runs in {time.perf_counter() - started:.0f} s; seeds {args.first_seed}..."
         f"{args.first_seed + args.seeds - 1}, {args.duration:g} s sessions)"

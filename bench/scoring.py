@@ -1,4 +1,5 @@
-"""Scores an estimate document against a simulation's truth: |z| of its data-sourced parameters, both error rates."""
+"""Scores an estimate document against a simulation's truth: its data-sourced parameters' errors and |z|, both error
+rates (two-sided calibration and sharpness: :mod:`calibration`)."""
 
 from __future__ import annotations
 
@@ -6,14 +7,27 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
+from calibration import z_values
+
 DATA_SOURCES = ("data", "data+prior")
 
 
-def z_scores(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, float]:
-    """|value - truth| / std of every data-sourced parameter the truth knows, keyed ``quantity/owner``.
+def residuals(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, tuple[float, float]]:
+    """(value - truth, std) of every data-sourced parameter the truth knows, keyed ``quantity/owner``.
 
-    Invalid estimates are scored too (their values are what a user who ignored the flag would take); a
-    parameter without a value is left out, one with a zero or missing std scores 0 if exact, else infinity.
+    Parameters
+    ----------
+    document : dict
+        An estimate document (``segments`` and ``joints``, each quantity with ``value``, ``std``, ``source``).
+    truth : dict
+        The simulation's truth in the same layout (``SimulatedSession.truth.to_dict()``, truth.json).
+
+    Returns
+    -------
+    dict
+        ``quantity/owner -> (signed error, std)`` in the quantity's unit; a missing std is 0. Invalid estimates
+        are scored too (their values are what a user who ignored the flag would take); a parameter without a
+        value is left out.
     """
     out = {}
     for group in ("segments", "joints"):
@@ -25,9 +39,16 @@ def z_scores(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, float
                 value, std = q.get("value"), q.get("std")
                 if not isinstance(true, (int, float)) or value is None:
                     continue
-                error = abs(float(value) - float(true))
-                out[f"{key}/{owner}"] = error / std if std else (0.0 if error == 0.0 else math.inf)
+                out[f"{key}/{owner}"] = (float(value) - float(true), float(std or 0.0))
     return out
+
+
+def z_scores(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, float]:
+    """|value - truth| / std of every parameter :func:`residuals` scores, keyed ``quantity/owner``.
+
+    A parameter with a zero or missing std scores 0 if exact, else infinity.
+    """
+    return {name: abs(z) for name, z in z_values(residuals(document, truth)).items()}
 
 
 def verdict(valid: bool, max_z: float) -> str:
