@@ -107,6 +107,25 @@ class TopicRecord:
     message_count: int
 
 
+def channel_metadata(topic: TopicRecord) -> dict[str, str]:
+    """The MCAP channel metadata of ``topic``, as rosbag2's MCAP storage writes it.
+
+    rosbags pairs each ``metadata.yaml`` topic with the MCAP channel of the same name, type and offered QoS
+    profiles, and reads nothing of a topic whose channel carries other profiles (without an error). Build
+    both from the same :class:`TopicRecord` so they always agree.
+
+    Parameters
+    ----------
+    topic : the topic as :func:`build_metadata` lists it.
+
+    Returns
+    -------
+    dict of str
+        ``offered_qos_profiles`` (the profiles as a YAML string) and ``topic_type_hash`` (RIHS01).
+    """
+    return {"offered_qos_profiles": dump_qos(topic.qos), "topic_type_hash": topic.type_hash}
+
+
 def build_metadata(
     file_name: str, topics: Sequence[TopicRecord], start_ns: int, end_ns: int, custom: Mapping[str, str]
 ) -> dict[str, Any]:
@@ -115,7 +134,8 @@ def build_metadata(
     Parameters
     ----------
     file_name : the ``.mcap`` file name, relative to the bag directory.
-    topics : every topic written, in channel order.
+    topics : every topic written, in channel order, each with the profiles its MCAP channel carries
+        (:func:`channel_metadata`): version 9 lists them as a YAML sequence, the channel as a YAML string.
     start_ns, end_ns : first and last receive time, ns.
     custom : ``custom_data`` string pairs.
     """

@@ -17,7 +17,14 @@ from rosbags.typesys import Stores, get_typestore
 from bsp_ros import __version__
 from bsp_ros.bag.cdr import encode_fixed
 from bsp_ros.bag.errors import BagWriteError
-from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, dump_metadata, dump_qos, qos_profile
+from bsp_ros.bag.metadata import (
+    METADATA_FILE,
+    TopicRecord,
+    build_metadata,
+    channel_metadata,
+    dump_metadata,
+    qos_profile,
+)
 from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, WORLD_FRAME, WRENCH_TYPE, TopicMap
 from bsp_ros.core.streams import MARKERS_3, Session
 from msg_adapters import TransformSample, build_tf_message, quaternion_from_matrix
@@ -192,16 +199,9 @@ def write_session_bag(
                     msgdef, _ = typestore.generate_msgdef(msgtype, ros_version=2)
                     schema_ids[msgtype] = writer.register_schema(msgtype, "ros2msg", msgdef.encode("utf-8"))
                 qos = (qos_profile(transient_local=latched, depth=1 if latched else 10),)
-                type_hash = typestore.hash_rihs01(msgtype)
-                channel_ids.append(
-                    writer.register_channel(
-                        topic,
-                        "cdr",
-                        schema_ids[msgtype],
-                        {"offered_qos_profiles": dump_qos(qos), "topic_type_hash": type_hash},
-                    )
-                )
-                records.append(TopicRecord(topic, msgtype, type_hash, qos, len(messages)))
+                record = TopicRecord(topic, msgtype, typestore.hash_rihs01(msgtype), qos, len(messages))
+                channel_ids.append(writer.register_channel(topic, "cdr", schema_ids[msgtype], channel_metadata(record)))
+                records.append(record)
             stamps_all = [p[3] for p in payloads]
             for k, i in zip(topic_all[order].tolist(), index_all[order].tolist(), strict=True):
                 writer.add_message(

@@ -19,8 +19,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "Subscribe to ROS 2 topics (rclpy, serialized messages) and write a rosbag2 bag (metadata.yaml "
             "version 9 and one .mcap with small CRC-checked chunks, flushed every 0.25 s, so a killed recorder "
             "loses well under a second). Types come from the publishers or from TOPIC:TYPE (a type whose message "
-            "package is not installed is refused). Each topic's metadata lists the QoS its publishers offered, as "
-            "rosbag2 records it. Stop with Ctrl-C/SIGTERM or --duration. Exit codes: 0 recorded, 2 bad argument "
+            "package is not installed is refused). Each topic's metadata.yaml entry and MCAP channel list the same "
+            "QoS profiles, those its publishers offered when its first message arrived, as rosbag2 records them. "
+            "Stop with Ctrl-C/SIGTERM or --duration. Exit codes: 0 recorded, 2 bad argument "
             "(topic or type name, a type not installed), 3 nothing recorded (no message arrived: no bag is left), "
             "4 the bag exists, 6 no rclpy. Never name the bag after a person."
         ),

@@ -8,13 +8,13 @@ import re
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from bsp_ros import __version__
 from bsp_ros.bag.errors import BagWriteError
-from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, dump_metadata, dump_qos
+from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, channel_metadata, dump_metadata
 from bsp_ros.errors import DataError, InputError, RuntimeBackendError
 from bsp_ros.live.sensor_topics import is_sensor_topic
 
@@ -150,11 +150,27 @@ class RecordReport:
 
 @dataclass
 class _Sub:
+    """A subscribed topic: its publishers so far, its MCAP channel once opened, and what it received.
+
+    Attributes
+    ----------
+    topic, msgtype : topic name and message type.
+    subscription : the rclpy raw subscription.
+    offered : publisher gid -> its offered QoS as rosbag2 records it, every publisher seen until the channel
+        is opened.
+    record : the topic as written (count 0), fixed when the channel is opened; its profiles go both into the
+        MCAP channel and into ``metadata.yaml``.
+    channel_id : the MCAP channel, once opened.
+    inbox : ``(receive time in ns, raw CDR)`` not yet written.
+    count : messages written.
+    """
+
     topic: str
     msgtype: str
     subscription: Any
-    channel_id: int
-    offered: dict[bytes, dict[str, Any]]  # publisher gid -> its offered QoS, every publisher seen
+    offered: dict[bytes, dict[str, Any]]
+    record: TopicRecord | None = None
+    channel_id: int | None = None
     inbox: list[tuple[int, bytes]] = field(default_factory=list)
     count: int = 0
 
@@ -204,18 +220,33 @@ class _Recorder:
                 )
         return found
 
-    def note_publishers(self) -> None:
-        """Add the publishers now in the graph to each topic's offered profiles (late joiners too)."""
-        for topic, publishers in self.discovered(list(self.subs)).items():
-            sub = self.subs[topic]
-            for gid, publisher in publishers.items():
-                if publisher.msgtype == sub.msgtype:
-                    sub.offered.setdefault(gid, publisher.profile)
+    def note_publishers(self, sub: _Sub) -> None:
+        """Add the publishers of ``sub``'s type now in the graph to its offered profiles (late joiners too)."""
+        for gid, publisher in self.discovered([sub.topic]).get(sub.topic, {}).items():
+            if publisher.msgtype == sub.msgtype:
+                sub.offered.setdefault(gid, publisher.profile)
+
+    def open_channel(self, sub: _Sub) -> int:
+        """Register ``sub``'s MCAP channel (once) with the profiles of every publisher known now.
+
+        Opened at the first message rather than at subscription: a topic subscribed by its given type before
+        any publisher appeared would otherwise carry no profile. The profiles are then fixed, as rosbag2 fixes
+        them: ``metadata.yaml`` must list exactly the channel's, or rosbags reads none of its messages.
+        """
+        if sub.channel_id is None:
+            self.note_publishers(sub)
+            qos = tuple(sub.offered.values())
+            sub.record = TopicRecord(sub.topic, sub.msgtype, self.typestore.hash_rihs01(sub.msgtype), qos, 0)
+            sub.channel_id = self.writer.register_channel(
+                sub.topic, "cdr", self.schemas[sub.msgtype], channel_metadata(sub.record)
+            )
+        return sub.channel_id
 
     def subscribe(
         self, topic: str, msgtype: str, reliable: bool, durable: bool, offered: dict[bytes, dict[str, Any]]
     ) -> _Sub:
-        """Create the raw subscription and register the MCAP channel of a topic."""
+        """Create the raw subscription of a topic and register its schema (its channel opens with its first
+        message: :meth:`open_channel`)."""
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
         from bsp_ros.live.runtime.ros import message_class
@@ -227,18 +258,7 @@ class _Recorder:
             except Exception as exc:  # rosbags: a type outside its Jazzy store
                 raise InputError(f"{topic}: no message definition of {msgtype} to store in the bag: {exc}") from exc
             self.schemas[msgtype] = self.writer.register_schema(msgtype, "ros2msg", msgdef.encode("utf-8"))
-        # As rosbag2: the channel carries the offered QoS of the publishers known when it is subscribed (the
-        # metadata.yaml written at the end lists every publisher seen during the recording).
-        channel_id = self.writer.register_channel(
-            topic,
-            "cdr",
-            self.schemas[msgtype],
-            {
-                "offered_qos_profiles": dump_qos(list(offered.values())),
-                "topic_type_hash": self.typestore.hash_rihs01(msgtype),
-            },
-        )
-        sub = _Sub(topic, msgtype, None, channel_id, dict(offered))
+        sub = _Sub(topic, msgtype, None, dict(offered))
         qos = QoSProfile(
             history=HistoryPolicy.KEEP_ALL,
             reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
@@ -261,18 +281,23 @@ class _Recorder:
         total = 0
         for sub in self.subs.values():
             inbox, sub.inbox = sub.inbox, []
-            for now, data in inbox:
-                # rclpy hands raw messages without their source timestamp: publish time = receive time.
-                self.writer.add_message(sub.channel_id, log_time=now, data=data, publish_time=now, sequence=sub.count)
-                sub.count += 1
             if inbox:
-                # The recording spans every topic: earliest and latest receive time over all of them.
-                first = min(now for now, _ in inbox)
-                self.start_ns = min(self.start_ns, first) if self.start_ns else first
-                self.end_ns = max(self.end_ns, max(now for now, _ in inbox))
+                self._write(sub, inbox)
             total += len(inbox)
         self.unflushed += total
         return total
+
+    def _write(self, sub: _Sub, inbox: list[tuple[int, bytes]]) -> None:
+        """Write ``inbox`` (receive time in ns, raw CDR) to ``sub``'s channel, opening it first if need be."""
+        channel_id = self.open_channel(sub)
+        for now, data in inbox:
+            # rclpy hands raw messages without their source timestamp: publish time = receive time.
+            self.writer.add_message(channel_id, log_time=now, data=data, publish_time=now, sequence=sub.count)
+            sub.count += 1
+        # The recording spans every topic: earliest and latest receive time over all of them.
+        first = min(now for now, _ in inbox)
+        self.start_ns = min(self.start_ns, first) if self.start_ns else first
+        self.end_ns = max(self.end_ns, max(now for now, _ in inbox))
 
     def flush(self) -> None:
         """Close the open chunk and hand everything written so far to the OS (a kill cannot lose it)."""
@@ -281,11 +306,12 @@ class _Recorder:
             self.unflushed = 0
 
     def finish(self) -> list[TopicRecord]:
-        """Write the summary, footer and the rosbag2 metadata record; returns the topics."""
-        records = [
-            TopicRecord(s.topic, s.msgtype, self.typestore.hash_rihs01(s.msgtype), tuple(s.offered.values()), s.count)
-            for s in self.subs.values()
-        ]
+        """Write the summary, footer and the rosbag2 metadata record; returns the topics, in subscription order.
+
+        A topic that received nothing gets its channel now, so that the MCAP lists every topic
+        ``metadata.yaml`` lists.
+        """
+        records = [self._final_record(s) for s in self.subs.values()]
         meta = build_metadata(self.mcap_name, records, self.start_ns, self.end_ns, self._custom())
         self.writer.add_metadata(
             "rosbag2",
@@ -296,6 +322,12 @@ class _Recorder:
         os.fsync(self.stream.fileno())
         self.stream.close()
         return records
+
+    def _final_record(self, sub: _Sub) -> TopicRecord:
+        """``sub`` as written: its channel's record with the count of messages written."""
+        self.open_channel(sub)
+        assert sub.record is not None  # set by open_channel
+        return replace(sub.record, message_count=sub.count)
 
     def _custom(self) -> dict[str, str]:
         return {"writer": f"bsp_ros {__version__} recorder"}
@@ -328,7 +360,9 @@ def record(
     clock; rclpy's raw subscriptions give no source timestamp). Chunks are small, CRC-checked and flushed
     at least every ``flush_interval_s``: a killed recorder leaves an ``.mcap`` that
     :func:`bsp_ros.bag.read_session` reads up to the cut.
-    ``metadata.yaml`` is written at the end.
+    ``metadata.yaml`` is written at the end. Each topic has one MCAP channel; it and ``metadata.yaml`` list
+    the same offered QoS profiles: those of the publishers known when the topic's first message arrived (a
+    publisher that joins later is not listed, as with rosbag2), so that rosbags pairs them and reads the bag.
 
     Parameters
     ----------
@@ -391,8 +425,6 @@ def record(
                 last_flush = time.monotonic()
         rec.spin(0.05)  # what arrived meanwhile
         rec.take_all()
-        if rec.subs:
-            rec.note_publishers()
         records = rec.finish()
         report.counts = {r.name: r.message_count for r in records}
         report.types = {r.name: r.msgtype for r in records}
