@@ -20,9 +20,9 @@ TRIM_THRESHOLD_BYTES = 512 * 1024 * 1024
 def reuse_freed_memory() -> bool:
     """Set glibc's malloc to keep and reuse freed blocks up to :data:`MMAP_THRESHOLD_BYTES`; True if it was set.
 
-    ``bsp identify`` of a 10-minute session took 1.12-1.30 s so set against 1.27-1.43 s by default, three runs each
-    in turns (minor page faults 34,400-34,900 against 48,000-49,000; peak memory 245 against 244 MB;
-    bench/README.md, nineteenth session). Elsewhere than glibc on Linux nothing is changed.
+    An identification allocates and frees the same large arrays over and over; kept, they are not faulted in anew
+    each time (the figures: bench/README.md, ``identify_vs_anyreader``). Elsewhere than glibc on Linux nothing is
+    changed.
     """
     if not sys.platform.startswith("linux"):
         return False

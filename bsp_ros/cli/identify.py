@@ -18,8 +18,7 @@ from bsp_ros.cli.identify_options import (  # noqa: F401
 )
 
 # METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.quantities import passive_curves_of, quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
 

@@ -60,17 +60,6 @@ def add_finding(quality: dict[str, Any], finding: Finding, at: int | None = None
     warnings.insert(len(warnings) if at is None else at, finding.text)
 
 
-def findings_of(quality: dict[str, Any]) -> list[Finding]:
-    """The findings of an estimate document's ``quality`` block (none for a document without them)."""
-    out = []
-    for block in quality.get("findings") or []:
-        try:
-            out.append(Finding.from_json(block))
-        except (KeyError, TypeError, ValueError):
-            continue  # a code from a newer version: its text stays in the message and warnings
-    return out
-
-
 def estimate_document(
     result: IdentificationResult,
     data: IdentificationData,

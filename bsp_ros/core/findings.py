@@ -22,7 +22,9 @@ __all__ = [
     "FindingCode",
     "FindingSpec",
     "Severity",
+    "findings_of",
     "invalid_texts",
+    "note",
     "note_texts",
 ]
 
@@ -192,6 +194,17 @@ class Finding:
 def note(code: FindingCode, detail: str) -> Finding:
     """A finding of a lower layer whose text is ``detail`` verbatim (the ``*_NOTE`` codes)."""
     return Finding(code=code, values={"detail": detail})
+
+
+def findings_of(quality: Mapping[str, Any]) -> list[Finding]:
+    """The findings of an estimate document's ``quality`` block (none for a document without them)."""
+    out = []
+    for block in quality.get("findings") or []:
+        try:
+            out.append(Finding.from_json(block))
+        except (KeyError, TypeError, ValueError):
+            continue  # a code from a newer version: its text stays in the message and warnings
+    return out
 
 
 def invalid_texts(findings: Iterable[Finding]) -> list[str]:

@@ -5,8 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode, Severity
+from bsp_ros.core.findings import FindingCode, Severity, findings_of
 
 # Findings of `bsp_identifier` that mean its inputs stopped or have not started (BspIdentifierNode.stale_reason).
 INPUT_STOPPED = frozenset({FindingCode.INPUT_STALE, FindingCode.INPUT_WAITING, FindingCode.WAITING_FOR_CHECK})

@@ -16,8 +16,7 @@ from mujoco_cell import CellOptions, draw_arm, paper_sine, run_engine
 
 from bsp_ros.cli import main
 from bsp_ros.core import model
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.planning import handle_poses_world, planned_trajectory_from_file, trajectory_from_points
 from bsp_ros.core.simulation import (
     GRAVITY_M_S2,

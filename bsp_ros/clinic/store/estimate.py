@@ -15,7 +15,7 @@ from typing import Any
 from bsp_ros.clinic.store.curves import CURVE_KEY, passive_curves
 from bsp_ros.clinic.store.records import ARMS, GROUPS, SOURCES, ParamKey, Quality, Quantity, SessionRecord
 from bsp_ros.clinic.store.subject import check_subject_id
-from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import findings_of
 from bsp_ros.errors import InputError, StoreError
 
 ESTIMATE_SCHEMA = "bsp_ros/core/estimate/1"

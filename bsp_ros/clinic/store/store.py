@@ -26,7 +26,7 @@ from bsp_ros.clinic.store.records import (
 )
 from bsp_ros.clinic.store.schema import APPLICATION, SCHEMA_VERSION, migration_statements
 from bsp_ros.clinic.store.subject import check_subject_id
-from bsp_ros.core.estimate import findings_of
+from bsp_ros.core.findings import findings_of
 from bsp_ros.errors import InputError, StoreError
 
 _MIGRATION_LOCK = 0x6273_7073  # PostgreSQL advisory lock key ("bsps") serialising migrations

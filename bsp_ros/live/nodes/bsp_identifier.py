@@ -208,7 +208,7 @@ class BspIdentifierNode(RosNode):
         # model its last check chose (~8 ms for 30 s at 1 kHz, the checks every elastic_check_every updates ~25
         # ms: bench/live_window_update.py), while the wrenches wait in their subscription's queue (1 s deep) and
         # are taken right after it. A worker thread kept the callbacks going, but the two traded the interpreter
-        # lock every 0.2 ms and the update took a fifth longer in the node (bench/README.md, 21st session).
+        # lock every 0.2 ms and the update took longer in the node (bench/README.md, live latency).
         self.support_fraction = float(p["support_fraction"])
         self.support_estimate: dict[str, Any] | None = None  # set with each estimate
         self.support_diagnostics: dict[str, str] = {}
@@ -491,8 +491,7 @@ class BspIdentifierNode(RosNode):
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros bsp_identifier``); ``args``: a command line like ``sys.argv``."""
     # A callback waiting for the interpreter lock waits up to the switch interval (5 ms by default) while another
-    # Python thread holds it; 0.2 ms kept the recursive mode's latency lower: p99 1.41-1.68 ms against 1.51-2.10
-    # without (bench/README.md, 21st session).
+    # Python thread holds it; 0.2 ms keeps the recursive mode's latency lower (bench/README.md, live latency).
     sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))
     return run_node(NAME, BspIdentifierNode, BspIdentifierNode.__doc__ or "", PARAMETERS, args)
 

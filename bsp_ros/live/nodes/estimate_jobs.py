@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
-from bsp_ros.core.estimate import estimate_document, findings_of, invalid_document
-from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.estimate import estimate_document, invalid_document
+from bsp_ros.core.findings import Finding, FindingCode, findings_of
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.pipeline import IdentifyOptions, fused

@@ -7,8 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import Finding, FindingCode, Severity
+from bsp_ros.core.findings import Finding, FindingCode, Severity, findings_of
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.live.online.windowed import WindowedIdentifier, WindowEstimate
 

@@ -15,9 +15,8 @@ def single_threaded_blas() -> bool:
 
     A node's products are small (a 30 s window, a few columns): OpenBLAS's second thread on a 2-core cell takes
     no time off them and, waiting busily for work, takes CPU from the simulator and the other nodes (the
-    identifier's threads other than its executor's: 2.8-2.9 % of a core against 3.8-4.4 %). The windowed update's
-    mean is the same either way; its max over five runs each (60 and 120 s) 28.8-44.6 ms against 33.7-63.9
-    (bench/README.md, twenty-second and twenty-fifth sessions).
+    identifier's threads other than its executor's). The windowed update's mean is the same either way and its
+    worst case lower with one thread (bench/README.md, live latency).
     Call after the node's modules are imported (a library loaded later keeps its default). Without threadpoolctl
     (pip installs it with bsp_ros; rosdep has no key for it) BLAS keeps its default.
     """

@@ -11,8 +11,7 @@ from bag_surgery import flip_bit_of_value, rewrite_without_crcs
 from bsp_ros.bag import write_session_bag
 from bsp_ros.bag.offline import identify_bag
 from bsp_ros.core import glitches
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.simulation import SimulatedSession, human_arm_cell, simulate_cell
 
 

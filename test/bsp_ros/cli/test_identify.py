@@ -9,8 +9,7 @@ from pathlib import Path
 import pytest
 
 from bsp_ros.cli import main
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.findings import FindingCode, findings_of
 
 
 @pytest.fixture(scope="module")

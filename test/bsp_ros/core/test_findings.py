@@ -11,8 +11,8 @@ import pytest
 
 from bsp_ros.clinic.report.summary import invalid_cause
 from bsp_ros.clinic.store.records import Quality, SessionRecord
-from bsp_ros.core.estimate import add_finding, findings_of, invalid_document
-from bsp_ros.core.findings import Finding, FindingCode, Severity, note
+from bsp_ros.core.estimate import add_finding, invalid_document
+from bsp_ros.core.findings import Finding, FindingCode, Severity, findings_of, note
 from bsp_ros.core.findings_specs import SPECS
 from bsp_ros.core.identification.result import IdentificationResult
 
@@ -199,3 +199,14 @@ def test_every_code_is_asserted_by_a_test() -> None:
         used |= set(re.findall(r"FindingCode\.([A-Z_]+)", path.read_text(encoding="utf-8")))
     missing = sorted(c.name for c in FindingCode if c.name not in used)
     assert not missing, f"finding codes no test asserts: {missing}"
+
+
+def test_the_contract_lists_every_code_under_its_severity() -> None:
+    contract = (TEST_ROOT.parent / "docs" / "contract.md").read_text(encoding="utf-8")
+    table = contract[contract.index("### Finding codes") :].split("\n\n")[2]
+    listed: dict[str, Severity] = {}
+    for row in table.splitlines()[2:]:
+        severity, codes = row.strip("|").split("|")
+        for code in re.findall(r"`([a-z_]+)`", codes):
+            listed[code] = Severity(severity.strip().split(":")[0])
+    assert listed == {str(c): SPECS[c].severity for c in FindingCode}

@@ -98,7 +98,7 @@ def _elastic_family_fit(
     A spring the fixed model lacks leaves a residual far above the sensor noise: the elastic check, which would
     find it, runs only on a model that fits. On a MuJoCo arm with joint springs and a planned trajectory the
     default model was invalid here ("does not fit at the wrist", static moments 4.7 std off) while the family was
-    valid within 1.5 std (bench/README.md, twenty-fourth session). A misfit the family cannot take up (a wrong
+    valid within 1.5 std (bench/README.md, physics engine). A misfit the family cannot take up (a wrong
     sensor transform, a load, low-speed friction) leaves it invalid too, and the fixed model's verdict stands.
     """
     if "offset" in config.passive.terms:  # an elastic model already: nothing wider to choose from

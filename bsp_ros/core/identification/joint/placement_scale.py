@@ -34,7 +34,7 @@ def _free_offsets(free: Problem, m: int) -> tuple[np.ndarray, np.ndarray]:
 
     As :func:`fit_problem`'s block of them, but the sandwich runs on the scores projected on those values (``B s_t``
     with ``B`` their rows of the inverse design): its lags are chosen for them, and it costs m components instead
-    of every parameter's (bench/README.md, seventeenth session)."""
+    of every parameter's."""
     solved = reweighted_values(free)
     design, _, _ = normal_equations(free, solved.weights, solved.statistics)
     rows = design_inverse(design)[-m:, :]  # (m, P)

@@ -9,8 +9,7 @@ import pytest
 
 from bsp_ros.core import model
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode, Severity
+from bsp_ros.core.findings import FindingCode, Severity, findings_of
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification import joint as joint_package
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session

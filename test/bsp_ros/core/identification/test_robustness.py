@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import glitches
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.pipeline import identify_session
 from bsp_ros.core.simulation import SimulatedSession, human_arm_cell, simulate_cell

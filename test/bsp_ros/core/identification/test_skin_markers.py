@@ -8,8 +8,7 @@ import functools
 import pytest
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.pipeline import identify_session
 from bsp_ros.core.planning import JointLimits, NominalArm, PlanRequest, plan_protocol
 from bsp_ros.core.quantities import quantities_of

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import FindingCode
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.joint import identify_joint
 from bsp_ros.core.identification.passive import PassiveModel

@@ -9,8 +9,7 @@ import numpy as np
 from live_inputs import WindowFeed, live_inputs, orientation
 
 from bsp_ros.core import simulation as sim
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import Finding, FindingCode, note
+from bsp_ros.core.findings import Finding, FindingCode, findings_of, note
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.passive import PassiveModel

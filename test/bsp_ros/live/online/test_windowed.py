@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bsp_ros.core.estimate import findings_of
-from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.findings import Finding, FindingCode, findings_of
 from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier, WindowEstimator, WindowSamples
 
