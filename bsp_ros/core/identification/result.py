@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bsp_ros.core.findings import Finding, Severity, invalid_texts, note_texts
+from bsp_ros.core.identification.ledger import Ledger, Term
 
 if TYPE_CHECKING:
     from bsp_ros.core.identification.joint.held import HeldModel
@@ -33,6 +34,7 @@ class IdentificationResult:
     covariance : (p, p) covariance of the estimates.
     findings : what the identification found, in order: an invalid one makes the estimate invalid.
     summary : the one-line summary of a valid estimate (``identified from 4000 samples``).
+    ledger : ``covariance`` as a sum of named terms (its uncertainty budget), or None where the method keeps none.
     condition_number : of the column-scaled weighted regressor.
     residual_rms_nm : joint -> RMS of the torque residual (Nm).
     n_samples : samples (time instants) used.
@@ -49,6 +51,7 @@ class IdentificationResult:
     covariance: np.ndarray
     findings: tuple[Finding, ...] = ()
     summary: str = ""
+    ledger: Ledger | None = None
     condition_number: float = float("nan")
     residual_rms_nm: dict[str, float] = field(default_factory=dict)
     n_samples: int = 0
@@ -80,6 +83,15 @@ class IdentificationResult:
     def warnings(self) -> list[str]:
         """The texts of the findings that qualify or annotate the estimate, in order."""
         return note_texts(self.findings)
+
+    def plus_term(self, term: Term, covariance: np.ndarray) -> IdentificationResult:
+        """A copy with ``covariance`` (p, p) added to the covariance as ``term`` of its ledger."""
+        ledger = self.ledger if self.ledger is not None else Ledger.of(Term.SENSOR_NOISE, self.covariance)
+        return dataclasses.replace(self, covariance=self.covariance + covariance, ledger=ledger.plus(term, covariance))
+
+    def budget(self, index: int) -> dict[str, float]:
+        """Each ledger term's standard uncertainty of parameter ``index`` (empty without a ledger)."""
+        return {} if self.ledger is None else self.ledger.contributions(index)
 
     def with_findings(self, *findings: Finding, first: bool = False) -> IdentificationResult:
         """A copy with ``findings`` added after (or, ``first``, before) its own."""

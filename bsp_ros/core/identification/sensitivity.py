@@ -11,6 +11,7 @@ import numpy.typing as npt
 
 from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.model import contact_lever_sums
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
@@ -148,7 +149,7 @@ def add_tare_covariance(
     """
     added = g @ np.asarray(wrench_covariance, dtype=np.float64) @ g.T
     added = 0.5 * (added + added.T)
-    return dataclasses.replace(result, covariance=result.covariance + added), added
+    return result.plus_term(Term.SENSOR_ZERO, added), added
 
 
 def zero_covariance(zero_sd_n: float, zero_sd_nm: float) -> np.ndarray:

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 import numpy as np
 
 from bsp_ros.core.findings import Finding, FindingCode, Severity, findings_of
+from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.live.online.windowed import WindowedIdentifier, WindowEstimate
 
@@ -56,7 +56,7 @@ def checked_result(result: IdentificationResult, window: dict[str, Any] | None) 
         if std is None or entry.get("value") is None:
             return checked.with_findings(Finding(code=FindingCode.WINDOW_WITHOUT_STD, where=owner, values={"key": key}))
         variance[k] = float(std) ** 2 + (float(result.values[k]) - float(entry["value"])) ** 2
-    return dataclasses.replace(checked, covariance=result.covariance + np.diag(variance))
+    return checked.plus_term(Term.WINDOW_CHECK, np.diag(variance))
 
 
 class WindowCheck:

@@ -8,6 +8,7 @@ import numpy as np
 
 from bsp_ros.core.findings import Finding
 from bsp_ros.core.identification.joint.curves import CurveBasis
+from bsp_ros.core.identification.ledger import Ledger
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import ParameterName
 
@@ -27,9 +28,9 @@ class HeldModel:
     drift : a drifting wrench offset was found and is modelled.
     placement_sd_m : (n + 1,) the chain points' placement sd (m): their share of the covariance follows the
         motion in the window, and a refit computes it anew.
-    systematic_covariance : (p, p) what the estimate's covariance holds beyond its fit's own and the placement's:
-        the passive model's choice, the friction shape, the drift's unknown level. These do not shrink with more
-        samples, and a few seconds more of the same arm hardly change them.
+    systematic : the terms of the estimate's covariance beyond its fit's own and the placement's: the passive
+        model's choice, the friction shape, the drift's unknown level. These do not shrink with more samples, and a
+        few seconds more of the same arm hardly change them.
     curves : the passive curves' basis (a model choice), or None.
     data_problems : why the samples could not support the estimate (excitation, misfit, identifiability): a refit
         judges its own samples' instead.
@@ -44,7 +45,7 @@ class HeldModel:
     widths_rad_s: np.ndarray
     drift: bool
     placement_sd_m: np.ndarray
-    systematic_covariance: np.ndarray
+    systematic: Ledger
     curves: CurveBasis | None
     data_problems: tuple[Finding, ...]
     check_problems: tuple[Finding, ...]

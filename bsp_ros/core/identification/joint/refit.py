@@ -11,16 +11,14 @@ from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.drift import drift_columns
 from bsp_ros.core.identification.joint.held import HeldModel
-from bsp_ros.core.identification.joint.identify import (
-    UNIDENTIFIABLE_CONDITION,
-    failed_result,
-    prior_share,
-    unidentifiable_problem,
-)
+from bsp_ros.core.identification.joint.identify import failed_result
+from bsp_ros.core.identification.joint.judgement import UNIDENTIFIABLE_CONDITION, unidentifiable_problem
 from bsp_ros.core.identification.joint.outliers import far_off_problem, fit_outliers, too_far_off
 from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
 from bsp_ros.core.identification.joint.samples import usable_samples
+from bsp_ros.core.identification.joint.steps import prior_share
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
+from bsp_ros.core.identification.ledger import Ledger, Term
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.stacked import augmented, build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
@@ -71,7 +69,7 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         values = {"n": n_far, "outlier_sd": config.outlier_sd}
         warnings.append(Finding(code=FindingCode.FIT_OUTLIERS_REMOVED, values=values))
     own = fit.covariance
-    placement = np.zeros_like(own)
+    placement = None
     if held.placement_sd_m.any():
         placement = placement_covariance(data, problem, fit, held.placement_sd_m)
     if held.drift:
@@ -82,7 +80,11 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         fit = dataclasses.replace(wide, values=wide.values[:p], design=wide.design[:p, :p])
         own = wide.covariance[:p, :p]
     shares = prior_share(problem, own)
-    fit = dataclasses.replace(fit, covariance=own + placement + held.systematic_covariance)
+    ledger = Ledger.of(Term.SENSOR_NOISE, own)
+    if placement is not None:
+        ledger = ledger.plus(Term.MARKER_PLACEMENT, placement)
+    ledger = ledger.joined(held.systematic)
+    fit = dataclasses.replace(fit, covariance=ledger.total(own.shape[0]))
     if fit.condition > UNIDENTIFIABLE_CONDITION:
         problems.append(unidentifiable_problem(fit.condition))
     problems += list(held.check_problems)
@@ -103,6 +105,7 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         names=problem.names,
         values=fit.values,
         covariance=fit.covariance,
+        ledger=ledger,
         findings=(*problems, *warnings, *(w for w in held.warnings if w not in warnings)),
         summary=f"identified from {data.t_ns.size} samples",
         condition_number=fit.condition,

@@ -13,8 +13,7 @@ from bsp_ros.core.findings import FindingCode, Severity, findings_of
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification import joint as joint_package
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
-from bsp_ros.core.identification.joint import JointConfig, identify_joint
-from bsp_ros.core.identification.joint import identify as identify_module
+from bsp_ros.core.identification.joint import JointConfig, identify_joint, judgement
 from bsp_ros.core.identification.joint import refit as refit_module
 from bsp_ros.core.identification.joint.refit import refit_held
 from bsp_ros.core.identification.result import IdentificationResult
@@ -123,7 +122,7 @@ def test_friction_the_data_put_below_zero_sits_at_its_bound(data: Identification
 def test_the_condition_number_thresholds_name_poor_excitation(data: IdentificationData, monkeypatch) -> None:
     poorly = identify_joint(data, dataclasses.replace(EXACT, max_condition=1.0))
     assert poorly.valid and FindingCode.POORLY_EXCITED in [c for c, _ in _codes(poorly)]
-    monkeypatch.setattr(identify_module, "UNIDENTIFIABLE_CONDITION", 1.0)
+    monkeypatch.setattr(judgement, "UNIDENTIFIABLE_CONDITION", 1.0)
     unidentified = identify_joint(data, EXACT)
     assert not unidentified.valid and FindingCode.NOT_IDENTIFIABLE in [c for c, _ in _codes(unidentified)]
 

@@ -12,6 +12,7 @@ from bsp_ros.core import simulation as sim
 from bsp_ros.core.findings import Finding, FindingCode, findings_of, note
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.joint.held import HeldModel
+from bsp_ros.core.identification.ledger import Ledger
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.pipeline import IdentifyOptions
@@ -31,7 +32,7 @@ def _check(found: tuple[Finding, ...] = (), data_problems: tuple[Finding, ...] =
         widths_rad_s=np.zeros(1),
         drift=False,
         placement_sd_m=np.zeros(2),
-        systematic_covariance=np.zeros((1, 1)),
+        systematic=Ledger(),
         curves=None,
         data_problems=data_problems,
         check_problems=found,

@@ -1,0 +1,135 @@
+"""The model checks of the stacked identification, in order: friction at low speed, an elastic moment the model
+lacks, the markers' placement, an implausible off-axis moment. Each finds what the model lacks on a fit that the
+data support; what it finds makes the estimate invalid or widens its std (a named term of the ledger)."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import numpy as np
+
+from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.identification.joint.elastic_check import elastic_check
+from bsp_ros.core.identification.joint.fallback import family_result
+from bsp_ros.core.identification.joint.placement_covariance import covariance_from_products
+from bsp_ros.core.identification.joint.placement_scale import placement_scale
+from bsp_ros.core.identification.joint.stage import Outcome, Stage
+from bsp_ros.core.identification.joint.steps import with_drift_terms, with_placement
+from bsp_ros.core.identification.joint.stribeck import stribeck_check
+from bsp_ros.core.identification.ledger import Term
+from bsp_ros.core.identification.priors import implausible_perpendicular_moments
+from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.identification.stacked import build_problem
+
+__all__ = ["check_elastic", "check_perpendicular", "check_placement", "check_stribeck"]
+
+
+def check_stribeck(stage: Stage) -> Stage:
+    """Friction larger at low speed: named; where modelling it moves the estimate beyond its std the estimate is
+    invalid, else which friction law holds is open and both amplitudes join the Coulomb variance."""
+    if not stage.config.check_elastic or stage.problems:
+        return stage
+    found = stribeck_check(stage.data, stage.problem, stage.fit, stage.config, stage.widths_rad_s)
+    biasing = tuple(f.note for f in found if f.biases_estimate)
+    term = np.zeros_like(stage.fit.covariance)
+    for finding in (f for f in found if not f.biases_estimate):
+        term[finding.coulomb_column, finding.coulomb_column] += finding.coulomb_shift_nm**2
+    outcome = Outcome(
+        added=((Term.FRICTION_SHAPE, term),) if term.any() else (),
+        notes=(*biasing, *(f.note for f in found if not f.biases_estimate)),
+        problems=(Finding(code=FindingCode.UNMODELLED_EFFECT),) if biasing else (),
+    )
+    return stage.apply(outcome, from_checks=True)
+
+
+def _with_springs(stage: Stage) -> Stage:
+    """``stage`` with the model that has a linear spring's terms beside this one's: the elastic check's wider
+    model, and what the placement check fits beside the offsets (built once, where either needs it)."""
+    springs = "offset" in stage.config.passive.terms  # an elastic model: every elastic term needs the offset
+    if springs or stage.problems or stage.with_springs is not None:
+        return stage
+    if not (stage.config.check_elastic or stage.placement is not None):
+        return stage
+    wider = stage.config.passive.with_terms(("offset", "stiffness"))
+    problem = build_problem(stage.data, wider, stage.problem.rows, stage.widths_rad_s, stage.samples.extras)
+    return dataclasses.replace(stage, with_springs=problem)
+
+
+def check_elastic(stage: Stage) -> Stage | IdentificationResult:
+    """A linear spring the fixed model lacks that the data support and that moves the static moments: the family
+    the data choose from replaces the model (``elastic_fallback``), or the estimate is invalid."""
+    stage = _with_springs(stage)
+    config = stage.config
+    if not config.check_elastic or stage.selection is not None or stage.problems:
+        return stage
+    elastic = elastic_check(
+        stage.data,
+        config,
+        stage.problem.rows,
+        stage.fit,
+        stage.widths_rad_s,
+        stage.samples.extras,
+        functools.partial(with_placement, stage),
+        stage.with_springs,
+    )
+    if elastic and config.elastic_fallback:
+        # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
+        return family_result(stage.data, config).with_findings(*elastic, first=True)
+    problems = (Finding(code=FindingCode.ELASTIC_LACKING),) if elastic else ()
+    return stage.apply(Outcome(notes=tuple(elastic), problems=problems), from_checks=True)
+
+
+def check_placement(stage: Stage) -> Stage:
+    """Whether the data put the markers further off their joint centres than assumed (placement_scale.py): where
+    they do, the wider placement's share replaces the assumed one.
+
+    Last of the checks that change the std, since free offsets take up what else the model lacks (a spring, a drift,
+    a low-speed friction), which must change the model or the verdict, not only widen the std. So it is not judged
+    where a check found something, nor with an elastic model (on one posture its terms, gravity and the offsets are
+    nearly one: MuJoCo arms with springs and their markers on the centres read as 6-10 mm off); and a spring or
+    drift too small for its own check is fitted beside the offsets (taken up, it read as 10-20 mm).
+    """
+    stage = _with_springs(stage)
+    placement = stage.placement
+    if placement is None or "offset" in stage.config.passive.terms or stage.problems:
+        return stage
+    assert stage.with_springs is not None  # built for the same conditions
+    placement_fit = stage.placement_fit
+    assert placement_fit is not None  # set with the placement
+    stage = with_drift_terms(stage)
+    assert stage.drift_terms is not None
+    skin = np.ones(stage.n + 1, dtype=bool)
+    skin[-1] = not stage.data.contact_from_robot
+    found = placement_scale(
+        stage.problem, placement.columns, stage.placement_sd_m, skin, stage.with_springs, stage.drift_terms[:2]
+    )
+    stage = dataclasses.replace(stage, placement_check=found)
+    if found.scale <= 1.0:
+        return stage
+    wider = covariance_from_products(placement_fit, placement.products * found.column_factor)
+    notes = (found.note,) if found.note is not None else ()
+    return stage.apply(Outcome(replaced=((Term.MARKER_PLACEMENT, wider),), notes=notes), from_checks=True)
+
+
+def check_perpendicular(stage: Stage) -> Stage:
+    """Last, with the model checks (live, they run beside the updates): an off-axis moment no real centre of mass
+    gives; a drift or an elastic term the checks above name is the likelier cause of one."""
+    if not stage.config.check_elastic or stage.samples.extras is None or stage.problems:
+        return stage
+    names = stage.problem.names
+    perpendicular = [i for i, (key, _) in enumerate(names) if key == "perpendicular_moment_kgm"]
+    model = stage.ledger.get(Term.MODEL_CHOICE)
+    placed = stage.ledger.get(Term.MARKER_PLACEMENT)
+    model_sd = np.zeros(len(names)) if model is None else np.sqrt(np.clip(np.diag(model), 0.0, None))
+    placement_sd = np.zeros(len(names)) if placed is None else np.sqrt(np.clip(np.diag(placed), 0.0, None))
+    problems = implausible_perpendicular_moments(
+        [names[i][1] for i in perpendicular],
+        stage.fit.values[perpendicular],
+        stage.samples.extras.prior,
+        # A marker off its joint centre, normal to the segment, tilts the segment's angle: an apparent off-axis
+        # moment as large as the placement std says, no evidence of a missing moment.
+        np.hypot(model_sd[perpendicular], placement_sd[perpendicular]),
+        family_chosen=stage.config.passive.select,
+    )
+    return stage.apply(Outcome(problems=tuple(problems)), from_checks=True)
