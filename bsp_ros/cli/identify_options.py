@@ -53,6 +53,14 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         "marker ('' to use the marker) (default: /robot/handle_pose)",
     )
     parser.add_argument(
+        "--marker-placement-sd-mm",
+        type=float_within(0.0, 50.0),
+        default=2.0,
+        metavar="MM",
+        help="how far (1 sd per in-plane axis) a skin marker may sit from its joint centre: its effect is the "
+        "marker_placement term of every std (0 for markers known to sit on the centres) (default: 2)",
+    )
+    parser.add_argument(
         "--handle-pose-sd-mm",
         type=float_within(0.0, 50.0),
         default=0.5,
@@ -164,6 +172,7 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
         subject=subject,
         tare=read_tare(args.tare),
         wrench_delay_s=args.wrench_delay_s,
+        marker_placement_sd_m=args.marker_placement_sd_mm / 1000.0,
         handle_pose_sd_m=args.handle_pose_sd_mm / 1000.0,
         zero_sd_n=args.zero_sd_n,
         zero_sd_nm=args.zero_sd_nm,

@@ -88,6 +88,46 @@ def estimate_document(
     -------
     A JSON-ready dict (strict JSON: no NaN).
     """
+    segments = _segments(result, data, posterior, marker_placement_sd_m)
+    joints = _joints(result)
+    correlation = _correlation(result.covariance)
+    document: dict[str, Any] = {
+        "schema": SCHEMA,
+        "method": result.method,
+        "segments": segments,
+        "joints": joints,
+        "quality": _quality(result, data, posterior),
+        "subject": {"body_mass_kg": subject.body_mass_kg, "height_m": subject.height_m, "sex": subject.sex},
+        "diagnostics": {
+            "parameters": [f"{key}/{owner}" for key, owner in result.names],
+            "correlation": [[_finite(c) for c in row] for row in correlation],
+            **{k: v for k, v in result.diagnostics.items() if k not in ("paper_pi", "passive_curves")},
+            **({"paper_pi": result.diagnostics["paper_pi"]} if "paper_pi" in result.diagnostics else {}),
+        },
+        "software": {"name": "bsp_ros", "version": __version__},
+    }
+    if session:
+        document["session"] = session
+    return document
+
+
+def identified(result: IdentificationResult, i: int, source: str = "data") -> dict[str, Any]:
+    """Parameter ``i`` of ``result`` as a docs/contract.md quantity, with its uncertainty budget (``budget``: each
+    ledger term's standard uncertainty, whose squares sum to the std's) where the result keeps a ledger."""
+    out = quantity(result.values[i], result.std[i], source)
+    budget = result.budget(i)
+    if budget and out["std"] is not None:
+        out["budget"] = {term: float(u) if math.isfinite(u) else None for term, u in budget.items()}
+    return out
+
+
+def _segments(
+    result: IdentificationResult,
+    data: IdentificationData,
+    posterior: Posterior | None,
+    marker_placement_sd_m: float | np.ndarray,
+) -> dict[str, dict[str, Any]]:
+    """The ``segments`` block: length, static moment, the fused masses and COMs, the base quantities."""
     n = data.n_joints
     # Two markers' offsets along the segment move the measured length; the truth is the joint centres' distance.
     sd_m = np.broadcast_to(np.asarray(marker_placement_sd_m, dtype=np.float64), (n + 1,))
@@ -96,9 +136,7 @@ def estimate_document(
     for j, segment in enumerate(segments_for(n)):
         entry = {
             "length_m": quantity(data.lengths_m[j], lengths_std_m[j], "data"),
-            "static_moment_kgm": quantity(
-                result.value("static_moment_kgm", segment), result.std_of("static_moment_kgm", segment), "data"
-            ),
+            "static_moment_kgm": identified(result, result.index("static_moment_kgm", segment)),
         }
         if posterior is not None:
             cov = posterior.covariance
@@ -115,24 +153,34 @@ def estimate_document(
                 entry[key] = quantity(float("nan"), float("nan"), "prior")
         entry.update(base_quantities(result, posterior, data.lengths_m, j, segment))
         segments[segment] = entry
-    joints: dict[str, dict[str, Any]] = {joint: {} for joint in joints_for(n)}
+    return segments
+
+
+def _joints(result: IdentificationResult) -> dict[str, dict[str, Any]]:
+    """The ``joints`` block: each passive parameter, and the passive curves of a valid estimate."""
+    joints: dict[str, dict[str, Any]] = {joint: {} for joint in joints_for(result.n_joints)}
     for i, (key, owner) in enumerate(result.names):
         if owner in joints:
-            joints[owner][key] = quantity(result.values[i], result.std[i], "data")
+            joints[owner][key] = identified(result, i)
     curves: dict[str, Any] = result.diagnostics.get("passive_curves") or {}  # type: ignore[assignment]
     for joint, curve in curves.items():
         # The elastic passive moment over the measured range: what a clinician compares day to day.
         if joint in joints and result.valid:
             joints[joint][PASSIVE_CURVE] = curve
+    return joints
+
+
+def _quality(result: IdentificationResult, data: IdentificationData, posterior: Posterior | None) -> dict[str, Any]:
+    """The ``quality`` block: the verdict, its findings, and what the std holds."""
+    notes = list(posterior.notes) if posterior else []
     quality: dict[str, Any] = {
         "valid": bool(result.valid),
         "n_samples": int(result.n_samples),
         "condition_number": float(result.condition_number) if math.isfinite(result.condition_number) else None,
         "residual_rms_nm": {k: float(v) for k, v in result.residual_rms_nm.items()},
-        "warnings": list(result.warnings) + (list(posterior.notes) if posterior else []),
+        "warnings": list(result.warnings) + notes,
         "message": result.message,
-        "findings": [f.to_json() for f in result.findings]
-        + [note(FindingCode.PRIOR_NOTE, text).to_json() for text in (posterior.notes if posterior else [])],
+        "findings": [f.to_json() for f in result.findings] + [note(FindingCode.PRIOR_NOTE, t).to_json() for t in notes],
         "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
         "removed_samples": removed_samples(result, data),
         # Where the handle wrench's point of action came from: it sets the lever arms (and their placement std).
@@ -152,25 +200,7 @@ def estimate_document(
                 "static_moment_shift_kgm_per_0_05_nm": sensitivity,
             }
         ]
-    correlation = _correlation(result.covariance)
-    document: dict[str, Any] = {
-        "schema": SCHEMA,
-        "method": result.method,
-        "segments": segments,
-        "joints": joints,
-        "quality": quality,
-        "subject": {"body_mass_kg": subject.body_mass_kg, "height_m": subject.height_m, "sex": subject.sex},
-        "diagnostics": {
-            "parameters": [f"{key}/{owner}" for key, owner in result.names],
-            "correlation": [[_finite(c) for c in row] for row in correlation],
-            **{k: v for k, v in result.diagnostics.items() if k not in ("paper_pi", "passive_curves")},
-            **({"paper_pi": result.diagnostics["paper_pi"]} if "paper_pi" in result.diagnostics else {}),
-        },
-        "software": {"name": "bsp_ros", "version": __version__},
-    }
-    if session:
-        document["session"] = session
-    return document
+    return quality
 
 
 def source_from_prior_share(share: float | None) -> str:
@@ -195,9 +225,7 @@ def base_quantities(
     for key in ("perpendicular_moment_kgm", "grouped_inertia_kgm2"):
         if (key, segment) in result.names:
             i = result.index(key, segment)
-            out[key] = quantity(
-                result.values[i], result.std[i], source_from_prior_share(shares.get(f"{key}/{segment}"))
-            )
+            out[key] = identified(result, i, source_from_prior_share(shares.get(f"{key}/{segment}")))
     if "grouped_inertia_kgm2" not in out or posterior is None:
         return out
     n = lengths_m.size

@@ -65,6 +65,11 @@ class IdentificationResult:
         return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
 
     @property
+    def n_joints(self) -> int:
+        """Joints of the chain: one static moment per segment."""
+        return sum(1 for key, _ in self.names if key == "static_moment_kgm")
+
+    @property
     def valid(self) -> bool:
         """Whether the data support the estimate: no finding makes it invalid."""
         return not any(f.severity is Severity.INVALID for f in self.findings)
