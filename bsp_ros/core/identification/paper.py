@@ -65,11 +65,67 @@ def identify_paper(data: IdentificationData, config: PaperConfig | None = None) 
     config = config or PaperConfig()
     n = data.n_joints
     a = data.lengths_m
+    fits = _sequential_fit(data, config)
+    pi = fits.pi
+    beta = [pi["m1l1"] + a[0] * (pi["m2"] + pi["m3"]), pi["m2l2"] + (a[1] * pi["m3"] if n == 3 else 0.0)]
+    if n == 3:
+        beta.append(pi["m3l3"])
+    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments_for(n)] + [
+        ("coulomb_nm", j) for j in joints_for(n)
+    ]
+    values = np.array(beta + list(fits.passive_nm))
+    n_samples = int(data.t_ns.size)
+    # Eq. 11's mean |residual| has the standard error of a mean of |r|.
+    passive_std = [float(np.std(np.abs(r))) / np.sqrt(n_samples) for r in _residuals(data, values, n)]
+    covariance = np.diag(np.concatenate((fits.static_std_kgm, passive_std)) ** 2)
+    return IdentificationResult(
+        method="paper",
+        names=names,
+        values=values,
+        covariance=covariance,
+        findings=_paper_findings(data, n_samples, len(names), values),
+        summary=f"identified from {n_samples} samples (sequential, Eq. 6-11)",
+        residual_rms_nm=fits.residual_rms_nm,
+        n_samples=n_samples,
+        diagnostics={"paper_pi": {k: float(v) for k, v in pi.items()}},
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class _SequentialFit:
+    """The joint-by-joint fits of Eq. 6-10 and what Eq. 11 makes of their residuals.
+
+    Attributes
+    ----------
+    pi : the paper's split parameters by name (``m1l1``, ``m2``, ``m2l2``, ``m3``, and ``m3l3`` for a
+        3-segment arm), kg m and kg.
+    passive_nm : each joint's passive moment, the mean absolute residual of Eq. 11, Nm; shape (n,).
+    static_std_kgm : each joint's classical std of its static-moment column, kg m; shape (n,).
+    residual_rms_nm : each joint's rms residual, Nm, by joint name.
+    """
+
+    pi: dict[str, float]
+    passive_nm: np.ndarray
+    static_std_kgm: np.ndarray
+    residual_rms_nm: dict[str, float]
+
+
+def _sequential_fit(data: IdentificationData, config: PaperConfig) -> _SequentialFit:
+    """Eq. 6-8 solved by bounded least squares from the wrist (Eq. 6) through the elbow (Eq. 7) to the shoulder
+    (Eq. 8), each step taking the previous steps' values; Eq. 11 on each step's residual.
+
+    Parameters
+    ----------
+    data : samples with joint angles and measured torques.
+    config : the bounds of Eq. 10.
+    """
+    n = data.n_joints
+    a = data.lengths_m
     g_cos = GRAVITY_M_S2 * np.cos(absolute_angles_rad(data.q_rad))  # (N, n): g cos(phi_j)
     ones = np.ones(data.t_ns.size)
     pi: dict[str, float] = {}
     passive, static_std, residual_rms = np.zeros(n), np.zeros(n), {}
-    joints, segments = joints_for(n), segments_for(n)
+    joints = joints_for(n)
 
     def finish(j: int, columns: np.ndarray, target: np.ndarray, solution: np.ndarray) -> None:
         residual = target - columns @ solution
@@ -109,37 +165,25 @@ def identify_paper(data: IdentificationData, config: PaperConfig | None = None) 
     sol = _bounded_fit(cols, target, np.array([bound_s, bound_m, 0.0]), config.passive_bound_nm)
     pi["m1l1"], pi["m2"] = sol[0], sol[1]
     finish(0, cols, target, sol)
+    return _SequentialFit(pi=pi, passive_nm=passive, static_std_kgm=static_std, residual_rms_nm=residual_rms)
 
-    beta = [pi["m1l1"] + a[0] * (pi["m2"] + pi["m3"]), pi["m2l2"] + (a[1] * pi["m3"] if n == 3 else 0.0)]
-    if n == 3:
-        beta.append(pi["m3l3"])
-    names: list[ParameterName] = [("static_moment_kgm", s) for s in segments] + [("coulomb_nm", j) for j in joints]
-    values = np.array(beta + list(passive))
-    n_samples = int(data.t_ns.size)
-    # Eq. 11's mean |residual| has the standard error of a mean of |r|.
-    passive_std = [float(np.std(np.abs(r))) / np.sqrt(n_samples) for r in _residuals(data, values, n)]
-    covariance = np.diag(np.concatenate((static_std, passive_std)) ** 2)
+
+def _paper_findings(
+    data: IdentificationData, n_samples: int, n_parameters: int, values: np.ndarray
+) -> tuple[Finding, ...]:
+    """The findings of a paper identification: too few samples for its ``n_parameters`` parameters or values not
+    finite (``values``, shape (p,)), the data's notes, and the method's two caveats (an arbitrary split, classical
+    standard deviations)."""
     problems = []
-    if n_samples < 2 * len(names):
+    if n_samples < 2 * n_parameters:
         problems.append(Finding(code=FindingCode.TOO_FEW_SAMPLES))
     elif not np.isfinite(values).all():
         problems.append(Finding(code=FindingCode.NON_FINITE))
-    findings = (
+    return (
         *problems,
         *(note(FindingCode.DATA_NOTE, w) for w in data.warnings),
         Finding(code=FindingCode.PAPER_SPLIT_ARBITRARY),
         Finding(code=FindingCode.PAPER_STD_CLASSICAL),
-    )
-    return IdentificationResult(
-        method="paper",
-        names=names,
-        values=values,
-        covariance=covariance,
-        findings=findings,
-        summary=f"identified from {n_samples} samples (sequential, Eq. 6-11)",
-        residual_rms_nm=residual_rms,
-        n_samples=n_samples,
-        diagnostics={"paper_pi": {k: float(v) for k, v in pi.items()}},
     )
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,6 +47,45 @@ def combine_recordings(
         No recording, a tilt count that differs from the recordings', a tilt beyond 90 deg, different numbers
         of segments, or recordings that overlap in time.
     """
+    tilts = _checked_tilts(recordings, trunk_tilts_rad)
+    if len(recordings) == 1 and tilts[0] == 0.0:
+        return recordings[0]
+    order = _time_order(recordings)
+    ordered = [recordings[k] for k in order]
+    lengths = _pooled_lengths(ordered)
+    robot = {r.contact_from_robot for r in ordered}
+    warnings = _merged_warnings(order, ordered, lengths.warnings, len(robot) > 1)
+    qd, qdd = _stacked_rates(ordered)
+    trunk = np.concatenate([np.full(r.t_ns.size, tilts[k]) for k, r in zip(order.tolist(), ordered, strict=True)])
+    return IdentificationData(
+        np.concatenate([r.t_ns for r in ordered]),
+        np.concatenate([r.q_rad for r in ordered]),
+        np.concatenate([r.velocity_rad_s for r in ordered]),
+        np.concatenate([r.tau_nm for r in ordered]),
+        lengths.mean_m,
+        lengths.std_m,
+        np.max([r.velocity_noise_rad_s for r in ordered], axis=0),
+        sum(r.n_wrench_samples for r in ordered),
+        warnings,
+        _summed_removed(ordered),
+        qd,
+        qdd,
+        robot == {True},
+        trunk if tilts.any() else None,
+        np.concatenate([np.full(r.t_ns.size, k) for k, r in enumerate(ordered)]),
+        np.max([r.out_of_plane for r in ordered], axis=0) if all(r.out_of_plane is not None for r in ordered) else None,
+        lengths.moved,
+    )
+
+
+def _checked_tilts(recordings: Sequence[IdentificationData], trunk_tilts_rad: Sequence[float]) -> np.ndarray:
+    """The trunk tilts as an array, rad, shape (number of recordings,).
+
+    Raises
+    ------
+    InputError
+        No recording, a tilt count that differs from the recordings', or a tilt not finite or beyond 90 deg.
+    """
     if not recordings:
         raise InputError("no recording to identify")
     if len(trunk_tilts_rad) != len(recordings):
@@ -55,8 +95,18 @@ def combine_recordings(
         raise InputError(
             f"trunk tilts must be finite and within +-90 deg, got {np.degrees(tilts).round(1).tolist()} deg"
         )
-    if len(recordings) == 1 and tilts[0] == 0.0:
-        return recordings[0]
+    return tilts
+
+
+def _time_order(recordings: Sequence[IdentificationData]) -> np.ndarray:
+    """The recordings' indices in the order of their first stamps (stable for equal ones), shape (number of
+    recordings,).
+
+    Raises
+    ------
+    InputError
+        Recordings with different numbers of segments, or recordings that overlap in time.
+    """
     n = {r.n_joints for r in recordings}
     if len(n) > 1:
         raise InputError(f"the recordings have different numbers of segments ({sorted(n)}): they are not one arm")
@@ -68,6 +118,29 @@ def combine_recordings(
                 f"recordings {order[k] + 1} and {order[k + 1] + 1} overlap in time: recordings of one arm follow each "
                 "other (the same recording given twice?)"
             )
+    return order
+
+
+@dataclass(frozen=True, kw_only=True)
+class _PooledLengths:
+    """The recordings' segment lengths as one arm's.
+
+    Attributes
+    ----------
+    mean_m : the sample-weighted mean length of each segment, m; shape (n,).
+    std_m : each segment's std, the larger of the recordings' and half the spread between them, m; shape (n,).
+    moved : whether some segment's lengths differ by more than :data:`MAX_LENGTH_SPREAD_M` (a marker moved).
+    warnings : one per such segment, in words.
+    """
+
+    mean_m: np.ndarray
+    std_m: np.ndarray
+    moved: bool
+    warnings: list[str]
+
+
+def _pooled_lengths(ordered: Sequence[IdentificationData]) -> _PooledLengths:
+    """The segment lengths of the recordings ``ordered`` (in time order) pooled, and where a marker moved."""
     counts = np.array([r.t_ns.size for r in ordered], dtype=np.float64)
     lengths = np.array([r.lengths_m for r in ordered])
     mean_lengths = counts @ lengths / counts.sum()
@@ -80,36 +153,43 @@ def combine_recordings(
             "placement is in every std)"
         )
     lengths_std = np.maximum(np.max([r.lengths_std_m for r in ordered], axis=0), spread / 2.0)
+    return _PooledLengths(
+        mean_m=mean_lengths,
+        std_m=lengths_std,
+        moved=bool((spread > MAX_LENGTH_SPREAD_M).any()),
+        warnings=warnings,
+    )
+
+
+def _merged_warnings(
+    order: np.ndarray, ordered: Sequence[IdentificationData], length_warnings: list[str], mixed_contact: bool
+) -> list[str]:
+    """The combined recording's warnings: the segment lengths' (``length_warnings``), each recording's own under
+    its number as given (``order`` maps the time order ``ordered`` back to it), and one when the contact point
+    came from the robot's handle pose in some recordings only (``mixed_contact``)."""
+    warnings = list(length_warnings)
     for k, r in zip(order.tolist(), ordered, strict=True):
         warnings += [f"recording {k + 1}: {w}" for w in r.warnings]
-    removed: dict[str, int] = {}
-    for r in ordered:
-        for key, count in r.removed_samples.items():
-            removed[key] = removed.get(key, 0) + count
-    robot = {r.contact_from_robot for r in ordered}
-    if len(robot) > 1:
+    if mixed_contact:
         warnings.append(
             "the contact point came from the robot's handle pose in some recordings only: the skin marker's "
             "placement sd is used for all"
         )
-    with_rates = all(r.qd_rad_s is not None and r.qdd_rad_s2 is not None for r in ordered)
-    trunk = np.concatenate([np.full(r.t_ns.size, tilts[k]) for k, r in zip(order.tolist(), ordered, strict=True)])
-    return IdentificationData(
-        np.concatenate([r.t_ns for r in ordered]),
-        np.concatenate([r.q_rad for r in ordered]),
-        np.concatenate([r.velocity_rad_s for r in ordered]),
-        np.concatenate([r.tau_nm for r in ordered]),
-        mean_lengths,
-        lengths_std,
-        np.max([r.velocity_noise_rad_s for r in ordered], axis=0),
-        sum(r.n_wrench_samples for r in ordered),
-        warnings,
-        removed,
-        np.concatenate([r.qd_rad_s for r in ordered]) if with_rates else None,
-        np.concatenate([r.qdd_rad_s2 for r in ordered]) if with_rates else None,
-        robot == {True},
-        trunk if tilts.any() else None,
-        np.concatenate([np.full(r.t_ns.size, k) for k, r in enumerate(ordered)]),
-        np.max([r.out_of_plane for r in ordered], axis=0) if all(r.out_of_plane is not None for r in ordered) else None,
-        bool((spread > MAX_LENGTH_SPREAD_M).any()),
-    )
+    return warnings
+
+
+def _summed_removed(ordered: Sequence[IdentificationData]) -> dict[str, int]:
+    """The samples removed from the recordings ``ordered``, by reason, summed over them."""
+    removed: dict[str, int] = {}
+    for r in ordered:
+        for key, count in r.removed_samples.items():
+            removed[key] = removed.get(key, 0) + count
+    return removed
+
+
+def _stacked_rates(ordered: Sequence[IdentificationData]) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The smooth joint velocities (rad/s) and accelerations (rad/s^2) of the recordings ``ordered`` stacked,
+    each of shape (N, n); both None unless every recording has both."""
+    if not all(r.qd_rad_s is not None and r.qdd_rad_s2 is not None for r in ordered):
+        return None, None
+    return np.concatenate([r.qd_rad_s for r in ordered]), np.concatenate([r.qdd_rad_s2 for r in ordered])

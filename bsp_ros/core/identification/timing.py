@@ -354,71 +354,111 @@ def estimate_wrench_delay(
     """
     check_finite_scalar("max_delay_s", max_delay_s, 1e-3, 10.0)
     check_finite_scalar("step_s", step_s, 1e-4, max_delay_s)
-    passive = passive or PassiveModel()
-    problem = (
-        session_or_problem
-        if isinstance(session_or_problem, DelayProblem)
-        else delay_problem(session_or_problem, kinematics_config)
-    )
-    # The samples that have angles at every shift the search may try (the refinement stays inside the grid).
-    reach = max_delay_s + step_s
-    keep = problem.valid(-reach) & problem.valid(reach) & problem.valid(0.0)
-    if keep.sum() < 50:
-        raise DataError(f"only {int(keep.sum())} wrench samples have joint angles at every delay within +-{reach:g} s")
-    kept = problem.rows(keep)  # every candidate's samples are among these: selected once
-    # Each candidate's samples, built once: the fit's reference (0), the profile and the inflation's slope share them
-    # (keyed by the shift in whole ns, as applied: the grid's 0 is 0 only to a float's rounding).
-    samples: dict[int, IdentificationData] = {}
-
-    def at(delay_s: float) -> IdentificationData:
-        shift_ns = round(delay_s * 1e9)
-        if shift_ns not in samples:
-            samples[shift_ns] = kept.data(delay_s)[0]
-        return samples[shift_ns]
-
-    rss = fit_rss or linear_rss(at(0.0), passive)
-    n_fits = 0
-
-    def profile(delay_s: float) -> float:
-        nonlocal n_fits
-        n_fits += 1
-        return float(rss(at(delay_s)))
-
+    problem = session_or_problem
+    if not isinstance(problem, DelayProblem):
+        problem = delay_problem(problem, kinematics_config)
+    profile = _DelayProfile(_rows_at_every_delay(problem, max_delay_s + step_s), fit_rss, passive or PassiveModel())
     grid = np.arange(-max_delay_s, max_delay_s + 0.5 * step_s, step_s)
-    values = _descend(grid, profile)
+    values = _descend(grid, profile.misfit)
     best = int(np.nanargmin(values))
     if best in (0, grid.size - 1):
         return WrenchDelay(
             0.0,
             math.nan,
             "none",
-            n_fits=n_fits,
+            n_fits=profile.n_fits,
             warnings=[
                 f"the wrench-marker delay lies at or beyond the searched +-{max_delay_s:g} s (the misfit falls toward "
                 f"{grid[best]:+.3g} s): not compensated; give it with --wrench-delay-s if the cell knows it"
             ],
         )
-    vertex, curvature = _parabola(grid[best - 1 : best + 2], values[best - 1 : best + 2])
+    return _delay_at_minimum(profile, grid[best - 1 : best + 2], values[best - 1 : best + 2], step_s, resolved_sd)
+
+
+def _rows_at_every_delay(problem: DelayProblem, reach_s: float) -> DelayProblem:
+    """``problem`` on the wrench samples that have angles at every shift within ``reach_s`` (s) either way.
+
+    Raises
+    ------
+    DataError
+        Fewer than 50 such samples.
+    """
+    # The samples that have angles at every shift the search may try (the refinement stays inside the grid).
+    keep = problem.valid(-reach_s) & problem.valid(reach_s) & problem.valid(0.0)
+    if keep.sum() < 50:
+        raise DataError(
+            f"only {int(keep.sum())} wrench samples have joint angles at every delay within +-{reach_s:g} s"
+        )
+    return problem.rows(keep)  # every candidate's samples are among these: selected once
+
+
+class _DelayProfile:
+    """The misfit of each candidate delay on the same wrench samples, counting the fits it takes.
+
+    Each candidate's samples are built once: the fit's reference (0), the profile and the inflation's slope share
+    them (keyed by the shift in whole ns, as applied: the grid's 0 is 0 only to a float's rounding).
+
+    Parameters
+    ----------
+    kept : the problem on the samples every candidate holds (:func:`_rows_at_every_delay`).
+    fit_rss : the misfit (:data:`FitRss`); None: :func:`linear_rss` at delay 0 with ``passive``.
+    passive : the passive model of the default fit and of the std's inflation.
+    """
+
+    def __init__(self, kept: DelayProblem, fit_rss: FitRss | None, passive: PassiveModel) -> None:
+        self.kept: DelayProblem = kept
+        self.passive: PassiveModel = passive
+        self.n_fits: int = 0
+        self._samples: dict[int, IdentificationData] = {}
+        self.rss: FitRss = fit_rss or linear_rss(self.samples(0.0), passive)
+
+    def samples(self, delay_s: float) -> IdentificationData:
+        """The identification samples with the wrench stamps shifted by ``-delay_s`` (s)."""
+        shift_ns = round(delay_s * 1e9)
+        if shift_ns not in self._samples:
+            self._samples[shift_ns] = self.kept.data(delay_s)[0]
+        return self._samples[shift_ns]
+
+    def misfit(self, delay_s: float) -> float:
+        """The misfit at ``delay_s`` (s), one fit more."""
+        self.n_fits += 1
+        return float(self.rss(self.samples(delay_s)))
+
+
+def _delay_at_minimum(
+    profile: _DelayProfile, x: np.ndarray, y: np.ndarray, step_s: float, resolved_sd: float
+) -> WrenchDelay:
+    """The delay from a parabola through the profile's grid minimum and its neighbours, refined once around its
+    vertex, and its std from the curvature widened by the residuals' autocorrelation.
+
+    Parameters
+    ----------
+    profile : the profile the grid was walked with.
+    x, y : the grid's minimum and its two neighbours, s, and their misfits; each of shape (3,).
+    step_s : the grid's step, s.
+    resolved_sd : the delay is applied only when ``|d| > resolved_sd * std``.
+    """
+    vertex, curvature = _parabola(x, y)
     if not math.isfinite(vertex):
         return WrenchDelay(
-            0.0, math.nan, "none", n_fits=n_fits, warnings=["the wrench-marker delay is not identifiable"]
+            0.0, math.nan, "none", n_fits=profile.n_fits, warnings=["the wrench-marker delay is not identifiable"]
         )
     # Refine on a narrower parabola around the first vertex: the misfit is quadratic only near its minimum.
     h = 0.25 * step_s
-    x = [vertex - h, vertex, vertex + h]
-    refined, refined_curvature = _parabola(np.array(x), np.array([profile(d) for d in x]))
+    around = [vertex - h, vertex, vertex + h]
+    refined, refined_curvature = _parabola(np.array(around), np.array([profile.misfit(d) for d in around]))
     # The slope of the residuals for the std's inflation: on the refinement's samples (the first vertex and h
     # either side), which the misfit's curvature comes from too.
-    minus, centre, plus = (at(d) for d in x)
+    minus, centre, plus = (profile.samples(d) for d in around)
     if math.isfinite(refined) and abs(refined - vertex) <= step_s:
         vertex, curvature = refined, refined_curvature
     if not curvature > 0:
         return WrenchDelay(
-            0.0, math.nan, "none", n_fits=n_fits, warnings=["the wrench-marker delay is not identifiable"]
+            0.0, math.nan, "none", n_fits=profile.n_fits, warnings=["the wrench-marker delay is not identifiable"]
         )
-    inflation = _autocorrelation_inflation(minus, centre, plus, h, passive)
+    inflation = _autocorrelation_inflation(minus, centre, plus, h, profile.passive)
     std = math.sqrt(2.0 / curvature) * inflation
-    n_fits += 4
+    n_fits = profile.n_fits + 4
     if abs(vertex) > resolved_sd * std:
         return WrenchDelay(vertex, std, "estimated", vertex, std, n_fits)
     return WrenchDelay(0.0, std, "none", vertex, std, n_fits)

@@ -290,64 +290,172 @@ def predict_covariance(
     noise = noise or NoiseSpec()
     config = config or JointConfig(passive=passive)
     kinematics = kinematics or KinematicsConfig()
-    duration = check_positive("session length (s)", duration_s, 86_400.0)
-    grid = check_positive("evaluation grid (Hz)", grid_hz, noise.wrench_hz)
     n = nominal.n_joints
-    if trajectory.n_joints != n:
-        raise InputError(f"the trajectory has {trajectory.n_joints} joints, the arm {n} segments")
+    motion = _motion_on_grid(trajectory, n, duration_s, grid_hz, noise.wrench_hz)
     lengths = np.asarray(nominal.lengths_m)
     beta = np.asarray(nominal.static_moments_kgm)
-    t = np.arange(int(duration * grid)) / grid
-    q = trajectory.angles_rad(t)
-    velocity = trajectory.velocities_rad_s(t)
-    tilts = tuple(float(tilt) for tilt in trunk_tilts_rad)
-    if not tilts or not all(abs(tilt) <= np.pi / 2 for tilt in tilts):
-        raise InputError(f"trunk tilts must be one or more within +-90 deg, got {np.degrees(tilts).round(1).tolist()}")
+    tilts = _checked_tilts(trunk_tilts_rad)
     model = predicted_model(passive)
     # A nonlinear model's estimate also carries its shape probe's std (identification.selection.shape_probe):
     # the probe's columns extend the model's, so one pass gives both.
     probe = model.with_terms(("higher",)) if "nonlinear" in model.terms and "higher" not in model.terms else None
+    information = _stacked_information(motion, tilts, probe or model, lengths, beta, noise, config, kinematics)
+    names = parameter_names(n, passive)
+    covariance = _predicted_covariance(information, names, probe, n)
+    p = len(names)
+    condition = _condition_number(information.design[:p, :p])
+    per_wrench = noise.wrench_hz / motion.grid_hz
+    rows_used = {joint: round(per_wrench * information.rows_total[j]) for j, joint in enumerate(joints_for(n))}
+    max_corr = _max_correlations(covariance, names, n)
+    return Prediction(names, covariance, _nominal_values(names, nominal), condition, max_corr, rows_used)
+
+
+@dataclass(frozen=True, kw_only=True)
+class _GridMotion:
+    """The trajectory on the prediction's evaluation grid.
+
+    Attributes
+    ----------
+    q_rad : joint angles relative to the trunk, rad; shape (N, n).
+    velocity_rad_s : joint velocities, rad/s; shape (N, n).
+    grid_hz : the grid's rate, Hz.
+    """
+
+    q_rad: np.ndarray
+    velocity_rad_s: np.ndarray
+    grid_hz: float
+
+
+def _motion_on_grid(trajectory: Trajectory, n: int, duration_s: float, grid_hz: float, wrench_hz: float) -> _GridMotion:
+    """``trajectory`` sampled at ``grid_hz`` (Hz, at most the wrench rate ``wrench_hz``) over ``duration_s`` (s).
+
+    Raises
+    ------
+    InputError
+        A session length or grid rate out of range, or a trajectory whose joints are not the arm's ``n``.
+    """
+    duration = check_positive("session length (s)", duration_s, 86_400.0)
+    grid = check_positive("evaluation grid (Hz)", grid_hz, wrench_hz)
+    if trajectory.n_joints != n:
+        raise InputError(f"the trajectory has {trajectory.n_joints} joints, the arm {n} segments")
+    t = np.arange(int(duration * grid)) / grid
+    return _GridMotion(q_rad=trajectory.angles_rad(t), velocity_rad_s=trajectory.velocities_rad_s(t), grid_hz=grid)
+
+
+def _checked_tilts(trunk_tilts_rad: Sequence[float]) -> tuple[float, ...]:
+    """The trunk tilts as floats, rad.
+
+    Raises
+    ------
+    InputError
+        No tilt, or one beyond 90 deg.
+    """
+    tilts = tuple(float(tilt) for tilt in trunk_tilts_rad)
+    if not tilts or not all(abs(tilt) <= np.pi / 2 for tilt in tilts):
+        raise InputError(f"trunk tilts must be one or more within +-90 deg, got {np.degrees(tilts).round(1).tolist()}")
+    return tilts
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Information:
+    """What the recordings of every posture give together, with the columns of the model they were built for.
+
+    Attributes
+    ----------
+    design : the weighted information ``X^T W X`` summed over the postures; shape (p, p).
+    long_run : the long-run covariance of ``X^T W e`` summed over the postures; shape (p, p).
+    rows_total : each joint's grid rows the estimator keeps, summed over the postures; shape (n,).
+    """
+
+    design: np.ndarray
+    long_run: np.ndarray
+    rows_total: np.ndarray
+
+
+def _stacked_information(
+    motion: _GridMotion,
+    tilts: tuple[float, ...],
+    model: PassiveModel,
+    lengths: np.ndarray,
+    beta: np.ndarray,
+    noise: NoiseSpec,
+    config: JointConfig,
+    kinematics: KinematicsConfig,
+) -> _Information:
+    """The information of one recording of ``motion`` per trunk tilt (rad), identified together.
+
+    Parameters
+    ----------
+    motion : the motion relative to the trunk on the evaluation grid.
+    tilts : the trunk's tilt in each recording, rad.
+    model : the passive model whose columns the information is of.
+    lengths, beta : the arm's segment lengths (m) and static moments (kg m); each of shape (n,).
+    noise, config, kinematics : as for :func:`predict_covariance`.
+    """
+    q, velocity = motion.q_rad, motion.velocity_rad_s
     postures = []
     for tilt in tilts:
         # The same motion relative to the trunk, recorded once per posture: gravity sees the world angles.
         world = q.copy()
         world[:, 0] += tilt
         postures.append(
-            _posture_information(world, q, velocity, probe or model, lengths, beta, noise, config, kinematics, grid)
+            _posture_information(world, q, velocity, model, lengths, beta, noise, config, kinematics, motion.grid_hz)
         )
-    names = parameter_names(n, passive)
+    return _Information(
+        design=np.sum([posture[0] for posture in postures], axis=0),
+        long_run=np.sum([posture[1] for posture in postures], axis=0),
+        rows_total=np.sum([posture[2].sum(axis=0) for posture in postures], axis=0),
+    )
+
+
+def _predicted_covariance(
+    information: _Information, names: list[ParameterName], probe: PassiveModel | None, n: int
+) -> np.ndarray:
+    """The covariance the estimator reports for the parameters ``names`` (p, p), with a shape probe's excess
+    variance when the model has one (``probe``, the model with its columns; ``information`` is of its columns)."""
     p = len(names)
-    design_all = np.sum([posture[0] for posture in postures], axis=0)
-    long_run_all = np.sum([posture[1] for posture in postures], axis=0)
-    rows_total = np.sum([posture[2].sum(axis=0) for posture in postures], axis=0)
-    design, long_run = design_all[:p, :p], long_run_all[:p, :p]
+    design, long_run = information.design[:p, :p], information.long_run[:p, :p]
     covariance = _sandwich(design, long_run, names)
     if probe is not None:
         # The estimator adds the probe's std where larger and its shift squared; under the model the shift's
         # expected square is that same excess variance (nested fits, Hausman 1978): twice the excess in all.
-        wide = _sandwich(design_all, long_run_all, problem_names(probe, n, dynamics=False))[:p, :p]
+        wide = _sandwich(information.design, information.long_run, problem_names(probe, n, dynamics=False))[:p, :p]
         covariance = covariance + np.diag(2.0 * np.clip(np.diag(wide) - np.diag(covariance), 0.0, None))
+    return covariance
 
-    # condition number of the column-scaled weighted regressor, from its Gram matrix (p x p)
+
+def _condition_number(design: np.ndarray) -> float:
+    """The condition number of the column-scaled weighted regressor, from its Gram matrix ``design`` (p, p);
+    infinite where a column has no rows."""
     norms = np.sqrt(np.clip(np.diag(design), 0.0, None))
     condition = float("inf")
     if (norms > 0).all() and np.isfinite(design).all():  # a column without rows: nothing to condition
         gram = design / np.outer(norms, norms)
         eigen = np.linalg.eigvalsh(0.5 * (gram + gram.T))
         condition = float(np.sqrt(eigen[-1] / eigen[0])) if eigen[0] > 0 else float("inf")
+    return condition
+
+
+def _max_correlations(covariance: np.ndarray, names: list[ParameterName], n: int) -> dict[str, float]:
+    """Per passive parameter ``key/joint``, its largest absolute correlation with one of the ``n`` static moments
+    (the first ``n`` of ``names``) under ``covariance`` (p, p)."""
     variances = np.diag(covariance)
     correlation = covariance / np.sqrt(np.outer(variances, variances) + 1e-300)
-    max_corr = {
+    return {
         f"{key}/{owner}": float(np.max(np.abs(correlation[i, :n]))) for i, (key, owner) in enumerate(names) if i >= n
     }
+
+
+def _nominal_values(names: list[ParameterName], nominal: NominalArm) -> np.ndarray:
+    """The nominal value of each parameter of ``names`` (p,): the arm's static moments, then its passive values
+    where it has them, NaN elsewhere."""
+    n = nominal.n_joints
     nominal_values = np.full(len(names), np.nan)
-    nominal_values[:n] = beta
+    nominal_values[:n] = np.asarray(nominal.static_moments_kgm)
     for i, name in enumerate(names):
         if name in nominal.passive:
             nominal_values[i] = nominal.passive[name]
-    per_wrench = noise.wrench_hz / grid
-    rows_used = {joint: round(per_wrench * rows_total[j]) for j, joint in enumerate(joints_for(n))}
-    return Prediction(names, covariance, nominal_values, condition, max_corr, rows_used)
+    return nominal_values
 
 
 def _sandwich(design: np.ndarray, long_run: np.ndarray, names: list[ParameterName]) -> np.ndarray:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -127,49 +127,131 @@ def estimate_tare(
     """
     t, force, torque, rotations = _check_recording(t_ns, force_n, torque_nm, rotations_world_from_sensor)
     n = t.size
-    swing = (0.0, 0.0)
-    mean_rotation = None
+    orientation = _orientation(rotations)
+    separated = rotations is not None and min(orientation.swing_deg) >= MIN_SWING_DEG
+    inliers = _without_outliers(_designs(rotations if separated else None, n), force, torque)
+    fit, keep = inliers.fit, inliers.keep
+    return Tare(
+        load="separated" if separated else "constant",
+        values=fit.values,
+        covariance=fit.covariance,
+        residual_rms=tuple(np.sqrt((fit.residual[keep] ** 2).mean(axis=0)).tolist()),
+        frame_id=frame_id,
+        n_samples=int(keep.sum()),
+        start_time_ns=int(t[0]),
+        duration_s=float(t[-1] - t[0]) * 1e-9,
+        swing_deg=orientation.swing_deg,
+        rotation_world_from_sensor=orientation.mean_rotation,
+        source=source,
+        n_rejected=int(n - keep.sum()),
+        unsteadiness=_unsteadiness(fit.residual[keep]),
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Orientation:
+    """How the sensor was held during the recording.
+
+    Attributes
+    ----------
+    swing_deg : rms swing of the gravity direction in the sensor frame along its two principal directions, deg
+        (0, 0 when the orientation is unknown).
+    mean_rotation : the mean orientation, world from sensor; shape (3, 3), or None when unknown.
+    """
+
+    swing_deg: tuple[float, float]
+    mean_rotation: np.ndarray | None
+
+
+def _orientation(rotations: np.ndarray | None) -> _Orientation:
+    """The swing and mean of the sensor's orientations ``rotations`` (N, 3, 3), world from sensor, or None."""
+    if rotations is None:
+        return _Orientation(swing_deg=(0.0, 0.0), mean_rotation=None)
+    down = gravity_in_sensor(rotations)
+    spread = np.linalg.svd(down - down.mean(axis=0), compute_uv=False) / math.sqrt(rotations.shape[0])
+    swing = (math.degrees(math.asin(min(spread[0], 1.0))), math.degrees(math.asin(min(spread[1], 1.0))))
+    return _Orientation(swing_deg=swing, mean_rotation=_mean_rotation(rotations))
+
+
+def _designs(rotations: np.ndarray | None, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The per-sample rows of the force and of the moment model, each of shape (N, 3, p).
+
+    With the orientations ``rotations`` (N, 3, 3) the force is ``oF + m g R^T e`` and the moment
+    ``oM + s x g R^T e`` (p = 4 and 6); without them (None), the constant load: a mean per axis (p = 3) over
+    the ``n`` samples.
+    """
     if rotations is not None:
-        down = gravity_in_sensor(rotations)
-        spread = np.linalg.svd(down - down.mean(axis=0), compute_uv=False) / math.sqrt(n)
-        swing = (math.degrees(math.asin(min(spread[0], 1.0))), math.degrees(math.asin(min(spread[1], 1.0))))
-        mean_rotation = _mean_rotation(rotations)
-    common: dict[str, Any] = {
-        "frame_id": frame_id,
-        "n_samples": n,
-        "start_time_ns": int(t[0]),
-        "duration_s": float(t[-1] - t[0]) * 1e-9,
-        "swing_deg": swing,
-        "rotation_world_from_sensor": mean_rotation,
-        "source": source,
-    }
-    separated = rotations is not None and min(swing) >= MIN_SWING_DEG
-    if rotations is not None and separated:
         d = GRAVITY_M_S2 * gravity_in_sensor(rotations)  # (N, 3)
         eye = np.broadcast_to(np.eye(3), (n, 3, 3))
-        designs = (np.concatenate([eye, d[:, :, None]], axis=2), np.concatenate([eye, -skew(d)], axis=2))
-    else:
-        designs = (np.broadcast_to(np.eye(3), (n, 3, 3)),) * 2  # the constant load: a mean per axis
+        return np.concatenate([eye, d[:, :, None]], axis=2), np.concatenate([eye, -skew(d)], axis=2)
+    return (np.broadcast_to(np.eye(3), (n, 3, 3)),) * 2
 
-    def solve(keep: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        f_values, f_cov, _ = _ols_hac(designs[0][keep], force[keep])
-        m_values, m_cov, _ = _ols_hac(designs[1][keep], torque[keep])
-        p_f = f_values.size
-        covariance = np.zeros((p_f + m_values.size,) * 2)
-        covariance[:p_f, :p_f], covariance[p_f:, p_f:] = f_cov, m_cov
-        residual = np.hstack(
-            [
-                force - np.einsum("nkp,p->nk", designs[0], f_values),
-                torque - np.einsum("nkp,p->nk", designs[1], m_values),
-            ]
-        )
-        return np.concatenate([f_values, m_values]), covariance, residual
 
+@dataclass(frozen=True, kw_only=True)
+class _TareFit:
+    """The force and moment models fitted on some samples.
+
+    Attributes
+    ----------
+    values : the force model's parameters, then the moment model's; shape (p,).
+    covariance : their covariance, block diagonal (force, moment); shape (p, p).
+    residual : the residual of every sample, force (N) then moment (Nm) axes; shape (N, 6).
+    """
+
+    values: np.ndarray
+    covariance: np.ndarray
+    residual: np.ndarray
+
+
+def _fit_tare(
+    designs: tuple[np.ndarray, np.ndarray], force: np.ndarray, torque: np.ndarray, keep: np.ndarray
+) -> _TareFit:
+    """The force and moment models (``designs``, each (N, 3, p)) fitted to the samples ``keep`` (N,) bool of
+    ``force`` (N) and ``torque`` (Nm), each (N, 3); the residual is of every sample."""
+    f_values, f_cov, _ = _ols_hac(designs[0][keep], force[keep])
+    m_values, m_cov, _ = _ols_hac(designs[1][keep], torque[keep])
+    p_f = f_values.size
+    covariance = np.zeros((p_f + m_values.size,) * 2)
+    covariance[:p_f, :p_f], covariance[p_f:, p_f:] = f_cov, m_cov
+    residual = np.hstack(
+        [
+            force - np.einsum("nkp,p->nk", designs[0], f_values),
+            torque - np.einsum("nkp,p->nk", designs[1], m_values),
+        ]
+    )
+    return _TareFit(values=np.concatenate([f_values, m_values]), covariance=covariance, residual=residual)
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Inliers:
+    """A fit without the outliers.
+
+    Attributes
+    ----------
+    fit : the fit on the inliers.
+    keep : which samples are inliers; shape (N,) bool.
+    """
+
+    fit: _TareFit
+    keep: np.ndarray
+
+
+def _without_outliers(designs: tuple[np.ndarray, np.ndarray], force: np.ndarray, torque: np.ndarray) -> _Inliers:
+    """The fit of :func:`_fit_tare` on every sample, refitted without the samples off the residuals' robust spread
+    until they no longer change (at most 4 passes).
+
+    Raises
+    ------
+    DataError
+        More than ``MAX_REJECTED_FRACTION`` of the samples are outliers.
+    """
+    n = force.shape[0]
     # Spikes (a knock on the handle, a glitch) must not move the tare: samples off the robust spread of
     # the residuals (median absolute deviation) are left out and counted.
     keep = np.ones(n, dtype=bool)
     for _ in range(4):
-        values, covariance, residual = solve(keep)
+        fit = _fit_tare(designs, force, torque, keep)
+        residual = fit.residual
         centred = residual[keep] - np.median(residual[keep], axis=0)
         scale = np.maximum(1.4826 * np.median(np.abs(centred), axis=0), 1e-12)
         inliers = (np.abs(residual - np.median(residual[keep], axis=0)) <= OUTLIER_MAD * scale).all(axis=1)
@@ -182,20 +264,16 @@ def estimate_tare(
                 f"robust spread (was the handle touched?): record it again"
             )
     if not keep.all():
-        values, covariance, residual = solve(keep)
-    common["n_samples"] = int(keep.sum())
-    common["n_rejected"] = int(n - keep.sum())
+        fit = _fit_tare(designs, force, torque, keep)
+    return _Inliers(fit=fit, keep=keep)
+
+
+def _unsteadiness(used: np.ndarray) -> float:
+    """The largest ratio over the axes of the residual rms to the sample-to-sample noise, from the inliers'
+    residuals ``used`` (M, 6); 1 when no axis has noise."""
     # Residual spread over sample-to-sample noise: about 1 for a steady load and a white sensor, far more
     # when the load changed during the recording (an arm attached, the handle held).
-    used = residual[keep]
     step_noise = 1.4826 * np.median(np.abs(np.diff(used, axis=0)), axis=0) / math.sqrt(2.0)
     spread = np.sqrt((used**2).mean(axis=0))
     ratios = spread[step_noise > 0] / step_noise[step_noise > 0]
-    common["unsteadiness"] = float(ratios.max()) if ratios.size else 1.0
-    return Tare(
-        load="separated" if separated else "constant",
-        values=values,
-        covariance=covariance,
-        residual_rms=tuple(np.sqrt((residual[keep] ** 2).mean(axis=0)).tolist()),
-        **common,
-    )
+    return float(ratios.max()) if ratios.size else 1.0
