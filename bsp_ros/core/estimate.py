@@ -9,14 +9,13 @@ import numpy as np
 
 from bsp_ros import __version__
 from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
+from bsp_ros.core.estimate_schema import SCHEMA
 from bsp_ros.core.findings import Finding, FindingCode, Severity, note
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.quantities import PASSIVE_CURVE
 from bsp_ros.core.streams import joints_for, segments_for
-
-SCHEMA = "bsp_ros/core/estimate/1"
 
 
 def quantity(value: float, std: float, source: str) -> dict[str, Any]:

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.model import check_lengths_m, contact_jacobian, gravity_regressor
 from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_array, check_finite_scalar
@@ -163,24 +164,21 @@ def estimate_from_result(result: Any) -> dict[str, Any]:
     return {"valid": bool(result.valid), "static_moments_kgm": values, "covariance": covariance}
 
 
-def estimate_from_document(document: Mapping[str, Any]) -> dict[str, Any] | None:
-    """The ``estimate`` argument of :func:`live_support` from an estimate document (docs/contract.md schema).
+def support_inputs(estimate: Estimate) -> dict[str, Any] | None:
+    """The ``estimate`` argument of :func:`live_support` from an :class:`Estimate`.
 
-    The static moments' covariance is rebuilt from their std and the document's ``diagnostics.correlation``
+    The static moments' covariance is rebuilt from their std and the estimate's ``diagnostics.correlation``
     (over ``diagnostics.parameters``); without those, their std alone (no correlation). None when the
-    document holds no static moments.
+    estimate holds no static moments.
     """
-    segments = document.get("segments") or {}
-    names = [s for s in ("upper_arm", "forearm", "hand") if s in segments]
-    try:
-        values = np.array([float(segments[s]["static_moment_kgm"]["value"]) for s in names])
-        std = np.array([float(segments[s]["static_moment_kgm"]["std"]) for s in names])
-    except (KeyError, TypeError, ValueError):
+    names = [s for s in ("upper_arm", "forearm", "hand") if s in estimate.segments]
+    moments = [estimate.quantity("static_moment_kgm", s) for s in names]
+    if not names or not all(q is not None and q.finite for q in moments):
         return None
-    if not names or not (np.isfinite(values).all() and np.isfinite(std).all()):
-        return None
+    values = np.array([q.value for q in moments if q is not None], dtype=np.float64)
+    std = np.array([q.std for q in moments if q is not None], dtype=np.float64)
     correlation = np.eye(len(names))
-    diagnostics = document.get("diagnostics") or {}
+    diagnostics = estimate.diagnostics or {}
     order = list(diagnostics.get("parameters") or [])
     matrix = diagnostics.get("correlation")
     picks = [order.index(f"static_moment_kgm/{s}") if f"static_moment_kgm/{s}" in order else -1 for s in names]
@@ -188,8 +186,7 @@ def estimate_from_document(document: Mapping[str, Any]) -> dict[str, Any] | None
         block = np.array([[matrix[i][j] for j in picks] for i in picks], dtype=np.float64)
         if np.isfinite(block).all():
             correlation = block
-    valid = bool((document.get("quality") or {}).get("valid"))
-    return {"valid": valid, "static_moments_kgm": values, "covariance": correlation * np.outer(std, std)}
+    return {"valid": estimate.valid, "static_moments_kgm": values, "covariance": correlation * np.outer(std, std)}
 
 
 def live_support(

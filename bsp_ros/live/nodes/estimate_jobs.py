@@ -10,11 +10,12 @@ import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
 from bsp_ros.core.estimate import estimate_document, invalid_document
-from bsp_ros.core.findings import Finding, FindingCode, findings_of
+from bsp_ros.core.estimate_schema import Estimate
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.pipeline import IdentifyOptions, fused
-from bsp_ros.core.weight_support import estimate_from_document
+from bsp_ros.core.weight_support import support_inputs
 from bsp_ros.live.estimate_messages import (
     diagnostics_from_estimate,
     inertias_from_estimate,
@@ -76,18 +77,16 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
         ),
         "json": cdr(types("std_msgs/msg/String")(data=json.dumps(document, allow_nan=False)), "std_msgs/msg/String"),
     }
-    valid = bool(document["quality"]["valid"])
+    estimate = Estimate.from_json(document)
+    valid = estimate.valid
     if valid:
         for segment, inertia in inertias_from_estimate(document, stamp_ns).items():
             out[f"inertia/{segment}"] = cdr(build_inertia_stamped(types, inertia), "geometry_msgs/msg/InertiaStamped")
         passive = passive_moments_from_estimate(document, stamp_ns)
         if passive is not None and with_passive:
             out["passive"] = cdr(build_joint_state(types, passive), "sensor_msgs/msg/JointState")
-    quality = document["quality"]
-    findings = tuple(findings_of(quality))
-    return EstimateOutputs(
-        valid, str(quality["message"]), out, findings=findings, support=estimate_from_document(document)
-    )
+    quality = estimate.quality
+    return EstimateOutputs(valid, quality.message, out, findings=quality.findings, support=support_inputs(estimate))
 
 
 def window_estimate(estimator: WindowEstimator, window: WindowSamples) -> EstimateOutputs:

@@ -1,0 +1,259 @@
+"""The estimate as typed, frozen objects, and its JSON (schema ``bsp_ros/core/estimate/1``, docs/contract.md).
+
+An :class:`Estimate` is what every consumer reads: the CLI, the node's messages, the weight support, the session
+store and the report. JSON is only its edge: :meth:`Estimate.to_json` writes the document docs/contract.md
+describes, and :meth:`Estimate.from_json` reads one back, keeping every key it does not type (a newer version's)
+in ``extra`` so that nothing recorded is lost and the round trip is exact.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any
+
+from bsp_ros.core.findings import Finding, Severity, findings_of
+from bsp_ros.core.quantities import PASSIVE_CURVE
+
+__all__ = ["SCHEMA", "Estimate", "Level", "Quality", "Quantity", "Source"]
+
+SCHEMA = "bsp_ros/core/estimate/1"
+
+
+class Source(StrEnum):
+    """Where a quantity's value comes from."""
+
+    DATA = "data"
+    PRIOR = "prior"
+    DATA_PRIOR = "data+prior"
+
+
+class Level(StrEnum):
+    """The verdict in one word."""
+
+    OK = "ok"
+    WEAK = "weak"
+    INVALID = "invalid"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Quantity:
+    """One estimated quantity.
+
+    Attributes
+    ----------
+    value, std : the estimate and one standard deviation, in the unit its key names; None where not computed.
+    source : data, prior or both.
+    budget : each named source of uncertainty's standard uncertainty (their squares sum to ``std`` squared), for
+        the quantities the identification decided; None elsewhere.
+    """
+
+    value: float | None
+    std: float | None
+    source: Source
+    budget: Mapping[str, float | None] | None = None
+
+    @property
+    def finite(self) -> bool:
+        """Whether value and std are both numbers."""
+        return self.value is not None and self.std is not None and math.isfinite(self.value + self.std)
+
+    def largest_term(self) -> tuple[str, float] | None:
+        """The budget's largest term and its share of the variance (0-1), or None without a budget."""
+        if not self.budget or not self.std:
+            return None
+        term, u = max(((t, u or 0.0) for t, u in self.budget.items()), key=lambda pair: pair[1])
+        return term, u**2 / self.std**2
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"value", "std", "source"}``, and ``budget`` where there is one."""
+        out: dict[str, Any] = {"value": self.value, "std": self.std, "source": str(self.source)}
+        if self.budget is not None:
+            out["budget"] = dict(self.budget)
+        return out
+
+    @classmethod
+    def from_json(cls, block: Mapping[str, Any]) -> Quantity:
+        """The quantity of a ``{"value", "std", "source"}`` block."""
+        budget = block.get("budget")
+        return cls(
+            value=_number(block.get("value")),
+            std=_number(block.get("std")),
+            source=Source(block.get("source", "data")),
+            budget=dict(budget) if isinstance(budget, Mapping) else None,
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Quality:
+    """How far the estimate can be trusted.
+
+    Attributes
+    ----------
+    valid : whether the data support the estimate.
+    level : ok, weak or invalid.
+    message : the verdict in one line (the invalid findings' texts, or a summary).
+    findings : what the estimator found, typed.
+    warnings : the texts of the weak and note findings.
+    n_samples : samples used.
+    condition_number : of the column-scaled regressor, None where not finite.
+    residual_rms_nm : per joint, the torque residual's RMS.
+    extra : the other keys of the JSON's ``quality`` block, in order (tare, timing, rotation, placement...).
+    """
+
+    valid: bool
+    level: Level
+    message: str
+    findings: tuple[Finding, ...] = ()
+    warnings: tuple[str, ...] = ()
+    n_samples: int = 0
+    condition_number: float | None = None
+    residual_rms_nm: Mapping[str, float] = field(default_factory=dict)
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def verdict(self) -> Finding | None:
+        """The first finding that makes the estimate invalid, or None."""
+        return next((f for f in self.findings if f.severity is Severity.INVALID), None)
+
+    @property
+    def tare_applied(self) -> bool:
+        """Whether a tare was subtracted."""
+        tare = self.extra.get("tare")
+        return isinstance(tare, Mapping) and tare.get("applied") is True
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON ``quality`` block, its keys in docs/contract.md's order and then the others."""
+        return {
+            "valid": self.valid,
+            "n_samples": self.n_samples,
+            "condition_number": self.condition_number,
+            "residual_rms_nm": dict(self.residual_rms_nm),
+            "warnings": list(self.warnings),
+            "message": self.message,
+            "findings": [f.to_json() for f in self.findings],
+            "level": str(self.level),
+            **self.extra,
+        }
+
+    @classmethod
+    def from_json(cls, block: Mapping[str, Any]) -> Quality:
+        """The quality of a JSON ``quality`` block (a block without findings, from before they existed, has none)."""
+        typed = {"valid", "n_samples", "condition_number", "residual_rms_nm", "warnings", "message", "findings"}
+        valid = bool(block.get("valid"))
+        level = block.get("level") or ("ok" if valid else "invalid")
+        return cls(
+            valid=valid,
+            level=Level(level),
+            message=str(block.get("message", "")),
+            findings=tuple(findings_of(block)),
+            warnings=tuple(str(w) for w in block.get("warnings") or ()),
+            n_samples=int(block.get("n_samples") or 0),
+            condition_number=_number(block.get("condition_number")),
+            residual_rms_nm={str(k): float(v) for k, v in (block.get("residual_rms_nm") or {}).items()},
+            extra={k: v for k, v in block.items() if k not in typed and k != "level"},
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Estimate:
+    """An identified arm: its segments and joints, how far to trust them, and where they came from.
+
+    Attributes
+    ----------
+    method : the identification method (``joint``, ``paper``, ``recursive``).
+    segments : segment -> quantity key -> quantity (``static_moment_kgm``, ``mass_kg``, ...).
+    joints : joint -> quantity key -> quantity (``coulomb_nm``, ...).
+    passive_curves : joint -> its passive moment curve (docs/contract.md), where estimated.
+    quality : the verdict and what the std holds.
+    subject : the body data the prior used.
+    diagnostics : the figures behind the verdict (parameters, correlation, ...).
+    software : name and version of what made it.
+    session : times, source, configuration; None for a live estimate before its first window.
+    extra : the document's other top-level keys, in order (``bag``, ``bags``, ``mode``, ``repeatability``...).
+    schema : the schema tag.
+    """
+
+    method: str
+    segments: Mapping[str, Mapping[str, Quantity]]
+    joints: Mapping[str, Mapping[str, Quantity]]
+    quality: Quality
+    passive_curves: Mapping[str, Any] = field(default_factory=dict)
+    subject: Mapping[str, Any] | None = None
+    diagnostics: Mapping[str, Any] | None = None
+    software: Mapping[str, Any] | None = None
+    session: Mapping[str, Any] | None = None
+    extra: Mapping[str, Any] = field(default_factory=dict)
+    schema: str = SCHEMA
+
+    @property
+    def valid(self) -> bool:
+        """Whether the data support the estimate."""
+        return self.quality.valid
+
+    def quantity(self, key: str, owner: str) -> Quantity | None:
+        """The quantity ``key`` of segment or joint ``owner``, or None."""
+        group = self.segments if owner in self.segments else self.joints
+        return group.get(owner, {}).get(key)
+
+    def to_json(self) -> dict[str, Any]:
+        """The docs/contract.md document (JSON-ready: no NaN; key order as written by the estimator)."""
+        joints: dict[str, dict[str, Any]] = {}
+        for joint, quantities in self.joints.items():
+            joints[joint] = {key: q.to_json() for key, q in quantities.items()}
+            if joint in self.passive_curves:
+                joints[joint][PASSIVE_CURVE] = self.passive_curves[joint]
+        out: dict[str, Any] = {
+            "schema": self.schema,
+            "method": self.method,
+            "segments": {s: {k: q.to_json() for k, q in qs.items()} for s, qs in self.segments.items()},
+            "joints": joints,
+            "quality": self.quality.to_json(),
+        }
+        for key in ("subject", "diagnostics", "software", "session"):
+            value = getattr(self, key)
+            if value is not None:
+                out[key] = value
+        return {**out, **self.extra}
+
+    @classmethod
+    def from_json(cls, document: Mapping[str, Any]) -> Estimate:
+        """The estimate of a docs/contract.md document; keys it does not type stay in ``extra``.
+
+        Raises
+        ------
+        KeyError, TypeError, ValueError
+            The document lacks ``quality`` or holds a quantity that is not ``{"value", "std", "source"}``.
+        """
+        joints: dict[str, dict[str, Quantity]] = {}
+        curves: dict[str, Any] = {}
+        for joint, block in (document.get("joints") or {}).items():
+            joints[joint] = {k: Quantity.from_json(q) for k, q in block.items() if k != PASSIVE_CURVE}
+            if PASSIVE_CURVE in block:
+                curves[joint] = block[PASSIVE_CURVE]
+        typed = {"schema", "method", "segments", "joints", "quality", "subject", "diagnostics", "software", "session"}
+        return cls(
+            schema=str(document.get("schema", SCHEMA)),
+            method=str(document.get("method", "")),
+            segments={
+                s: {k: Quantity.from_json(q) for k, q in block.items()}
+                for s, block in (document.get("segments") or {}).items()
+            },
+            joints=joints,
+            passive_curves=curves,
+            quality=Quality.from_json(document["quality"]),
+            subject=document.get("subject"),
+            diagnostics=document.get("diagnostics"),
+            software=document.get("software"),
+            session=document.get("session"),
+            extra={k: v for k, v in document.items() if k not in typed},
+        )
+
+
+def _number(value: Any) -> float | None:
+    """A JSON number as float; null (or anything not a number) as None."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return float(value)
