@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from bsp_ros.cli.argtypes import int_within
 from bsp_ros.cli.identify_options import (  # noqa: F401
     METHODS,
     add_identify_arguments,
@@ -49,15 +50,37 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="rosbag2 directory or .mcap file; several: recordings of the same arm identified together",
     )
     add_trunk_tilt_argument(parser)
-    parser.add_argument("--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here")
+    parser.add_argument(
+        "--json", type=Path, metavar="OUT", help="write the estimate (bsp_ros/core/estimate/1) here ('-': stdout)"
+    )
     add_identify_arguments(parser)
     parser.add_argument(
         "--format",
         choices=("auto", "table", "tsv", "none"),
         default="auto",
-        help="stdout: a table on a terminal, tab-separated values otherwise",
+        help="stdout: a table on a terminal, tab-separated values otherwise (nothing with --json -)",
     )
+    add_each_arguments(parser)
     return parser
+
+
+def add_each_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of `bsp identify --each` (every bag its own session: bsp_ros.cli.identify_each)."""
+    parser.add_argument(
+        "--each",
+        action="store_true",
+        help="every bag its own session (a folder of bags: each bag inside); needs --json-dir and --summary",
+    )
+    parser.add_argument("--json-dir", type=Path, metavar="DIR", help="with --each: one <bag name>.json per bag here")
+    parser.add_argument(
+        "--summary",
+        type=Path,
+        metavar="FILE",
+        help="with --each: a CSV row per bag (exit code, verdict, cause, parameters with std; '-': stdout)",
+    )
+    parser.add_argument(
+        "--jobs", type=int_within(1, 256), metavar="N", help="with --each: N worker processes (default 1)"
+    )
 
 
 def _progress_bar() -> Any:
@@ -168,10 +191,18 @@ def run(args: argparse.Namespace) -> int:
 
     from bsp_ros.bag.errors import BagError
     from bsp_ros.bag.offline import identify_bags
+    from bsp_ros.cli.identify_each import check_each_args, run_each
     from bsp_ros.validation import check_output_file
 
+    check_each_args(args)
+    if args.each:
+        return run_each(args)
+    # `--json -` is the estimate on stdout, and then stdout is nothing else (as `sessions export --csv -`).
+    json_stdout = args.json is not None and str(args.json) == "-"
+    if json_stdout and args.format in ("table", "tsv"):
+        raise InputError(f"--json - writes the estimate to stdout: --format {args.format} would mix into it")
     # Before the identification: a result that cannot be written is not worth computing.
-    json_path = None if args.json is None else check_output_file("--json", args.json)
+    json_path = None if args.json is None or json_stdout else check_output_file("--json", args.json)
     options = options_from_args(args)
     tilts_rad = trunk_tilts_rad(args.trunk_tilt_deg, len(args.bag))
     try:
@@ -185,6 +216,8 @@ def run(args: argparse.Namespace) -> int:
     if unusable:
         # One rule for too little data, however little (README "Exit codes": 3), whichever stage noticed it.
         raise DataError(f"the data cannot be used: {'; '.join(unusable)}")
+    if json_stdout:
+        sys.stdout.write(json.dumps(document, indent=2, allow_nan=False) + "\n")
     if json_path is not None:
         text = json.dumps(document, indent=2, allow_nan=False) + "\n"
         try:
@@ -193,6 +226,7 @@ def run(args: argparse.Namespace) -> int:
         except OSError as error:  # checked above; this is a disk that filled or changed since
             raise InputError(f"--json {json_path}: cannot write ({error.strerror})") from None
     output = args.format if args.format != "auto" else ("table" if sys.stdout.isatty() else "tsv")
+    output = "none" if json_stdout else output
     if output == "table":
         print(format_table(document))
     elif output == "tsv":

@@ -1,4 +1,8 @@
-"""Sessions as CSV: one row per session and parameter (long format, for spreadsheets and R)."""
+"""Sessions as CSV: one row per session and parameter (long format, for spreadsheets and R).
+
+The last columns (:data:`JOIN_COLUMNS`) join a row back to the recording and the run it came from: the
+recording's content hash is the `content_sha256` column of `bsp identify --each --summary`.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +12,7 @@ from typing import TextIO
 
 from bsp_ros.clinic.store.records import SessionRecord, format_time
 
-CSV_COLUMNS = (
+_SESSION_COLUMNS = (
     "subject",
     "session_time_utc",
     "session_time_ns",
@@ -25,6 +29,34 @@ CSV_COLUMNS = (
     "std",
     "value_source",
 )
+#: Last, so a reader that takes the columns by position finds the others where they were.
+JOIN_COLUMNS = (
+    "content_sha256",
+    "passive_model_configured",
+    "tare_applied",
+    "tare_file",
+    "estimate_schema",
+)
+CSV_COLUMNS = (*_SESSION_COLUMNS, *JOIN_COLUMNS)
+
+
+def join_cells(record: SessionRecord) -> list[str]:
+    """The :data:`JOIN_COLUMNS` cells of ``record``: what joins its rows back to the recording and the run.
+
+    ``content_sha256`` is the recording's fingerprint (a bag's, or its estimate's for a result JSON without one);
+    ``passive_model_configured`` the passive model the identification was configured with (the store keeps the
+    configuration, not the model ``auto`` chose); ``tare_applied`` 1 or 0; ``estimate_schema`` the estimate's
+    schema tag, the nearest the store keeps to the software's version (the estimate's ``software.version`` is
+    not stored).
+    """
+    passive = record.config.get("passive")
+    return [
+        record.content_sha256 or "",
+        "" if passive is None else str(passive),
+        str(int(record.quality.tare_applied)),
+        record.quality.tare_file or "",
+        record.estimate_schema,
+    ]
 
 
 def write_sessions_csv(records: Iterable[SessionRecord], stream: TextIO) -> int:
@@ -58,9 +90,10 @@ def write_sessions_csv(records: Iterable[SessionRecord], stream: TextIO) -> int:
             "" if quality.condition_number is None else repr(quality.condition_number),
             "; ".join(quality.warnings),
         ]
+        joined = join_cells(record)
         for (group, part, quantity), q in record.parameters.items():
             writer.writerow(
-                [*head, group, part, quantity, _num(q.value), _num(q.std), q.source],
+                [*head, group, part, quantity, _num(q.value), _num(q.std), q.source, *joined],
             )
             rows += 1
     return rows
