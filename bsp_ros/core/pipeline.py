@@ -31,7 +31,7 @@ from bsp_ros.core.identification.rate import identification_rate_hz
 from bsp_ros.core.identification.recordings import combine_recordings
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
-from bsp_ros.core.identification.timing import compensate_wrench_delay
+from bsp_ros.core.identification.timing import WrenchDelay, compensate_wrench_delay
 from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_markers
 from bsp_ros.core.sensor_rotation import rotation_quality
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
@@ -200,47 +200,24 @@ def identify_recordings(
     frames = sorted({s.wrench.frame_id for s in sessions})
     if len(frames) > 1:
         raise InputError(f"the recordings' wrenches are in different frames ({', '.join(frames)}): not one sensor")
-    prepared, timings, recordings = [], [], []
-    for session in sessions:
-        session = corrected_session(session, options.tare)
-        # --- stream timing (bsp_ros/core/identification/timing.py): the wrench stamps' delay, compensated ---
-        # The markers' angles once: the delay search and the identification data share them (where they fail,
-        # the identification data says why, in its own order of checks).
-        kinematics: MarkerKinematics | None = None
-        with contextlib.suppress(BspError):
-            kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, options.kinematics)
-        session, timing = compensate_wrench_delay(
-            session, options.wrench_delay_s, options.kinematics, options.passive, kinematics=kinematics
-        )
-        # --- end stream timing ---
-        prepared.append(session)
-        timings.append(timing)
-        recordings.append(identification_data_from_session(session, options.kinematics, kinematics))
+    prepared = [_prepared(session, options) for session in sessions]
+    recordings = [p.data for p in prepared]
     data = combine_recordings(recordings, tilts)
     result = identify_data(data, options)
     refit = refit_options(result, options)
-    rotations = [np.asarray(s.rotation_world_from_sensor, dtype=np.float64) for s in prepared]
+    rotations = [np.asarray(p.session.rotation_world_from_sensor, dtype=np.float64) for p in prepared]
     rotation = rotations[0] if len(rotations) == 1 else np.concatenate([r.reshape(-1, 3, 3) for r in rotations])
     result, offsets = account_for_tare(
         result,
         data,
         rotation,
-        prepared[0].wrench.frame_id,
+        prepared[0].session.wrench.frame_id,
         options.tare,
         lambda d: identify_data(d, refit, check_elastic=False),
         (options.zero_sd_n, options.zero_sd_nm),
     )
     posterior, result = fused(result, data, options.subject) if result.valid else (None, result)
-    info = {
-        "start_time_ns": int(data.t_ns[0]),
-        "end_time_ns": int(data.t_ns[-1]),
-        "duration_s": float(data.t_ns[-1] - data.t_ns[0]) / 1e9,
-        "n_wrench_samples": data.n_wrench_samples,
-        "identification_rate_hz": identification_rate_hz(data.t_ns),
-        "method": options.method,
-        "config": options.config(),
-        **(session_info or {}),
-    }
+    info = _session_info(data, options, session_info)
     if len(sessions) > 1:
         info["recordings"] = [
             {
@@ -256,16 +233,59 @@ def identify_recordings(
         result, data, posterior, options.subject, info, marker_placement_sd_m=options.placement_sd_used_m(result, data)
     )
     document["quality"].update(offsets)
-    # --- stream timing and sensor rotation (timing.py, sensor_rotation.py) ---
-    quality = document["quality"]
+    _add_timing_and_rotation(document["quality"], [p.timing for p in prepared], rotation)
+    return document
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Prepared:
+    """One recording corrected (tare, stream delay) and turned into samples."""
+
+    session: Session
+    timing: WrenchDelay
+    data: IdentificationData
+
+
+def _prepared(session: Session, options: IdentifyOptions) -> _Prepared:
+    """``session`` corrected by the tare and the wrench stamps' delay (timing.py), and its samples."""
+    session = corrected_session(session, options.tare)
+    # The markers' angles once: the delay search and the identification data share them (where they fail, the
+    # identification data says why, in its own order of checks).
+    kinematics: MarkerKinematics | None = None
+    with contextlib.suppress(BspError):
+        kinematics = kinematics_from_markers(chain_markers(session), session.n_segments, options.kinematics)
+    session, timing = compensate_wrench_delay(
+        session, options.wrench_delay_s, options.kinematics, options.passive, kinematics=kinematics
+    )
+    data = identification_data_from_session(session, options.kinematics, kinematics)
+    return _Prepared(session=session, timing=timing, data=data)
+
+
+def _session_info(
+    data: IdentificationData, options: IdentifyOptions, session_info: dict[str, Any] | None
+) -> dict[str, Any]:
+    """The estimate's ``session`` block: its span, rates, method and settings, and what the caller adds."""
+    return {
+        "start_time_ns": int(data.t_ns[0]),
+        "end_time_ns": int(data.t_ns[-1]),
+        "duration_s": float(data.t_ns[-1] - data.t_ns[0]) / 1e9,
+        "n_wrench_samples": data.n_wrench_samples,
+        "identification_rate_hz": identification_rate_hz(data.t_ns),
+        "method": options.method,
+        "config": options.config(),
+        **(session_info or {}),
+    }
+
+
+def _add_timing_and_rotation(quality: dict[str, Any], timings: Sequence[WrenchDelay], rotation: np.ndarray) -> None:
+    """The stream timing of each recording and the sensor rotation's shape into ``quality``, in place (timing.py,
+    sensor_rotation.py); the timing's notes as findings."""
     quality["timing"] = timings[0].quality() if len(timings) == 1 else {"recordings": [t.quality() for t in timings]}
     for timing in timings:
         for text in timing.warnings:
             if text not in quality["warnings"]:
                 add_finding(quality, note(FindingCode.TIMING_NOTE, text))
     quality["rotation"] = rotation_quality(rotation, "session")
-    # --- end stream timing and sensor rotation ---
-    return document
 
 
 __all__ = [

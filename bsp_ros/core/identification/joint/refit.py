@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,12 +16,12 @@ from bsp_ros.core.identification.joint.identify import failed_result
 from bsp_ros.core.identification.joint.judgement import UNIDENTIFIABLE_CONDITION, unidentifiable_problem
 from bsp_ros.core.identification.joint.outliers import far_off_problem, fit_outliers, too_far_off
 from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
-from bsp_ros.core.identification.joint.samples import usable_samples
+from bsp_ros.core.identification.joint.samples import Samples, usable_samples
 from bsp_ros.core.identification.joint.steps import prior_share
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
 from bsp_ros.core.identification.ledger import Ledger, Term
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.identification.stacked import augmented, build_problem, fit_problem
+from bsp_ros.core.identification.stacked import Fit, Problem, augmented, build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
 
@@ -46,28 +47,84 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
     IdentificationResult, with ``held`` passed on for the next refit.
     """
     config = dataclasses.replace(config or JointConfig(), passive=held.passive, check_elastic=False, check_drift=False)
-    n = data.n_joints
-    joints = joints_for(n)
     widths = held.widths_rad_s if held.widths_rad_s.any() else None
     samples = usable_samples(data, config, widths)
-    rows, spikes, problem, usable = samples.rows, samples.spikes, samples.problem, samples.usable
     problems, warnings = list(samples.problems), list(samples.warnings)
-    if problem.names != held.names:
+    if samples.problem.names != held.names:
         problems.append(Finding(code=FindingCode.NOT_SAME_ARM))
     if samples.too_few is not None and not problems:
         problems.append(samples.too_few)
     if problems:
-        return failed_result(data, problem.names, problems, warnings)
-    fit = fit_problem(problem)
+        return failed_result(data, samples.problem.names, problems, warnings)
+    kept = _without_far_off(data, config, samples, widths)
+    problems += kept.problems
+    warnings += kept.notes
+    fit, ledger, own = _held_covariance(data, kept.problem, kept.fit, held)
+    if fit.condition > UNIDENTIFIABLE_CONDITION:
+        problems.append(unidentifiable_problem(fit.condition))
+    problems += list(held.check_problems)
+    if not problems and not np.isfinite(fit.values).all():
+        problems.append(Finding(code=FindingCode.NON_FINITE))
+    joints = joints_for(data.n_joints)
+    removed = {"wrench_spikes": int(samples.spikes.sum()), "fit_outliers": kept.removed}
+    diagnostics = {
+        **held.diagnostics,
+        "hac_lags": fit.lags,
+        "passive_curves": {} if held.curves is None else held.curves.curves(fit),
+        "rows_used": {j: int(c) for j, c in zip(joints, kept.problem.rows.sum(axis=0), strict=True)},
+        "removed_samples": {k: v for k, v in removed.items() if v},
+        "prior_share": prior_share(kept.problem, own),
+    }
+    return IdentificationResult(
+        method="joint",
+        names=kept.problem.names,
+        values=fit.values,
+        covariance=fit.covariance,
+        ledger=ledger,
+        findings=(*problems, *warnings, *(w for w in held.warnings if w not in warnings)),
+        summary=f"identified from {data.t_ns.size} samples",
+        condition_number=fit.condition,
+        residual_rms_nm={joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)},
+        n_samples=int(data.t_ns.size),
+        diagnostics=diagnostics,
+        torque_response=TorqueResponse.of(kept.problem, fit),
+        held=held,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Kept:
+    """The refit's problem and fit once samples far off it are removed, and what that found."""
+
+    problem: Problem
+    fit: Fit
+    problems: tuple[Finding, ...]
+    notes: tuple[Finding, ...]
+    removed: int
+
+
+def _without_far_off(
+    data: IdentificationData, config: JointConfig, samples: Samples, widths: np.ndarray | None
+) -> _Kept:
+    """The fit of ``samples``, refitted without the samples far off it (too many: the model does not fit)."""
+    fit = fit_problem(samples.problem)
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
-    if too_far_off(n_far, usable):
-        problems.append(far_off_problem(n_far, usable, config))
-    elif n_far:
-        problem = build_problem(data, config.passive, rows & ~far[:, None], widths, samples.extras)
-        fit = fit_problem(problem)
-        values = {"n": n_far, "outlier_sd": config.outlier_sd}
-        warnings.append(Finding(code=FindingCode.FIT_OUTLIERS_REMOVED, values=values))
+    if too_far_off(n_far, samples.usable):
+        far_off = far_off_problem(n_far, samples.usable, config)
+        return _Kept(problem=samples.problem, fit=fit, problems=(far_off,), notes=(), removed=0)
+    if not n_far:
+        return _Kept(problem=samples.problem, fit=fit, problems=(), notes=(), removed=0)
+    problem = build_problem(data, config.passive, samples.rows & ~far[:, None], widths, samples.extras)
+    removed = Finding(code=FindingCode.FIT_OUTLIERS_REMOVED, values={"n": n_far, "outlier_sd": config.outlier_sd})
+    return _Kept(problem=problem, fit=fit_problem(problem), problems=(), notes=(removed,), removed=n_far)
+
+
+def _held_covariance(
+    data: IdentificationData, problem: Problem, fit: Fit, held: HeldModel
+) -> tuple[Fit, Ledger, np.ndarray]:
+    """The refit with its covariance: its own (HAC), the placement's share for these samples, and the held model's
+    systematic terms; the ledger of those terms, and the fit's own covariance."""
     own = fit.covariance
     placement = None
     if held.placement_sd_m.any():
@@ -79,39 +136,8 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         p = len(problem.names)
         fit = dataclasses.replace(wide, values=wide.values[:p], design=wide.design[:p, :p])
         own = wide.covariance[:p, :p]
-    shares = prior_share(problem, own)
     ledger = Ledger.of(Term.SENSOR_NOISE, own)
     if placement is not None:
         ledger = ledger.plus(Term.MARKER_PLACEMENT, placement)
     ledger = ledger.joined(held.systematic)
-    fit = dataclasses.replace(fit, covariance=ledger.total(own.shape[0]))
-    if fit.condition > UNIDENTIFIABLE_CONDITION:
-        problems.append(unidentifiable_problem(fit.condition))
-    problems += list(held.check_problems)
-    if not problems and not np.isfinite(fit.values).all():
-        problems.append(Finding(code=FindingCode.NON_FINITE))
-    used = problem.rows.sum(axis=0)
-    removed = {"wrench_spikes": int(spikes.sum()), "fit_outliers": 0 if too_far_off(n_far, usable) else n_far}
-    diagnostics = {
-        **held.diagnostics,
-        "hac_lags": fit.lags,
-        "passive_curves": {} if held.curves is None else held.curves.curves(fit),
-        "rows_used": {j: int(c) for j, c in zip(joints, used, strict=True)},
-        "removed_samples": {k: v for k, v in removed.items() if v},
-        "prior_share": shares,
-    }
-    return IdentificationResult(
-        method="joint",
-        names=problem.names,
-        values=fit.values,
-        covariance=fit.covariance,
-        ledger=ledger,
-        findings=(*problems, *warnings, *(w for w in held.warnings if w not in warnings)),
-        summary=f"identified from {data.t_ns.size} samples",
-        condition_number=fit.condition,
-        residual_rms_nm={joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)},
-        n_samples=int(data.t_ns.size),
-        diagnostics=diagnostics,
-        torque_response=TorqueResponse.of(problem, fit),
-        held=held,
-    )
+    return dataclasses.replace(fit, covariance=ledger.total(own.shape[0])), ledger, own
