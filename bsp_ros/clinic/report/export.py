@@ -7,6 +7,7 @@ from collections.abc import Iterable
 from typing import TextIO
 
 from bsp_ros.clinic.report.analysis import MDC_SOURCES, Analysis, Change
+from bsp_ros.clinic.store.csv_export import JOIN_COLUMNS, join_cells
 from bsp_ros.clinic.store.records import format_time
 
 CSV_COLUMNS = (
@@ -29,6 +30,7 @@ CSV_COLUMNS = (
     "mdc95_source",
     "mdc95_pairs",
     "flagged",
+    *JOIN_COLUMNS,
 )
 
 
@@ -58,6 +60,7 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
     for analysis in analyses:
         by_key = {(s.arm, s.key): s for s in analysis.series}
         for record in analysis.sessions:
+            joined = join_cells(record)
             for key, quantity in record.parameters.items():
                 series = by_key.get((record.arm, key))
                 step: Change | None = None
@@ -91,6 +94,7 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
                         _mdc95_source(step if judged else None, judged),
                         error.n_pairs if error is not None else 0,
                         int(step is not None and judged and step.beyond_mdc),
+                        *joined,
                     ]
                 )
                 rows += 1
