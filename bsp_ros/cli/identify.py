@@ -19,7 +19,7 @@ from bsp_ros.cli.identify_options import (  # noqa: F401
 )
 
 # METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
-from bsp_ros.core.findings import FindingCode, findings_of
+from bsp_ros.core.findings import FindingCode, findings_of, invalid_texts, plain_cause
 from bsp_ros.core.quantities import passive_curves_of, quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
 
@@ -166,6 +166,41 @@ def format_tsv(document: dict[str, Any]) -> str:
     return "\n".join("\t".join(_cell(value) for value in row) for row in table)
 
 
+def verdict_lines(document: dict[str, Any]) -> list[str]:
+    """The verdict: ``VALID: <summary>``, or ``INVALID: <cause>; <action>`` in plain words and then each reason
+    the estimator found, once."""
+    quality = document["quality"]
+    if quality["valid"]:
+        return [f"VALID: {quality.get('message', '')}"]
+    findings = findings_of(quality)
+    plain = plain_cause(findings)
+    reasons = list(dict.fromkeys(invalid_texts(findings))) or [str(quality.get("message", ""))]
+    if plain is None:
+        return [f"INVALID: {reasons[0]}", *(f"  because: {r}" for r in reasons[1:])]
+    cause, action = plain
+    return [f"INVALID: {cause}; {action}", *(f"  because: {r}" for r in reasons)]
+
+
+def largest_uncertainty(document: dict[str, Any]) -> str | None:
+    """Which source of uncertainty weighs most in the static moments' std, and what would shrink it."""
+    from bsp_ros.core.estimate_schema import Estimate
+    from bsp_ros.core.identification.ledger import Term
+
+    shares: dict[str, list[float]] = {}
+    for quantities in Estimate.from_json(document).segments.values():
+        largest = quantities["static_moment_kgm"].largest_term() if "static_moment_kgm" in quantities else None
+        if largest is not None:
+            shares.setdefault(largest[0], []).append(largest[1])
+    if not shares:
+        return None
+    term = max(shares, key=lambda t: (len(shares[t]), max(shares[t])))
+    remedy = Term(term).remedy if term in {t.value for t in Term} else ""
+    return (
+        f"uncertainty: the static moments' std is mostly {term.replace('_', ' ')} (up to "
+        f"{100 * max(shares[term]):.0f} % of the variance){': ' + remedy if remedy else ''}"
+    )
+
+
 def format_table(document: dict[str, Any]) -> str:
     """A human-readable table of an estimate document."""
     quality = document["quality"]
@@ -180,8 +215,9 @@ def format_table(document: dict[str, Any]) -> str:
         std_text = "n/a" if std is None else f"{std:.2g}"
         lines.append(f"{owner:10s} {key:22s} {value_text:>12s} {std_text:>11s}  {source}")
     lines.append(tare_line(quality))
-    state = "VALID" if quality["valid"] else "INVALID"
-    lines.append(f"{state}: {quality.get('message', '')}")
+    uncertainty = largest_uncertainty(document) if quality["valid"] else None
+    lines += [uncertainty] if uncertainty else []
+    lines += verdict_lines(document)
     lines += [f"warning: {w}" for w in quality["warnings"]]
     return "\n".join(lines)
 
@@ -235,7 +271,10 @@ def run(args: argparse.Namespace) -> int:
         # The table says all of this on stdout; otherwise stdout is data, and the reasons go to stderr.
         quality = document["quality"]
         if not quality["valid"]:
-            print(f"bsp identify: estimate INVALID: {quality.get('message', '')}", file=sys.stderr)
+            first, *details = verdict_lines(document)
+            print(f"bsp identify: estimate {first}", file=sys.stderr)
+            for line in details:
+                print(line, file=sys.stderr)
         for warning in quality["warnings"] if output == "tsv" else ():
             print(f"warning: {warning}", file=sys.stderr)
     return 0 if document["quality"]["valid"] else EXIT_INVALID

@@ -20,9 +20,21 @@ from bsp_ros.clinic.store import (
     parse_time_ns,
 )
 from bsp_ros.clinic.store.estimate import check_future
-from bsp_ros.clinic.store.records import describe_body
+from bsp_ros.clinic.store.records import Quality, describe_body
 from bsp_ros.clinic.store.subject import check_pseudonymous_id
+from bsp_ros.core.findings import invalid_texts, plain_cause
 from bsp_ros.errors import InputError, StoreError
+
+
+def verdict_text(quality: Quality) -> str:
+    """Why a stored session is not valid: the cause and what to do, in plain words, and the estimator's first
+    reason (a session stored before findings existed: its message)."""
+    plain = plain_cause(quality.findings)
+    if plain is None:
+        return quality.message or "no reason recorded"
+    cause, action = plain
+    first = next(iter(invalid_texts(quality.findings)), "")
+    return f"{cause}; {action} ({first})" if first else f"{cause}; {action}"
 
 
 def run_action(args: argparse.Namespace) -> int:
@@ -222,6 +234,8 @@ def _add(store: Store, args: argparse.Namespace) -> int:
         f"from {record.source} ({'valid' if record.quality.valid else 'NOT VALID'}, "
         f"{len(record.parameters)} parameters)"
     )
+    if not record.quality.valid:
+        print(f"  not valid: {verdict_text(record.quality)}")
     if known is not None and known.differs_from(record.subject_info):
         print(_body_warning(path, record, known), file=sys.stderr)
     return 0
@@ -270,6 +284,8 @@ def _show(store: Store, subject: str, *, as_json: bool) -> int:
             f"method={record.method or '-'}  {'valid' if quality.valid else 'NOT VALID'}  "
             + " ".join(m for m in marks if m)
         )
+        if not quality.valid:
+            print(f"  not valid: {verdict_text(quality)}")
         for warning in quality.warnings:
             print(f"  warning: {warning}")
         for (_group, part, quantity), q in record.parameters.items():

@@ -50,11 +50,14 @@ def invalid_document(method: str, finding: Finding) -> dict[str, Any]:
 def add_finding(quality: dict[str, Any], finding: Finding, at: int | None = None) -> None:
     """Add ``finding`` to an estimate document's ``quality`` block, in place: to ``findings``, and its text to the
     ``message`` (an invalid one, first) or to the ``warnings`` (at index ``at``, else last)."""
-    quality.setdefault("findings", []).append(finding.to_json())
+    findings = quality.setdefault("findings", [])
     if finding.severity is Severity.INVALID:
+        # The likeliest cause of what else the estimate found (a lost transform makes the model misfit): first.
+        findings.insert(0, finding.to_json())
         quality["message"] = finding.text + (f"; {quality['message']}" if not quality["valid"] else "")
         quality["valid"], quality["level"] = False, "invalid"
         return
+    findings.append(finding.to_json())
     warnings = quality.setdefault("warnings", [])
     warnings.insert(len(warnings) if at is None else at, finding.text)
 

@@ -26,6 +26,7 @@ __all__ = [
     "invalid_texts",
     "note",
     "note_texts",
+    "plain_cause",
 ]
 
 
@@ -205,6 +206,16 @@ def findings_of(quality: Mapping[str, Any]) -> list[Finding]:
         except (KeyError, TypeError, ValueError):
             continue  # a code from a newer version: its text stays in the message and warnings
     return out
+
+
+def plain_cause(findings: Iterable[Finding]) -> tuple[str, str] | None:
+    """The cause and the action, in a clinic's words, of the first finding that makes an estimate invalid (its
+    joint or segment named); None where none does or it has no plain cause."""
+    verdict = next((f for f in findings if f.severity is Severity.INVALID), None)
+    if verdict is None or not verdict.spec.cause:
+        return None
+    where = verdict.where.replace("_", " ")
+    return verdict.spec.cause.format(where=where), verdict.spec.action or "repeat the session"
 
 
 def invalid_texts(findings: Iterable[Finding]) -> list[str]:

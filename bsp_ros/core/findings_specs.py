@@ -286,7 +286,7 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "missing transform world -> {frame} (/tf_static lost or never recorded): the wrench was taken as given in "
         "world",
         "the force sensor's orientation was not recorded",
-        "record /tf_static with the session, or give the cell description (bsp identify --cell)",
+        "check that the cell publishes the sensor's transform on /tf_static and record it with the session",
     ),
     C.INPUT_WAITING: FindingSpec(
         INVALID, "waiting for {what}", "the session has not started", "start the robot and the motion capture"

@@ -40,6 +40,22 @@ class Term(StrEnum):
     WINDOW_CHECK = "window_check"
     """The recursive mode: its window's checked variances and the filter's distance from that window's values."""
 
+    @property
+    def remedy(self) -> str:
+        """What would shrink this term, in one phrase."""
+        return _REMEDIES[self.value]
+
+
+_REMEDIES = {
+    "sensor_noise": "a longer session or more motion shrinks it",
+    "marker_placement": "markers firmly on their landmarks shrink it (--marker-placement-sd-mm says how firm)",
+    "model_choice": "wider, independent joint motion shrinks it (bsp plan)",
+    "friction_shape": "a protocol that leaves the friction transition more often shrinks it",
+    "drift": "a warmed-up, re-tared sensor removes it",
+    "sensor_zero": "a tare shrinks it (bsp tare, then --tare FILE)",
+    "window_check": "a longer window shrinks it",
+}
+
 
 @dataclass(frozen=True)
 class Ledger:

@@ -134,7 +134,7 @@ def test_a_bag_whose_clock_jumps_back_is_refused_with_a_clear_message(tmp_path, 
     assert "jump back by" in capsys.readouterr().err
 
 
-def test_a_rotated_sensor_bag_without_tf_static_is_invalid_naming_the_transform(human_bag, tmp_path) -> None:
+def test_a_rotated_sensor_bag_without_tf_static_is_invalid_naming_the_transform(human_bag, tmp_path, capsys) -> None:
     from bag_surgery import rewrite_without_crcs
 
     lost = tmp_path / "lost_tf"
@@ -143,8 +143,15 @@ def test_a_rotated_sensor_bag_without_tf_static_is_invalid_naming_the_transform(
     code, estimate = _identify(lost, tmp_path / "l.json")
     assert code == 1
     assert not estimate["quality"]["valid"]
-    assert findings_of(estimate["quality"])[-1].code is FindingCode.ROTATION_ASSUMED
+    assert findings_of(estimate["quality"])[0].code is FindingCode.ROTATION_ASSUMED  # the cause of the misfit
     assert estimate["quality"]["message"].startswith("missing transform world -> ft_sensor")
+    # The verdict a user reads: the cause in plain words and what to do, then the estimator's reasons.
+    first, *reasons = capsys.readouterr().err.splitlines()
+    assert first == (
+        "bsp identify: estimate INVALID: the force sensor's orientation was not recorded; check that the cell "
+        "publishes the sensor's transform on /tf_static and record it with the session"
+    )
+    assert reasons[0].startswith("  because: missing transform world -> ft_sensor") and len(first) < 200
 
 
 def test_a_bit_flip_in_a_bag_without_crcs_is_counted_and_harmless(human_bag, tmp_path) -> None:

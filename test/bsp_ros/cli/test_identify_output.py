@@ -65,11 +65,17 @@ def test_an_invalid_estimate_says_why_on_stderr_even_with_format_none(
     out = tmp_path / "e.json"
     code = main(["identify", str(bags["one_way"]), "--json", str(out), "--format", "none"])
     captured = capsys.readouterr()
-    message = json.loads(out.read_text())["quality"]["message"]
+    quality = json.loads(out.read_text())["quality"]
     assert code == INVALID
     assert captured.out == ""
-    assert captured.err == f"bsp identify: estimate INVALID: {message}\n"
-    assert "moved in one direction only" in message
+    # The cause in plain words and what to do, then each reason the estimator found.
+    reasons = [f["text"] for f in quality["findings"] if f["severity"] == "invalid"]
+    assert [f["code"] for f in quality["findings"][: len(reasons)]] == ["one_direction"] * len(reasons)
+    assert captured.err.splitlines() == [
+        "bsp identify: estimate INVALID: a joint moved in one direction only; repeat with the full back-and-forth "
+        "movement",
+        *(f"  because: {reason}" for reason in reasons),
+    ]
 
 
 @pytest.mark.parametrize("duration_s", ["0.5", "2"])
