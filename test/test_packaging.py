@@ -37,6 +37,8 @@ DECLARED: dict[str, tuple[str | None, str | None]] = {
     "threadpoolctl": ("threadpoolctl", None),
     # The optional PostgreSQL store (extra `postgres`); rosdep has no key for psycopg 3.
     "psycopg": ("psycopg", None),
+    # Only bsp_ros.to_frame, for a user who has it; not a dependency (to_records needs nothing).
+    "pandas": (None, None),
     "rclpy": ("ros-jazzy-rclpy", "rclpy"),
     "rcl_interfaces": ("ros-jazzy-rclpy", "rcl_interfaces"),
     "builtin_interfaces": ("ros-jazzy-rclpy", "rcl_interfaces"),
