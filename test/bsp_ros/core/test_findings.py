@@ -156,10 +156,9 @@ def test_findings_of_skips_a_code_it_does_not_know() -> None:
     assert [f.code for f in findings_of(quality)] == [FindingCode.NO_MOTION]
 
 
-@pytest.mark.parametrize("code", [c for c in FindingCode if SPECS[c].severity is Severity.INVALID])
-def test_every_invalid_code_gives_the_report_a_cause_and_an_action(code: FindingCode) -> None:
-    finding = sample(code, "elbow")
-    record = SessionRecord(
+def _stored(quality: Quality) -> SessionRecord:
+    """A stored session of ``quality`` (the report reads its cause from it)."""
+    return SessionRecord(
         subject="P001",
         session_time_ns=1_700_000_000_000_000_000,
         source="s.mcap",
@@ -167,26 +166,21 @@ def test_every_invalid_code_gives_the_report_a_cause_and_an_action(code: Finding
         config={},
         subject_info={},
         estimate_schema="bsp_ros/core/estimate/1",
-        quality=Quality(valid=False, message=finding.text, findings=(finding,)),
+        quality=quality,
         parameters={},
     )
-    cause, action = invalid_cause(record)
+
+
+@pytest.mark.parametrize("code", [c for c in FindingCode if SPECS[c].severity is Severity.INVALID])
+def test_every_invalid_code_gives_the_report_a_cause_and_an_action(code: FindingCode) -> None:
+    finding = sample(code, "elbow")
+    cause, action = invalid_cause(_stored(Quality(valid=False, message=finding.text, findings=(finding,))))
     assert cause == SPECS[code].cause.format(where="elbow") and action == SPECS[code].action
     assert cause and action and "{" not in cause
 
 
 def test_a_session_stored_without_findings_gets_a_general_cause() -> None:
-    record = SessionRecord(
-        subject="P001",
-        session_time_ns=1_700_000_000_000_000_000,
-        source="s.mcap",
-        method="joint",
-        config={},
-        subject_info={},
-        estimate_schema="bsp_ros/core/estimate/1",
-        quality=Quality(valid=False, message="the model does not fit at the elbow"),
-        parameters={},
-    )
+    record = _stored(Quality(valid=False, message="the model does not fit at the elbow"))
     assert invalid_cause(record) == ("the measurement could not be evaluated", "repeat the session")
 
 

@@ -6,9 +6,8 @@ import copy
 from typing import Any
 
 import pytest
+from invalid_estimates import NOT_IDENTIFIED, ONE_WAY_ELBOW, POOR, WAITING, invalid
 
-from bsp_ros.core.estimate import invalid_document
-from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.session_end import SessionEndDetector
 
 S = 1_000_000_000  # ns per s
@@ -25,17 +24,7 @@ def _valid(value: float, start_ns: int = T0, end_ns: int = T0 + 30 * S) -> dict[
     }
 
 
-WAITING = Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench"})
-STALE = Finding(code=FindingCode.INPUT_STALE, values={"what": "wrench", "silent_s": 0.5})
-POOR = Finding(code=FindingCode.NOT_YET_DETERMINED)
-NOT_IDENTIFIED = Finding(code=FindingCode.NOT_IDENTIFIABLE, values={"condition": 2e9})
-ONE_WAY_ELBOW = Finding(code=FindingCode.ONE_DIRECTION, where="elbow", values={"other_percent": 0.0})
-ONE_WAY_WRIST = Finding(code=FindingCode.ONE_DIRECTION, where="wrist", values={"other_percent": 0.0})
-
-
-def _invalid(finding: Finding = STALE) -> dict[str, Any]:
-    """An invalid estimate as the identifier publishes it (``STALE``: its inputs stopped)."""
-    return invalid_document("joint", finding)
+_invalid = invalid
 
 
 def _feed(detector: SessionEndDetector, documents: list[Any], t_ns: int, period_ns: int = S // 5) -> int:

@@ -10,11 +10,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from invalid_estimates import NOT_IDENTIFIED, ONE_WAY_ELBOW, ONE_WAY_WRIST, POOR, STALE, WAITING, invalid
 from node_processes import NodeProcesses, Peer, domain_id
 
 from bsp_ros.clinic.store import SessionRecord, open_store
-from bsp_ros.core.estimate import invalid_document
-from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.findings import Finding
 from bsp_ros.core.pipeline import identify_session
 from bsp_ros.core.simulation import human_arm_cell, simulate_cell
 
@@ -46,17 +46,7 @@ def _estimate(base: dict[str, Any], start_ns: int, scale: float) -> dict[str, An
     return document
 
 
-WAITING = Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench"})
-STALE = Finding(code=FindingCode.INPUT_STALE, values={"what": "wrench", "silent_s": 0.5})
-POOR = Finding(code=FindingCode.NOT_YET_DETERMINED)
-NOT_IDENTIFIED = Finding(code=FindingCode.NOT_IDENTIFIABLE, values={"condition": 2e9})
-ONE_WAY_ELBOW = Finding(code=FindingCode.ONE_DIRECTION, where="elbow", values={"other_percent": 0.0})
-ONE_WAY_WRIST = Finding(code=FindingCode.ONE_DIRECTION, where="wrist", values={"other_percent": 0.0})
-
-
-def _invalid(finding: Finding) -> dict[str, Any]:
-    """An invalid estimate as the identifier publishes it when an input is stale or excitation is poor."""
-    return invalid_document("joint", finding)
+_invalid = invalid
 
 
 def _stored_values(record: SessionRecord) -> dict[str, float]:
