@@ -11,18 +11,24 @@ comes from :func:`bsp_ros.core.pipeline.identify_session`, as for a recorded bag
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
+
+import numpy as np
 
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.core.simulation import MarkerSpec, PassiveTruth, SensorSpec, human_arm_cell, simulate_cell
+from bsp_ros.core.tare import Tare
 
 DAY_NS = 86_400 * 10**9
 HISTORY_START_NS = 1_717_225_200 * 10**9  # 2024-06-01T07:00:00Z
 RETEST_AFTER_NS = 3_600 * 10**9
 """A retest is recorded an hour after the day's session, the arm taken out and re-attached in between."""
+HANDLE_COM_M = (0.0, 0.0, 0.05)
+TARE_SD = (0.02, 0.002)
+"""A tare's 1 SD per axis (force N, moment Nm): a few seconds of the handle at rest, averaged."""
 
 
 @dataclass(frozen=True)
@@ -57,11 +63,16 @@ def session_estimate(
     duration_s: float = 40.0,
     wrench_hz: float = 50.0,
     marker_hz: float = 25.0,
+    handle_mass_kg: float = 0.0,
+    tared: bool = False,
 ) -> dict[str, Any]:
     """The estimate document of one simulated session of ``patient`` on ``day`` (0 = 2024-06-01).
 
     ``seed`` draws the marker re-placement, the sensor offset and the recording noise. The rates are half
-    the simulator's defaults, so a history of a dozen sessions is made in seconds.
+    the simulator's defaults, so a history of a dozen sessions is made in seconds. ``handle_mass_kg`` hangs
+    a handle between the sensor and the hand (its centre 5 cm beyond the sensor); ``tared`` subtracts a tare
+    of the sensor's offset and the handle's weight (read with the handle free: :func:`session_tare`), as
+    ``bsp sessions add --tare`` does; untared, both load the arm's estimate.
     """
     rng = random.Random(seed)
     skin = tuple(
@@ -80,12 +91,28 @@ def session_estimate(
             neutral_rad=patient.neutral_rad,
         ),
         markers=MarkerSpec(skin_offset_m=skin, marker_hz=marker_hz),
-        sensor=SensorSpec(force_bias_n=bias, wrench_hz=wrench_hz),
+        sensor=SensorSpec(
+            force_bias_n=bias, wrench_hz=wrench_hz, handle_mass_kg=handle_mass_kg, handle_com_m=HANDLE_COM_M
+        ),
         duration_s=duration_s,
         start_ns=start_ns,
         seed=seed,
     )
-    document = identify_session(simulate_cell(spec).session, patient.options(), {"source": f"day{day:03d}_{seed}.mcap"})
+    session = simulate_cell(spec).session
+    options = patient.options()
+    if tared:
+        options = replace(options, tare=session_tare(spec.sensor, session.wrench.frame_id))
+    document = identify_session(session, options, {"source": f"day{day:03d}_{seed}.mcap"})
     if retest:
         document["session"]["retest"] = True
     return document
+
+
+def session_tare(sensor: SensorSpec, frame_id: str) -> Tare:
+    """The tare of a simulated session: the sensor's offset and the handle's weight at its fixed orientation,
+    as a tare recording with the handle free reads them (within :data:`TARE_SD`)."""
+    force_offset, torque_offset = sensor.offset_at([0.0])
+    force, torque = sensor.payload_wrench(sensor.rotation_world_from_sensor)
+    values = np.concatenate([force_offset[0] + force, torque_offset[0] + torque])
+    covariance = np.diag([TARE_SD[0] ** 2] * 3 + [TARE_SD[1] ** 2] * 3)
+    return Tare(frame_id, "constant", values, covariance, 1000, 0, 20.0, source="tare.mcap")

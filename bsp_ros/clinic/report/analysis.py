@@ -5,10 +5,10 @@ from __future__ import annotations
 import itertools
 import math
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
-from bsp_ros.clinic.mdc import MIN_PAIRS, Z95, DayToDayError, RetestPair, day_to_day_error, retest_pairs
+from bsp_ros.clinic.mdc import DAY_NS, MIN_PAIRS, Z95, DayToDayError, RetestPair, day_to_day_error, retest_pairs
 from bsp_ros.clinic.report.labels import label, sort_key, unit
 from bsp_ros.clinic.report.priors import Prior, has_prior_inputs, session_prior
 from bsp_ros.clinic.store.records import ParamKey, SessionRecord, SubjectRecord
@@ -42,8 +42,10 @@ def is_passive(key: ParamKey) -> bool:
 class Point:
     """One session's estimate of one parameter.
 
-    ``number`` is the session's number within the subject (1 = first); ``valid`` False marks a session whose
-    estimate is not usable: it is a gap, never a value in a trend or a comparison.
+    ``number`` is the session's number among the subject's sessions that are not retests (1 = first);
+    ``valid`` False marks a session whose estimate is not usable: it is a gap, never a value in a trend or a
+    comparison. ``left_out`` (non-empty) leaves a valid value out of the trend and its comparisons: an
+    untared session's arm weight among tared sessions (:func:`untared_sessions`).
     """
 
     number: int
@@ -54,26 +56,43 @@ class Point:
     source: str
     valid: bool
     prior: Prior | None = None
+    left_out: str = ""
 
     @property
     def usable(self) -> bool:
-        """Valid and with a value."""
-        return self.valid and self.value is not None
+        """Valid, with a value and not left out (``left_out`` says why: an untared session's arm weight)."""
+        return self.valid and self.value is not None and not self.left_out
 
 
 MDC_SOURCES = ("retest pairs", "session uncertainty", "none")
 """What a change's MDC95 is: the retest pairs', the two sessions' own uncertainty where larger, or none."""
 
 
+REPORT_ALPHA = 0.05
+"""The chance, at most, that measurement error alone flags anything anywhere in one report (Bonferroni)."""
+
+
+def limit_factor(alpha: float, dof: int | None) -> float:
+    """The two-sided ``1 - alpha`` quantile: Student's t for ``dof`` degrees of freedom, the normal for None."""
+    from scipy.stats import norm, t
+
+    return float(norm.ppf(1.0 - alpha / 2.0) if dof is None else t.ppf(1.0 - alpha / 2.0, dof))
+
+
 @dataclass(frozen=True)
 class Change:
-    """The difference of one parameter between two usable sessions, against the day-to-day error."""
+    """The difference of one parameter between two usable sessions, against the day-to-day error.
+
+    ``comparisons`` is how many comparisons the whole report judges: the limit a change must exceed to be
+    flagged keeps the chance of any false flag in the report at most :data:`REPORT_ALPHA` (Bonferroni).
+    """
 
     key: ParamKey
     before: Point
     after: Point
     delta: float
     error: DayToDayError
+    comparisons: int = 1
 
     @property
     def mdc95(self) -> float | None:
@@ -90,7 +109,25 @@ class Change:
     @property
     def own_mdc95(self) -> float:
         """The two estimates' own 95 % uncertainty of their difference, 1.96 sqrt(std_a^2 + std_b^2)."""
-        return Z95 * math.hypot(self.before.std or 0.0, self.after.std or 0.0)
+        return Z95 * self._own_sd
+
+    @property
+    def _own_sd(self) -> float:
+        return math.hypot(self.before.std or 0.0, self.after.std or 0.0)
+
+    @property
+    def limit(self) -> float | None:
+        """The change this comparison must exceed to be flagged in a report of :attr:`comparisons` comparisons.
+
+        The MDC95 with its 95 % widened to ``1 - 0.05 / comparisons``: the retest pairs' SD of differences
+        times Student's t for their number, or the two estimates' own SD times the normal quantile, whichever
+        is larger. One comparison: the MDC95. None without enough retest pairs.
+        """
+        if self.error.sem is None:
+            return None
+        alpha = REPORT_ALPHA / max(self.comparisons, 1)
+        retest = limit_factor(alpha, self.error.n_pairs) * self.error.sem * math.sqrt(2.0)
+        return max(retest, limit_factor(alpha, None) * self._own_sd)
 
     @property
     def mdc95_source(self) -> str:
@@ -106,21 +143,41 @@ class Change:
         return self.key[2] in NON_NEGATIVE and (self.before.value == 0.0 or self.after.value == 0.0)
 
     @property
+    def judged(self) -> bool:
+        """Whether this comparison is judged: the error is known and neither value sits at its bound."""
+        return self.error.known and not self.at_bound
+
+    @property
     def beyond_mdc(self) -> bool:
-        """Whether ``|delta|`` exceeds the MDC95 (False when the MDC is unknown: no change can be claimed)."""
+        """Whether ``|delta|`` exceeds the MDC95 of one comparison alone (not what flags: see :attr:`flagged`)."""
         return self.mdc95 is not None and not self.at_bound and abs(self.delta) > self.mdc95
 
     @property
+    def flagged(self) -> bool:
+        """Whether ``|delta|`` exceeds :attr:`limit`: a change beyond measurement error over the whole report."""
+        limit = self.limit
+        return limit is not None and not self.at_bound and abs(self.delta) > limit
+
+    @property
     def percent(self) -> float | None:
-        """The change in % of the earlier value (None if that is 0)."""
+        """The change in % of the earlier value; None where that is 0 or within 2 SD of 0 (a % of it means
+        nothing)."""
         base = self.before.value
-        return None if not base else 100.0 * self.delta / abs(base)
+        if not base or abs(base) <= 2.0 * (self.before.std or 0.0):
+            return None
+        return 100.0 * self.delta / abs(base)
 
     @property
     def mdc_percent(self) -> float | None:
         """The MDC95 in % of the earlier value."""
         base = self.before.value
         return None if not base or self.mdc95 is None else 100.0 * self.mdc95 / abs(base)
+
+    @property
+    def limit_percent(self) -> float | None:
+        """The flag limit in % of the earlier value."""
+        base, limit = self.before.value, self.limit
+        return None if not base or limit is None else 100.0 * limit / abs(base)
 
     @property
     def mdc_ratio(self) -> float | None:
@@ -149,8 +206,8 @@ class Series:
 
     @property
     def changes(self) -> tuple[Change, ...]:
-        """Steps beyond the MDC95 (none for parameters that are not judged)."""
-        return tuple(c for c in self.steps if c.beyond_mdc) if self.judged else ()
+        """Steps flagged: beyond the report's limit (none for parameters that are not judged)."""
+        return tuple(c for c in self.steps if c.flagged) if self.judged else ()
 
     @property
     def has_values(self) -> bool:
@@ -169,10 +226,18 @@ class Series:
 
     @property
     def flagged_latest(self) -> list[Change]:
-        """The latest session's comparisons (since previous, since first) beyond the MDC95."""
+        """The latest session's comparisons (since previous, since first) that are flagged."""
         if not self.judged:
             return []
-        return [c for c in (self.since_previous, self.since_first) if c is not None and c.beyond_mdc]
+        return [c for c in (self.since_previous, self.since_first) if c is not None and c.flagged]
+
+    @property
+    def comparisons(self) -> tuple[Change, ...]:
+        """The comparisons of this series the report judges: each step and the latest since the first."""
+        if not self.judged:
+            return ()
+        found = (*self.steps, *((self.since_first,) if self.since_first is not None else ()))
+        return tuple(c for c in found if c.judged)
 
 
 @dataclass(frozen=True)
@@ -188,6 +253,20 @@ class Analysis:
     pairs: tuple[RetestPair, ...] = ()
     cell: str = ""
     min_pairs: int = MIN_PAIRS
+    labels: tuple[str, ...] = ()
+    untared: tuple[Untared, ...] = ()
+
+    @property
+    def comparisons(self) -> int:
+        """How many comparisons the report judges (what each flag's limit is widened for)."""
+        return sum(len(s.comparisons) for s in self.series)
+
+    def label_of(self, record: SessionRecord) -> str:
+        """The session's name in the report: ``3`` for the third session, ``3a`` for its same-day retest."""
+        for k, known in enumerate(self.sessions):
+            if known is record and k < len(self.labels):
+                return self.labels[k]
+        return str(record.number or "")
 
     def visits(self, arm: str | None) -> list[SessionRecord]:
         """The sessions of ``arm`` that make its trend (retests left out)."""
@@ -199,12 +278,12 @@ class Analysis:
 
     @property
     def latest_changes(self) -> list[Change]:
-        """Changes of the latest usable session beyond the MDC95 (since previous and since first), every arm."""
+        """Flagged changes of the latest usable session (since previous and since first), every arm."""
         return [c for s in self.series for c in s.flagged_latest]
 
     @property
     def changes(self) -> list[Change]:
-        """Every step beyond the MDC95, in display order."""
+        """Every flagged step, in display order."""
         return [c for s in self.series for c in s.changes]
 
     @property
@@ -234,6 +313,154 @@ def _compare(key: ParamKey, before: Point, after: Point, error: DayToDayError) -
     return Change(key, before, after, after.value - before.value, error)
 
 
+WEIGHT_QUANTITIES = ("static_moment_kgm", "mass_kg", "com_m", "first_moment_kgm")
+"""What a forgotten tare moves: the arm's weight and what is fused from it (the sensor's zero and the handle's
+weight load the static moments; the masses and centres of mass are combined from them)."""
+
+
+@dataclass(frozen=True)
+class Untared:
+    """A valid session recorded without a tare among an arm's tared sessions: its arm weight is left out.
+
+    ``deviations`` are its static moments' differences from the median of the arm's tared sessions, in %
+    (segment, %), where that median is clear of 0.
+    """
+
+    arm: str | None
+    record: SessionRecord
+    label: str
+    deviations: tuple[tuple[str, float], ...]
+
+
+RETEST_LETTERS = "abcdefghijklmnopqrstuvwxyz"
+
+
+def visit_labels(sessions: Sequence[SessionRecord]) -> tuple[str, ...]:
+    """Each session's name: visits numbered 1..n in time order, a retest its visit's number and a letter.
+
+    A retest belongs to the latest earlier session of the same arm and day that is not a retest (``3a``,
+    ``3b``); one without such a session is numbered as a visit.
+    """
+    labels: list[str] = []
+    visits = 0
+    letters: dict[int, int] = {}
+    for k, record in enumerate(sessions):
+        partner = None
+        if record.retest:
+            day = record.session_time_ns // DAY_NS
+            partner = next(
+                (
+                    j
+                    for j in range(k - 1, -1, -1)
+                    if not sessions[j].retest
+                    and sessions[j].arm == record.arm
+                    and sessions[j].session_time_ns // DAY_NS == day
+                ),
+                None,
+            )
+        if partner is None:
+            visits += 1
+            labels.append(str(visits))
+        else:
+            letters[partner] = letters.get(partner, 0) + 1
+            labels.append(labels[partner] + RETEST_LETTERS[min(letters[partner], 26) - 1])
+    return tuple(labels)
+
+
+def untared_sessions(sessions: Sequence[SessionRecord], labels: Sequence[str]) -> tuple[Untared, ...]:
+    """The valid untared visits of every arm that also has valid tared visits (see :class:`Untared`)."""
+    found = []
+    for arm in dict.fromkeys(r.arm for r in sessions):
+        visits = [(r, lab) for r, lab in zip(sessions, labels, strict=True) if r.arm == arm and not r.retest]
+        valid = [(r, lab) for r, lab in visits if r.quality.valid]
+        tared = [r for r, _ in valid if r.quality.tare_applied]
+        if not tared:
+            continue
+        for record, lab in valid:
+            if not record.quality.tare_applied:
+                found.append(Untared(arm, record, lab, tuple(_deviations(record, tared))))
+    return tuple(found)
+
+
+def _deviations(record: SessionRecord, tared: Sequence[SessionRecord]) -> list[tuple[str, float]]:
+    import statistics
+
+    found = []
+    for group, segment, quantity in record.parameters:
+        if group != "segments" or quantity != "static_moment_kgm":
+            continue
+        key = (group, segment, quantity)
+        value = record.parameters[key].value
+        values = [r.parameters[key] for r in tared if key in r.parameters and r.parameters[key].value is not None]
+        if value is None or not values:
+            continue
+        median = statistics.median(q.value or 0.0 for q in values)
+        spread = statistics.median(q.std or 0.0 for q in values)
+        if abs(median) > 2.0 * spread:
+            found.append((segment, 100.0 * (value - median) / abs(median)))
+    return found
+
+
+def _points(key: ParamKey, visits: Sequence[tuple[SessionRecord, str]], left_out: frozenset[int]) -> tuple[Point, ...]:
+    weight = key[0] == "segments" and key[2] in WEIGHT_QUANTITIES
+    return tuple(
+        Point(
+            int(lab),
+            r.id,
+            r.session_time_ns,
+            r.parameters[key].value,
+            r.parameters[key].std,
+            r.parameters[key].source,
+            r.quality.valid,
+            session_prior(r, key),
+            "recorded without a tare" if weight and id(r) in left_out else "",
+        )
+        for r, lab in visits
+        if key in r.parameters
+    )
+
+
+def _arm_series(
+    arm: str | None,
+    visits: Sequence[tuple[SessionRecord, str]],
+    errors: Callable[[ParamKey], DayToDayError],
+    left_out: frozenset[int],
+) -> list[Series]:
+    series = []
+    for key in sorted({key for r, _ in visits for key in r.parameters}, key=sort_key):
+        error = errors(key)
+        points = _points(key, visits, left_out)
+        usable = [p for p in points if p.usable]
+        steps = tuple(_compare(key, a, b, error) for a, b in itertools.pairwise(usable))
+        first = _compare(key, usable[0], usable[-1], error) if len(usable) >= 3 else None
+        series.append(
+            Series(
+                arm,
+                key,
+                label(key),
+                unit(key[2]),
+                points,
+                error,
+                is_judged(key),
+                steps,
+                steps[-1] if steps else None,
+                first,
+            )
+        )
+    return series
+
+
+def _widened(series: Sequence[Series]) -> tuple[Series, ...]:
+    """``series`` with every comparison told how many the report judges (the limit of its flags)."""
+    count = sum(len(s.comparisons) for s in series)
+    out = []
+    for s in series:
+        steps = tuple(replace(c, comparisons=count) for c in s.steps)
+        first = replace(s.since_first, comparisons=count) if s.since_first is not None else None
+        out.append(replace(s, steps=steps, since_previous=steps[-1] if steps else None, since_first=first))
+    return tuple(out)
+
+
 def analyse(
     subject: str,
     records: Sequence[SessionRecord],
@@ -243,6 +470,11 @@ def analyse(
     min_pairs: int = MIN_PAIRS,
 ) -> Analysis:
     """Build the per-arm series of ``subject``'s sessions and judge their changes against retest pairs.
+
+    Every comparison (each step between usable sessions, and the latest since the first) of every judged
+    parameter is flagged only beyond a limit widened for their number (:attr:`Change.limit`), so that an
+    unchanged arm is flagged anywhere in the report at most 1 time in 20. An untared session among an arm's
+    tared ones keeps its passive moments but not its arm weight (:func:`untared_sessions`).
 
     Parameters
     ----------
@@ -268,50 +500,30 @@ def analyse(
     sessions = tuple(
         _merge_subject(r, subject_record) for r in sorted(records, key=lambda r: (r.session_time_ns, r.id or 0))
     )
+    labels = visit_labels(sessions)
+    untared = untared_sessions(sessions, labels)
+    left_out = frozenset(id(u.record) for u in untared)
     pairs = tuple(retest_pairs(pool if pool is not None else records))
-    cells = Counter(r.cell for r in sessions)
-    cell = cells.most_common(1)[0][0]
+    cell = Counter(r.cell for r in sessions).most_common(1)[0][0]
     preferred = subject_record.arm if subject_record is not None else None
     present = list(dict.fromkeys(r.arm for r in sessions))
     arms = tuple(sorted(present, key=lambda a: (a != preferred, a is None, a or "")))
-    series = []
+    series: list[Series] = []
     for arm in arms:
-        visits = [r for r in sessions if r.arm == arm and not r.retest]
-        keys = sorted({key for r in visits for key in r.parameters}, key=sort_key)
-        for key in keys:
-            error = day_to_day_error(key, subject, cell, pairs, min_pairs)
-            points = tuple(
-                Point(
-                    r.number or 0,
-                    r.id,
-                    r.session_time_ns,
-                    r.parameters[key].value,
-                    r.parameters[key].std,
-                    r.parameters[key].source,
-                    r.quality.valid,
-                    session_prior(r, key),
-                )
-                for r in visits
-                if key in r.parameters
-            )
-            usable = [p for p in points if p.usable]
-            steps = tuple(_compare(key, a, b, error) for a, b in itertools.pairwise(usable))
-            series.append(
-                Series(
-                    arm,
-                    key,
-                    label(key),
-                    unit(key[2]),
-                    points,
-                    error,
-                    is_judged(key),
-                    steps,
-                    steps[-1] if steps else None,
-                    _compare(key, usable[0], usable[-1], error) if len(usable) >= 3 else None,
-                )
-            )
+        visits = [(r, lab) for r, lab in zip(sessions, labels, strict=True) if r.arm == arm and not r.retest]
+        series += _arm_series(arm, visits, lambda key: day_to_day_error(key, subject, cell, pairs, min_pairs), left_out)
     return Analysis(
-        subject, subject_record, sessions, arms, tuple(series), _prior_note(sessions), pairs, cell, min_pairs
+        subject,
+        subject_record,
+        sessions,
+        arms,
+        _widened(series),
+        _prior_note(sessions),
+        pairs,
+        cell,
+        min_pairs,
+        labels,
+        untared,
     )
 
 

@@ -20,7 +20,7 @@ CURVES_CAPTION = (
 
 @dataclass(frozen=True)
 class CurveSession:
-    """One session's passive curve: its number within the subject, its start, and the curve as stored."""
+    """One session's passive curve: its number in the report (retests not counted), its start, and the curve."""
 
     number: int
     time_ns: int
@@ -44,9 +44,9 @@ class CurveView:
     changed_deg: tuple[int, ...]
 
 
-def _curve_session(record: SessionRecord, curve: dict[str, Any]) -> CurveSession:
+def _curve_session(analysis: Analysis, record: SessionRecord, curve: dict[str, Any]) -> CurveSession:
     return CurveSession(
-        number=record.number or 0,
+        number=int(analysis.label_of(record)),
         time_ns=record.session_time_ns,
         angle_deg=tuple(curve["angle_deg"]),
         moment_nm=tuple(curve["moment_nm"]),
@@ -55,7 +55,7 @@ def _curve_session(record: SessionRecord, curve: dict[str, Any]) -> CurveSession
 
 
 def _changed_angles(analysis: Analysis, arm: str | None, joint: str, first: int, latest: int) -> tuple[int, ...]:
-    """Angles whose judged change between sessions ``first`` and ``latest`` (numbers) exceeds the MDC95."""
+    """Angles whose change between sessions ``first`` and ``latest`` (numbers) is flagged."""
     found = []
     for series in analysis.arm_series(arm):
         group, part, quantity = series.key
@@ -65,7 +65,7 @@ def _changed_angles(analysis: Analysis, arm: str | None, joint: str, first: int,
         # Two usable sessions compare in their one step; more, in the comparison since the first.
         for change in (*series.steps, series.since_first):
             if change is not None and (change.before.number, change.after.number) == (first, latest):
-                if change.beyond_mdc:
+                if change.flagged:
                     found.append(angle)
     return tuple(sorted(set(found)))
 
@@ -87,8 +87,8 @@ def curve_views(analysis: Analysis) -> list[CurveView]:
             having = [r for r in visits if joint in r.passive_curves and len(r.passive_curves[joint]["angle_deg"]) > 1]
             if not having:
                 continue
-            first = _curve_session(having[0], having[0].passive_curves[joint])
-            latest = _curve_session(having[-1], having[-1].passive_curves[joint]) if len(having) > 1 else None
+            first = _curve_session(analysis, having[0], having[0].passive_curves[joint])
+            latest = _curve_session(analysis, having[-1], having[-1].passive_curves[joint]) if len(having) > 1 else None
             changed = _changed_angles(analysis, arm, joint, first.number, latest.number) if latest else ()
             views.append(CurveView(arm, joint, first, latest, changed))
     return views

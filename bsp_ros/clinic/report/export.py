@@ -14,6 +14,7 @@ CSV_COLUMNS = (
     "subject",
     "arm",
     "session_number",
+    "session_label",
     "session_time_utc",
     "retest",
     "valid",
@@ -29,6 +30,7 @@ CSV_COLUMNS = (
     "mdc95",
     "mdc95_source",
     "mdc95_pairs",
+    "flag_limit",
     "flagged",
     *JOIN_COLUMNS,
 )
@@ -52,7 +54,9 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
     it and with the arm's first usable one (empty for retests, invalid sessions and the first); ``mdc95`` is the
     change it would need to be flagged (empty when unknown: ``mdc95_source`` ``none``) and ``mdc95_source`` says
     what it is: ``retest pairs``, or ``session uncertainty`` where the two sessions' own uncertainty is the larger;
-    ``flagged`` is 1 for a change from the previous session beyond it.
+    ``flag_limit`` is the MDC95 widened for the number of comparisons the report judges (:attr:`Change.limit`) and
+    ``flagged`` is 1 for a change from the previous session beyond it. ``session_number`` is the store's number
+    (``bsp sessions show``), ``session_label`` the report's (``3``, ``3a`` for the retest of session 3).
     """
     writer = csv.writer(stream, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
@@ -78,6 +82,7 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
                         record.subject,
                         record.arm or "",
                         record.number or "",
+                        analysis.label_of(record),
                         format_time(record.session_time_ns),
                         int(record.retest),
                         int(record.quality.valid),
@@ -93,7 +98,8 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
                         ),
                         _mdc95_source(step if judged else None, judged),
                         error.n_pairs if error is not None else 0,
-                        int(step is not None and judged and step.beyond_mdc),
+                        _num(step.limit if step is not None and judged else None),
+                        int(step is not None and judged and step.flagged),
                         *joined,
                     ]
                 )

@@ -9,20 +9,31 @@ from html import escape
 
 from bsp_ros import __version__
 from bsp_ros.clinic.mdc import READING_GUIDE, RETEST_METHOD
-from bsp_ros.clinic.report.analysis import Analysis, Change, Series
-from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
+from bsp_ros.clinic.report.analysis import Analysis
+from bsp_ros.clinic.report.detail import (
+    APPENDIX_NOTE,
+    PEERS_NOTE,
+    PROTOCOL,
+    DetailRow,
+    detail_rows,
+    peer_cells,
+    peer_rows,
+)
+from bsp_ros.clinic.report.labels import plain_name, plain_number, unit
 from bsp_ros.clinic.report.summary import (
     arm_title,
-    day,
     error_source,
     first_page_rows,
-    headline,
-    percent,
+    flag_rule,
+    headline_parts,
     period_line,
-    quality_notes,
+    session_notes,
     session_rows,
     subject_line,
     support_table,
+    tare_note,
+    tare_sentences,
+    technical_notes,
 )
 
 FIRST_PAGE_ROWS = 12
@@ -36,7 +47,8 @@ h3 { font-size: 1em; margin: 0.8em 0 0.2em; }
 .who { margin: 0 0 0.6em; color: #444; }
 .headline { border-left: 5px solid #1f5fa6; background: #f3f6fa; padding: 0.5em 0.8em; margin: 0.4em 0; }
 .headline p { margin: 0.25em 0; } .headline .arm { font-weight: bold; }
-.changed { color: #b71c1c; font-weight: bold; }
+.changed, tr.changed td { color: #b71c1c; font-weight: bold; }
+.unknown { color: #7a4f00; }
 .source { font-size: 0.85em; color: #555; margin: 0.3em 0; }
 figure { margin: 0.4em 0; } figure img { width: 100%; height: auto; display: block; }
 figcaption { font-size: 0.8em; color: #555; }
@@ -62,28 +74,38 @@ def _png(data: bytes, alt: str) -> str:
     return f"<img alt='{escape(alt, quote=True)}' src='data:image/png;base64,{encoded}'>"
 
 
+_KIND_CLASS = {"change": "changed", "cannot be judged yet": "unknown"}
+
+
 def _headline(analysis: Analysis) -> list[str]:
     parts = ["<div class='headline' id='headline'>"]
     for arm in analysis.arms:
         if len(analysis.arms) > 1:
             parts.append(f"<p class='arm'>{escape(arm_title(analysis, arm))}</p>")
-        flagged = {id(s): s for s in analysis.arm_series(arm) if s.flagged_latest}
-        for sentence in headline(analysis, arm):
-            changed = any(plain_name(s.key).lower() in sentence.lower() for s in flagged.values())
-            parts.append(f"<p{' class=' + chr(39) + 'changed' + chr(39) if changed else ''}>{escape(sentence)}</p>")
+        for kind, sentence in headline_parts(analysis, arm):
+            cls = _KIND_CLASS.get(kind)
+            parts.append(f"<p{f' class={chr(39)}{cls}{chr(39)}' if cls else ''}>{escape(sentence)}</p>")
     parts.append("</div>")
+    for sentence in tare_sentences(analysis):
+        parts.append(f"<p class='changed tare'>{escape(sentence)}</p>")
     parts.append(f"<p class='source' id='error-source'>{escape(error_source(analysis))}</p>")
+    rule = flag_rule(analysis)
+    if rule:
+        parts.append(f"<p class='source' id='flag-rule'>{escape(rule)}</p>")
     return parts
 
 
 def _session_table(analysis: Analysis, rows_limit: int | None, table_id: str) -> str:
-    shown, note = first_page_rows(session_rows(analysis), rows_limit)
-    out = [f"<table id='{table_id}'><tr><th>No.</th><th>Date</th><th>Arm</th><th>Status</th></tr>"]
+    first_page = rows_limit is not None
+    shown, note = first_page_rows(session_rows(analysis, retests=not first_page), rows_limit)
+    stored = "" if first_page else "<th>Stored as</th>"
+    out = [f"<table id='{table_id}'><tr><th>No.</th><th>Date</th><th>Arm</th><th>Status</th>{stored}</tr>"]
     for row in shown:
         cls = " class='attention'" if row.attention else ""
+        extra = "" if first_page else f"<td class='num'>{row.number}</td>"
         out.append(
-            f"<tr{cls}><td class='num'>{row.number}</td><td class='num'>{row.date}</td><td>{escape(row.arm)}</td>"
-            f"<td>{escape(row.status)}</td></tr>"
+            f"<tr{cls}><td class='num'>{escape(row.name)}</td><td class='num'>{row.date}</td>"
+            f"<td>{escape(row.arm)}</td><td>{escape(row.status)}</td>{extra}</tr>"
         )
     out.append("</table>")
     if note:
@@ -91,40 +113,44 @@ def _session_table(analysis: Analysis, rows_limit: int | None, table_id: str) ->
     return "\n".join(out)
 
 
-def _change_cell(change: Change | None, unit: str) -> str:
-    if change is None:
-        return "–"
-    sign = "+" if change.delta > 0 else "−"
-    text = escape(f"{sign}{with_unit(abs(change.delta), unit)} ({sign}{percent(change.percent)})")
-    return f"<span class='changed'>{text}</span>" if change.beyond_mdc else text
-
-
-def _error_cell(series: Series) -> str:
-    error = series.error
-    if error.mdc95 is None:
-        return "unknown (too few retests)" if series.judged else "not judged"
-    whose = "this patient" if error.source == "subject" else "cell"
-    text = f"{escape(with_unit(error.mdc95, series.unit))} ({error.n_pairs} retests, {whose})"
-    return text if series.judged else text + ", for reference: not judged"
-
-
-def _changes_table(analysis: Analysis) -> str:
+def _rows_table(rows: Sequence[DetailRow], table_id: str, *, error: bool = True) -> str:
+    head = "<th>Measurement error</th>" if error else ""
     out = [
-        "<table id='changes'><tr><th>Parameter</th><th>Arm</th><th>Latest</th><th>Since previous</th>"
-        "<th>Since first</th><th>Measurement error (MDC95)</th></tr>"
+        f"<table id='{table_id}'><tr><th>Parameter</th><th>Arm</th><th>Latest</th><th>Since previous</th>"
+        f"<th>Since first</th>{head}</tr>"
     ]
-    for series in analysis.series:
-        latest = series.latest
-        if latest is None or series.key[2] == "length_m":
-            continue
-        name = plain_name(series.key)
+    for row in rows:
+        cls = " class='changed'" if row.flagged else ""
+        cell = f"<td>{escape(row.error)}</td>" if error else ""
         out.append(
-            f"<tr><td>{escape(name[0].upper() + name[1:])}</td><td>{escape((series.arm or '–').capitalize())}</td>"
-            f"<td class='num'>{escape(with_unit(latest.value, series.unit))}</td>"
-            f"<td class='num'>{_change_cell(series.since_previous, series.unit)}</td>"
-            f"<td class='num'>{_change_cell(series.since_first, series.unit)}</td><td>{_error_cell(series)}</td></tr>"
+            f"<tr{cls}><td>{escape(row.name)}</td><td>{escape(row.arm)}</td><td class='num'>{escape(row.latest)}</td>"
+            f"<td class='num'>{escape(row.since_previous)}</td><td class='num'>{escape(row.since_first)}</td>"
+            f"{cell}</tr>"
         )
     out.append("</table>")
+    return "\n".join(out)
+
+
+def _peers_table(analysis: Analysis) -> str:
+    rows = peer_rows(analysis)
+    if not rows:
+        return f"<p class='note' id='prior-note'>{escape(analysis.prior_note)}</p>"
+    two = len(analysis.arms) > 1
+    out = [
+        "<table id='peers'><tr><th>Segment</th>"
+        + ("<th>Arm</th>" if two else "")
+        + "<th>Measured (latest)</th><th>Tables predict (±2 SD)</th><th>Against peers</th></tr>"
+    ]
+    for arm, row in rows:
+        measured, tables, words = peer_cells(row, unit(row.key[2]))
+        out.append(
+            f"<tr><td>{escape(row.label)}</td>"
+            + (f"<td>{escape(arm)}</td>" if two else "")
+            + f"<td class='num'>{escape(measured)}</td><td class='num'>{escape(tables)}</td>"
+            + f"<td>{escape(words)}</td></tr>"
+        )
+    out.append("</table>")
+    out.append(f"<p class='note' id='prior-note'>{escape(PEERS_NOTE)}</p>")
     return "\n".join(out)
 
 
@@ -165,20 +191,31 @@ def _support(analysis: Analysis) -> list[str]:
     return parts
 
 
-def _quality(analysis: Analysis) -> list[str]:
-    parts = ["<h2>All sessions</h2>", _session_table(analysis, None, "all-sessions"), "<h3>Session notes</h3><ul>"]
-    for record in analysis.sessions:
-        notes = quality_notes(record)
-        text = "; ".join(notes) if notes else "no notes"
-        parts.append(f"<li>Session {record.number} ({day(record.session_time_ns)}): {escape(text)}</li>")
-    parts.append("</ul><h3>Technical notes (for the engineer)</h3>")
-    for record in analysis.sessions:
-        lines = [record.quality.message] if not record.quality.valid and record.quality.message else []
-        lines += list(record.quality.warnings)
-        if lines:
-            parts.append(
-                f"<p class='tech'>Session {record.number}: " + " | ".join(escape(line) for line in lines) + "</p>"
-            )
+def _sessions(analysis: Analysis) -> list[str]:
+    parts = ["<h2>All sessions</h2>", _session_table(analysis, None, "all-sessions")]
+    notes = session_notes(analysis)
+    if notes:
+        parts.append("<h3>Session notes</h3><ul id='session-notes'>")
+        parts += [f"<li>{escape(who)}: {escape(text)}.</li>" for who, text in notes]
+        parts.append("</ul>")
+    if tare_note(analysis):
+        parts.append(f"<p class='note'>{escape(tare_note(analysis))}</p>")
+    return parts
+
+
+def _appendix(analysis: Analysis, pngs: Sequence[tuple[str, bytes]]) -> list[str]:
+    parts = [
+        "<section id='appendix'><h2>Appendix for the engineer</h2>",
+        f"<p class='note'>{escape(APPENDIX_NOTE)}</p>",
+        _rows_table(detail_rows(analysis, "appendix"), "appendix-table", error=False),
+    ]
+    for title, png in pngs:
+        parts.append(f"<h3>{escape(title)}</h3><figure>{_png(png, title)}</figure>")
+    notes = technical_notes(analysis)
+    if notes:
+        parts.append("<h3>Technical notes of the estimator</h3>")
+        parts += [f"<p class='tech'>{escape(who)}: {escape(text)}</p>" for who, text in notes]
+    parts.append("</section>")
     return parts
 
 
@@ -198,6 +235,7 @@ def render_html(
     detail_pngs: Sequence[tuple[str, bytes]],
     generated: dt.datetime,
     curves_png: bytes | None = None,
+    appendix_pngs: Sequence[tuple[str, bytes]] = (),
 ) -> str:
     """The report page.
 
@@ -208,6 +246,7 @@ def render_html(
     detail_pngs : ``(title, png)`` of the detail trend groups.
     generated : when the report is made (printed on every page).
     curves_png : the torque-angle panels (first and latest usable session per joint), None if no curves.
+    appendix_pngs : ``(title, png)`` of the engineer's appendix trend groups.
     """
     from bsp_ros.clinic.report.curve_views import CURVES_CAPTION, CURVES_TITLE
 
@@ -228,7 +267,8 @@ def render_html(
             "<figure id='passive-trends'>"
             + _png(first_png, "Passive joint moments across sessions")
             + "<figcaption>Dots: usable sessions (bars ±2 SD); shaded: measurement error around the first session; "
-            "red: a change beyond it; dotted line: a session that could not be used.</figcaption></figure>"
+            "red: a flagged change; dotted line: a session that could not be used. "
+            f"{escape(PROTOCOL)}</figcaption></figure>"
         )
     parts.append(_session_table(analysis, FIRST_PAGE_ROWS, "sessions"))
     parts.append("</section>")
@@ -238,15 +278,19 @@ def render_html(
             f"<h3>{escape(CURVES_TITLE)}</h3><figure id='passive-curves'>{_png(curves_png, CURVES_TITLE)}"
             f"<figcaption>{escape(CURVES_CAPTION)}</figcaption></figure>"
         )
-    parts.append(_changes_table(analysis))
+    parts.append("<h3>Passive joint moments</h3>" + _rows_table(detail_rows(analysis, "passive"), "changes"))
+    parts.append("<h3>Arm weight against its peers</h3>" + _peers_table(analysis))
+    parts.append(
+        "<h3>Arm weight, masses and centres of mass</h3>" + _rows_table(detail_rows(analysis, "weight"), "weight")
+    )
     for title, png in detail_pngs:
         parts.append(f"<h3>{escape(title)}</h3><figure>{_png(png, title)}</figure>")
-    parts.append(f"<p class='note' id='prior-note'>{escape(analysis.prior_note)}</p>")
     parts.append("<h3>Segment lengths (from the markers)</h3>" + _lengths_table(analysis))
     parts.extend(_support(analysis))
-    parts.extend(_quality(analysis))
-    parts.append(f"<h2>Method</h2><p class='note'>{escape(RETEST_METHOD)}</p>")
-    parts.append(f"<p class='note' id='reading-guide'>{escape(READING_GUIDE)}</p>")
+    parts.extend(_sessions(analysis))
+    parts.append(f"<h2>Method</h2><p class='note'>{escape(RETEST_METHOD)} {escape(flag_rule(analysis))}</p>")
     parts.append("</section>")
+    parts.extend(_appendix(analysis, appendix_pngs))
+    parts.append(f"<p class='note' id='reading-guide'>{escape(READING_GUIDE)}</p>")
     parts.append(f"<footer>{escape(footer)} by bsp_ros {escape(__version__)}.</footer></body></html>")
     return "\n".join(parts)

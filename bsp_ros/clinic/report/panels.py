@@ -52,8 +52,7 @@ def first_page_panels(analysis: Analysis) -> list[Panel]:
     return sorted(chosen, key=lambda p: sort_key(p[0].key))
 
 
-def detail_groups(analysis: Analysis) -> list[tuple[str, list[Panel]]]:
-    """Titled groups of the remaining trends for the detail pages."""
+def _groups(analysis: Analysis) -> list[tuple[str, list[Panel]]]:
     shown = {p[0].key for p in first_page_panels(analysis)}
     keys = sorted({s.key for s in analysis.series}, key=sort_key)
     rest = [k for k in keys if k not in shown and k[2] not in NOT_PLOTTED]
@@ -63,7 +62,7 @@ def detail_groups(analysis: Analysis) -> list[tuple[str, list[Panel]]]:
             "Masses and centres of mass (measured weight combined with tables)",
             [k for k in rest if k[2] in ("mass_kg", "com_m")],
         ),
-        ("Further passive-moment terms", [k for k in rest if k[0] == "joints"]),
+        (APPENDIX_GROUP, [k for k in rest if k[0] == "joints"]),
     ]
     found = []
     for title, chosen in groups:
@@ -71,3 +70,16 @@ def detail_groups(analysis: Analysis) -> list[tuple[str, list[Panel]]]:
         if panels:
             found.append((title, panels))
     return found
+
+
+APPENDIX_GROUP = "Further passive-moment terms"
+
+
+def detail_groups(analysis: Analysis) -> list[tuple[str, list[Panel]]]:
+    """Titled groups of the remaining trends a clinician reads: the arm weight, masses and centres of mass."""
+    return [g for g in _groups(analysis) if g[0] != APPENDIX_GROUP]
+
+
+def appendix_groups(analysis: Analysis) -> list[tuple[str, list[Panel]]]:
+    """The engineer's trends: passive-moment terms not on the first page (elastic offsets, curve angles)."""
+    return [g for g in _groups(analysis) if g[0] == APPENDIX_GROUP]

@@ -17,31 +17,42 @@ from matplotlib.patches import Rectangle
 
 from bsp_ros import __version__
 from bsp_ros.clinic.mdc import READING_GUIDE, RETEST_METHOD
-from bsp_ros.clinic.report.analysis import Analysis, Change
+from bsp_ros.clinic.report.analysis import Analysis
 from bsp_ros.clinic.report.curve_plots import curve_panels, draw_curves
 from bsp_ros.clinic.report.curve_views import CURVES_CAPTION, CURVES_TITLE
-from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
-from bsp_ros.clinic.report.panels import arm_names, detail_groups, first_page_panels
+from bsp_ros.clinic.report.detail import (
+    APPENDIX_NOTE,
+    PEERS_NOTE,
+    PROTOCOL,
+    DetailRow,
+    detail_rows,
+    peer_cells,
+    peer_rows,
+)
+from bsp_ros.clinic.report.labels import plain_name, plain_number, unit
+from bsp_ros.clinic.report.panels import appendix_groups, arm_names, detail_groups, first_page_panels
 from bsp_ros.clinic.report.plots import Panel, draw_panels
 from bsp_ros.clinic.report.summary import (
     arm_title,
-    day,
     error_source,
     first_page_rows,
-    headline,
-    percent,
+    flag_rule,
+    headline_parts,
     period_line,
-    quality_notes,
+    session_notes,
     session_rows,
     subject_line,
     support_table,
+    tare_note,
+    tare_sentences,
+    technical_notes,
 )
 from bsp_ros.errors import InputError
 
 A4_IN = (8.27, 11.69)
 LEFT, RIGHT, TOP, BOTTOM = 0.07, 0.93, 0.955, 0.06
 LINE = 0.0145  # height of a 9 pt line, fraction of the page
-BLUE, RED, GREY, INK = "#1f5fa6", "#b71c1c", "#666666", "#222222"
+BLUE, RED, GREY, INK, AMBER = "#1f5fa6", "#b71c1c", "#666666", "#222222", "#7a4f00"
 FIRST_PAGE_ROWS = 12
 
 
@@ -99,42 +110,30 @@ def _headline_box(flow: _Flow, analysis: Analysis) -> None:
     for arm in analysis.arms:
         if len(analysis.arms) > 1:
             flow.line(arm_title(analysis, arm), 9.5, INK, "bold", LEFT + 0.015)
-        flagged = [plain_name(s.key).lower() for s in analysis.arm_series(arm) if s.flagged_latest]
-        for sentence in headline(analysis, arm):
-            changed = any(name in sentence.lower() for name in flagged)
-            flow.paragraph(sentence, 9.5, RED if changed else INK, "bold" if changed else "normal", indent=0.015)
-    flow.page.add_artist(
-        Rectangle(
-            (LEFT - 0.005, flow.y),
-            RIGHT - LEFT + 0.01,
-            top - flow.y,
-            transform=flow.page.transFigure,
-            facecolor="#f3f6fa",
-            edgecolor="none",
-            zorder=-1,
-        )
-    )
-    flow.page.add_artist(
-        Rectangle(
-            (LEFT - 0.005, flow.y),
-            0.006,
-            top - flow.y,
-            transform=flow.page.transFigure,
-            facecolor=BLUE,
-            edgecolor="none",
-        )
-    )
+        for kind, sentence in headline_parts(analysis, arm):
+            colour, weight = {"change": (RED, "bold"), "cannot be judged yet": (AMBER, "normal")}.get(
+                kind, (INK, "normal")
+            )
+            flow.paragraph(sentence, 9.5, colour, weight, indent=0.015)
+    for artist in (
+        Rectangle((LEFT - 0.005, flow.y), RIGHT - LEFT + 0.01, top - flow.y, facecolor="#f3f6fa", zorder=-1),
+        Rectangle((LEFT - 0.005, flow.y), 0.006, top - flow.y, facecolor=BLUE),
+    ):
+        artist.set(transform=flow.page.transFigure, edgecolor="none")
+        flow.page.add_artist(artist)
     flow.y -= LINE * 0.5
+    for sentence in tare_sentences(analysis):
+        flow.paragraph(sentence, 8.5, RED, "bold")
 
 
 def _session_list(flow: _Flow, analysis: Analysis, limit: int | None) -> None:
-    shown, note = first_page_rows(session_rows(analysis), limit)
+    shown, note = first_page_rows(session_rows(analysis, retests=limit is None), limit)
     flow.line("No.   Date          Arm     Status", 8.0, GREY, "bold")
     for row in shown:
         colour, weight = (RED, "bold") if row.attention else (INK, "normal")
         status = textwrap.wrap(row.status, 78) or [""]
         flow.room(LINE * len(status))
-        flow.page.text(LEFT, flow.y, f"{row.number}", fontsize=8, color=colour, weight=weight, va="top")
+        flow.page.text(LEFT, flow.y, row.name, fontsize=8, color=colour, weight=weight, va="top")
         flow.page.text(LEFT + 0.05, flow.y, row.date, fontsize=8, color=colour, weight=weight, va="top")
         flow.page.text(LEFT + 0.165, flow.y, row.arm, fontsize=8, color=colour, weight=weight, va="top")
         for part in status:
@@ -144,13 +143,27 @@ def _session_list(flow: _Flow, analysis: Analysis, limit: int | None) -> None:
         flow.line(note, 7.5, GREY)
 
 
-def _change_text(change: Change | None, unit: str) -> str:
-    if change is None:
-        return "–"
-    sign = "+" if change.delta > 0 else "−"
-    return f"{sign}{with_unit(abs(change.delta), unit)} ({sign}{percent(change.percent)})" + (
-        " beyond error" if change.beyond_mdc else ""
-    )
+def _rows(flow: _Flow, rows: Sequence[DetailRow], *, error: bool = True) -> None:
+    for row in rows:
+        text = (
+            f"{row.name} ({row.arm}): latest {row.latest}; since previous {row.since_previous}; "
+            f"since first {row.since_first}"
+        )
+        flow.paragraph(text + (f"; {row.error}." if error and row.error else "."), 8.0, RED if row.flagged else INK)
+
+
+def _peers(flow: _Flow, analysis: Analysis) -> None:
+    rows = peer_rows(analysis)
+    if not rows:
+        flow.paragraph(analysis.prior_note, 8.0, GREY)
+        return
+    two = len(analysis.arms) > 1
+    for arm, row in rows:
+        measured, tables, words = peer_cells(row, unit(row.key[2]))
+        flow.paragraph(
+            f"{row.label}{f' ({arm})' if two else ''}: measured {measured}; tables predict {tables}; {words}.", 8.0
+        )
+    flow.paragraph(PEERS_NOTE, 7.5, GREY)
 
 
 def _curves(flow: _Flow, analysis: Analysis) -> None:
@@ -169,43 +182,7 @@ def _curves(flow: _Flow, analysis: Analysis) -> None:
     flow.paragraph(CURVES_CAPTION, 7.5, GREY)
 
 
-def _detail(flow: _Flow, analysis: Analysis) -> None:
-    flow.new_page()
-    flow.heading("Detail: every parameter", 13.0)
-    _curves(flow, analysis)
-    for series in analysis.series:
-        latest = series.latest
-        if latest is None or series.key[2] == "length_m":
-            continue
-        name = plain_name(series.key)
-        arm = f" ({series.arm} arm)" if series.arm and len(analysis.arms) > 1 else ""
-        error = (
-            "measurement error unknown"
-            if series.error.mdc95 is None
-            else f"measurement error {with_unit(series.error.mdc95, series.unit)} ({series.error.n_pairs} retests)"
-        ) + ("" if series.judged else ", not judged")
-        flagged = any(c is not None and c.beyond_mdc for c in (series.since_previous, series.since_first))
-        flow.paragraph(
-            f"{name[0].upper()}{name[1:]}{arm}: latest {with_unit(latest.value, series.unit)}; since previous "
-            f"{_change_text(series.since_previous, series.unit)}; "
-            f"since first {_change_text(series.since_first, series.unit)}; {error}.",
-            8.0,
-            RED if flagged and series.judged else INK,
-        )
-    names = arm_names(analysis)
-    for title, panels in detail_groups(analysis):
-        flow.heading(title)
-        for start in range(0, len(panels), 6):
-            flow.panels(panels[start : start + 6], names)
-    flow.paragraph(analysis.prior_note, 8.0, GREY)
-    flow.heading("Segment lengths (from the markers)")
-    for series in analysis.series:
-        if series.key[2] == "length_m" and series.latest is not None:
-            name = plain_name(series.key)
-            arm = f" ({series.arm} arm)" if series.arm and len(analysis.arms) > 1 else ""
-            flow.line(
-                f"{name[0].upper()}{name[1:]}{arm}: {plain_number((series.latest.value or 0.0) * 100, 3)} cm", 8.0
-            )
+def _support(flow: _Flow, analysis: Analysis) -> None:
     flow.heading("Weight support")
     for side in analysis.arms:
         rows, note = support_table(analysis, side)
@@ -219,21 +196,66 @@ def _detail(flow: _Flow, analysis: Analysis) -> None:
                 8.0,
             )
         flow.paragraph(note, 8.0, GREY)
+
+
+def _lengths(flow: _Flow, analysis: Analysis) -> None:
+    flow.heading("Segment lengths (from the markers)")
+    for series in analysis.series:
+        if series.key[2] == "length_m" and series.latest is not None:
+            name = plain_name(series.key)
+            arm = f" ({series.arm} arm)" if series.arm and len(analysis.arms) > 1 else ""
+            flow.line(
+                f"{name[0].upper()}{name[1:]}{arm}: {plain_number((series.latest.value or 0.0) * 100, 3)} cm", 8.0
+            )
+
+
+def _detail(flow: _Flow, analysis: Analysis) -> None:
+    flow.new_page()
+    flow.heading("Detail: every parameter", 13.0)
+    _curves(flow, analysis)
+    flow.heading("Passive joint moments")
+    _rows(flow, detail_rows(analysis, "passive"))
+    flow.heading("Arm weight against its peers")
+    _peers(flow, analysis)
+    flow.heading("Arm weight, masses and centres of mass")
+    _rows(flow, detail_rows(analysis, "weight"))
+    names = arm_names(analysis)
+    for title, panels in detail_groups(analysis):
+        flow.heading(title)
+        for start in range(0, len(panels), 6):
+            flow.panels(panels[start : start + 6], names)
+    _lengths(flow, analysis)
+    _support(flow, analysis)
     flow.heading("All sessions")
     _session_list(flow, analysis, None)
-    for record in analysis.sessions:
-        notes = quality_notes(record)
-        if notes:
-            flow.paragraph(f"Session {record.number} ({day(record.session_time_ns)}): {'; '.join(notes)}.", 8.0, GREY)
-    flow.heading("Technical notes (for the engineer)", 10.0)
-    for record in analysis.sessions:
-        lines = [record.quality.message] if not record.quality.valid and record.quality.message else []
-        lines += list(record.quality.warnings)
-        if lines:
-            flow.paragraph(f"Session {record.number}: " + " | ".join(lines), 7.0, GREY)
+    notes = session_notes(analysis)
+    if notes:
+        flow.heading("Session notes", 10.0)
+        for who, text in notes:
+            flow.paragraph(f"{who}: {text}.", 8.0)
+    if tare_note(analysis):
+        flow.paragraph(tare_note(analysis), 8.0, GREY)
     flow.heading("Method")
-    flow.paragraph(RETEST_METHOD, 8.0, GREY)
+    flow.paragraph(f"{RETEST_METHOD} {flag_rule(analysis)}", 8.0, GREY)
+    _appendix(flow, analysis)
     flow.paragraph(READING_GUIDE, 8.0, GREY)
+
+
+def _appendix(flow: _Flow, analysis: Analysis) -> None:
+    flow.new_page()
+    flow.heading("Appendix for the engineer", 13.0)
+    flow.paragraph(APPENDIX_NOTE, 8.0, GREY)
+    _rows(flow, detail_rows(analysis, "appendix"), error=False)
+    names = arm_names(analysis)
+    for title, panels in appendix_groups(analysis):
+        flow.heading(title)
+        for start in range(0, len(panels), 6):
+            flow.panels(panels[start : start + 6], names)
+    notes = technical_notes(analysis)
+    if notes:
+        flow.heading("Technical notes of the estimator", 10.0)
+        for who, text in notes:
+            flow.paragraph(f"{who}: {text}", 7.0, GREY)
 
 
 def report_pages(analysis: Analysis, generated: dt.datetime) -> list[Figure]:
@@ -246,9 +268,12 @@ def report_pages(analysis: Analysis, generated: dt.datetime) -> list[Figure]:
     flow.y -= LINE * 0.4
     _headline_box(flow, analysis)
     flow.paragraph(error_source(analysis), 7.5, GREY)
+    if flag_rule(analysis):
+        flow.paragraph(flag_rule(analysis), 7.5, GREY)
     panels = first_page_panels(analysis)
     if panels:
         flow.panels(panels, arm_names(analysis))
+        flow.paragraph(PROTOCOL, 7.5, GREY)
     _session_list(flow, analysis, FIRST_PAGE_ROWS)
     _detail(flow, analysis)
     stamp = generated.strftime("%Y-%m-%d %H:%M UTC")

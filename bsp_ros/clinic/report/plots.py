@@ -47,8 +47,9 @@ def draw_panel(axes: Axes, panel: Panel, arm_names: Sequence[str], *, compact: b
     """Draw one parameter's trend of every arm into ``axes``.
 
     Usable sessions are dots joined by a line with ±2 std bars; a band around the first usable value shows
-    the MDC95 (measurement error); a step beyond it is drawn in red. An invalid session is a dotted vertical
-    line marked "not usable": it takes no value, so it neither joins the line nor scales the axis.
+    the MDC95 (measurement error); a flagged step is drawn in red. An invalid session is a dotted vertical
+    line marked "not usable" (an untared session's left-out arm weight: "no tare"): it takes no value, so it
+    neither joins the line nor scales the axis. A table prediction is a grey band (±2 SD).
     """
     for k, series in enumerate(panel):
         colour = ARM_COLOURS[k % len(ARM_COLOURS)]
@@ -97,13 +98,13 @@ def draw_panel(axes: Axes, panel: Panel, arm_names: Sequence[str], *, compact: b
             axes.plot(xx, yy, color=FLAG_COLOUR, lw=2.2, zorder=4)
             axes.plot(xx[1:], yy[1:], "o", ms=8, mfc="none", mec=FLAG_COLOUR, mew=1.6, zorder=5)
         for p in series.points:
-            if not p.valid:
+            if not p.valid or p.left_out:
                 x = _day(p.time_ns)
                 axes.axvline(x, color=GAP_COLOUR, ls=":", lw=1.2, zorder=1)
                 axes.text(
                     x,
                     0.97,
-                    "not usable",
+                    "not usable" if not p.valid else "no tare",
                     transform=axes.get_xaxis_transform(),
                     rotation=90,
                     va="top",

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bsp_ros.clinic.report.analysis import Analysis, Change, Series
-from bsp_ros.clinic.report.labels import PART_NAMES, plain_name, plain_number, with_unit
-from bsp_ros.clinic.store.records import SessionRecord, format_time, ns_to_datetime
+from bsp_ros.clinic.report.analysis import RETEST_LETTERS, Analysis, Change, Series
+from bsp_ros.clinic.report.labels import PART_NAMES, plain_name, plain_number, short_label, with_unit
+from bsp_ros.clinic.store.records import ParamKey, SessionRecord, format_time, ns_to_datetime
+from bsp_ros.core.findings import Severity
 from bsp_ros.core.weight_support import support_wrench
 from bsp_ros.errors import InputError
 
@@ -84,45 +85,139 @@ def _span(change: Change, unit: str) -> str:
     return f"{plain_number(change.before.value)} to {with_unit(change.after.value, unit)}"
 
 
+def short_name(key: ParamKey) -> str:
+    """``elbow friction``: a parameter's short name, lower case, for lists."""
+    return short_label(key).lower()
+
+
 def change_sentence(series: Series, changes: list[Change]) -> str:
-    """One sentence on a parameter's changes beyond the MDC95 (since previous and/or since first)."""
+    """One sentence on a parameter's flagged changes (since previous and/or since first) and the limit they pass."""
     name = plain_name(series.key)
     parts = []
     for change in changes:
         since = "since the previous session" if change is series.since_previous else "since the first session"
-        parts.append(f"{_direction(change)} {percent(change.percent)} {since} ({_span(change, series.unit)})")
-    mdc = changes[0]
-    explained = f"{with_unit(mdc.mdc95, series.unit)} ({percent(mdc.mdc_percent)})"
-    return f"{name[0].upper()}{name[1:]} {' and '.join(parts)}, beyond the {explained} that measurement error explains."
+        size = percent(change.percent) if change.percent is not None else with_unit(abs(change.delta), series.unit)
+        parts.append(f"{_direction(change)} {size} {since} ({_span(change, series.unit)})")
+    limit = changes[0]
+    share = f" ({percent(limit.limit_percent)})" if limit.percent is not None else ""
+    explained = f"{with_unit(limit.limit, series.unit)}{share}"
+    return (
+        f"{name[0].upper()}{name[1:]} {' and '.join(parts)}, beyond the {explained} that measurement error can "
+        "explain in this report."
+    )
 
 
-def headline(analysis: Analysis, arm: str | None) -> list[str]:
-    """The headline sentences of one arm: what changed beyond the MDC95, or why nothing can be said."""
+CHANGE, NO_CHANGE, UNKNOWN = "change", "no change", "cannot be judged yet"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the headline says of one passive parameter of one arm: ``change``, ``no change`` or ``cannot be
+    judged yet`` (then ``reason``: why, and what to record)."""
+
+    series: Series
+    status: str
+    reason: str = ""
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}{'s' if count != 1 else ''}"
+
+
+def verdict(series: Series, min_pairs: int) -> Verdict:
+    """Whether the latest session's change of ``series`` is judged, and what was found (see :class:`Verdict`)."""
+    if series.flagged_latest:
+        return Verdict(series, CHANGE)
+    usable = sum(p.usable for p in series.points)
+    if usable < 2:
+        return Verdict(series, UNKNOWN, "one usable session. The next one is compared with it")
+    if not series.error.known:
+        return Verdict(
+            series,
+            UNKNOWN,
+            f"{_plural(series.error.n_pairs, 'retest pair')} of the {min_pairs} needed. To judge it, record a "
+            "same-day retest with the same passive model (bsp sessions add … --retest)",
+        )
+    latest = [c for c in (series.since_previous, series.since_first) if c is not None]
+    if all(c.at_bound for c in latest):
+        return Verdict(
+            series,
+            UNKNOWN,
+            "estimated at 0, where the movement did not show it. To judge it, record wider or faster movements "
+            "(bsp plan)",
+        )
+    return Verdict(series, NO_CHANGE)
+
+
+def verdicts(analysis: Analysis, arm: str | None) -> list[Verdict]:
+    """The headline's verdict on each judged passive parameter of ``arm`` that has a value (the moment at one
+    angle of a passive curve only where it changed: the curve's panel shows the rest)."""
+    from bsp_ros.clinic.store.curves import angle_of
+
+    found = []
+    for series in analysis.arm_series(arm):
+        if not series.judged or not series.has_values:
+            continue
+        if angle_of(series.key[2]) is not None and not series.flagged_latest:
+            continue
+        found.append(verdict(series, analysis.min_pairs))
+    return found
+
+
+def headline_parts(analysis: Analysis, arm: str | None) -> list[tuple[str, str]]:
+    """The headline of one arm as ``(kind, sentence)``: kind ``change`` (red), ``no change``, ``cannot be judged
+    yet`` or ``note``. A parameter is named under "no change" only where its change was judged."""
     visits = [r for r in analysis.visits(arm) if r.quality.valid]
     if not visits:
-        return ["No session of this arm could be evaluated yet."]
+        return [("note", "No session of this arm could be evaluated yet.")]
     if len(visits) == 1:
-        return [f"One usable session ({long_day(visits[0].session_time_ns)}): the first measurement to compare with."]
+        return [
+            (
+                "note",
+                f"One usable session ({long_day(visits[0].session_time_ns)}): the first measurement to compare with.",
+            )
+        ]
     if not analysis.judgeable:
-        return [cannot_judge(analysis)]
-    sentences = [change_sentence(s, s.flagged_latest) for s in analysis.arm_series(arm) if s.flagged_latest]
-    if not sentences:
+        return [("note", cannot_judge(analysis))]
+    found = verdicts(analysis, arm)
+    parts = [(CHANGE, change_sentence(v.series, v.series.flagged_latest)) for v in found if v.status == CHANGE]
+    same = [short_name(v.series.key) for v in found if v.status == NO_CHANGE]
+    if same:
         first, last = visits[0], visits[-1]
         since = (
             "the previous session"
             if len(visits) == 2
-            else f"the previous session or the first ({long_day(first.session_time_ns)})"
+            else f"the previous or the first ({long_day(first.session_time_ns)})"
         )
-        when = long_day(last.session_time_ns)
-        sentences.append(f"No change beyond measurement error in the latest session ({when}) since {since}.")
+        parts.append(
+            (
+                NO_CHANGE,
+                f"No change beyond measurement error in the latest session ({long_day(last.session_time_ns)}) since "
+                f"{since}: {', '.join(same)}.",
+            )
+        )
+    unknown: dict[str, list[str]] = {}
+    for v in found:
+        if v.status == UNKNOWN:
+            unknown.setdefault(v.reason, []).append(short_name(v.series.key))
+    for reason, names in unknown.items():
+        parts.append((UNKNOWN, f"Cannot be judged yet: {', '.join(names)}. Why: {reason}."))
     latest = analysis.visits(arm)[-1]
     if not latest.quality.valid:
-        sentences.insert(
+        parts.insert(
             0,
-            f"The latest session ({long_day(latest.session_time_ns)}) could not be evaluated; the session before "
-            "it is compared instead.",
+            (
+                "note",
+                f"The latest session ({long_day(latest.session_time_ns)}) could not be evaluated; the session "
+                "before it is compared instead.",
+            ),
         )
-    return sentences
+    return parts
+
+
+def headline(analysis: Analysis, arm: str | None) -> list[str]:
+    """The headline sentences of one arm (:func:`headline_parts` without their kinds)."""
+    return [sentence for _, sentence in headline_parts(analysis, arm)]
 
 
 def cannot_judge(analysis: Analysis) -> str:
@@ -137,26 +232,68 @@ def cannot_judge(analysis: Analysis) -> str:
     )
 
 
+ICC_WORDS = ((0.9, "excellent"), (0.75, "good"), (0.5, "moderate"), (float("-inf"), "poor"))
+"""Agreement in words by ICC (Koo and Li 2016)."""
+
+
+def icc_words(icc: float) -> str:
+    """``good agreement (ICC 0.82)``, and for poor agreement what it means for a report."""
+    word = next(w for bound, w in ICC_WORDS if icc >= bound)
+    text = f"{word} agreement between patients' tests and retests (ICC {icc:.2f})"
+    if word == "poor":
+        text += ": the patients differ little against the measurement error, which is what the MDC95 judges by"
+    return text
+
+
 def error_source(analysis: Analysis) -> str:
     """Where the measurement error comes from, in one sentence."""
     judged = [s for s in analysis.series if s.judged and s.error.known]
     if not judged:
         return "No measurement error is known yet (no or too few retests): changes are not judged."
     error = judged[0].error
-    whose = "this patient" if error.source == "subject" else f"{error.n_subjects} patient(s) measured in this cell"
-    # The agreement differs per quantity: name the one it belongs to, or give the range over those judged.
-    iccs = [(s.error.icc, s.label) for s in judged if s.error.icc is not None]
+    whose = "this patient" if error.source == "subject" else f"{error.n_subjects} patients measured in this cell"
+    iccs = sorted((s.error.icc, short_name(s.key)) for s in judged if s.error.icc is not None)
     if len(iccs) == 1:
-        icc = f"; agreement (ICC) {iccs[0][0]:.2f} for {iccs[0][1].lower()}"
+        icc = f"; {icc_words(iccs[0][0])} for {iccs[0][1]}"
     elif iccs:
-        low, high = min(i for i, _ in iccs), max(i for i, _ in iccs)
-        icc = f"; agreement (ICC) {low:.2f} to {high:.2f} over the {len(iccs)} quantities judged"
+        (low, low_name), (high, high_name) = iccs[0], iccs[-1]
+        icc = (
+            f"; agreement between patients' tests and retests (ICC) from {low:.2f} ({low_name}, "
+            f"{next(w for b, w in ICC_WORDS if low >= b)}) to {high:.2f} ({high_name}, "
+            f"{next(w for b, w in ICC_WORDS if high >= b)}) over the {len(iccs)} quantities judged"
+        )
     else:
         icc = ""
+    return f"Measurement error (MDC95) from {error.n_pairs} same-day retests of {whose}{icc}."
+
+
+def flag_rule(analysis: Analysis) -> str:
+    """The rule that flags a change, in one plain sentence."""
+    count = analysis.comparisons
+    if count == 0:
+        return ""
     return (
-        f"Measurement error (MDC95) from {error.n_pairs} same-day retests of {whose}{icc}. A change is reported "
-        "only when it is larger."
+        f"A change is flagged only when it exceeds the measurement error by enough that, over all {count} "
+        "comparisons in this report, an unchanged arm shows a flag anywhere at most 1 time in 20."
     )
+
+
+def tare_sentences(analysis: Analysis) -> list[str]:
+    """Page 1's sentence on each untared session among tared ones: what was left out, and why."""
+    out = []
+    for untared in analysis.untared:
+        record = untared.record
+        read = ", ".join(
+            f"{'+' if d > 0 else '−'}{percent(d)} ({PART_NAMES.get(seg, seg).lower()})" for seg, d in untared.deviations
+        )
+        against = f": its arm weight read {read} against the tared sessions" if read else ""
+        out.append(
+            f"Session {untared.label} ({long_day(record.session_time_ns)}) was recorded without a tare (the sensor's "
+            f"zero and the handle's weight){against}. The weight support and the arm-weight trend leave it out; its "
+            "passive moments are used, their uncertainty including the unknown zero. Record a tare before every "
+            "session (bsp sessions add … --tare FILE)."
+        )
+    return out
 
 
 def invalid_cause(record: SessionRecord) -> tuple[str, str]:
@@ -171,7 +308,11 @@ def invalid_cause(record: SessionRecord) -> tuple[str, str]:
 
 @dataclass(frozen=True)
 class SessionRow:
-    """One line of the session list (``retest``: a same-day retest, kept for the measurement error)."""
+    """One line of the session list (``retest``: a same-day retest, kept for the measurement error).
+
+    ``number`` is the store's number of the session (``bsp sessions show``); ``label`` its name in the report
+    (``3``, ``3a`` for the retest of session 3).
+    """
 
     number: int
     date: str
@@ -179,69 +320,138 @@ class SessionRow:
     status: str
     attention: bool
     retest: bool = False
+    label: str = ""
+
+    @property
+    def name(self) -> str:
+        """The session's name in the report."""
+        return self.label or str(self.number)
 
 
-def session_rows(analysis: Analysis) -> list[SessionRow]:
-    """The session list: only invalid sessions and changes beyond measurement error need attention."""
+def _flagged_steps(analysis: Analysis) -> dict[int | None, list[str]]:
     flagged: dict[int | None, list[str]] = {}
     for series in analysis.series:
         for change in series.changes:
             sign = "+" if change.delta > 0 else "−"
-            flagged.setdefault(change.after.session_id, []).append(
-                f"{plain_name(series.key)} {sign}{percent(change.percent)}"
-            )
-    rows = []
+            size = percent(change.percent) if change.percent is not None else with_unit(abs(change.delta), series.unit)
+            flagged.setdefault(change.after.session_id, []).append(f"{short_name(series.key)} {sign}{size}")
+    return flagged
+
+
+def _status(analysis: Analysis, record: SessionRecord, flagged: dict[int | None, list[str]]) -> tuple[str, bool]:
+    if not record.quality.valid:
+        cause, action = invalid_cause(record)
+        return f"Not usable: {cause}; {action}.", True
+    if record.retest:
+        return "Retest (for measurement error)", False
+    parts, attention = [], False
+    if record.id in flagged:
+        parts.append("Change beyond measurement error: " + "; ".join(flagged[record.id]))
+        attention = True
+    if any(u.record is record for u in analysis.untared):
+        parts.append("No tare: its arm weight is left out")
+        attention = True
+    return ("; ".join(parts) if parts else "Usable"), attention
+
+
+def session_rows(analysis: Analysis, *, retests: bool = True) -> list[SessionRow]:
+    """The session list: only invalid sessions, untared ones among tared and flagged changes need attention.
+
+    With ``retests`` False a retest has no line of its own: its name stands beside its session's status.
+    """
+    flagged = _flagged_steps(analysis)
+    rows: list[SessionRow] = []
     for record in analysis.sessions:
+        name = analysis.label_of(record)
+        status, attention = _status(analysis, record, flagged)
+        visit = name.rstrip(RETEST_LETTERS)
+        if record.retest and not retests and visit != name:
+            partner = next((k for k in range(len(rows) - 1, -1, -1) if rows[k].label == visit), None)
+            if partner is not None:
+                rows[partner] = replace(rows[partner], status=f"{rows[partner].status} (retest {name})")
+                continue
         arm = (record.arm or "–").capitalize()
-        if not record.quality.valid:
-            cause, action = invalid_cause(record)
-            rows.append(
-                SessionRow(
-                    record.number or 0, day(record.session_time_ns), arm, f"Not usable: {cause}; {action}.", True
-                )
-            )
-        elif record.retest:
-            rows.append(
-                SessionRow(
-                    record.number or 0, day(record.session_time_ns), arm, "Retest (for measurement error)", False, True
-                )
-            )
-        elif record.id in flagged:
-            text = "Change beyond measurement error: " + "; ".join(flagged[record.id])
-            rows.append(SessionRow(record.number or 0, day(record.session_time_ns), arm, text, True))
-        else:
-            rows.append(SessionRow(record.number or 0, day(record.session_time_ns), arm, "Usable", False))
+        rows.append(
+            SessionRow(record.number or 0, day(record.session_time_ns), arm, status, attention, record.retest, name)
+        )
     return rows
 
 
 def first_page_rows(rows: list[SessionRow], limit: int | None) -> tuple[list[SessionRow], str]:
     """The rows the first page lists, and a note on those left out (empty when all are listed).
 
-    A long history keeps its latest sessions and its baseline, the first usable session that changes "since the
-    first session" are measured from: a list without it leaves a therapist no way to see where progress started.
+    Every row that needs attention is listed (a flagged change on page 1 always has its line), and the baseline,
+    the first usable session that changes "since the first session" are measured from; the latest sessions fill
+    the rest up to ``limit``.
     """
     if limit is None or len(rows) <= limit:
         return rows, ""
     baseline = next((r for r in rows if not r.attention and not r.retest), rows[0])
-    latest = rows[-(limit - 1) :]
-    if baseline in latest:
-        latest = rows[-limit:]
-        return latest, f"The latest {len(latest)} of {len(rows)} sessions; all are listed in the detail."
-    return (
-        [baseline, *latest],
-        f"The baseline (session {baseline.number}) and the latest {len(latest)} of {len(rows)} sessions; all are "
-        "listed in the detail.",
+    keep = {id(baseline)} | {id(r) for r in rows if r.attention}
+    for row in reversed(rows):
+        if len(keep) >= limit:
+            break
+        keep.add(id(row))
+    shown = [r for r in rows if id(r) in keep]
+    return shown, (
+        f"The baseline (session {baseline.name}), every session that needs attention and the latest: {len(shown)} "
+        f"of {len(rows)} sessions; all are listed in the detail."
     )
 
 
-def quality_notes(record: SessionRecord) -> list[str]:
-    """Plain notes on a session's quality for the detail pages (not red: they need no action)."""
-    notes = []
-    if not record.quality.tare_applied:
-        notes.append("no tare (sensor zero) recording applied")
-    if record.quality.warnings:
-        notes.append(f"{len(record.quality.warnings)} technical note(s) from the estimator")
-    return notes
+def _names(labels: list[str], every: int) -> str:
+    if len(labels) == every and every > 1:
+        return "Every session"
+    return ("Session " if len(labels) == 1 else "Sessions ") + ", ".join(labels)
+
+
+def session_notes(analysis: Analysis) -> list[tuple[str, str]]:
+    """The clinic's notes on usable sessions: the plain cause and action of each finding that has one, once per
+    session, identical notes of several sessions together, as ``(sessions, note)``."""
+    found: dict[str, list[str]] = {}
+    for record in analysis.sessions:
+        if not record.quality.valid:
+            continue
+        for finding in record.quality.findings:
+            spec = finding.spec
+            if finding.severity is Severity.INVALID or not spec.cause:
+                continue
+            where = PART_NAMES.get(finding.where, finding.where).lower()
+            text = spec.cause.format(where=where) + (f": {spec.action}" if spec.action else "")
+            labels = found.setdefault(text[0].upper() + text[1:], [])
+            if analysis.label_of(record) not in labels:
+                labels.append(analysis.label_of(record))
+    every = sum(r.quality.valid for r in analysis.sessions)
+    return [(_names(labels, every), text) for text, labels in found.items()]
+
+
+def technical_notes(analysis: Analysis) -> list[tuple[str, str]]:
+    """The estimator's own texts for the engineer as ``(sessions, text)``: one line per kind of finding and part,
+    with the sessions that have it and the latest one's text (numbers differ a little from session to session)."""
+    found: dict[tuple[str, str], tuple[list[str], str]] = {}
+    for record in analysis.sessions:
+        name = analysis.label_of(record)
+        items = [(str(f.code), f.where, f.text) for f in record.quality.findings]
+        if not items:
+            items = [("", text, text) for text in record.quality.warnings]
+            if not record.quality.valid and record.quality.message:
+                items.insert(0, ("", record.quality.message, record.quality.message))
+        for code, where, text in items:
+            labels, _ = found.get((code, where), ([], ""))
+            if name not in labels:
+                labels.append(name)
+            found[(code, where)] = (labels, text)
+    return [(_names(labels, len(analysis.sessions)), text) for labels, text in found.values()]
+
+
+def tare_note(analysis: Analysis) -> str:
+    """A sentence for the detail when no session was tared (each untared one among tared ones is on page 1)."""
+    if any(r.quality.tare_applied for r in analysis.sessions):
+        return ""
+    return (
+        "No session was recorded with a tare: the sensor's zero is assumed within its usual range (in each "
+        "uncertainty) and a handle's weight would count as the arm's."
+    )
 
 
 @dataclass(frozen=True)
@@ -255,14 +465,19 @@ class SupportRow:
 
 def support_table(analysis: Analysis, arm: str | None) -> tuple[list[SupportRow], str]:
     """Support forces implied by the arm's latest usable static moments at :data:`REFERENCE_POSE_DEG`."""
-    latest = next((r for r in reversed(analysis.visits(arm)) if r.quality.valid), None)
+    left_out = {id(u.record) for u in analysis.untared}
+    latest = next((r for r in reversed(analysis.visits(arm)) if r.quality.valid and id(r) not in left_out), None)
     if latest is None:
         return [], "No usable session: no support settings can be derived."
     segments = [s for s in SEGMENT_ORDER if ("segments", s, "static_moment_kgm") in latest.parameters]
     beta = [latest.parameters[("segments", s, "static_moment_kgm")] for s in segments]
     lengths = [latest.parameters.get(("segments", s, "length_m")) for s in segments]
     if len(segments) < 2 or any(q.value is None for q in beta) or any(q is None or q.value is None for q in lengths):
-        return [], f"Session {latest.number} lacks static moments or segment lengths: no support settings derived."
+        return (
+            [],
+            f"Session {analysis.label_of(latest)} lacks static moments or segment lengths: no support settings "
+            "derived.",
+        )
     pose = np.radians(REFERENCE_POSE_DEG[: len(segments)])
     variances = np.diag([(q.std or 0.0) ** 2 for q in beta])
     rows = []
@@ -286,7 +501,7 @@ def support_table(analysis: Analysis, arm: str | None) -> tuple[list[SupportRow]
     except InputError as error:
         return [], f"No support settings derived: {error}"
     note = (
-        f"From session {latest.number} ({long_day(latest.session_time_ns)}), with the upper arm 45° below "
+        f"From session {analysis.label_of(latest)} ({long_day(latest.session_time_ns)}), with the upper arm 45° below "
         "horizontal, the elbow at a right angle and the wrist straight: the force the robot applies at the handle "
         "(forward, upward) and the moment about the handle axis, so that it carries the given share of the "
         "arm's weight. Live, the robot computes it at the current pose."

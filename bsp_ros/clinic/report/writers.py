@@ -15,10 +15,14 @@ def _now() -> dt.datetime:
     return dt.datetime.now(dt.timezone.utc)
 
 
-def _figures(analysis: Analysis) -> tuple[bytes | None, list[tuple[str, bytes]], bytes | None]:
-    """PNGs of the first page's trends, of each detail group, and of the torque-angle curves (None: none)."""
+Figures = tuple[bytes | None, list[tuple[str, bytes]], bytes | None, list[tuple[str, bytes]]]
+
+
+def _figures(analysis: Analysis) -> Figures:
+    """PNGs of the first page's trends, of each detail group, of the torque-angle curves (None: none) and of each
+    group of the engineer's appendix."""
     from bsp_ros.clinic.report.curve_plots import curve_panels, curves_figure
-    from bsp_ros.clinic.report.panels import arm_names, detail_groups, first_page_panels
+    from bsp_ros.clinic.report.panels import appendix_groups, arm_names, detail_groups, first_page_panels
     from bsp_ros.clinic.report.plots import figure_png, panels_figure  # matplotlib only when plotting
 
     names = arm_names(analysis)
@@ -27,13 +31,14 @@ def _figures(analysis: Analysis) -> tuple[bytes | None, list[tuple[str, bytes]],
     detail = [(title, figure_png(panels_figure(panels, names))) for title, panels in detail_groups(analysis)]
     views, colours, titles = curve_panels(analysis)
     curves_png = figure_png(curves_figure(views, colours, titles)) if views else None
-    return first_png, detail, curves_png
+    appendix = [(title, figure_png(panels_figure(panels, names))) for title, panels in appendix_groups(analysis)]
+    return first_png, detail, curves_png, appendix
 
 
 def render_report(analysis: Analysis, generated: dt.datetime | None = None) -> str:
     """The HTML page of ``analysis``, plots included."""
-    first_png, detail, curves_png = _figures(analysis)
-    return render_html(analysis, first_png, detail, generated or _now(), curves_png)
+    first_png, detail, curves_png, appendix = _figures(analysis)
+    return render_html(analysis, first_png, detail, generated or _now(), curves_png, appendix)
 
 
 def write_html(analysis: Analysis, path: str | Path) -> Path:
@@ -45,11 +50,11 @@ def write_pngs(analysis: Analysis, directory: str | Path) -> list[Path]:
     """Write the figures (``passive_moments.png``, ``passive_curves.png`` and one per detail group) into
     ``directory``."""
     target = Path(directory)
-    first_png, detail, curves_png = _figures(analysis)
+    first_png, detail, curves_png, appendix = _figures(analysis)
     named = (
         ([("passive_moments", first_png)] if first_png is not None else [])
         + ([("passive_curves", curves_png)] if curves_png is not None else [])
-        + [(title.split(" (")[0].lower().replace(" ", "_"), png) for title, png in detail]
+        + [(title.split(" (")[0].lower().replace(" ", "_"), png) for title, png in [*detail, *appendix]]
     )
     try:
         target.mkdir(parents=True, exist_ok=True)

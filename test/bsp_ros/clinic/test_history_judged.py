@@ -14,7 +14,7 @@ from bsp_ros.clinic.histories import HISTORY_START_NS, session_estimate
 from bsp_ros.clinic.mdc import Z95
 from bsp_ros.clinic.report import Analysis, analyse
 from bsp_ros.clinic.report.export import write_analysis_csv
-from bsp_ros.clinic.report.summary import headline
+from bsp_ros.clinic.report.summary import headline, headline_parts
 from bsp_ros.clinic.store import open_store
 from bsp_ros.errors import InputError, StoreError
 
@@ -46,6 +46,8 @@ def test_planted_steps_are_flagged_exactly_where_beyond_the_mdc(history: History
     assert any(abs(d) > 2 * series.error.mdc95 for d in planted)  # the history plants steps well beyond the MDC
     flagged = [step.beyond_mdc for step in series.steps]
     assert flagged == [abs(d) > series.error.mdc95 for d in planted]
+    # What the report flags is stricter: beyond the MDC95 widened for every comparison it makes.
+    assert all(step.beyond_mdc and abs(step.delta) > step.limit for step in series.changes)
     # No other parameter of these arms is flagged anywhere.
     assert [s.key for s in analysis.series if s.changes] == [ELBOW[which]]
 
@@ -54,8 +56,9 @@ def test_an_unchanged_arm_is_flagged_nowhere_over_ten_sessions(history: History)
     analysis = _analysis(history, UNCHANGED)
     assert len(analysis.visits("left")) == 10 and analysis.judgeable
     assert analysis.changes == [] and analysis.latest_changes == []
-    (sentence,) = headline(analysis, "left")
-    assert sentence.startswith("No change beyond measurement error")
+    parts = headline_parts(analysis, "left")
+    assert [kind for kind, _ in parts] == ["no change", "cannot be judged yet"]
+    assert "elbow friction, elbow stiffness" in parts[0][1] and "wrist stiffness" in parts[1][1]
     # The day-to-day error is what the visits scatter by: the MDC is not a within-session 0.1 %.
     (friction,) = [s for s in analysis.series if s.key == ELBOW["coulomb"]]
     assert friction.error.source == "subject" and friction.error.mdc95 > 0.02 * 0.28
@@ -70,8 +73,8 @@ def test_cell_pairs_serve_a_subject_without_retests(history: History) -> None:
 
 def test_invalid_duplicate_and_future_sessions_do_not_move_the_headline(history: History) -> None:
     before = _analysis(history, FRICTION)
-    (sentence,) = headline(before, "left")
-    assert sentence.startswith("Resistance to passive elbow movement (friction) fell 5")
+    sentence = headline(before, "left")
+    assert sentence[0].startswith("Resistance to passive elbow movement (friction) fell 5")
     # The invalid session's absurd value is not a point of any trend or comparison.
     (friction,) = [s for s in before.series if s.key == ELBOW["coulomb"]]
     invalid = [p for p in friction.points if not p.valid]
@@ -83,7 +86,7 @@ def test_invalid_duplicate_and_future_sessions_do_not_move_the_headline(history:
         pool=[r for r in before.sessions if r.quality.valid],
         subject_record=before.record,
     )
-    assert headline(without, "left") == [sentence]
+    assert headline(without, "left") == sentence
     first = session_estimate(patient(0.80, 1.5), 0, 100)  # F1 (k = 1): its first session again
     future = session_estimate(patient(0.40, 1.5), 0, 77)
     future["session"]["start_time_ns"] = HISTORY_START_NS + 7 * 365 * 86_400 * 10**9  # 2031
@@ -96,7 +99,7 @@ def test_invalid_duplicate_and_future_sessions_do_not_move_the_headline(history:
         with pytest.raises(InputError, match="in the future"):
             store.add_estimate(future, FRICTION)
         assert len(store.sessions()) == count
-    assert headline(_analysis(history, FRICTION), "left") == [sentence]
+    assert headline(_analysis(history, FRICTION), "left") == sentence
 
 
 def test_csv_export_flags_the_planted_steps(history: History) -> None:
@@ -106,9 +109,11 @@ def test_csv_export_flags_the_planted_steps(history: History) -> None:
     rows = [r for r in csv.DictReader(io.StringIO(stream.getvalue())) if r["quantity"] == "coulomb_nm"]
     elbow = [r for r in rows if r["part"] == "elbow"]
     assert [int(r["session_number"]) for r in elbow] == list(range(1, len(analysis.sessions) + 1))
+    assert [r["session_label"] for r in elbow][:4] == ["1", "1a", "2", "2a"]  # a retest beside its session
     flagged = [r for r in elbow if r["flagged"] == "1"]
     assert len(flagged) == 2 and all(r["mdc95_source"] in ("retest pairs", "session uncertainty") for r in flagged)
-    assert all(float(r["change_from_previous"]) < -float(r["mdc95"]) for r in flagged)
+    assert all(float(r["change_from_previous"]) < -float(r["flag_limit"]) for r in flagged)
+    assert all(float(r["flag_limit"]) > float(r["mdc95"]) for r in flagged)  # widened for the report's comparisons
     assert {r["change_from_previous"] for r in elbow if r["retest"] == "1" or r["valid"] == "0"} == {""}
 
 
@@ -116,7 +121,7 @@ def _csv_rows(analysis: Analysis) -> dict[tuple[str, str, str, str], dict[str, s
     stream = io.StringIO()
     write_analysis_csv([analysis], stream)
     rows = csv.DictReader(io.StringIO(stream.getvalue()))
-    return {(r["arm"], r["part"], r["quantity"], r["session_number"]): r for r in rows if r["retest"] == "0"}
+    return {(r["arm"], r["part"], r["quantity"], r["session_label"]): r for r in rows if r["retest"] == "0"}
 
 
 def test_csv_export_says_which_mdc95_was_used(history: History) -> None:

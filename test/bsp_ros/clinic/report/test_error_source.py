@@ -1,4 +1,4 @@
-"""The report's sentence on measurement error names the agreement (ICC) of the quantities it judges, not one of them."""
+"""The report's sentence on measurement error names the agreement (ICC) of the quantities it judges, in words."""
 
 from __future__ import annotations
 
@@ -14,24 +14,31 @@ class _Analysis:
         self.series = series
 
 
-def _series(label: str, noise: float, seed: int) -> Series:
+def _series(joint: str, noise: float, seed: int) -> Series:
     rng = np.random.default_rng(seed)
     level = rng.uniform(0.3, 0.9, 8)  # 8 subjects, each once retested
     pairs = [
         (a + noise * rng.standard_normal(), a + noise * rng.standard_normal(), f"S{i}") for i, a in enumerate(level)
     ]
-    return Series(None, ("joints", "elbow", label), label, "Nm", (), pooled_error(pairs, "cell"), True)
+    return Series(None, ("joints", joint, "coulomb_nm"), joint, "Nm", (), pooled_error(pairs, "cell"), True)
 
 
 def test_two_judged_quantities_give_the_range_of_their_agreement() -> None:
-    close, loose = _series("Elbow friction", 0.01, 1), _series("Shoulder friction", 0.2, 2)
+    close, loose = _series("elbow", 0.01, 1), _series("shoulder", 0.2, 2)
     assert close.error.icc is not None and loose.error.icc is not None
     assert close.error.icc > 0.9 > loose.error.icc  # the truth: one agrees well, the other poorly
     sentence = error_source(_Analysis((close, loose)))
-    assert f"agreement (ICC) {loose.error.icc:.2f} to {close.error.icc:.2f} over the 2 quantities judged" in sentence
+    assert (
+        f"(ICC) from {loose.error.icc:.2f} (shoulder friction, poor) to {close.error.icc:.2f} (elbow friction, "
+        "excellent) over the 2 quantities judged"
+    ) in sentence
 
 
 def test_one_judged_quantity_names_its_agreement() -> None:
-    only = _series("Elbow friction", 0.05, 3)
+    only = _series("elbow", 0.05, 3)
     sentence = error_source(_Analysis((only,)))
-    assert f"agreement (ICC) {only.error.icc:.2f} for elbow friction" in sentence
+    assert only.error.icc is not None
+    word = "excellent" if only.error.icc >= 0.9 else "good" if only.error.icc >= 0.75 else "moderate"
+    assert f"{word} agreement between patients' tests and retests (ICC {only.error.icc:.2f}) for elbow friction" in (
+        sentence
+    )

@@ -77,7 +77,9 @@ def _names_in(text: str, history: History) -> set[str]:
 def _check_first_page(text: str, history: History) -> None:
     assert "Arm assessment" in text and FRICTION in text and "female, 68 kg" in text
     headline = text.split("Measurement error (MDC95) from")[0]
-    assert _names_in(headline, history) == {FRICTION_NAME}, headline
+    changed = headline.split("No change beyond measurement error")[0]  # the red sentences come first
+    assert _names_in(changed, history) == {FRICTION_NAME}, headline
+    assert "elbow stiffness" in headline.split("No change beyond measurement error")[1]
     assert re.search(r"Resistance to passive elbow movement \(friction\) fell 5\d %", headline), headline
     assert "Not usable:" in text and "Detail: every parameter" not in text
     assert not RAW_KEY.search(text), RAW_KEY.search(text)

@@ -1,4 +1,5 @@
-"""The first page's session list keeps the baseline a long history's progress is measured from."""
+"""The first page's session list keeps the baseline a long history's progress is measured from, and every session
+that needs attention."""
 
 from __future__ import annotations
 
@@ -15,9 +16,19 @@ def _rows(n: int) -> list[SessionRow]:
 def test_a_long_history_lists_its_baseline_and_its_latest_sessions() -> None:
     rows = _rows(20)
     shown, note = first_page_rows(rows, 12)
-    # Session 1 was not usable and session 2 a retest: the baseline is session 3, the first usable one.
-    assert [r.number for r in shown] == [3, *range(10, 21)]
-    assert note == "The baseline (session 3) and the latest 11 of 20 sessions; all are listed in the detail."
+    # Session 1 was not usable (kept: it needs attention) and session 2 a retest: the baseline is session 3.
+    assert [r.number for r in shown] == [1, 3, *range(11, 21)]
+    assert note == (
+        "The baseline (session 3), every session that needs attention and the latest: 12 of 20 sessions; all are "
+        "listed in the detail."
+    )
+
+
+def test_a_flagged_session_is_never_left_out() -> None:
+    rows = _rows(20)
+    rows[6] = SessionRow(7, "day 7", "Right", "Change beyond measurement error: elbow friction −22 %", True)
+    shown, _ = first_page_rows(rows, 12)
+    assert [r.number for r in shown] == [1, 3, 7, *range(12, 21)]
 
 
 def test_a_short_history_is_listed_whole() -> None:
@@ -29,5 +40,5 @@ def test_a_short_history_is_listed_whole() -> None:
 def test_a_baseline_among_the_latest_sessions_takes_no_extra_row() -> None:
     rows = _rows(13)
     shown, note = first_page_rows(rows, 12)
-    assert [r.number for r in shown] == list(range(2, 14))
-    assert note.startswith("The latest 12 of 13 sessions")
+    assert [r.number for r in shown] == [1, *range(3, 14)]  # the retest (2) makes room for the invalid session
+    assert "12 of 13 sessions" in note
