@@ -31,10 +31,8 @@ magnitude. ``--delay-offsets`` monkeypatches the delay profile's linear model (`
 the perpendicular moments and the markers' offset columns (``placement_columns`` on 0.5 s averaged torques) beside
 its gravity and friction columns: with 2 mm placement the unpatched profile applies a delay of tens of ms in most
 sessions, which moves the Coulomb amplitudes outside the placement term. ``--known-delay`` gives the delay (0)
-instead of estimating it. ``--noise-on-offset-residual`` monkeypatches ``add_marker_placement`` so that the
-``sensor_noise`` term's HAC sandwich runs on the residual the offsets leave (``PlacementEffect.residual``) instead of
-the fit's: where the offsets bend the torques in ways the model cannot follow (the planner's wide ranges) that misfit
-otherwise reads as autocorrelated noise, and placement is counted twice. Nothing under ``bsp_ros/`` is changed.
+instead of estimating it. The estimator's ``sensor_noise`` term is the HAC sandwich of the residual the offsets leave
+(``steps.add_marker_placement``), so that the part of their effect the model cannot follow is not counted twice.
 
 The table is over the sessions that kept the default passive model (``quality.marker_placement`` present); a session
 whose model checks replaced the model (an elastic false alarm: a family of models, a much wider std) is listed
@@ -161,35 +159,6 @@ def patch_delay_profile() -> None:
     timing._JointColumns.of = classmethod(of)  # type: ignore[method-assign,assignment]
 
 
-def patch_noise_term() -> None:
-    """Monkeypatch the identification's ``add_marker_placement`` step: the ``sensor_noise`` term recomputed (HAC
-    sandwich, prior included, as ``fit_problem``) on the residual the offsets leave (the proposed change)."""
-    from bsp_ros.core.identification.covariance import design_inverse, hac_covariance
-    from bsp_ros.core.identification.joint import identify as joint_identify
-    from bsp_ros.core.identification.joint import steps
-    from bsp_ros.core.identification.joint.stage import Outcome
-    from bsp_ros.core.identification.ledger import Term
-    from bsp_ros.core.identification.stacked import joint_scores
-
-    original = steps.add_marker_placement
-
-    def add_marker_placement(stage: Any) -> Any:
-        placed = original(stage)
-        if placed.placement is None:
-            return placed
-        problem, fit = placed.problem, placed.fit
-        residual = np.nan_to_num(placed.placement.residual, nan=0.0)
-        scores = joint_scores(problem, fit.weights[None, :] * residual)
-        covariance, _ = hac_covariance(fit.design, scores[problem.rows.any(axis=1)])
-        if problem.prior_precision.any():
-            inverse = design_inverse(fit.design)
-            covariance = covariance + inverse @ np.diag(problem.prior_precision) @ inverse
-        covariance = 0.5 * (covariance + covariance.T)
-        return placed.apply(Outcome(replaced=((Term.SENSOR_NOISE, covariance),)))
-
-    joint_identify.STEPS = tuple(add_marker_placement if step is original else step for step in joint_identify.STEPS)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sessions", type=int, default=12, help="sessions of the one arm (default 12)")
@@ -200,14 +169,9 @@ def main() -> None:
     parser.add_argument("--fd-step-mm", type=float, default=1.0, help="finite-difference step (mm; 0: none)")
     parser.add_argument("--delay-offsets", action="store_true", help="the delay profile also fits the offsets")
     parser.add_argument("--known-delay", action="store_true", help="give the wrench delay (0), do not estimate")
-    parser.add_argument(
-        "--noise-on-offset-residual", action="store_true", help="the sensor-noise term on the residual offsets leave"
-    )
     args = parser.parse_args()
     if args.delay_offsets:
         patch_delay_profile()
-    if args.noise_on_offset_residual:
-        patch_noise_term()
     sd_m = 1e-3 * args.sd_mm
     options = IdentifyOptions(
         zero_sd_n=0.0, zero_sd_nm=0.0, marker_placement_sd_m=sd_m, wrench_delay_s=0.0 if args.known_delay else None
@@ -228,7 +192,7 @@ def main() -> None:
         f"scenario {args.scenario}, {args.sessions} sessions from seed {args.seed}, placement sd {args.sd_mm:g} mm,"
         f" {'known delay' if args.known_delay else 'delay estimated'}"
         f"{' (profile fits the offsets)' if args.delay_offsets else ''}"
-        f"{', noise term on the offsets residual' if args.noise_on_offset_residual else ''};"
+        ";"
         f" valid {sum(r['valid'] for r in rows)}"
     )
     print(

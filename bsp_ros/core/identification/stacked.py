@@ -425,6 +425,30 @@ def reweighted_values(problem: Problem) -> Reweighted:
     return Reweighted(values, weights, sigma, statistics)
 
 
+def residual_covariance(
+    problem: Problem, design: np.ndarray, weights: np.ndarray, residual: np.ndarray
+) -> tuple[np.ndarray, int]:
+    """The HAC sandwich of a fit of ``problem`` whose residual is ``residual`` (N, n; finite on the used rows, the
+    rest ignored), with the prior's information; and the lags it chose.
+
+    Parameters
+    ----------
+    problem : the problem fitted.
+    design : (p, p) its weighted normal matrix (without the prior).
+    weights : (n,) its per-joint weights.
+    residual : (N, n) the torque residual the std is to hold, Nm.
+    """
+    finite = np.where(problem.rows, np.nan_to_num(residual, nan=0.0), 0.0)
+    scores = joint_scores(problem, weights[None, :] * finite)
+    covariance, lags = hac_covariance(design, scores[problem.rows.any(axis=1)])
+    if problem.prior_precision.any():
+        # The prior is an independent source of information: (A + P)^-1 (S + P) (A + P)^-1.
+        inverse = design_inverse(design)
+        covariance = covariance + inverse @ np.diag(problem.prior_precision) @ inverse
+        covariance = 0.5 * (covariance + covariance.T)
+    return covariance, lags
+
+
 def fit_problem(problem: Problem, solved: Reweighted | None = None) -> Fit:
     """The reweighted fit of ``problem`` with its HAC covariance; ``solved``: its :func:`reweighted_values`, when a
     caller has them already (a model check that looks at the values first, and needs the covariance only if they
@@ -432,14 +456,7 @@ def fit_problem(problem: Problem, solved: Reweighted | None = None) -> Fit:
     solved = reweighted_values(problem) if solved is None else solved
     values, weights, residual = solved.values, solved.weights, solved.residual(problem)
     design, moment, _ = normal_equations(problem, weights, solved.statistics)
-    scores = joint_scores(problem, weights[None, :] * residual)
-    used_samples = problem.rows.any(axis=1)
-    covariance, lags = hac_covariance(design, scores[used_samples])
-    if problem.prior_precision.any():
-        # The prior is an independent source of information: (A + P)^-1 (S + P) (A + P)^-1.
-        inverse = design_inverse(design)
-        covariance = covariance + inverse @ np.diag(problem.prior_precision) @ inverse
-        covariance = 0.5 * (covariance + covariance.T)
+    covariance, lags = residual_covariance(problem, design, weights, residual)
     # Singular values of the column-scaled matrix are those of its triangular factor.
     factor = _scaled_cholesky(design, moment)
     if factor is not None:

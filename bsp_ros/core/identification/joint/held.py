@@ -31,6 +31,8 @@ class HeldModel:
     systematic : the terms of the estimate's covariance beyond its fit's own and the placement's: the passive
         model's choice, the friction shape, the drift's unknown level. These do not shrink with more samples, and a
         few seconds more of the same arm hardly change them.
+    noise_scale : (p,) each parameter's sensor-noise std on the residual the marker offsets leave over its std on
+        the raw residual (ones without a placement): a refit rescales its own covariance by it.
     curves : the passive curves' basis (a model choice), or None.
     data_problems : why the samples could not support the estimate (excitation, misfit, identifiability): a refit
         judges its own samples' instead.
@@ -46,6 +48,7 @@ class HeldModel:
     drift: bool
     placement_sd_m: np.ndarray
     systematic: Ledger
+    noise_scale: np.ndarray
     curves: CurveBasis | None
     data_problems: tuple[Finding, ...]
     check_problems: tuple[Finding, ...]

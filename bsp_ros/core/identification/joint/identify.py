@@ -189,6 +189,7 @@ def _held(stage: Stage, diagnostics: dict[str, object]) -> HeldModel:
         drift=stage.drift is not None,
         placement_sd_m=stage.placement_sd_m if check is None else check.sd_m,
         systematic=stage.ledger.without(Term.SENSOR_NOISE, Term.MARKER_PLACEMENT),
+        noise_scale=np.ones(len(stage.problem.names)) if stage.noise_scale is None else stage.noise_scale,
         curves=stage.curves,
         data_problems=stage.data_problems,
         check_problems=stage.check_problems,

@@ -129,6 +129,9 @@ def _held_covariance(
     placement = None
     if held.placement_sd_m.any():
         placement = placement_covariance(data, problem, fit, held.placement_sd_m)
+        # As the full identification, the noise term holds only what the offsets leave (joint/steps.py): its
+        # ratio to the raw residual's, from the check, rescales this fit's (a refit costs one fit).
+        own = own * np.outer(held.noise_scale, held.noise_scale)
     if held.drift:
         # The drift's rate is the newer data's; its unknown level's share is in the held systematic covariance.
         extra, names, _ = drift_columns(data)

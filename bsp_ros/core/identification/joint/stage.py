@@ -71,6 +71,7 @@ class Stage:
     removed : fit outliers removed.
     prior_share : posterior over prior variance of each parameter with a prior.
     placement, placement_fit : the markers' placement effect and the fit it was computed at.
+    noise_scale : (p,) the sensor-noise std on the offsets' residual over that on the raw residual, or None.
     judged_residual : (N, n) the residual the misfit check judges (less what placement explains), or None.
     drift : a drift the data show and its model, or None.
     curves : the passive curves' basis, or None; passive_curves : the curves at the judged fit; elastic_reference :
@@ -102,6 +103,7 @@ class Stage:
     prior_share: dict[str, float] = field(default_factory=dict)
     placement: PlacementEffect | None = None
     placement_fit: Fit | None = None
+    noise_scale: np.ndarray | None = None
     judged_residual: np.ndarray | None = None
     drift: Drift | None = None
     curves: CurveBasis | None = None

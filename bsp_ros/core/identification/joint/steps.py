@@ -22,7 +22,7 @@ from bsp_ros.core.identification.joint.stage import Outcome, Stage
 from bsp_ros.core.identification.joint.transition import transition_widths
 from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.selection import Candidate, Selection, select_passive, shape_probe, spread_covariance
-from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem
+from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem, residual_covariance
 from bsp_ros.core.streams import joints_for
 
 __all__ = [
@@ -152,14 +152,28 @@ def add_friction_shape(stage: Stage) -> Stage:
 
 def add_marker_placement(stage: Stage) -> Stage:
     """How far each chain point may sit from where the data put it (skin markers, the robot's contact point): its
-    effect on the estimate joins the covariance, and the misfit check judges the residual it leaves."""
+    effect on the estimate joins the covariance, and the misfit check judges the residual it leaves.
+
+    The sensor-noise term is then the HAC sandwich of that residual: the part of the offsets' effect the model
+    cannot follow would otherwise be counted twice, once as noise and once as placement (on a planned protocol
+    with 2 mm offsets the Coulomb amplitudes' noise term was 12-47 times the exact-marker one; bench
+    placement_sharpness.py).
+    """
     if not stage.placement_sd_m.any():
         return dataclasses.replace(stage, placement_fit=stage.fit)
     placement = placement_effect(stage.data, stage.problem, stage.fit, stage.placement_sd_m)
     placed = dataclasses.replace(
         stage, placement=placement, placement_fit=stage.fit, judged_residual=placement.residual
     )
-    return placed.apply(Outcome(added=((Term.MARKER_PLACEMENT, placement.covariance),)))
+    fit = stage.fit
+    noise, _ = residual_covariance(stage.problem, fit.design, fit.weights, placement.residual)
+    raw = stage.ledger.get(Term.SENSOR_NOISE)
+    raw_variance = np.diag(fit.covariance if raw is None else raw)
+    ratio = np.divide(np.diag(noise), raw_variance, out=np.ones_like(raw_variance), where=raw_variance > 0)
+    placed = dataclasses.replace(placed, noise_scale=np.sqrt(np.clip(ratio, 0.0, None)))
+    return placed.apply(
+        Outcome(added=((Term.MARKER_PLACEMENT, placement.covariance),), replaced=((Term.SENSOR_NOISE, noise),))
+    )
 
 
 def add_model_choice(stage: Stage) -> Stage:
@@ -199,7 +213,10 @@ def model_drift(stage: Stage) -> Stage:
     judged = stage.judged_residual
     if judged is not None:
         judged = judged - (stage.fit.residual - drift.fit.residual)
-    own = dataclasses.replace(drift.fit, covariance=drift.own_covariance)
     level = drift.fit.covariance - drift.own_covariance
+    own_covariance = drift.own_covariance
+    if stage.noise_scale is not None:  # the noise the offsets leave, as add_marker_placement measured it
+        own_covariance = own_covariance * np.outer(stage.noise_scale, stage.noise_scale)
+    own = dataclasses.replace(drift.fit, covariance=own_covariance)
     stage = stage.apply(Outcome(fit=own, added=((Term.DRIFT, level),), notes=(drift.note,)))
     return dataclasses.replace(stage, drift=drift, judged_residual=judged)

@@ -33,6 +33,7 @@ def _check(found: tuple[Finding, ...] = (), data_problems: tuple[Finding, ...] =
         drift=False,
         placement_sd_m=np.zeros(2),
         systematic=Ledger(),
+        noise_scale=np.ones(1),
         curves=None,
         data_problems=data_problems,
         check_problems=found,
