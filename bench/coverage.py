@@ -64,7 +64,7 @@ SCENARIOS = (
     "skin_3mm_planned",
     "fast_inertia_plan",
 )
-SKIN_BOUND_M = 0.003  # issue 19: markers re-placed within +-3 mm of the joint centres, anew every session
+SKIN_BOUND_M = 0.003  # markers re-placed within +-3 mm of the joint centres, anew every session
 COULOMB_NM = np.array([0.5, 0.28, 0.06])
 
 
