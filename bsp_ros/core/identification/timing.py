@@ -6,7 +6,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
@@ -36,6 +36,7 @@ __all__ = [
     "delay_problem",
     "estimate_wrench_delay",
     "linear_rss",
+    "measured_stamps_ns",
     "parameter_timing",
     "shifted_session",
 ]
@@ -110,7 +111,7 @@ class DelayProblem:
 
     def valid(self, delay_s: float) -> np.ndarray:
         """(N,) which wrench samples have angles at their stamps shifted by ``-delay_s``."""
-        return valid_stamps(self.kinematics, self.t_ns - np.int64(round(delay_s * 1e9)))
+        return valid_stamps(self.kinematics, measured_stamps_ns(self.t_ns, delay_s))
 
     def data(self, delay_s: float, keep: np.ndarray | None = None) -> tuple[IdentificationData, np.ndarray]:
         """The identification samples with the wrench stamps shifted by ``-delay_s``.
@@ -124,7 +125,7 @@ class DelayProblem:
         -------
         data : samples at the shifted stamps; valid : (N,) which wrench samples have angles there.
         """
-        t = self.t_ns - np.int64(round(delay_s * 1e9))
+        t = measured_stamps_ns(self.t_ns, delay_s)
         q, velocity, valid = resample_kinematics(self.kinematics, t)
         use = valid if keep is None else keep & valid
         k, wrench = self.kinematics, self.wrench_yzx
@@ -464,11 +465,33 @@ def _delay_at_minimum(
     return WrenchDelay(0.0, std, "none", vertex, std, n_fits)
 
 
+@overload
+def measured_stamps_ns(t_ns: int, wrench_delay_s: float) -> int: ...
+@overload
+def measured_stamps_ns(t_ns: np.ndarray, wrench_delay_s: float) -> np.ndarray: ...
+def measured_stamps_ns(t_ns: int | np.ndarray, wrench_delay_s: float) -> int | np.ndarray:
+    """When wrenches stamped ``t_ns`` were measured, on the markers' clock: ``t_ns - wrench_delay_s``, ns.
+
+    The one place a wrench delay is applied: offline to a session's stamps (:func:`shifted_session`, the delay the
+    cell knows or the estimated one) and live to each wrench as it arrives (``bsp_ros.live.online.wrench_input``).
+    A positive delay means a wrench stamped ``t`` was measured at ``t - delay``.
+
+    Parameters
+    ----------
+    t_ns : a wrench stamp (int) or stamps (int64 array), ns.
+    wrench_delay_s : the delay, s (rounded to the nanosecond).
+    """
+    shift_ns = round(wrench_delay_s * 1e9)
+    if isinstance(t_ns, np.ndarray):
+        return t_ns - np.int64(shift_ns)
+    return int(t_ns) - shift_ns
+
+
 def shifted_session(session: Session, delay_s: float) -> Session:
     """``session`` with its wrench stamps shifted by ``-delay_s`` (a wrench stamped ``t`` was measured at ``t - d``)."""
     if delay_s == 0.0:
         return session
-    wrench = dataclasses.replace(session.wrench, t_ns=session.wrench.t_ns - np.int64(round(delay_s * 1e9)))
+    wrench = dataclasses.replace(session.wrench, t_ns=measured_stamps_ns(session.wrench.t_ns, delay_s))
     return dataclasses.replace(session, wrench=wrench)
 
 
@@ -510,7 +533,8 @@ def compensate_wrench_delay(
 
 
 def parameter_timing(wrench_delay_s: float | None) -> dict[str, Any]:
-    """``quality.timing`` where the delay is not estimated (live): the parameter's, ``"none"`` when 0 or unset."""
+    """``quality.timing`` where the delay is not estimated (live, which cannot estimate it per update): the
+    parameter's, ``"none"`` when 0 or unset (live applies 0 then)."""
     if not wrench_delay_s:
         return WrenchDelay(0.0, 0.0, "none").quality()
     return WrenchDelay(float(wrench_delay_s), 0.0, "parameter").quality()

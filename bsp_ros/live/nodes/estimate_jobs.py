@@ -9,22 +9,32 @@ from typing import Any
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
-from bsp_ros.core.estimate import estimate_document, invalid_document
+from bsp_ros.core.estimate import invalid_document
 from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode
-from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.pipeline import IdentifyOptions, fused
+from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.core.weight_support import support_inputs
 from bsp_ros.live.estimate_messages import (
     diagnostics_from_estimate,
     inertias_from_estimate,
     passive_moments_from_estimate,
 )
+from bsp_ros.live.online.identifier_modes import ModeEstimate, recursive_document
 from bsp_ros.live.online.windowed import WindowEstimator, WindowSamples
 from msg_adapters.diagnostics import build_diagnostic_array
 from msg_adapters.inertia import build_inertia_stamped
 from msg_adapters.joint_state import build_joint_state
+
+__all__ = [
+    "EstimateOutputs",
+    "internal_error_document",
+    "outputs_from_document",
+    "outputs_from_estimate",
+    "recursive_document",
+    "recursive_estimate",
+    "window_estimate",
+]
 
 _store: Any = None
 
@@ -89,6 +99,11 @@ def outputs_from_document(document: dict[str, Any], stamp_ns: int, with_passive:
     return EstimateOutputs(valid, quality.message, out, findings=quality.findings, support=support_inputs(estimate))
 
 
+def outputs_from_estimate(estimate: ModeEstimate) -> EstimateOutputs:
+    """Serialise one update's estimate of an identifier mode (:func:`outputs_from_document`)."""
+    return outputs_from_document(estimate.document, estimate.stamp_ns, with_passive=estimate.with_passive)
+
+
 def window_estimate(estimator: WindowEstimator, window: WindowSamples) -> EstimateOutputs:
     """The estimate of a window copied by ``WindowedIdentifier.snapshot``, stamped with its newest wrench;
     ``estimator`` keeps the model checks' schedule (one thread at a time)."""
@@ -108,24 +123,3 @@ def recursive_estimate(
     document = recursive_document(result, lengths_m, options, contact_from_robot)
     document["mode"] = "recursive"
     return outputs_from_document(document, stamp_ns, with_passive=False)
-
-
-def recursive_document(
-    result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, contact_from_robot: bool = False
-) -> dict[str, Any]:
-    """The estimate document of a recursive result (fused with the anthropometric prior when valid);
-    ``contact_from_robot``: the contact point came from the robot's handle pose (its placement sd)."""
-    n = lengths_m.size
-    data = IdentificationData(
-        np.zeros(0, dtype=np.int64),
-        np.zeros((0, n)),
-        np.zeros((0, n)),
-        np.zeros((0, n)),
-        lengths_m,
-        np.zeros(n),
-        np.zeros(n),
-        contact_from_robot=contact_from_robot,
-    )
-    posterior, result = fused(result, data, options.subject) if result.valid else (None, result)
-    placement_sd_m = options.placement_sd_m(data)
-    return estimate_document(result, data, posterior, options.subject, marker_placement_sd_m=placement_sd_m)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.identification.timing import measured_stamps_ns
 from bsp_ros.core.tare import Tare
 from msg_adapters.wrench import WrenchSample
 
@@ -17,11 +18,12 @@ class WrenchInput:
     Attributes
     ----------
     tare : a `bsp tare` of this sensor (its offset and handle load are removed), or None.
-    delay_ns : how late the wrench stamps are behind the joint states' (``wrench_delay_s``), ns.
+    delay_s : how late the wrench stamps are behind the joint states' (``wrench_delay_s``; live applies 0 when it
+        is unset), s: applied by :func:`~bsp_ros.core.identification.timing.measured_stamps_ns`, as offline.
     """
 
     tare: Tare | None = None
-    delay_ns: int = 0
+    delay_s: float = 0.0
 
     def world(self, sample: WrenchSample, rotation: np.ndarray) -> tuple[int, np.ndarray] | None:
         """One wrench in ``world``.
@@ -43,4 +45,4 @@ class WrenchInput:
             load_force_n, load_torque_nm = self.tare.predicted_wrench(rotation)
             force_n, torque_nm = force_n - load_force_n, torque_nm - load_torque_nm
         force, torque = rotation @ force_n, rotation @ torque_nm
-        return sample.t_ns - self.delay_ns, np.array([force[1], force[2], torque[0]])
+        return measured_stamps_ns(sample.t_ns, self.delay_s), np.array([force[1], force[2], torque[0]])

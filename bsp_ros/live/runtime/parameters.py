@@ -22,10 +22,12 @@ class Param:
 
     Attributes
     ----------
-    name, default, description : as declared.
+    name, default, description : as declared; a default of None leaves the parameter unset (declared with the type
+        ``kind``: its value is None unless given).
     unit : shown after the description, e.g. ``"Hz"``.
     lo, hi : inclusive range of a numeric parameter (a ``FloatingPointRange`` / ``IntegerRange``).
     choices : the allowed values of a string parameter.
+    kind : the type of a parameter without a default (``float``, ``int``, ``str`` or ``bool``).
     """
 
     name: str
@@ -35,6 +37,16 @@ class Param:
     lo: float | None = None
     hi: float | None = None
     choices: tuple[str, ...] = ()
+    kind: type | None = None
+
+    @property
+    def value_type(self) -> type:
+        """The parameter's type: its default's, or ``kind`` for one without a default."""
+        if self.default is not None:
+            return type(self.default)
+        if self.kind is None:
+            raise TypeError(f"parameter {self.name!r}: one without a default needs its kind")
+        return self.kind
 
     def text(self) -> str:
         """Description with unit, range and choices, as in the descriptor and ``--help``."""
@@ -54,9 +66,9 @@ def _descriptor(param: Param) -> Any:
     # read_only: the nodes read their parameters once at start; a later `ros2 param set` is refused, not ignored.
     descriptor = ParameterDescriptor(description=param.text(), read_only=True)
     if param.lo is not None or param.hi is not None:
-        if isinstance(param.default, bool) or not isinstance(param.default, int | float):
+        if param.value_type not in (int, float):
             raise TypeError(f"parameter {param.name!r}: a range needs a numeric default")
-        if isinstance(param.default, int):
+        if param.value_type is int:
             low = _INT64_MIN if param.lo is None else math.ceil(param.lo)
             high = _INT64_MAX if param.hi is None else math.floor(param.hi)
             descriptor.integer_range = [IntegerRange(from_value=low, to_value=high, step=0)]
@@ -78,14 +90,18 @@ def declare_parameters(node: Any, params: Sequence[Param]) -> dict[str, Any]:
         Naming the node, the parameter and the offending value.
     """
     from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+    from rclpy.parameter import Parameter
 
+    unset = {float: Parameter.Type.DOUBLE, int: Parameter.Type.INTEGER, str: Parameter.Type.STRING}
     values: dict[str, Any] = {}
     where = f"node {node.get_name()!r}"
     for param in params:
+        # A parameter without a default is declared by its type: unset (None) unless given.
+        default = param.default if param.default is not None else unset.get(param.value_type, Parameter.Type.BOOL)
         try:
-            value = node.declare_parameter(param.name, param.default, _descriptor(param)).value
+            value = node.declare_parameter(param.name, default, _descriptor(param)).value
         except InvalidParameterTypeException as exc:
-            hint = " (write it with a decimal point, e.g. 1.0)" if isinstance(param.default, float) else ""
+            hint = " (write it with a decimal point, e.g. 1.0)" if param.value_type is float else ""
             raise InputError(f"parameter {param.name!r} of {where}: {exc}{hint}") from exc
         except InvalidParameterValueException as exc:
             raise InputError(f"parameter {param.name!r} of {where}: {exc}") from exc
@@ -115,6 +131,6 @@ def help_text(name: str, summary: str, params: Sequence[Param]) -> str:
     ]
     width = max(len(p.name) for p in params) if params else 0
     for p in params:
-        kind = type(p.default).__name__
+        kind = p.value_type.__name__
         lines.append(f"  {p.name:<{width}}  {kind:<5} default {p.default!r:<20} {p.text()}")
     return "\n".join(lines)

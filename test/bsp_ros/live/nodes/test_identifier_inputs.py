@@ -45,13 +45,13 @@ def test_angles_received_before_the_first_segment_lengths_join_the_window(identi
     early = [T0_NS + k * FRAME_NS for k in range(60)]
     for t_ns in early:
         identifier.on_raw_angles(_state(identifier, t_ns, joints_for(3), q_rad + 1e-3 * (t_ns - T0_NS) / FRAME_NS))
-    assert identifier.windowed.angles.last_t_ns is None  # nothing without lengths
+    assert identifier.identifier.mode.window.angles.last_t_ns is None  # nothing without lengths
     identifier.on_lengths(_state(identifier, early[-1], segments_for(3), lengths_m))
     late = early[-1] + FRAME_NS
     identifier.on_raw_angles(_state(identifier, late, joints_for(3), q_rad))
 
-    t_ns, rows = identifier.windowed.angles.since(0)
+    t_ns, rows = identifier.identifier.mode.window.angles.since(0)
     np.testing.assert_array_equal(t_ns, [*early, late])
     np.testing.assert_allclose(rows[:, :3], [q_rad + 1e-3 * k for k in range(60)] + [q_rad])
     np.testing.assert_array_equal(rows[:, 3:], np.tile(lengths_m, (61, 1)))
-    assert identifier.counts["joint_states"] == 61
+    assert identifier.identifier.counts["joint_states"] == 61

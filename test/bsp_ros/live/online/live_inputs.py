@@ -10,8 +10,8 @@ import numpy as np
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.identification.data import wrench_world_yzx
 from bsp_ros.core.pipeline import IdentifyOptions
-from bsp_ros.live.nodes.estimate_jobs import recursive_document
 from bsp_ros.live.online.causal_angles import CausalJointAngles
+from bsp_ros.live.online.identifier_modes import recursive_document
 from bsp_ros.live.online.recursive_check import WindowCheck
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier

@@ -36,7 +36,7 @@ def test_the_hands_wrench_comes_out_in_world_without_the_handle_and_on_the_angle
     reading = WrenchSample(
         1_000_000_000, "ft_sensor", ROTATION.T @ FORCE_WORLD + handle_force, ROTATION.T @ MOMENT_WORLD + handle_moment
     )
-    world = WrenchInput(tare, delay_ns=5_000_000).world(reading, ROTATION)
+    world = WrenchInput(tare, delay_s=0.005).world(reading, ROTATION)
     assert world is not None
     t_ns, wrench_yzx = world
     assert t_ns == 995_000_000  # measured 5 ms before its stamp
