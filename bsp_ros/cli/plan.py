@@ -16,6 +16,7 @@ from bsp_ros.cli.argtypes import (
     positive_at_most,
     positive_float,
 )
+from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.errors import InputError
 
 # The planner's own limits (bsp_ros.core.planning), spelled out so the parser needs no numpy (a test keeps them
@@ -141,8 +142,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         type=positive_float,
         default=TARGET_STD_PERCENT,
         metavar="PERCENT",
-        help="warn when a static moment's predicted relative std exceeds this, and say which duration reaches "
-        f"it (default {TARGET_STD_PERCENT:g} %%)",
+        help="warn when a static moment's predicted relative std (the total bsp identify will report: sensor noise, "
+        "marker placement, sensor zero, model choice) exceeds this, and say which duration reaches it or which "
+        f"term no duration shrinks (default {TARGET_STD_PERCENT:g} %%)",
     )
     session.add_argument(
         "--operating-points",
@@ -217,6 +219,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="HZ",
         help="marker frame rate (default 50)",
     )
+    _add_identify_arguments(parser)
     out = parser.add_argument_group("output")
     out.add_argument(
         "--json", type=Path, metavar="FILE", help="write the plan (knots, samples, predicted stds) as JSON"
@@ -247,6 +250,68 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="x of the movement plane (the shoulder's x) for the published path, m (default 0)",
     )
     return parser
+
+
+def _add_identify_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of `bsp identify` the predicted std depends on (the same names and defaults)."""
+    group = parser.add_argument_group(
+        "how the sessions will be identified (the predicted std holds what bsp identify's will)"
+    )
+    group.add_argument(
+        "--marker-placement-sd-mm",
+        type=float_within(0.0, 50.0),
+        default=2.0,
+        metavar="MM",
+        help="as bsp identify's: how far (1 sd per in-plane axis) a skin marker may sit from its joint centre "
+        "(default: 2)",
+    )
+    group.add_argument(
+        "--handle-pose-sd-mm",
+        type=float_within(0.0, 50.0),
+        default=0.5,
+        metavar="MM",
+        help="as bsp identify's: the robot's contact point's registration to world, 1 sd per axis, with "
+        "--robot-handle-pose (default: 0.5)",
+    )
+    group.add_argument(
+        "--robot-handle-pose",
+        action="store_true",
+        help="the contact point will come from the robot's handle pose (/robot/handle_pose), not a skin marker",
+    )
+    group.add_argument(
+        "--tare",
+        action="store_true",
+        help="the sessions will be tared (bsp tare, then bsp identify --tare FILE): the zero's share is a tare's "
+        "(a recording at rest), not --zero-sd-n/--zero-sd-nm",
+    )
+    group.add_argument(
+        "--zero-sd-n",
+        type=float_within(0.0, 100.0),
+        default=ZERO_SD_N,
+        metavar="N",
+        help=f"as bsp identify's: without --tare, the sensor's force zero, 1 sd per axis (default: {ZERO_SD_N:g})",
+    )
+    group.add_argument(
+        "--zero-sd-nm",
+        type=float_within(0.0, 10.0),
+        default=ZERO_SD_NM,
+        metavar="NM",
+        help=f"as bsp identify's: the sensor's moment zero, N m (default: {ZERO_SD_NM:g})",
+    )
+
+
+def _session(args: argparse.Namespace) -> Any:
+    """The :class:`~bsp_ros.core.planning.budget.SessionSpec` of the identify options."""
+    from bsp_ros.core.pipeline import IdentifyOptions
+    from bsp_ros.core.planning.budget import SessionSpec
+
+    identify = IdentifyOptions(
+        marker_placement_sd_m=args.marker_placement_sd_mm / 1000.0,
+        handle_pose_sd_m=args.handle_pose_sd_mm / 1000.0,
+        zero_sd_n=args.zero_sd_n,
+        zero_sd_nm=args.zero_sd_nm,
+    )
+    return SessionSpec(identify=identify, tared=args.tare, contact_from_robot=args.robot_handle_pose)
 
 
 def _request(args: argparse.Namespace) -> Any:
@@ -291,6 +356,7 @@ def _request(args: argparse.Namespace) -> Any:
         objective=args.objective,
         max_evaluations=args.max_evaluations,
         trunk_tilts_rad=tuple(math.radians(t) for t in args.trunk_tilt_deg),
+        session=_session(args),
     )
 
 
@@ -300,10 +366,28 @@ def _check_range(option: str, pair: list[float]) -> None:
 
 
 def worst_static_std_percent(plan: Any) -> tuple[str, float]:
-    """The static moment with the largest predicted relative std, and that std in %."""
-    rows = [r for r in plan.prediction.table() if r["quantity"] == "static_moment_kgm" and r["relative_std"]]
+    """The static moment with the largest predicted relative std (the total `bsp identify` will report), and that
+    std in %."""
+    rows = [r for r in plan.reported.table() if r["quantity"] == "static_moment_kgm" and r["relative_std"]]
     worst = max(rows, key=lambda r: r["relative_std"])
     return worst["owner"], 100.0 * float(worst["relative_std"])
+
+
+def duration_free_excess(plan: Any, target_percent: float) -> tuple[str, float, str] | None:
+    """The static moment whose terms a longer session does not shrink (marker placement, sensor zero) exceed
+    ``target_percent`` alone, their relative std in % and the larger of them; None where none does."""
+    from bsp_ros.core.planning.budget import DURATION_FREE_TERMS
+
+    budget = plan.reported
+    free = budget.duration_free_std()
+    picks = [i for i, (key, _) in enumerate(budget.names) if key == "static_moment_kgm"]
+    percent = {i: 100.0 * float(free[i] / abs(budget.nominal[i])) for i in picks}
+    worst = max(picks, key=lambda i: percent[i])
+    if not percent[worst] > target_percent:
+        return None
+    shares = budget.contributions(worst)
+    term = max((str(t) for t in DURATION_FREE_TERMS if str(t) in shares), key=lambda t: shares[t])
+    return budget.names[worst][1], percent[worst], term
 
 
 def precision_warning(plan: Any, target_percent: float, replan: Any) -> str | None:
@@ -311,15 +395,27 @@ def precision_warning(plan: Any, target_percent: float, replan: Any) -> str | No
 
     ``replan(duration_s)`` plans the same request for another duration (an InputError if it cannot); the
     durations tried double from the one asked for, so the duration named was planned and predicted, not guessed.
+    Where the marker placement and the sensor zero alone exceed the target, no duration is tried: they do not
+    shrink with the session's length (measured on the default plan: 4.37, 4.39, 4.39 % at 120, 240, 480 s).
     """
+    from bsp_ros.core.identification.ledger import Term
+
     owner, worst = worst_static_std_percent(plan)
     if worst <= target_percent:
         return None
     asked = plan.request.duration_s
     head = (
         f"this plan cannot reach useful precision: the {owner}'s static moment is predicted to +- {worst:.3g} % "
-        f"(1 std; target {target_percent:g} %)"
+        f"(1 std, as bsp identify will report it; target {target_percent:g} %)"
     )
+    excess = duration_free_excess(plan, target_percent)
+    if excess is not None:
+        where, percent, term = excess
+        return (
+            f"{head}; no session length reaches it: the {where}'s marker placement and sensor zero alone give "
+            f"{percent:.3g} %, mostly {term}, and a longer session does not shrink them: {Term(term).remedy}, and "
+            "bsp plan --tare or --marker-placement-sd-mm predicts the std then"
+        )
     duration = asked
     while duration < min(LONGEST_SUGGESTION_FACTOR * asked, LONGEST_SUGGESTION_S):
         duration = min(2 * duration, LONGEST_SUGGESTION_S)
@@ -333,6 +429,11 @@ def precision_warning(plan: Any, target_percent: float, replan: Any) -> str | No
                 f"{head}; a {duration:.0f} s session reaches {worst_then:.3g} % (planned with the same options: "
                 f"--duration {duration:.0f})"
             )
+    return _no_duration_warning(plan, head, owner, duration)
+
+
+def _no_duration_warning(plan: Any, head: str, owner: str, duration: float) -> str:
+    """The warning where no session up to ``duration`` (s) reaches the target: why, and what would."""
     passive = plan.request.passive
     if passive.select or "stiffness" in passive.terms:
         # In one vertical plane a joint's gravity torque is a smooth function of the joint angles, as the elastic
@@ -369,14 +470,36 @@ def format_plan(plan: Any) -> str:
         "inertial / gravity torque (anthropometric inertia): "
         + ", ".join(f"{j} {100 * r:.3f}%" for j, r in zip(joints, plan.inertia_ratio, strict=True)),
         f"predicted condition number {plan.prediction.condition_number:.3g}",
-        f"{'parameter':36s} {'nominal':>10s} {'predicted std':>14s} {'relative':>9s}",
+        _assumptions_line(plan),
+        f"{'parameter':36s} {'nominal':>10s} {'predicted std':>14s} {'largest term':>27s} {'relative':>9s}",
     ]
-    for row in plan.prediction.table():
+    budget = plan.reported
+    for i, row in enumerate(budget.table()):
         nominal = "" if row["nominal"] is None else f"{row['nominal']:.4g}"
         relative = "" if row["relative_std"] is None else f"{100 * row['relative_std']:.3f}%"
-        lines.append(f"{row['quantity'] + '/' + row['owner']:36s} {nominal:>10s} {row['std']:14.3g} {relative:>9s}")
+        term, sd = budget.largest_term(i)
+        largest = f"{term} {sd:.3g}"
+        name = row["quantity"] + "/" + row["owner"]
+        lines.append(f"{name:36s} {nominal:>10s} {row['std']:14.3g} {largest:>27s} {relative:>9s}")
     lines += [f"note: {note}" for note in plan.notes]
     return "\n".join(lines)
+
+
+def _assumptions_line(plan: Any) -> str:
+    """What the predicted std assumes of the session beside its sensor noise, in one line."""
+    session = plan.request.session
+    identify = session.identify
+    zero_n, zero_nm = session.zero_sd(plan.request.noise)
+    zero = "tared" if session.tared else f"untared, zero {zero_n:g} N / {zero_nm:g} Nm"
+    contact = (
+        f"contact point from the robot {1e3 * identify.handle_pose_sd_m:g} mm"
+        if session.contact_from_robot
+        else "contact point a skin marker"
+    )
+    return (
+        f"predicted std: what bsp identify will report (sensor noise, markers {1e3 * identify.marker_placement_sd_m:g}"
+        f" mm, {contact}, sensor {zero}{', model choice' if plan.request.passive.select else ''})"
+    )
 
 
 def inertia_lines(plan: Any, args: argparse.Namespace) -> str:

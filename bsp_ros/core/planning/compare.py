@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.planning.budget import PredictedBudget
 from bsp_ros.core.planning.information import Prediction
 from bsp_ros.errors import InputError
 
@@ -76,3 +77,39 @@ def compare_with_scatter(prediction: Prediction, results: Sequence[Identificatio
         }
         for (key, owner), p, a, r in zip(prediction.names, prediction.std, scatter, reported, strict=True)
     ]
+
+
+def compare_budget_with_estimate(budget: PredictedBudget, estimate: dict[str, Any]) -> list[dict[str, Any]]:
+    """Per parameter the plan predicts and the estimate reports: the predicted std against the reported one.
+
+    Parameters
+    ----------
+    budget : the plan's predicted budget (``Plan.budget``).
+    estimate : `bsp identify`'s estimate document of a session that followed the plan (docs/contract.md).
+
+    Returns
+    -------
+    One dict per parameter in both: ``quantity``, ``owner``, ``predicted_std``, ``reported_std``, ``ratio``
+    (reported / predicted), ``predicted_largest`` and ``reported_largest`` (the largest term of each budget).
+    A parameter of a model the estimate did not choose (``--passive auto``) is left out.
+    """
+    rows = []
+    for i, (key, owner) in enumerate(budget.names):
+        block = estimate["segments" if key == "static_moment_kgm" else "joints"].get(owner, {})
+        reported = block.get(key)
+        if not isinstance(reported, dict) or reported.get("std") is None:
+            continue
+        predicted = float(budget.std[i])
+        terms: dict[str, float] = reported.get("budget") or {}
+        rows.append(
+            {
+                "quantity": key,
+                "owner": owner,
+                "predicted_std": predicted,
+                "reported_std": float(reported["std"]),
+                "ratio": float(reported["std"]) / predicted if predicted > 0 else float("inf"),
+                "predicted_largest": budget.largest_term(i)[0],
+                "reported_largest": max(terms, key=lambda term: terms[term]) if terms else None,
+            }
+        )
+    return rows

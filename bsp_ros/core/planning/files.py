@@ -41,7 +41,9 @@ def plan_to_dict(plan: Plan, rate_hz: float = SAMPLE_HZ) -> dict[str, Any]:
     (``{joint: {low_deg, high_deg}}``, ``max_speed_rad_s``), ``duration_s``, ``passive_model``,
     ``operating_points_deg``, ``amplitudes_deg``, ``knots`` (``t_s``, ``q_rad``, ``qdot_rad_s``: the exact
     trajectory), ``samples`` (``t_s``, ``q_rad``, ``qdot_rad_s``, ``handle_y_m``, ``handle_z_m``,
-    ``handle_pitch_rad`` in ``world``), ``predicted`` (one row per parameter), ``inertia_ratio``, ``notes``.
+    ``handle_pitch_rad`` in ``world``), ``predicted`` (one row per parameter: the std `bsp identify` will report,
+    its ``budget`` {term: standard uncertainty} and ``largest_term``), ``uncertainty`` (what the std assumes of
+    the session: marker placement, contact point, tare or sensor zero), ``inertia_ratio``, ``notes``.
     """
     request = plan.request
     n = request.nominal.n_joints
@@ -76,7 +78,8 @@ def plan_to_dict(plan: Plan, rate_hz: float = SAMPLE_HZ) -> dict[str, Any]:
             "handle_z_m": path["handle"][:, 1].tolist(),
             "handle_pitch_rad": path["handle"][:, 2].tolist(),
         },
-        "predicted": plan.prediction.table(),
+        "predicted": plan.reported.table(),
+        "uncertainty": request.session.to_dict(request.noise),
         "noise": {
             "force_noise_n": request.noise.force_noise_n,
             "torque_noise_nm": request.noise.torque_noise_nm,

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.core.planning.planner import Plan, PlanRequest, _predict, inertial_torque_ratio
+from bsp_ros.core.planning.planner import Plan, PlanRequest, _predict, inertial_torque_ratio, with_budget
 from bsp_ros.core.planning.safety import check_reachable, check_trajectory_within
 from bsp_ros.core.planning.trajectory import PlannedTrajectory
 from bsp_ros.core.simulation.trajectory import MultiSineTrajectory
@@ -119,7 +119,7 @@ def plan_inertia_protocol(request: PlanRequest, max_acceleration_rad_s2: float) 
     ratio = inertial_torque_ratio(trajectory, request.nominal)
     amplitudes = np.array(sines.amplitude_deg).sum(axis=1)
     centres = np.array(sines.center_deg)[None]
-    return Plan(request, trajectory, centres, amplitudes, _predict(request, trajectory), ratio, notes)
+    return with_budget(Plan(request, trajectory, centres, amplitudes, _predict(request, trajectory), ratio, notes))
 
 
 def simulated_inertia_std(
@@ -133,7 +133,8 @@ def simulated_inertia_std(
     """
     from bsp_ros.core import simulation as sim
     from bsp_ros.core.pipeline import IdentifyOptions, identify_session
-    from bsp_ros.core.planning.simulated import NOMINAL_COULOMB_NM, plan_cell_spec
+    from bsp_ros.core.planning.budget import NOMINAL_COULOMB_NM
+    from bsp_ros.core.planning.simulated import plan_cell_spec
 
     passive = sim.PassiveTruth(coulomb_nm=NOMINAL_COULOMB_NM[: plan.request.nominal.n_joints])
     spec = plan_cell_spec(plan, subject, passive, seed=seed)

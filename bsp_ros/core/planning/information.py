@@ -414,14 +414,32 @@ def _predicted_covariance(
     """The covariance the estimator reports for the parameters ``names`` (p, p), with a shape probe's excess
     variance when the model has one (``probe``, the model with its columns; ``information`` is of its columns)."""
     p = len(names)
-    design, long_run = information.design[:p, :p], information.long_run[:p, :p]
-    covariance = _sandwich(design, long_run, names)
-    if probe is not None:
-        # The estimator adds the probe's std where larger and its shift squared; under the model the shift's
-        # expected square is that same excess variance (nested fits, Hausman 1978): twice the excess in all.
-        wide = _sandwich(information.design, information.long_run, problem_names(probe, n, dynamics=False))[:p, :p]
-        covariance = covariance + np.diag(2.0 * np.clip(np.diag(wide) - np.diag(covariance), 0.0, None))
-    return covariance
+    probe_names = None if probe is None else problem_names(probe, n, dynamics=False)
+    precision = elastic_prior_precision(names if probe_names is None else probe_names)
+    fit, choice = covariance_terms(information.design, information.long_run, precision, p)
+    return fit if choice is None else fit + choice
+
+
+def covariance_terms(
+    design: np.ndarray, long_run: np.ndarray, precision: np.ndarray, p: int
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """The fit's covariance of the first ``p`` parameters (p, p), and the model-choice term a shape probe adds
+    (p, p; None without a probe).
+
+    Parameters
+    ----------
+    design, long_run : ``X^T W X`` and the long-run covariance of ``X^T W e`` (q, q) of the columns the
+        information is of: the model's ``p``, then (``q > p``) its shape probe's extra ones.
+    precision : (q,) the estimator's Gaussian priors, 1 / sd^2 in each parameter's unit (0: none).
+    p : the model's parameter count.
+    """
+    covariance = sandwich(design[:p, :p], long_run[:p, :p], precision[:p])
+    if design.shape[0] == p:
+        return covariance, None
+    # The estimator adds the probe's std where larger and its shift squared; under the model the shift's
+    # expected square is that same excess variance (nested fits, Hausman 1978): twice the excess in all.
+    wide = sandwich(design, long_run, precision)[:p, :p]
+    return covariance, np.diag(2.0 * np.clip(np.diag(wide) - np.diag(covariance), 0.0, None))
 
 
 def _condition_number(design: np.ndarray) -> float:
@@ -458,11 +476,12 @@ def _nominal_values(names: list[ParameterName], nominal: NominalArm) -> np.ndarr
     return nominal_values
 
 
-def _sandwich(design: np.ndarray, long_run: np.ndarray, names: list[ParameterName]) -> np.ndarray:
-    """The estimator's covariance ``(A + P)^-1 (S + P) (A + P)^-1`` (p, p): the elastic terms' priors are
-    information it adds (pseudo-observations of variance 1 / P)."""
-    precision = np.diag(elastic_prior_precision(names))
-    matrix = design + precision
+def sandwich(design: np.ndarray, long_run: np.ndarray, precision: np.ndarray) -> np.ndarray:
+    """The estimator's covariance ``(A + P)^-1 (S + P) (A + P)^-1`` (p, p) of information ``design`` (A) and
+    ``long_run`` (S), both (p, p): its Gaussian priors ``precision`` (p,) are information it adds
+    (pseudo-observations of variance 1 / P)."""
+    prior = np.diag(precision)
+    matrix = design + prior
     # Inverted with rows and columns scaled, as the estimator's design_inverse does: unscaled, a pseudo-inverse
     # drops a nearly confounded direction of an elastic model and predicts it a variance of 0. The scales are
     # powers of two relative to the largest diagonal: exact in floating point and the same for twice the data,
@@ -473,8 +492,71 @@ def _sandwich(design: np.ndarray, long_run: np.ndarray, names: list[ParameterNam
     scale = np.where(diagonal > 0, 2.0 ** np.round(0.5 * np.log2(relative)), 1.0)
     outer = np.outer(scale, scale)
     inverse = np.linalg.pinv(matrix / outer, hermitian=True) / outer
-    covariance = inverse @ (long_run + precision) @ inverse
+    covariance = inverse @ (long_run + prior) @ inverse
     return np.asarray(0.5 * (covariance + covariance.T))
+
+
+@dataclass(frozen=True, kw_only=True)
+class SampleNoise:
+    """The sensor noise of each sample's joint torques, as the estimator sees it.
+
+    Attributes
+    ----------
+    force_cov : (N, n, n) torque covariance from the wrench noise (white, per wrench sample), Nm^2.
+    marker_cov : (N, n, n) torque covariance from one marker frame's angle noise, Nm^2.
+    weights : (n,) the estimator's per-joint weights, 1 / Nm^2 (its residual variance; the filtered angle noise
+        keeps ~2 fc / f of it).
+    velocity_noise_rad_s : (n,) noise of the direction velocities, rad/s (the direction deadband's scale).
+    """
+
+    force_cov: np.ndarray
+    marker_cov: np.ndarray
+    weights: np.ndarray
+    velocity_noise_rad_s: np.ndarray
+
+
+def sample_noise(
+    q: np.ndarray, lengths: np.ndarray, beta: np.ndarray, noise: NoiseSpec, kinematics: KinematicsConfig
+) -> SampleNoise:
+    """The torque noise of each sample at world angles ``q`` (N, n) rad, for segment ``lengths`` (n,) m and static
+    moments ``beta`` (n,) kg m: force noise through ``J^T``, marker noise through the angles."""
+    angle_cov = _angle_noise_covariance(q, lengths, noise.marker_noise_m)
+    angle_sd = np.sqrt(np.einsum("nii->ni", angle_cov).mean(axis=0))
+    velocity_noise = angle_sd * direction_noise_gain(kinematics.direction_cutoff_hz, noise.marker_hz)
+    jacobian = contact_jacobian(q, lengths)
+    wrench_var = np.array([noise.force_noise_n**2, noise.force_noise_n**2, noise.torque_noise_nm**2])
+    force_cov = np.transpose(jacobian, (0, 2, 1)) @ (wrench_var[None, :, None] * jacobian)
+    gain = _residual_gain(q, lengths, beta)
+    marker_cov = gain @ angle_cov @ np.transpose(gain, (0, 2, 1))
+    band = min(2.0 * kinematics.cutoff_hz / noise.marker_hz, 1.0)
+    sigma2 = np.einsum("nii->ni", force_cov).mean(axis=0) + band * np.einsum("nii->ni", marker_cov).mean(axis=0)
+    return SampleNoise(
+        force_cov=force_cov,
+        marker_cov=marker_cov,
+        weights=1.0 / np.maximum(sigma2, 1e-30),
+        velocity_noise_rad_s=velocity_noise,
+    )
+
+
+def information_products(
+    x: np.ndarray, rows: np.ndarray, sample: SampleNoise, noise: NoiseSpec, grid: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The weighted information ``X^T W X`` (p, p) and the long-run covariance of ``X^T W e`` (p, p) of the
+    regressor ``x`` (N, n, p) on its ``rows`` (N, n) bool, for samples on a grid of ``grid`` Hz standing for the
+    wrench rate's.
+
+    Wrench noise is white at the wrench rate; the filtered angle noise is correlated over the filter's time
+    scale and its long-run variance is the raw marker noise's: one independent draw per marker frame.
+    """
+    w = np.where(rows, sample.weights[None, :], 0.0)
+    wx = x * w[..., None]  # (N, n, p)
+    per_wrench = noise.wrench_hz / grid
+    p = x.shape[2]
+    flat = wx.reshape(-1, p)
+    design = per_wrench * (x.reshape(-1, p).T @ flat)
+    noise_cov = per_wrench * sample.force_cov + noise.wrench_hz**2 / (noise.marker_hz * grid) * sample.marker_cov
+    long_run = flat.T @ (noise_cov @ wx).reshape(-1, p)
+    return design, long_run
 
 
 def _posture_information(
@@ -492,36 +574,16 @@ def _posture_information(
     """One recording's weighted information ``X^T W X`` (p, p), the long-run covariance of ``X^T W e`` (p, p) and
     the rows the estimator keeps (N, n), for world angles ``q`` and passive angles ``passive_q`` on the grid."""
     x = regressor(q, velocity, passive, passive_q)
-
+    sample = sample_noise(q, lengths, beta, noise, kinematics)
     # rows the estimator keeps: above the direction deadband (Coulomb models only)
-    angle_cov = _angle_noise_covariance(q, lengths, noise.marker_noise_m)
     speed = np.abs(velocity)
     if "coulomb" in passive.terms:
-        angle_sd = np.sqrt(np.einsum("nii->ni", angle_cov).mean(axis=0))
-        velocity_noise = angle_sd * direction_noise_gain(kinematics.direction_cutoff_hz, noise.marker_hz)
         deadband = np.maximum(
-            config.deadband_fraction * np.percentile(speed, 95, axis=0), config.deadband_noise_sd * velocity_noise
+            config.deadband_fraction * np.percentile(speed, 95, axis=0),
+            config.deadband_noise_sd * sample.velocity_noise_rad_s,
         )
         rows = speed > deadband[None, :]
     else:
         rows = np.ones_like(speed, dtype=bool)
-
-    # per-sample torque noise covariance: force (white, per wrench sample) and angles (per marker frame)
-    jacobian = contact_jacobian(q, lengths)
-    wrench_var = np.array([noise.force_noise_n**2, noise.force_noise_n**2, noise.torque_noise_nm**2])
-    force_cov = np.transpose(jacobian, (0, 2, 1)) @ (wrench_var[None, :, None] * jacobian)
-    gain = _residual_gain(q, lengths, beta)
-    marker_cov = gain @ angle_cov @ np.transpose(gain, (0, 2, 1))
-    # the estimator weights each joint by its residual variance (filtered angle noise keeps ~2 fc / f of it)
-    band = min(2.0 * kinematics.cutoff_hz / noise.marker_hz, 1.0)
-    sigma2 = np.einsum("nii->ni", force_cov).mean(axis=0) + band * np.einsum("nii->ni", marker_cov).mean(axis=0)
-    weights = 1.0 / np.maximum(sigma2, 1e-30)
-    w = np.where(rows, weights[None, :], 0.0)
-    wx = x * w[..., None]  # (N, n, p)
-    per_wrench = noise.wrench_hz / grid
-    p = x.shape[2]
-    flat = wx.reshape(-1, p)
-    design = per_wrench * (x.reshape(-1, p).T @ flat)
-    noise_cov = per_wrench * force_cov + noise.wrench_hz**2 / (noise.marker_hz * grid) * marker_cov
-    long_run = flat.T @ (noise_cov @ wx).reshape(-1, p)
+    design, long_run = information_products(x, rows, sample, noise, grid)
     return design, long_run, rows

@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 from scipy.optimize import differential_evolution
+from threadpoolctl import threadpool_limits
 
 from bsp_ros.core.anthropometry import segment_norm
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import check_lengths_m, gravity_regressor, static_moments_kgm
+from bsp_ros.core.planning.budget import PredictedBudget, SessionSpec, predict_budget
 from bsp_ros.core.planning.information import (
     PREDICTION_GRID_HZ,
     NoiseSpec,
@@ -69,6 +72,8 @@ class PlanRequest:
     max_evaluations : budget of the optimiser (trajectory evaluations) per number of operating points.
     trunk_tilts_rad : the plan is recorded once per trunk posture (rad; the same motion relative to the trunk)
         and the recordings identified together: a second posture turns gravity relative to the arm.
+    session : how the sessions will be identified (marker placement, sensor zero or tare): the terms of the
+        predicted std beside the sensor noise (:func:`~bsp_ros.core.planning.budget.predict_budget`).
     """
 
     nominal: NominalArm
@@ -82,6 +87,7 @@ class PlanRequest:
     objective: str = "d-optimal"
     max_evaluations: int = 400
     trunk_tilts_rad: tuple[float, ...] = (0.0,)
+    session: SessionSpec = field(default_factory=SessionSpec)
 
     def __post_init__(self) -> None:
         n = self.nominal.n_joints
@@ -140,9 +146,11 @@ class Plan:
     trajectory : the joint motion (checked against the limits and for reachability).
     centres_deg : (K, n) operating points, deg.
     amplitudes_deg : (n,) oscillation amplitude about each, deg.
-    prediction : predicted covariance of the identification.
+    prediction : the sensor noise's predicted covariance (the optimiser's objective).
     inertia_ratio : (n,) largest inertial torque / largest gravity torque per joint (anthropometric inertia).
     notes : what the planner changed or assumed.
+    budget : the std `bsp identify` will report, term by term (sensor noise, marker placement, sensor zero,
+        model choice); None until :func:`with_budget`.
     """
 
     request: PlanRequest
@@ -152,6 +160,12 @@ class Plan:
     prediction: Prediction
     inertia_ratio: np.ndarray
     notes: list[str]
+    budget: PredictedBudget | None = None
+
+    @property
+    def reported(self) -> PredictedBudget:
+        """The budget (:func:`with_budget` computes it where the plan has none)."""
+        return self.budget if self.budget is not None else with_budget(self).reported
 
 
 class InfeasiblePlanError(InputError):
@@ -309,17 +323,36 @@ def plan_protocol(request: PlanRequest, grid_hz: float = 2.0) -> Plan:
         The limits leave no room (range narrower than the oscillation, session too short), or the
         result would leave the limits or the workspace (never expected: it is checked, not assumed).
     """
-    if request.n_points is not None:
-        return _plan_points(request, request.n_points, grid_hz)
-    plans, errors = [], []
-    for k_points in (1, 2, 3):
-        try:
-            plans.append(_plan_points(request, k_points, grid_hz))
-        except InfeasiblePlanError as error:
-            errors.append(error)
-    if not plans:
-        raise errors[0]
-    return min(plans, key=lambda plan: _objective_value(plan.prediction, request.objective))
+    # The optimiser's covariances are small (p < 40): BLAS threads only add their start-up, which on a loaded
+    # machine cost a 3-5x slower `bsp plan --passive auto` (measured: 22 s -> 5 s, the same plan).
+    with threadpool_limits(limits=1, user_api="blas"):
+        if request.n_points is not None:
+            return with_budget(_plan_points(request, request.n_points, grid_hz))
+        plans, errors = [], []
+        for k_points in (1, 2, 3):
+            try:
+                plans.append(_plan_points(request, k_points, grid_hz))
+            except InfeasiblePlanError as error:
+                errors.append(error)
+        if not plans:
+            raise errors[0]
+        return with_budget(min(plans, key=lambda plan: _objective_value(plan.prediction, request.objective)))
+
+
+def with_budget(plan: Plan) -> Plan:
+    """``plan`` with the std `bsp identify` will report for its sessions, term by term (:func:`predict_budget`
+    for the plan's request: its arm, model, noise, postures and session)."""
+    request = plan.request
+    budget = predict_budget(
+        plan.trajectory,
+        request.duration_s,
+        request.nominal,
+        request.passive,
+        request.noise,
+        request.session,
+        trunk_tilts_rad=request.trunk_tilts_rad,
+    )
+    return dataclasses.replace(plan, budget=budget)
 
 
 def _predict(request: PlanRequest, trajectory: PlannedTrajectory, grid_hz: float = PREDICTION_GRID_HZ) -> Prediction:

@@ -8,19 +8,10 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.planning.budget import nominal_passive_truth
 from bsp_ros.core.planning.planner import Plan
 from bsp_ros.core.streams import joints_for
 
-#: The simulated arm's dry friction (shoulder, elbow, wrist), Nm: the simulated cell's (the paper's human results).
-NOMINAL_COULOMB_NM = (0.5, 0.28, 0.06)
-#: The simulated arm's joint springs (shoulder, elbow, wrist), Nm/rad: relaxed-arm values of the order the
-#: literature reports and the MuJoCo benchmark cell uses.
-NOMINAL_STIFFNESS_NM_PER_RAD = (0.30, 0.50, 0.15)
-#: Its stiffening (``sinh`` about the neutral angle over 0.5 rad), Nm, and a two-joint muscle across shoulder and
-#: elbow, Nm: a real arm's passive moments are nonlinear and coupled, and the curves' std must carry the shape
-#: uncertainty that follows (the estimator's shape probe), which a linear spring would not show.
-NOMINAL_STIFFENING_NM = (0.10, 0.05, 0.01)
-NOMINAL_BIARTICULAR_NM = 0.05
 #: Markers re-placed within this much of the joint centres per recording (uniform per axis), m: a day's placement.
 SKIN_BOUND_M = 0.003
 #: A passive curve is "followed" when its error is within this share of the curve (RMS over the range) ...
@@ -119,10 +110,9 @@ def simulated_plan_check(
     skin_bound_m : markers placed within this much of the joint centres (one placement for every posture), m.
 
     The sensor is taken as tared; the simulated arm has the cell's Coulomb friction and nonlinear, coupled elastic
-    moments (:data:`NOMINAL_STIFFNESS_NM_PER_RAD`, :data:`NOMINAL_STIFFENING_NM`, :data:`NOMINAL_BIARTICULAR_NM`)
-    about the middle of the planned motion. The passive model identified is the plan's own.
+    moments about the middle of the planned motion (:func:`plan_passive_truth`). The passive model identified is
+    the plan's own.
     """
-    from bsp_ros.core import simulation as sim
     from bsp_ros.core.model import gravity_regressor
     from bsp_ros.core.pipeline import IdentifyOptions, identify_recordings
 
@@ -131,21 +121,8 @@ def simulated_plan_check(
     model = request.passive
     t = np.linspace(0.0, plan.trajectory.duration_s, 2001)
     q = plan.trajectory.angles_rad(t)
-    passive = sim.PassiveTruth(
-        coulomb_nm=NOMINAL_COULOMB_NM[:n],
-        stiffness_nm_per_rad=NOMINAL_STIFFNESS_NM_PER_RAD[:n],
-        neutral_rad=tuple(float(v) for v in np.median(q, axis=0)),
-        stiffening_nm=NOMINAL_STIFFENING_NM[:n],
-        biarticular_nm=NOMINAL_BIARTICULAR_NM,
-        biarticular_neutral_rad=float(np.median(q[:, 0] + q[:, 1])),
-    )
-    # One day's marker placement, kept for every posture (the markers stay on between them).
-    offsets = sim.skin_offsets_m(sim.MarkerSpec(skin_offset_bound_m=skin_bound_m), n + 1, seed)
     sessions = [
-        sim.simulate_cell(
-            plan_cell_spec(plan, subject, passive, seed=seed + k, recording=k, tilt_rad=tilt, skin_offset_m=offsets)
-        ).session
-        for k, tilt in enumerate(request.trunk_tilts_rad)
+        cell.session for cell in simulated_recordings(plan, subject, plan_passive_truth(plan), seed, skin_bound_m)
     ]
     options = IdentifyOptions(passive=model, zero_sd_n=0.0, zero_sd_nm=0.0)
     document = identify_recordings(sessions, options, trunk_tilts_rad=request.trunk_tilts_rad)
@@ -170,3 +147,29 @@ def simulated_plan_check(
         valid=bool(quality["valid"]),
         message=str(quality.get("message", "")),
     )
+
+
+def plan_passive_truth(plan: Plan) -> Any:
+    """The simulated arm's passive moments for ``plan``: the cell's Coulomb friction and nonlinear, coupled elastic
+    moments (``budget.NOMINAL_STIFFNESS_NM_PER_RAD``, ``NOMINAL_STIFFENING_NM``, ``NOMINAL_BIARTICULAR_NM``) about
+    the middle of the planned motion (a
+    :class:`~bsp_ros.core.simulation.PassiveTruth`)."""
+    return nominal_passive_truth(
+        plan.trajectory, plan.trajectory.duration_s, plan.request.nominal.n_joints, elastic=True, nonlinear=True
+    )
+
+
+def simulated_recordings(plan: Plan, subject: Any, passive: Any, seed: int, skin_bound_m: float) -> list[Any]:
+    """One simulated recording of ``plan`` per trunk posture (each a ``SimulatedCell``; posture ``k`` seeded
+    ``seed + k``) on ``subject`` with ``passive``, its markers placed within ``skin_bound_m`` (m, uniform per axis)
+    of the joint centres: one day's placement, kept for every posture (the markers stay on between them)."""
+    from bsp_ros.core import simulation as sim
+
+    n = plan.request.nominal.n_joints
+    offsets = sim.skin_offsets_m(sim.MarkerSpec(skin_offset_bound_m=skin_bound_m), n + 1, seed)
+    return [
+        sim.simulate_cell(
+            plan_cell_spec(plan, subject, passive, seed=seed + k, recording=k, tilt_rad=tilt, skin_offset_m=offsets)
+        )
+        for k, tilt in enumerate(plan.request.trunk_tilts_rad)
+    ]
