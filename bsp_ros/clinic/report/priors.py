@@ -142,7 +142,10 @@ class PeerRow:
 
     @property
     def words(self) -> str:
-        """``typical``, ``heavier than most`` (1 to 2 SD) or ``far heavier than most`` (beyond 2 SD)."""
+        """``typical``, ``heavier than most`` (1 to 2 SD) or ``far heavier than most`` (beyond 2 SD); a value
+        measured less precisely than twice the population's SD is not compared."""
+        if self.std > 2.0 * self.prior.std:
+            return "measured too roughly to compare with peers"
         z = self.z
         if abs(z) < 1.0:
             return "typical for this body"

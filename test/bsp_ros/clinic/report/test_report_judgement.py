@@ -155,6 +155,9 @@ def test_the_arm_against_its_peers(peers: Path) -> None:
         assert row.prior.std > 0 and math.isfinite(row.z)
     # The simulated arm is built from the same tables: its well-measured static moments sit within their spread.
     assert abs(rows[("segments", "upper_arm", "static_moment_kgm")].z) < 2
+    # The hand's static moment is measured far more roughly than people differ: it is not called typical.
+    hand = rows[("segments", "hand", "static_moment_kgm")]
+    assert hand.std > 2 * hand.prior.std and hand.words == "measured too roughly to compare with peers"
     static = [s for s in analysis.series if s.key[2] == "static_moment_kgm"]
     assert static and all(s.has_prior for s in static)  # drawn as a band in the trend
     page = render_report(analysis)
