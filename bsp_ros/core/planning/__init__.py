@@ -1,6 +1,7 @@
 """Protocol planning: robot trajectories that make every reported parameter identifiable."""
 
-from bsp_ros.core.planning.compare import compare_with_result, compare_with_scatter
+from bsp_ros.core.planning.budget import PredictedBudget, SessionSpec, predict_budget
+from bsp_ros.core.planning.compare import compare_budget_with_estimate, compare_with_result, compare_with_scatter
 from bsp_ros.core.planning.files import (
     PLAN_SCHEMA,
     plan_to_dict,
@@ -28,9 +29,12 @@ __all__ = [
     "Plan",
     "PlanRequest",
     "PlannedTrajectory",
+    "PredictedBudget",
     "Prediction",
+    "SessionSpec",
     "check_reachable",
     "check_trajectory_within",
+    "compare_budget_with_estimate",
     "compare_with_result",
     "compare_with_scatter",
     "handle_poses_world",
@@ -39,6 +43,7 @@ __all__ = [
     "plan_protocol",
     "plan_to_dict",
     "planned_trajectory_from_file",
+    "predict_budget",
     "predict_covariance",
     "simulated_inertia_std",
     "trajectory_from_points",
