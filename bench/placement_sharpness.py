@@ -133,7 +133,7 @@ def patch_delay_profile() -> None:
     """Monkeypatch the wrench-delay profile's linear model to fit the perpendicular moments and the markers' offset
     columns beside gravity and friction (the proposed change to ``timing._JointColumns.of``)."""
     from bsp_ros.core.identification import timing
-    from bsp_ros.core.identification.joint.placement_covariance import _averaged_torques
+    from bsp_ros.core.identification.joint.placement_covariance import averaged_torques
     from bsp_ros.core.identification.placement import placement_columns
     from bsp_ros.core.model import GRAVITY_M_S2, absolute_angles_rad
 
@@ -146,7 +146,7 @@ def patch_delay_profile() -> None:
         beta = np.linalg.lstsq(design, moment, rcond=None)[0][:n]  # for the offsets' columns only
         zeros = np.zeros_like(data.q_rad)
         offset = placement_columns(
-            data.q_rad, zeros, zeros, data.lengths_m, _averaged_torques(data), np.concatenate((beta, np.zeros(2 * n)))
+            data.q_rad, zeros, zeros, data.lengths_m, averaged_torques(data), np.concatenate((beta, np.zeros(2 * n)))
         )
         sine = -GRAVITY_M_S2 * np.sin(absolute_angles_rad(data.q_rad))
         m = offset.shape[2]

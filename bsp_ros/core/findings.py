@@ -12,6 +12,7 @@ that makes the estimator produce it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -137,6 +138,8 @@ class Finding:
     where: str = ""
     values: Mapping[str, Any] = field(default_factory=dict)
     recording: int | None = None
+    # The text a document carried, for a finding read back whose values JSON could not hold (an infinite ratio).
+    written: str | None = field(default=None, compare=False, repr=False)
 
     @property
     def spec(self) -> FindingSpec:
@@ -154,12 +157,17 @@ class Finding:
     def text(self) -> str:
         """The finding in words, rendered from its code."""
         template = self.spec.text
-        body = template.format(where=self.where, **self.values) if isinstance(template, str) else template(self)
+        try:
+            body = template.format(where=self.where, **self.values) if isinstance(template, str) else template(self)
+        except (KeyError, TypeError, ValueError):
+            if self.written is None:
+                raise
+            return self.written
         return body if self.recording is None else f"recording {self.recording}: {body}"
 
     def in_recording(self, recording: int) -> Finding:
         """This finding as one of recording ``recording`` (1-based) of several."""
-        return Finding(code=self.code, where=self.where, values=self.values, recording=recording)
+        return Finding(code=self.code, where=self.where, values=self.values, recording=recording, written=self.written)
 
     def to_json(self) -> dict[str, Any]:
         """``{"code", "severity", "where", "text", "values"}`` (and ``recording`` where set): JSON-ready."""
@@ -189,6 +197,7 @@ class Finding:
             where=str(block.get("where", "")),
             values=dict(block.get("values") or {}),
             recording=int(recording) if recording is not None else None,
+            written=str(block["text"]) if "text" in block else None,
         )
 
 
@@ -229,9 +238,10 @@ def note_texts(findings: Iterable[Finding]) -> list[str]:
 
 
 def _json_value(value: Any) -> Any:
-    """A finding's value as JSON: numbers as float or int, sequences as lists."""
+    """A finding's value as JSON: numbers as float or int (null where not finite: strict JSON), sequences as lists."""
     if isinstance(value, bool | str | int) or value is None:
         return value
     if isinstance(value, list | tuple):
         return [_json_value(v) for v in value]
-    return float(value)
+    number = float(value)
+    return number if math.isfinite(number) else None

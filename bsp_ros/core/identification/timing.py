@@ -13,7 +13,9 @@ import numpy as np
 from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.data import IdentificationData, _clean_wrench, wrench_world_yzx
+from bsp_ros.core.identification.joint.placement_covariance import averaged_torques
 from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.rate import IDENTIFICATION_MAX_RATE_HZ, block_means
 from bsp_ros.core.joint_angles import (
     KinematicsConfig,
@@ -166,12 +168,15 @@ class _JointColumns:
     the segments it carries) and its own passive columns (sign steps), as :mod:`identification.joint` stacks them;
     the zero blocks of the stacked (N, n, p) regressor are never built."""
 
-    columns: list[np.ndarray]  # per joint i (N, n - i + k)
+    columns: list[np.ndarray]  # per joint i (N, n - i + k + nuisances)
     indices: list[np.ndarray]  # per joint, where its columns sit among the p parameters
     n_parameters: int
+    nuisances: _Nuisances
 
     @classmethod
-    def of(cls, data: IdentificationData, passive: PassiveModel) -> _JointColumns:
+    def of(cls, data: IdentificationData, passive: PassiveModel, nuisances: _Nuisances | None = None) -> _JointColumns:
+        """The gravity and passive columns of ``data``, and beside them the nuisances' (``nuisances``: those of a
+        reference, which a small shift of the wrench stamps hardly changes; None: ``data``'s own)."""
         n, k = data.n_joints, len(passive.local)
         # Joint i carries the segments j >= i: its row of gravity_regressor, without the zeros before them.
         gravity = GRAVITY_M_S2 * np.cos(absolute_angles_rad(data.q_rad))
@@ -179,7 +184,16 @@ class _JointColumns:
         for i in range(n):
             columns.append(np.hstack((gravity[:, i:], passive.columns(data.passive_q_rad, data.velocity_rad_s, i))))
             indices.append(np.concatenate((np.arange(i, n), n + i * k + np.arange(k))))
-        return cls(columns, indices, n + n * k)
+        nuisances = nuisances or _Nuisances.of(data, columns, indices, n + n * k)
+        p = n + n * k
+        m = nuisances.offsets.shape[2]
+        for i in range(n):
+            spring = np.column_stack((np.ones(data.t_ns.size), data.passive_q_rad[:, i]))
+            columns[i] = np.hstack((columns[i], nuisances.sin[:, i:], nuisances.offsets[:, i, :], spring))
+            indices[i] = np.concatenate(
+                (indices[i], p + np.arange(i, n), p + n + np.arange(m), p + n + m + 2 * i + np.arange(2))
+            )
+        return cls(columns, indices, p + n + m + 2 * n, nuisances)
 
     def predicted(self, values: np.ndarray) -> np.ndarray:
         """(N, n) the model's torques at ``values``."""
@@ -197,17 +211,49 @@ class _JointColumns:
 
 
 @dataclass(frozen=True)
+class _Nuisances:
+    """What skin markers off their joint centres and a centre of mass off its segment's axis do to the torques, fitted
+    beside gravity and friction at every candidate delay: left out, a few mm of marker placement read as tens of ms
+    of delay (a delay applied in 30 of 32 sessions of 2 mm placement, in none with them; placement_sharpness.py).
+
+    Attributes
+    ----------
+    sin : (N, n) the perpendicular moments' columns, ``-g sin`` of each segment's absolute angle.
+    offsets : (N, n, m) the markers' offsets' columns, at the static moments of an unweighted first fit.
+    """
+
+    sin: np.ndarray
+    offsets: np.ndarray
+
+    @classmethod
+    def of(cls, data: IdentificationData, columns: list[np.ndarray], indices: list[np.ndarray], p: int) -> _Nuisances:
+        """The nuisances of ``data``, given the gravity and passive ``columns`` (per joint, at ``indices`` of
+        ``p`` parameters) for the first fit."""
+        n = data.n_joints
+        design, moment = np.zeros((p, p)), np.zeros(p)
+        for i, (x, index) in enumerate(zip(columns, indices, strict=True)):
+            design[np.ix_(index, index)] += x.T @ x
+            moment[index] += x.T @ data.tau_nm[:, i]
+        static = np.linalg.lstsq(design, moment, rcond=None)[0][:n]
+        zeros = np.zeros_like(data.q_rad)
+        base_values = np.concatenate((static, np.zeros(2 * n)))
+        offsets = placement_columns(data.q_rad, zeros, zeros, data.lengths_m, averaged_torques(data), base_values)
+        return cls(-GRAVITY_M_S2 * np.sin(absolute_angles_rad(data.q_rad)), offsets)
+
+
+@dataclass(frozen=True)
 class _LinearFit:
     """The weighted linear model of the default profile, with its rows and weights fixed at a reference."""
 
     passive: PassiveModel
     rows: np.ndarray  # (N, n) rows used (direction of motion clear at the reference)
     weights: np.ndarray  # (n,) 1 / sigma^2 per joint
+    nuisances: _Nuisances | None = None  # the reference's, shared by every candidate
 
     def solve(self, data: IdentificationData, columns: _JointColumns | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Parameters (p,) and residuals (N, n) (0 off the rows) of one candidate (``columns``: its model's, when
         already built)."""
-        columns = columns or _JointColumns.of(data, self.passive)
+        columns = columns or _JointColumns.of(data, self.passive, self.nuisances)
         # Normal equations: a p x p solve (the columns are few and well scaled); lstsq's SVD of the tall
         # matrix would cost 10 times more for each candidate delay.
         design, moment = columns.products(np.where(self.rows, self.weights[None, :], 0.0), data.tau_nm)
@@ -231,7 +277,8 @@ def _linear_fit(
         noise = np.nan_to_num(reference.velocity_noise_rad_s, nan=0.0)
         deadband = np.maximum(0.1 * np.percentile(speed, 95, axis=0), 4.0 * noise)
         rows = speed > deadband[None, :]
-    fit = _LinearFit(passive, rows, np.ones(reference.n_joints))
+    columns = columns or _JointColumns.of(reference, passive)
+    fit = _LinearFit(passive, rows, np.ones(reference.n_joints), columns.nuisances)
     _, residual = fit.solve(reference, columns)
     sigma = np.sqrt((residual**2).sum(axis=0) / np.maximum(rows.sum(axis=0), 1))
     sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(reference.tau_nm).max()), 1e-9))
@@ -273,7 +320,7 @@ def _autocorrelation_inflation(
     values, residual = fit.solve(centre, columns)
     if plus.t_ns.size != centre.t_ns.size or minus.t_ns.size != centre.t_ns.size:
         return 1.0
-    predicted = lambda d: d.tau_nm - _JointColumns.of(d, passive).predicted(values)  # noqa: E731
+    predicted = lambda d: d.tau_nm - _JointColumns.of(d, passive, columns.nuisances).predicted(values)  # noqa: E731
     slope = (predicted(plus) - predicted(minus)) / (2.0 * h)  # d(residual)/d(delay), (N, n)
     w = np.where(fit.rows, fit.weights[None, :], 0.0)
     # Partial the parameters out: the part of the slope the model's columns cannot take up.

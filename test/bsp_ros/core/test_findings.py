@@ -3,6 +3,7 @@ and every code is asserted by some test of the estimator or its consumers."""
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -204,3 +205,13 @@ def test_the_contract_lists_every_code_under_its_severity() -> None:
         for code in re.findall(r"`([a-z_]+)`", codes):
             listed[code] = Severity(severity.strip().split(":")[0])
     assert listed == {str(c): SPECS[c].severity for c in FindingCode}
+
+
+def test_a_value_json_cannot_hold_is_null_and_the_written_text_stays() -> None:
+    values = {"key": "coulomb_nm", "corr": 0.99, "segment": "hand", "rel_std": float("inf")}
+    confounded = Finding(code=FindingCode.CONFOUNDED, where="wrist", values=values)
+    block = confounded.to_json()
+    assert block["values"]["rel_std"] is None
+    text = json.dumps(block, allow_nan=False)  # strict JSON, as every document is written
+    back = Finding.from_json(json.loads(text))
+    assert back.text == confounded.text and "inf" in back.text

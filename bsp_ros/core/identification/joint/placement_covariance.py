@@ -54,12 +54,12 @@ def offset_columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: n
     zeros = np.zeros_like(data.q_rad)
     qd = zeros if data.qd_rad_s is None else data.qd_rad_s
     qdd = zeros if data.qdd_rad_s2 is None else data.qdd_rad_s2
-    columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, _averaged_torques(data), base_values)
+    columns = placement_columns(data.q_rad, qd, qdd, data.lengths_m, averaged_torques(data), base_values)
     columns = columns * np.repeat(np.asarray(sd_m, dtype=np.float64), 2)
     return _per_recording(columns, data.recording_index if data.markers_moved else None)
 
 
-def _averaged_torques(data: IdentificationData) -> np.ndarray:
+def averaged_torques(data: IdentificationData) -> np.ndarray:
     """(N, n) the measured torques, each the centred mean of the samples within :data:`AVERAGE_S` (fewer at a
     recording's ends): the noise of one sample weighs 1/k in it."""
     tau = np.asarray(data.tau_nm, dtype=np.float64)

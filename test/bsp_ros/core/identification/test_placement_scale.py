@@ -124,7 +124,7 @@ def test_a_robot_contact_point_keeps_its_own_sd() -> None:
 
 
 def test_the_handle_force_averages_the_noise_out_and_keeps_each_recording_apart() -> None:
-    from bsp_ros.core.identification.joint.placement_covariance import AVERAGE_S, _averaged_torques
+    from bsp_ros.core.identification.joint.placement_covariance import AVERAGE_S, averaged_torques
 
     rng = np.random.default_rng(5)
     t_ns = np.arange(400, dtype=np.int64) * 10_000_000  # 100 Hz
@@ -135,7 +135,7 @@ def test_the_handle_force_averages_the_noise_out_and_keeps_each_recording_apart(
     data = dataclasses.replace(
         base.window(0, 400), t_ns=t_ns, tau_nm=slow + level + noise, recording_index=(np.arange(400) >= 200).astype(int)
     )
-    averaged = _averaged_torques(data)
+    averaged = averaged_torques(data)
     k = int(AVERAGE_S / 0.01) + 1
     inner = np.r_[k : 200 - k, 200 + k : 400 - k]
     assert np.std(averaged[inner] - (slow + level)[inner]) < 0.3 * 0.05  # the noise of one sample weighs 1/k

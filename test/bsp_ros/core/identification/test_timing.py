@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.identification.timing import (
     DelayProblem,
     compensate_wrench_delay,
@@ -69,7 +70,9 @@ def test_the_delay_of_a_late_filtered_wrench_is_found_within_its_std_cheaply(
     elapsed_s = time.perf_counter() - started
     assert delay.source == "estimated" and delay.delay_s == delay.estimate_s
     assert abs(delay.delay_s - TRUE_DELAY_S) <= 2.0 * delay.std_s, (delay.delay_s, delay.std_s)
-    assert 0.0003 < delay.std_s < 0.003  # resolved to about a millisecond from 60 s
+    # Resolved to a few milliseconds from 60 s: the profile fits marker offsets, off-axis moments and springs beside
+    # gravity and friction, whose share of the misfit would otherwise read as a delay.
+    assert 0.0003 < delay.std_s < 0.006
     assert delay.n_fits <= 20 and elapsed_s < 2.0  # a grid of 11 linear fits, 3 to refine, 4 for the std
 
 
@@ -137,6 +140,10 @@ def test_a_delay_beyond_the_search_is_not_compensated() -> None:
     delay = estimate_wrench_delay(session)
     assert delay.source == "none" and delay.delay_s == 0.0
     assert "beyond the searched" in delay.warnings[0]
+    # The estimate says so as a finding of its own (a note: the estimate stands, uncompensated).
+    quality = identify_session(session)["quality"]
+    timing = [f for f in findings_of(quality) if f.code is FindingCode.TIMING_NOTE]
+    assert [f.text for f in timing] == delay.warnings and timing[0].text in quality["warnings"]
 
 
 @pytest.mark.parametrize("minimum_s", [-0.13, -0.1, -0.047, 0.0, 0.031, 0.09, 0.2])
