@@ -238,7 +238,30 @@ def _add(store: Store, args: argparse.Namespace) -> int:
         print(f"  not valid: {verdict_text(record.quality)}")
     if known is not None and known.differs_from(record.subject_info):
         print(_body_warning(path, record, known), file=sys.stderr)
+    untared = _untared_warning(store, record)
+    if untared:
+        print(untared, file=sys.stderr)
     return 0
+
+
+def _untared_warning(store: Store, record: SessionRecord) -> str | None:
+    """One line where a session without a tare joins a subject's tared sessions of the same arm: a sensor offset or
+    the handle's weight may sit in its arm weight, which the report and the weight support then leave out."""
+    if record.quality.tare_applied or not record.quality.valid:
+        return None
+    tared = [
+        r
+        for r in store.sessions(record.subject)
+        if r.id != record.id and r.arm == record.arm and r.quality.valid and r.quality.tare_applied
+    ]
+    if not tared:
+        return None
+    return (
+        f"warning: session {record.number} of {record.subject} has no tare while {len(tared)} of its sessions do: "
+        "a sensor offset or the handle's weight may be in its arm weight, so the report keeps its passive moments "
+        "but not its arm weight, and the weight support comes from a tared session (record a tare: bsp tare, "
+        "then --tare FILE)"
+    )
 
 
 def _body_warning(path: Path, record: SessionRecord, known: SubjectRecord) -> str:

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
 from cli_run import bsp
 
+import bsp_ros
 from bsp_ros.cli import main
 
 
@@ -28,3 +30,22 @@ def test_the_cause_and_the_action_are_printed_when_stored_and_shown(
     assert any(line.startswith(expected) for line in out.splitlines()), out
     code, out, _ = bsp(capsys, "sessions", "show", "--store", store, "P001")
     assert code == 0 and any(line.startswith(expected) for line in out.splitlines()), out
+
+
+def test_an_untared_session_among_tared_ones_is_warned_of(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    results = []
+    for seed, (day, tared) in enumerate((("2026-01-05", True), ("2026-01-12", True), ("2026-01-19", False))):
+        bag = bsp_ros.simulate(tmp_path / f"session_{seed}", duration_s=30, seed=seed)
+        result = json.loads(json.dumps(bsp_ros.identify(bag).to_json()))
+        assert result["quality"]["valid"]
+        # As a tare would have marked it (its uncertainty aside, which the warning does not read).
+        result["quality"]["tare"] = {"applied": tared, "file": "cell.tare.yaml" if tared else None}
+        path = tmp_path / f"{day}.json"
+        path.write_text(json.dumps(result))
+        results.append((day, path))
+    store = str(tmp_path / "clinic.sqlite")
+    for day, path in results:
+        code, _, err = bsp(capsys, "sessions", "add", str(path), "--store", store, "--subject", "P002", "--time", day)
+        assert code == 0, err
+    assert err.startswith("warning: session 3 of P002 has no tare while 2 of its sessions do")
+    assert "bsp tare" in err
