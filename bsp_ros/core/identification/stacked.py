@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -24,10 +25,34 @@ from bsp_ros.core.streams import joints_for, segments_for
 Statistics = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
+class JointRegressors:
+    """A :class:`Problem`'s regressor per joint (N, p): its column blocks joined when a pass first needs them,
+    and kept (a problem of one block holds them joined already). The problem's cache; the problem itself is
+    never changed."""
+
+    def __init__(self, blocks: tuple[tuple[np.ndarray, ...], ...]) -> None:
+        self._blocks = blocks
+        self._joined: dict[int, np.ndarray] = {}
+
+    def joined(self, joint: int) -> bool:
+        """Whether ``joint``'s regressor is at hand without joining its blocks."""
+        return len(self._blocks) == 1 or joint in self._joined
+
+    def __getitem__(self, joint: int) -> np.ndarray:
+        if len(self._blocks) == 1:
+            return self._blocks[0][joint]
+        if joint not in self._joined:
+            self._joined[joint] = np.hstack([block[joint] for block in self._blocks])
+        return self._joined[joint]
+
+
 @dataclass(frozen=True)
 class Problem:
     """The joint model stacked over samples and joints: ``torque[t, i] = sum_k X_i[t, k] theta_k`` on joint ``i``'s
-    used rows, with bounds and Gaussian priors on some parameters (``p`` of them, ``n`` joints, ``N`` samples)."""
+    used rows, with bounds and Gaussian priors on some parameters (``p`` of them, ``n`` joints, ``N`` samples).
+
+    Immutable: what is computed from its arrays once and kept (each joint's joined regressor, the statistics)
+    lives in cached properties, never written into the instance by hand."""
 
     names: list[ParameterName]
     # The regressor's column blocks, in order, each as one (N, p_k) array per joint ``i`` whose rows the joint does
@@ -43,26 +68,38 @@ class Problem:
     prior_mean: np.ndarray  # (p,) Gaussian prior means (0 where none)
     prior_precision: np.ndarray  # (p,) 1 / sd^2 of the priors (0 where none)
     passive_end: int  # parameters [n, passive_end) are the passive terms
-    # Per-joint sufficient statistics (joint_statistics), kept once computed: every reweighting, check and
-    # augmented problem solves from them. The arrays above are never changed after construction.
-    statistics: Statistics | None = field(default=None, compare=False, repr=False)
+    # (N,) per joint: its torques, 0 off its used rows (an augmented problem shares its base's).
+    joint_torques: tuple[np.ndarray, ...] = field(compare=False, repr=False)
+    # The per-joint statistics when known at construction (an augmented problem's, from its base's); else
+    # ``statistics`` computes them on first use. The arrays above are never changed after construction.
+    known_statistics: Statistics | None = field(default=None, compare=False, repr=False)
+
+    @cached_property
+    def statistics(self) -> Statistics:
+        """Per joint ``j`` over its used rows: ``X_j^T X_j`` (n, p, p), ``X_j^T y_j`` (n, p) and ``y_j^T y_j``
+        (n,), computed once: every reweighting, check and augmented problem solves from them."""
+        if self.known_statistics is not None:
+            return self.known_statistics
+        n, p = self.torque.shape[1], len(self.names)
+        grams, moments, totals = np.empty((n, p, p)), np.empty((n, p)), np.empty(n)
+        for j in range(n):
+            x, y = self.joint_rows(j)
+            grams[j], moments[j], totals[j] = x.T @ x, x.T @ y, y @ y
+        return grams, moments, totals
+
+    @cached_property
+    def regressors(self) -> JointRegressors:
+        """Each joint's regressor, its blocks joined once when first needed."""
+        return JointRegressors(self.blocks)
 
     def joint_rows(self, joint: int) -> tuple[np.ndarray, np.ndarray]:
         """``joint``'s regressor (N, p) and torques (N,), both 0 off its used rows, the blocks joined once and
         kept: the statistics, the augmented problems of the model checks and their candidate profiles use them."""
-        cache: dict[int, tuple[np.ndarray, np.ndarray]] = self.__dict__.setdefault("_joint_rows", {})
-        if joint not in cache:
-            parts = [block[joint] for block in self.blocks]
-            x = parts[0] if len(parts) == 1 else np.hstack(parts)
-            cache[joint] = (x, self.joint_torque(joint))
-        return cache[joint]
+        return self.regressors[joint], self.joint_torques[joint]
 
     def joint_torque(self, joint: int) -> np.ndarray:
-        """(N,) ``joint``'s torques, 0 off its used rows, kept."""
-        cache: dict[int, np.ndarray] = self.__dict__.setdefault("_joint_torque", {})
-        if joint not in cache:
-            cache[joint] = np.where(self.rows[:, joint], self.torque[:, joint], 0.0)
-        return cache[joint]
+        """(N,) ``joint``'s torques, 0 off its used rows."""
+        return self.joint_torques[joint]
 
     def joint_blocks(self, joint: int) -> list[tuple[slice, np.ndarray]]:
         """``joint``'s column blocks (N, p_k), each with the slice of the parameters it holds: for the passes that
@@ -78,12 +115,17 @@ class Problem:
         augmented problem's columns are not joined for it)."""
         out = np.empty(self.torque.shape)
         for j in range(self.torque.shape[1]):
-            if len(self.blocks) == 1 or j in self.__dict__.get("_joint_rows", {}):
-                predicted = self.joint_rows(j)[0] @ values
+            if self.regressors.joined(j):
+                predicted = self.regressors[j] @ values
             else:
                 predicted = sum(x @ values[cols] for cols, x in self.joint_blocks(j))
-            out[:, j] = self.joint_torque(j) - predicted
+            out[:, j] = self.joint_torques[j] - predicted
         return out
+
+
+def used_torques(torque: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(N,) per joint: its torques (``torque`` (N, n)), 0 off its used rows (``rows`` (N, n))."""
+    return tuple(np.where(rows[:, j], torque[:, j], 0.0) for j in range(torque.shape[1]))
 
 
 @dataclass(frozen=True)
@@ -159,7 +201,16 @@ def build_problem(
         precision = np.concatenate((precision, np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)))
         lower += [-np.inf] * dynamics
     return Problem(
-        names, (tuple(columns),), data.tau_nm, rows, np.array(lower), np.full(p + dynamics, np.inf), mean, precision, p
+        names,
+        (tuple(columns),),
+        data.tau_nm,
+        rows,
+        np.array(lower),
+        np.full(p + dynamics, np.inf),
+        mean,
+        precision,
+        p,
+        used_torques(data.tau_nm, rows),
     )
 
 
@@ -259,16 +310,8 @@ def joint_statistics(problem: Problem) -> Statistics:
     """Per joint ``j`` over its used rows: ``X_j^T X_j`` (n, p, p), ``X_j^T y_j`` (n, p) and ``y_j^T y_j`` (n,).
 
     The weights of the fit are per joint, so these give the normal equations of every reweighting at p x p
-    cost (one pass over the samples, BLAS products). Computed once per problem and kept on it."""
-    if problem.statistics is not None:
-        return problem.statistics
-    n, p = problem.torque.shape[1], len(problem.names)
-    grams, moments, totals = np.empty((n, p, p)), np.empty((n, p)), np.empty(n)
-    for j in range(n):
-        x, y = problem.joint_rows(j)
-        grams[j], moments[j], totals[j] = x.T @ x, x.T @ y, y @ y
-    object.__setattr__(problem, "statistics", (grams, moments, totals))  # a cache of the frozen problem's arrays
-    return grams, moments, totals
+    cost (one pass over the samples, BLAS products). Computed once per problem (:attr:`Problem.statistics`)."""
+    return problem.statistics
 
 
 def _augmented_statistics(problem: Problem, extra: tuple[np.ndarray, ...]) -> Statistics:
@@ -481,7 +524,7 @@ def augmented(
     """``problem`` with extra unbounded columns ``extra`` (N, n, m), with Gaussian priors where given."""
     m = len(names)
     own = tuple(np.where(problem.rows[:, j, None], extra[:, j], 0.0) for j in range(problem.torque.shape[1]))
-    wider = Problem(
+    return Problem(
         problem.names + names,
         (*problem.blocks, own),
         problem.torque,
@@ -491,7 +534,6 @@ def augmented(
         np.concatenate((problem.prior_mean, np.zeros(m) if prior_mean is None else prior_mean)),
         np.concatenate((problem.prior_precision, np.zeros(m) if prior_precision is None else prior_precision)),
         problem.passive_end,
+        problem.joint_torques,  # the same rows and torques
         _augmented_statistics(problem, own),
     )
-    wider.__dict__["_joint_torque"] = problem.__dict__.get("_joint_torque", {})  # the same rows and torques
-    return wider

@@ -24,6 +24,7 @@ from bsp_ros.core.model import (
     gravity_regressor,
     static_moments_kgm,
 )
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.streams import joints_for, segments_for
 from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_array, check_finite_scalar, check_positive
@@ -75,6 +76,7 @@ class NoiseSpec:
             raise InputError("at least one noise level must be positive: a noise-free session has no std to predict")
 
 
+@normalising
 @dataclass(frozen=True)
 class NominalArm:
     """The arm a prediction assumes: segment lengths and grouped static moments (and passive values).
@@ -90,13 +92,14 @@ class NominalArm:
     static_moments_kgm: tuple[float, ...]
     passive: dict[ParameterName, float] = field(default_factory=dict)
 
-    def __post_init__(self) -> None:
-        lengths = check_lengths_m(self.lengths_m)
-        moments = check_finite_array("static moments (kg m)", self.static_moments_kgm, (lengths.size,))
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: tuples of floats."""
+        lengths = check_lengths_m(given.lengths_m)
+        moments = check_finite_array("static moments (kg m)", given.static_moments_kgm, (lengths.size,))
         if (moments <= 0).any():
             raise InputError(f"static moments must be positive, got {moments.tolist()}")
-        object.__setattr__(self, "lengths_m", tuple(float(v) for v in lengths))
-        object.__setattr__(self, "static_moments_kgm", tuple(float(v) for v in moments))
+        return {"lengths_m": tuple(float(v) for v in lengths), "static_moments_kgm": tuple(float(v) for v in moments)}
 
     @classmethod
     def from_anthropometry(cls, lengths_m: npt.ArrayLike, sex: str = "male", body_mass_kg: float = 75.0) -> NominalArm:

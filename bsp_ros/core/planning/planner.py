@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
@@ -14,6 +15,7 @@ from threadpoolctl import threadpool_limits
 from bsp_ros.core.anthropometry import segment_norm
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import check_lengths_m, gravity_regressor, static_moments_kgm
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.planning.budget import PredictedBudget, SessionSpec, predict_budget
 from bsp_ros.core.planning.information import (
     PREDICTION_GRID_HZ,
@@ -51,6 +53,7 @@ _POPULATION = 8
 _INFEASIBLE = 1e3
 
 
+@normalising
 @dataclass(frozen=True)
 class PlanRequest:
     """What the planner is given.
@@ -89,30 +92,33 @@ class PlanRequest:
     trunk_tilts_rad: tuple[float, ...] = (0.0,)
     session: SessionSpec = field(default_factory=SessionSpec)
 
-    def __post_init__(self) -> None:
-        n = self.nominal.n_joints
-        if self.limits.n_joints != n:
-            raise InputError(f"{self.limits.n_joints} joint ranges given for a {n}-segment arm")
-        shoulder = check_finite_array("shoulder [y, z] (m)", self.shoulder_yz_m, (2,))
-        object.__setattr__(self, "shoulder_yz_m", (float(shoulder[0]), float(shoulder[1])))
-        check_positive("session length (s)", self.duration_s, 86_400.0)
-        if self.n_points is not None and (
-            isinstance(self.n_points, bool) or not isinstance(self.n_points, int) or not 1 <= self.n_points <= 20
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: the shoulder, the amplitudes and the tilts as tuples of floats."""
+        n = given.nominal.n_joints
+        if given.limits.n_joints != n:
+            raise InputError(f"{given.limits.n_joints} joint ranges given for a {n}-segment arm")
+        shoulder = check_finite_array("shoulder [y, z] (m)", given.shoulder_yz_m, (2,))
+        out: dict[str, Any] = {"shoulder_yz_m": (float(shoulder[0]), float(shoulder[1]))}
+        check_positive("session length (s)", given.duration_s, 86_400.0)
+        if given.n_points is not None and (
+            isinstance(given.n_points, bool) or not isinstance(given.n_points, int) or not 1 <= given.n_points <= 20
         ):
-            raise InputError(f"number of operating points must be an integer within [1, 20], got {self.n_points!r}")
-        if self.objective not in OBJECTIVES:
-            raise InputError(f"objective must be one of {OBJECTIVES}, got {self.objective!r}")
-        if self.amplitude_deg is not None:
-            amplitude = check_finite_array("oscillation amplitudes (deg)", self.amplitude_deg, (n,))
+            raise InputError(f"number of operating points must be an integer within [1, 20], got {given.n_points!r}")
+        if given.objective not in OBJECTIVES:
+            raise InputError(f"objective must be one of {OBJECTIVES}, got {given.objective!r}")
+        if given.amplitude_deg is not None:
+            amplitude = check_finite_array("oscillation amplitudes (deg)", given.amplitude_deg, (n,))
             if (amplitude <= 0).any():
                 raise InputError(f"oscillation amplitudes must be positive, got {amplitude.tolist()} deg")
-            object.__setattr__(self, "amplitude_deg", tuple(float(a) for a in amplitude))
-        tilts = check_finite_array("trunk tilts (rad)", self.trunk_tilts_rad, (len(self.trunk_tilts_rad),))
+            out["amplitude_deg"] = tuple(float(a) for a in amplitude)
+        tilts = check_finite_array("trunk tilts (rad)", given.trunk_tilts_rad, (len(given.trunk_tilts_rad),))
         if not 1 <= tilts.size <= 5 or (np.abs(tilts) > np.pi / 2).any():
             raise InputError(f"one to five trunk tilts within +-90 deg, got {np.degrees(tilts).round(1).tolist()} deg")
-        object.__setattr__(self, "trunk_tilts_rad", tuple(float(t) for t in tilts))
-        if not 10 <= self.max_evaluations <= 100_000:
-            raise InputError(f"max_evaluations must be within [10, 100000], got {self.max_evaluations!r}")
+        out["trunk_tilts_rad"] = tuple(float(t) for t in tilts)
+        if not 10 <= given.max_evaluations <= 100_000:
+            raise InputError(f"max_evaluations must be within [10, 100000], got {given.max_evaluations!r}")
+        return out
 
     def usable_range_deg(self) -> np.ndarray:
         """(n, 2) the ranges the planner uses: the given ones, the elbow kept 5 deg from straight/folded."""

@@ -5,11 +5,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from bsp_ros.core.model import check_lengths_m
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.planning.trajectory import PlannedTrajectory, handle_poses_world
 from bsp_ros.core.streams import joints_for
 from bsp_ros.errors import InputError
@@ -23,6 +25,7 @@ ELBOW_MARGIN_DEG = 5.0
 _TOLERANCE = 1e-9
 
 
+@normalising
 @dataclass(frozen=True)
 class JointLimits:
     """What the therapist allows: a range per joint and one speed limit.
@@ -36,16 +39,17 @@ class JointLimits:
     range_deg: tuple[tuple[float, float], ...]
     max_speed_rad_s: float = 0.03
 
-    def __post_init__(self) -> None:
-        if isinstance(self.range_deg, str) or len(self.range_deg) not in (2, 3):
-            raise InputError(f"give one range per joint (2 or 3 joints), got {self.range_deg!r}")
-        joints = joints_for(len(self.range_deg))
-        ranges = tuple(check_range_deg(joint, pair) for joint, pair in zip(joints, self.range_deg, strict=True))
-        object.__setattr__(self, "range_deg", ranges)
-        speed = check_finite_scalar("max joint speed (rad/s)", self.max_speed_rad_s, 0.0, MAX_SPEED_LIMIT_RAD_S)
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: each range a ``(low, high)`` tuple of floats, the speed a float."""
+        if isinstance(given.range_deg, str) or len(given.range_deg) not in (2, 3):
+            raise InputError(f"give one range per joint (2 or 3 joints), got {given.range_deg!r}")
+        joints = joints_for(len(given.range_deg))
+        ranges = tuple(check_range_deg(joint, pair) for joint, pair in zip(joints, given.range_deg, strict=True))
+        speed = check_finite_scalar("max joint speed (rad/s)", given.max_speed_rad_s, 0.0, MAX_SPEED_LIMIT_RAD_S)
         if speed <= 0.0:
-            raise InputError(f"max joint speed (rad/s) must be positive, got {self.max_speed_rad_s!r}")
-        object.__setattr__(self, "max_speed_rad_s", speed)
+            raise InputError(f"max joint speed (rad/s) must be positive, got {given.max_speed_rad_s!r}")
+        return {"range_deg": ranges, "max_speed_rad_s": speed}
 
     @property
     def n_joints(self) -> int:

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.simulation.checks import (
     DEFAULT_START_NS,
     MAX_DURATION_S,
@@ -25,6 +26,7 @@ from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_scalar, check_positive
 
 
+@normalising
 @dataclass(frozen=True)
 class CellSpec:
     """Everything that defines one simulated session.
@@ -68,7 +70,9 @@ class CellSpec:
     robot_handle_pose: bool = False
     trunk_tilt_rad: float = 0.0
 
-    def __post_init__(self) -> None:
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: the duration as a float, the start and the seed as ints."""
         for name, kind in (
             ("subject", SubjectTruth),
             ("passive", PassiveTruth),
@@ -76,27 +80,29 @@ class CellSpec:
             ("sensor", SensorSpec),
             ("markers", MarkerSpec),
         ):
-            if not isinstance(getattr(self, name), kind):
-                raise InputError(f"{name} must be a {kind.__name__}, got {getattr(self, name)!r}")
-        n = self.subject.n_segments
-        if self.passive.n_joints != n:
-            raise InputError(f"passive has {self.passive.n_joints} joints, the subject has {n} segments")
-        if self.trajectory.n_joints != n:
-            raise InputError(f"trajectory has {self.trajectory.n_joints} joints, the subject has {n} segments")
-        if self.markers.skin_offset_m and len(self.markers.skin_offset_m) != n + 1:
+            if not isinstance(getattr(given, name), kind):
+                raise InputError(f"{name} must be a {kind.__name__}, got {getattr(given, name)!r}")
+        n = given.subject.n_segments
+        if given.passive.n_joints != n:
+            raise InputError(f"passive has {given.passive.n_joints} joints, the subject has {n} segments")
+        if given.trajectory.n_joints != n:
+            raise InputError(f"trajectory has {given.trajectory.n_joints} joints, the subject has {n} segments")
+        if given.markers.skin_offset_m and len(given.markers.skin_offset_m) != n + 1:
             raise InputError(
-                f"markers.skin_offset_m has {len(self.markers.skin_offset_m)} pairs, the chain has {n + 1} markers"
+                f"markers.skin_offset_m has {len(given.markers.skin_offset_m)} pairs, the chain has {n + 1} markers"
             )
-        object.__setattr__(self, "duration_s", check_positive("duration_s", self.duration_s, MAX_DURATION_S))
-        object.__setattr__(self, "start_ns", check_int("start_ns", self.start_ns, 1, 2**62))
-        object.__setattr__(self, "seed", check_int("seed", self.seed, 0))
-        check_bool("inertia", self.inertia)
-        check_finite_scalar("trunk_tilt_rad", self.trunk_tilt_rad, -np.pi / 2, np.pi / 2)
-        if isinstance(self.trajectory, TrajectorySpec):
-            centre, amp = self.trajectory.center_deg[1], self.trajectory.amplitude_deg[1]
+        out = {
+            "duration_s": check_positive("duration_s", given.duration_s, MAX_DURATION_S),
+            "start_ns": check_int("start_ns", given.start_ns, 1, 2**62),
+            "seed": check_int("seed", given.seed, 0),
+        }
+        check_bool("inertia", given.inertia)
+        check_finite_scalar("trunk_tilt_rad", given.trunk_tilt_rad, -np.pi / 2, np.pi / 2)
+        if isinstance(given.trajectory, TrajectorySpec):
+            centre, amp = given.trajectory.center_deg[1], given.trajectory.amplitude_deg[1]
             elbow = np.radians(np.linspace(centre - amp, centre + amp, 721))
         else:  # any other motion: the elbow angles it takes over the session
-            elbow = self.trajectory.angles_rad(np.linspace(0.0, self.duration_s, 7201))[:, 1]
+            elbow = given.trajectory.angles_rad(np.linspace(0.0, out["duration_s"], 7201))[:, 1]
             centre, amp = float(np.degrees(elbow.mean())), float(np.degrees(np.ptp(elbow)) / 2)
         worst = float(np.abs(np.sin(elbow)).min())
         if worst < MIN_ELBOW_SIN:
@@ -104,6 +110,7 @@ class CellSpec:
                 f"elbow range {centre!r} +- {amp!r} deg comes within 5 deg of a straight or folded arm "
                 f"(|sin q2| = {worst:.3g}): the wrench cannot be resolved there"
             )
+        return out
 
     @property
     def n_segments(self) -> int:

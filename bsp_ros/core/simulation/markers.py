@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.simulation.checks import float_tuple
 from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_scalar, check_positive
@@ -14,6 +16,7 @@ from bsp_ros.validation import check_finite_scalar, check_positive
 MAX_SKIN_OFFSET_M = 0.1
 
 
+@normalising
 @dataclass(frozen=True)
 class MarkerSpec:
     """The motion-capture streams (one marker per joint centre, ``hand`` at the contact point).
@@ -46,27 +49,19 @@ class MarkerSpec:
     skin_offset_m: tuple[tuple[float, float], ...] = ()
     skin_offset_bound_m: float = 0.0
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "marker_hz", check_positive("marker_hz", self.marker_hz, 5000.0))
-        object.__setattr__(self, "phase_s", check_finite_scalar("marker phase_s", self.phase_s, 0.0, 1.0))
-        if self.phase_s >= 1.0:
-            raise InputError(f"marker phase_s must be below 1 s, got {self.phase_s!r}")
-        object.__setattr__(
-            self,
-            "stamp_jitter_s",
-            check_finite_scalar("marker stamp_jitter_s", self.stamp_jitter_s, 0.0, 0.1),
-        )
-        object.__setattr__(self, "shoulder_m", float_tuple("shoulder_m", self.shoulder_m, 3, -100.0, 100.0))
-        object.__setattr__(self, "noise_m", check_finite_scalar("marker noise_m", self.noise_m, 0.0, 0.1))
-        object.__setattr__(
-            self, "dropout_fraction", check_finite_scalar("dropout_fraction", self.dropout_fraction, 0.0, 0.9)
-        )
-        object.__setattr__(
-            self,
-            "dropout_mean_frames",
-            check_finite_scalar("dropout_mean_frames", self.dropout_mean_frames, 1.0, 1e6),
-        )
-        offsets = self.skin_offset_m
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: the numbers as floats, the positions as tuples of floats."""
+        out: dict[str, Any] = {"marker_hz": check_positive("marker_hz", given.marker_hz, 5000.0)}
+        out["phase_s"] = check_finite_scalar("marker phase_s", given.phase_s, 0.0, 1.0)
+        if out["phase_s"] >= 1.0:
+            raise InputError(f"marker phase_s must be below 1 s, got {out['phase_s']!r}")
+        out["stamp_jitter_s"] = check_finite_scalar("marker stamp_jitter_s", given.stamp_jitter_s, 0.0, 0.1)
+        out["shoulder_m"] = float_tuple("shoulder_m", given.shoulder_m, 3, -100.0, 100.0)
+        out["noise_m"] = check_finite_scalar("marker noise_m", given.noise_m, 0.0, 0.1)
+        out["dropout_fraction"] = check_finite_scalar("dropout_fraction", given.dropout_fraction, 0.0, 0.9)
+        out["dropout_mean_frames"] = check_finite_scalar("dropout_mean_frames", given.dropout_mean_frames, 1.0, 1e6)
+        offsets = given.skin_offset_m
         if isinstance(offsets, str | bytes) or not isinstance(offsets, Sequence | np.ndarray):
             raise InputError(f"skin_offset_m must be a sequence of (along, normal) pairs, got {offsets!r}")
         pairs = tuple(
@@ -75,12 +70,11 @@ class MarkerSpec:
         )
         if pairs and len(pairs) not in (3, 4):
             raise InputError(f"skin_offset_m needs one (along, normal) pair per marker (3 or 4), got {len(pairs)}")
-        object.__setattr__(self, "skin_offset_m", pairs)
-        object.__setattr__(
-            self,
-            "skin_offset_bound_m",
-            check_finite_scalar("skin_offset_bound_m", self.skin_offset_bound_m, 0.0, MAX_SKIN_OFFSET_M),
+        out["skin_offset_m"] = pairs
+        out["skin_offset_bound_m"] = check_finite_scalar(
+            "skin_offset_bound_m", given.skin_offset_bound_m, 0.0, MAX_SKIN_OFFSET_M
         )
+        return out
 
 
 def skin_offsets_m(markers: MarkerSpec, n_markers: int, seed: int) -> tuple[tuple[float, float], ...]:

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.simulation.checks import GRAVITY_M_S2, check_bool, float_tuple, rotation_from_rpy_deg
 from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_scalar
@@ -20,6 +22,7 @@ _EXPONENTIAL_NODES = 16
 _EXPONENTIAL_SPAN = 8.0  # bins cover 8 time constants; the tail beyond is one more node at its mean
 
 
+@normalising
 @dataclass(frozen=True)
 class SensorSpec:
     """The force/torque sensor stream.
@@ -88,51 +91,36 @@ class SensorSpec:
     average_over_period: bool = False
     clock_offset_s: float = 0.0
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "wrench_hz", check_finite_scalar("wrench_hz", self.wrench_hz, 1.0, 5000.0))
-        object.__setattr__(self, "phase_s", check_finite_scalar("wrench phase_s", self.phase_s, 0.0, 1.0))
-        if self.phase_s >= 1.0:
-            raise InputError(f"wrench phase_s must be below 1 s, got {self.phase_s!r}")
-        object.__setattr__(
-            self,
-            "stamp_jitter_s",
-            check_finite_scalar("wrench stamp_jitter_s", self.stamp_jitter_s, 0.0, 0.1),
-        )
-        rpy = float_tuple("roll_pitch_yaw_deg", self.roll_pitch_yaw_deg, 3, -360.0, 360.0)
-        object.__setattr__(self, "roll_pitch_yaw_deg", rpy)
-        if not isinstance(self.frame_id, str) or not self.frame_id.strip() or self.frame_id != self.frame_id.strip():
-            raise InputError(f"frame_id must be a non-empty name without surrounding spaces, got {self.frame_id!r}")
-        object.__setattr__(self, "force_noise_n", check_finite_scalar("force_noise_n", self.force_noise_n, 0.0, 100.0))
-        object.__setattr__(
-            self, "torque_noise_nm", check_finite_scalar("torque_noise_nm", self.torque_noise_nm, 0.0, 10.0)
-        )
-        object.__setattr__(self, "force_bias_n", float_tuple("force_bias_n", self.force_bias_n, 3, -1e3, 1e3))
-        object.__setattr__(self, "torque_bias_nm", float_tuple("torque_bias_nm", self.torque_bias_nm, 3, -1e2, 1e2))
-        object.__setattr__(
-            self, "force_drift_n_per_s", float_tuple("force_drift_n_per_s", self.force_drift_n_per_s, 3, -1.0, 1.0)
-        )
-        object.__setattr__(
-            self,
-            "torque_drift_nm_per_s",
-            float_tuple("torque_drift_nm_per_s", self.torque_drift_nm_per_s, 3, -0.1, 0.1),
-        )
-        object.__setattr__(
-            self, "handle_mass_kg", check_finite_scalar("handle_mass_kg", self.handle_mass_kg, 0.0, 20.0)
-        )
-        object.__setattr__(self, "handle_com_m", float_tuple("handle_com_m", self.handle_com_m, 3, -1.0, 1.0))
-        check_bool("tf_static", self.tf_static)
-        object.__setattr__(self, "spike_fraction", check_finite_scalar("spike_fraction", self.spike_fraction, 0.0, 0.5))
-        object.__setattr__(self, "spike_n", check_finite_scalar("spike_n", self.spike_n, 0.0, 1e30))
-        check_bool("turns_with_handle", self.turns_with_handle)
-        object.__setattr__(
-            self, "filter_delay_s", check_finite_scalar("wrench filter_delay_s", self.filter_delay_s, 0.0, 1.0)
-        )
-        if self.filter_kind not in FILTER_KINDS:
-            raise InputError(f"wrench filter_kind must be one of {FILTER_KINDS}, got {self.filter_kind!r}")
-        check_bool("average_over_period", self.average_over_period)
-        object.__setattr__(
-            self, "clock_offset_s", check_finite_scalar("wrench clock_offset_s", self.clock_offset_s, -1.0, 1.0)
-        )
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: the numbers as floats, the vectors as tuples of floats."""
+        out: dict[str, Any] = {"wrench_hz": check_finite_scalar("wrench_hz", given.wrench_hz, 1.0, 5000.0)}
+        out["phase_s"] = check_finite_scalar("wrench phase_s", given.phase_s, 0.0, 1.0)
+        if out["phase_s"] >= 1.0:
+            raise InputError(f"wrench phase_s must be below 1 s, got {out['phase_s']!r}")
+        out["stamp_jitter_s"] = check_finite_scalar("wrench stamp_jitter_s", given.stamp_jitter_s, 0.0, 0.1)
+        out["roll_pitch_yaw_deg"] = float_tuple("roll_pitch_yaw_deg", given.roll_pitch_yaw_deg, 3, -360.0, 360.0)
+        frame_id = given.frame_id
+        if not isinstance(frame_id, str) or not frame_id.strip() or frame_id != frame_id.strip():
+            raise InputError(f"frame_id must be a non-empty name without surrounding spaces, got {frame_id!r}")
+        out["force_noise_n"] = check_finite_scalar("force_noise_n", given.force_noise_n, 0.0, 100.0)
+        out["torque_noise_nm"] = check_finite_scalar("torque_noise_nm", given.torque_noise_nm, 0.0, 10.0)
+        out["force_bias_n"] = float_tuple("force_bias_n", given.force_bias_n, 3, -1e3, 1e3)
+        out["torque_bias_nm"] = float_tuple("torque_bias_nm", given.torque_bias_nm, 3, -1e2, 1e2)
+        out["force_drift_n_per_s"] = float_tuple("force_drift_n_per_s", given.force_drift_n_per_s, 3, -1.0, 1.0)
+        out["torque_drift_nm_per_s"] = float_tuple("torque_drift_nm_per_s", given.torque_drift_nm_per_s, 3, -0.1, 0.1)
+        out["handle_mass_kg"] = check_finite_scalar("handle_mass_kg", given.handle_mass_kg, 0.0, 20.0)
+        out["handle_com_m"] = float_tuple("handle_com_m", given.handle_com_m, 3, -1.0, 1.0)
+        check_bool("tf_static", given.tf_static)
+        out["spike_fraction"] = check_finite_scalar("spike_fraction", given.spike_fraction, 0.0, 0.5)
+        out["spike_n"] = check_finite_scalar("spike_n", given.spike_n, 0.0, 1e30)
+        check_bool("turns_with_handle", given.turns_with_handle)
+        out["filter_delay_s"] = check_finite_scalar("wrench filter_delay_s", given.filter_delay_s, 0.0, 1.0)
+        if given.filter_kind not in FILTER_KINDS:
+            raise InputError(f"wrench filter_kind must be one of {FILTER_KINDS}, got {given.filter_kind!r}")
+        check_bool("average_over_period", given.average_over_period)
+        out["clock_offset_s"] = check_finite_scalar("wrench clock_offset_s", given.clock_offset_s, -1.0, 1.0)
+        return out
 
     def offset_at(self, t_s: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Force (N) and moment (Nm) offsets in the sensor frame at ``t_s`` s: (N,) -> (N, 3), (N, 3)."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -18,6 +19,7 @@ from bsp_ros.core.anthropometry import (
     length_from_height_m,
     segment_norm,
 )
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.simulation.checks import (
     MAX_COM_FRACTION,
     MAX_COULOMB_NM,
@@ -40,6 +42,7 @@ from bsp_ros.validation import check_finite_scalar, check_positive
 PAPER_ARM_INERTIA_ASSUMPTION = "uniform slender bars: I_com = m a^2 / 12 (the paper gives no inertia)"
 
 
+@normalising
 @dataclass(frozen=True)
 class SubjectTruth:
     """True segment geometry and mass of a simulated arm (2 or 3 segments, proximal to distal).
@@ -75,18 +78,20 @@ class SubjectTruth:
     inertia_com_kgm2: tuple[float, ...] = ()
     com_perpendicular_m: tuple[float, ...] = ()
 
-    def __post_init__(self) -> None:
-        lengths = float_tuple("lengths_m", self.lengths_m, None, MIN_LENGTH_M, MAX_LENGTH_M)
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: tuples of floats, the empty defaults expanded."""
+        lengths = float_tuple("lengths_m", given.lengths_m, None, MIN_LENGTH_M, MAX_LENGTH_M)
         n = check_n_segments(len(lengths), "the number of segments (entries of lengths_m)")
-        masses = float_tuple("masses_kg", self.masses_kg, n, positive=True, hi=MAX_MASS_KG)
-        coms = float_tuple("com_m", self.com_m, n, positive=True)
+        masses = float_tuple("masses_kg", given.masses_kg, n, positive=True, hi=MAX_MASS_KG)
+        coms = float_tuple("com_m", given.com_m, n, positive=True)
         for j, (com, length) in enumerate(zip(coms, lengths, strict=True)):
             if com > MAX_COM_FRACTION * length:
                 raise InputError(
                     f"com_m[{j}] = {com!r} m is implausible for a segment of length {length!r} m "
                     f"(at most {MAX_COM_FRACTION} lengths)"
                 )
-        inertia = self.inertia_com_kgm2
+        inertia = given.inertia_com_kgm2
         if isinstance(inertia, Sequence | np.ndarray) and len(inertia) == 0:
             table = DE_LEVA["male"]
             inertia = tuple(
@@ -94,7 +99,7 @@ class SubjectTruth:
                 for m, a, name in zip(masses, lengths, segments_for(n), strict=True)
             )
         inertia = float_tuple("inertia_com_kgm2", inertia, n, positive=True, hi=MAX_INERTIA_KGM2)
-        perpendicular = self.com_perpendicular_m
+        perpendicular = given.com_perpendicular_m
         if isinstance(perpendicular, Sequence | np.ndarray) and len(perpendicular) == 0:
             perpendicular = (0.0,) * n
         perpendicular = float_tuple("com_perpendicular_m", perpendicular, n, -MAX_LENGTH_M, MAX_LENGTH_M)
@@ -104,11 +109,13 @@ class SubjectTruth:
                     f"com_perpendicular_m[{j}] = {d!r} m is implausible for a segment of length {length!r} m "
                     "(at most half a length off the axis)"
                 )
-        object.__setattr__(self, "lengths_m", lengths)
-        object.__setattr__(self, "masses_kg", masses)
-        object.__setattr__(self, "com_m", coms)
-        object.__setattr__(self, "inertia_com_kgm2", inertia)
-        object.__setattr__(self, "com_perpendicular_m", perpendicular)
+        return {
+            "lengths_m": lengths,
+            "masses_kg": masses,
+            "com_m": coms,
+            "inertia_com_kgm2": inertia,
+            "com_perpendicular_m": perpendicular,
+        }
 
     @property
     def n_segments(self) -> int:
@@ -236,6 +243,7 @@ class SubjectTruth:
         )
 
 
+@normalising
 @dataclass(frozen=True)
 class PassiveTruth:
     """True passive joint moment, per joint (shoulder, elbow, wrist), the torque the driver must supply.
@@ -279,8 +287,10 @@ class PassiveTruth:
     biarticular_neutral_rad: float = 0.0
     stiffening_width_rad: float = 0.5
 
-    def __post_init__(self) -> None:
-        coulomb = float_tuple("coulomb_nm", self.coulomb_nm, None, 0.0, MAX_COULOMB_NM)
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: the numbers as floats, tuples of floats, the empty ones zeros."""
+        coulomb = float_tuple("coulomb_nm", given.coulomb_nm, None, 0.0, MAX_COULOMB_NM)
         n = check_n_segments(len(coulomb), "the number of joints (entries of coulomb_nm)")
         bounds = {
             "viscous_nms": (0.0, MAX_VISCOUS_NMS),
@@ -289,31 +299,24 @@ class PassiveTruth:
             "offset_nm": (-MAX_OFFSET_NM, MAX_OFFSET_NM),
             "stiffening_nm": (-MAX_OFFSET_NM, MAX_OFFSET_NM),
         }
-        object.__setattr__(self, "coulomb_nm", coulomb)
+        out: dict[str, Any] = {"coulomb_nm": coulomb}
         for name, (lo, hi) in bounds.items():
-            value = getattr(self, name)
+            value = getattr(given, name)
             if isinstance(value, Sequence | np.ndarray) and len(value) == 0:
                 value = (0.0,) * n
-            object.__setattr__(self, name, float_tuple(name, value, n, lo, hi))
-        object.__setattr__(
-            self,
-            "friction_transition_rad_s",
-            check_finite_scalar("friction_transition_rad_s", self.friction_transition_rad_s, 0.0, 10.0),
+            out[name] = float_tuple(name, value, n, lo, hi)
+        out["friction_transition_rad_s"] = check_finite_scalar(
+            "friction_transition_rad_s", given.friction_transition_rad_s, 0.0, 10.0
         )
-        object.__setattr__(
-            self, "stribeck_ratio", check_finite_scalar("stribeck_ratio", self.stribeck_ratio, 0.0, 10.0)
-        )
-        object.__setattr__(
-            self, "stribeck_speed_rad_s", check_positive("stribeck_speed_rad_s", self.stribeck_speed_rad_s, 10.0)
-        )
+        out["stribeck_ratio"] = check_finite_scalar("stribeck_ratio", given.stribeck_ratio, 0.0, 10.0)
+        out["stribeck_speed_rad_s"] = check_positive("stribeck_speed_rad_s", given.stribeck_speed_rad_s, 10.0)
         for name, (lo, hi) in (
             ("biarticular_nm", (-MAX_OFFSET_NM, MAX_OFFSET_NM)),
             ("biarticular_neutral_rad", (-2.0 * math.pi, 2.0 * math.pi)),
         ):
-            object.__setattr__(self, name, check_finite_scalar(name, getattr(self, name), lo, hi))
-        object.__setattr__(
-            self, "stiffening_width_rad", check_positive("stiffening_width_rad", self.stiffening_width_rad, 10.0)
-        )
+            out[name] = check_finite_scalar(name, getattr(given, name), lo, hi)
+        out["stiffening_width_rad"] = check_positive("stiffening_width_rad", given.stiffening_width_rad, 10.0)
+        return out
 
     @property
     def n_joints(self) -> int:

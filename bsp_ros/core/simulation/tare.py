@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.simulation.cell import CellSpec
 from bsp_ros.core.simulation.checks import GRAVITY_M_S2, JITTER_CLIP_PERIODS, float_tuple, rotation_from_rpy_deg
 from bsp_ros.core.streams import WrenchSeries
@@ -18,6 +19,7 @@ from bsp_ros.validation import check_finite_scalar, check_positive, check_stamps
 _SWING_PHASES_RAD = (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)
 
 
+@normalising
 @dataclass(frozen=True)
 class TareSpec:
     """A tare recording of a cell: the handle free (no arm), the robot at rest or swinging the sensor.
@@ -42,14 +44,16 @@ class TareSpec:
     swing_period_s: float = 10.0
     tf_hz: float = 50.0
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "duration_s", check_positive("tare duration_s", self.duration_s, 3600.0))
-        object.__setattr__(
-            self, "start_offset_s", check_finite_scalar("tare start_offset_s", self.start_offset_s, -1e5, 1e5)
-        )
-        object.__setattr__(self, "swing_rpy_deg", float_tuple("swing_rpy_deg", self.swing_rpy_deg, 3, 0.0, 90.0))
-        object.__setattr__(self, "swing_period_s", check_positive("swing_period_s", self.swing_period_s, 1e4))
-        object.__setattr__(self, "tf_hz", check_positive("tf_hz", self.tf_hz, 1000.0))
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: the numbers as floats, the swing as a tuple of floats."""
+        return {
+            "duration_s": check_positive("tare duration_s", given.duration_s, 3600.0),
+            "start_offset_s": check_finite_scalar("tare start_offset_s", given.start_offset_s, -1e5, 1e5),
+            "swing_rpy_deg": float_tuple("swing_rpy_deg", given.swing_rpy_deg, 3, 0.0, 90.0),
+            "swing_period_s": check_positive("swing_period_s", given.swing_period_s, 1e4),
+            "tf_hz": check_positive("tf_hz", given.tf_hz, 1000.0),
+        }
 
     @property
     def swinging(self) -> bool:

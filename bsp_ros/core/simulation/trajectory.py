@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.normalised import normalising
 from bsp_ros.core.simulation.checks import check_n_segments, float_tuple
 from bsp_ros.errors import InputError
 from bsp_ros.validation import check_positive
@@ -17,6 +18,7 @@ from bsp_ros.validation import check_positive
 _ACCELERATION_STEP_S = 1e-4
 
 
+@normalising
 @dataclass(frozen=True)
 class TrajectorySpec:
     """Slow sinusoidal joint motion ``q_j(t) = center_j + amp_j sin(2 pi t / period_j + phase_j)``.
@@ -34,13 +36,17 @@ class TrajectorySpec:
     period_s: tuple[float, ...]
     phase_rad: tuple[float, ...]
 
-    def __post_init__(self) -> None:
-        centre = float_tuple("center_deg", self.center_deg, None, -180.0, 180.0)
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: tuples of floats, one entry per joint."""
+        centre = float_tuple("center_deg", given.center_deg, None, -180.0, 180.0)
         n = check_n_segments(len(centre), "the number of joints (entries of center_deg)")
-        object.__setattr__(self, "center_deg", centre)
-        object.__setattr__(self, "amplitude_deg", float_tuple("amplitude_deg", self.amplitude_deg, n, 0.0, 90.0))
-        object.__setattr__(self, "period_s", float_tuple("period_s", self.period_s, n, positive=True, hi=1e5))
-        object.__setattr__(self, "phase_rad", float_tuple("phase_rad", self.phase_rad, n, -100.0, 100.0))
+        return {
+            "center_deg": centre,
+            "amplitude_deg": float_tuple("amplitude_deg", given.amplitude_deg, n, 0.0, 90.0),
+            "period_s": float_tuple("period_s", given.period_s, n, positive=True, hi=1e5),
+            "phase_rad": float_tuple("phase_rad", given.phase_rad, n, -100.0, 100.0),
+        }
 
     @property
     def n_joints(self) -> int:
@@ -125,6 +131,7 @@ def joint_accelerations_rad_s2(trajectory: TrajectorySpec | JointTrajectory, t_s
     return (trajectory.velocities_rad_s(t + h) - trajectory.velocities_rad_s(t - h)) / (2.0 * h)
 
 
+@normalising
 @dataclass(frozen=True)
 class MultiSineTrajectory:
     """Per joint a sum of sines, ``q_j(t) = centre_j + sum_k amp_jk sin(2 pi t / period_jk + phase_jk)``.
@@ -145,22 +152,23 @@ class MultiSineTrajectory:
     period_s: tuple[tuple[float, ...], ...]
     phase_rad: tuple[tuple[float, ...], ...]
 
-    def __post_init__(self) -> None:
-        centre = float_tuple("center_deg", self.center_deg, None, -180.0, 180.0)
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: tuples of floats, one row per joint."""
+        centre = float_tuple("center_deg", given.center_deg, None, -180.0, 180.0)
         n = check_n_segments(len(centre), "the number of joints (entries of center_deg)")
-        object.__setattr__(self, "center_deg", centre)
-        if {len(self.amplitude_deg), len(self.period_s), len(self.phase_rad)} != {n}:
+        if {len(given.amplitude_deg), len(given.period_s), len(given.phase_rad)} != {n}:
             raise InputError(f"amplitude_deg, period_s and phase_rad need one row per joint ({n})")
         periods = tuple(
-            float_tuple(f"period_s[{j}]", row, None, hi=1e5, positive=True) for j, row in enumerate(self.period_s)
+            float_tuple(f"period_s[{j}]", row, None, hi=1e5, positive=True) for j, row in enumerate(given.period_s)
         )
-        object.__setattr__(self, "period_s", periods)
+        out = {"center_deg": centre, "period_s": periods}
         for name, rows, lo, hi in (
-            ("amplitude_deg", self.amplitude_deg, 0.0, 90.0),
-            ("phase_rad", self.phase_rad, -100.0, 100.0),
+            ("amplitude_deg", given.amplitude_deg, 0.0, 90.0),
+            ("phase_rad", given.phase_rad, -100.0, 100.0),
         ):
-            checked = tuple(float_tuple(f"{name}[{j}]", row, len(periods[j]), lo, hi) for j, row in enumerate(rows))
-            object.__setattr__(self, name, checked)
+            out[name] = tuple(float_tuple(f"{name}[{j}]", row, len(periods[j]), lo, hi) for j, row in enumerate(rows))
+        return out
 
     @classmethod
     def within_speed(

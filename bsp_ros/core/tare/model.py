@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.normalised import normalising
 from bsp_ros.errors import InputError
 
 TARE_SCHEMA = "bsp_ros/core/tare/1"
@@ -63,6 +64,7 @@ def gravity_in_sensor(rotation_world_from_sensor: npt.ArrayLike) -> np.ndarray:
     return np.asarray(-rotation[..., 2, :])
 
 
+@normalising
 @dataclass(frozen=True)
 class Tare:
     """A tare: what the sensor reads with the handle free, as a function of its orientation.
@@ -107,25 +109,27 @@ class Tare:
     unsteadiness: float = 1.0
     file: str = dataclasses.field(default="", compare=False)
 
-    def __post_init__(self) -> None:
-        if self.load not in LOADS:
-            raise InputError(f"tare load must be one of {LOADS}, got {self.load!r}")
-        p = 10 if self.load == "separated" else 6
-        values = np.asarray(self.values, dtype=np.float64)
-        covariance = np.asarray(self.covariance, dtype=np.float64)
+    @staticmethod
+    def normalise(given: Any) -> dict[str, Any]:
+        """The arguments checked, as stored: float64 arrays, the covariance made exactly symmetric."""
+        if given.load not in LOADS:
+            raise InputError(f"tare load must be one of {LOADS}, got {given.load!r}")
+        p = 10 if given.load == "separated" else 6
+        values = np.asarray(given.values, dtype=np.float64)
+        covariance = np.asarray(given.covariance, dtype=np.float64)
         if values.shape != (p,) or covariance.shape != (p, p):
-            raise InputError(f"a {self.load} tare has {p} parameters, got {values.shape} and {covariance.shape}")
+            raise InputError(f"a {given.load} tare has {p} parameters, got {values.shape} and {covariance.shape}")
         if not (np.isfinite(values).all() and np.isfinite(covariance).all()):
             raise InputError("a tare's values and covariance must be finite")
-        if not isinstance(self.frame_id, str) or not self.frame_id:
-            raise InputError(f"tare frame_id must be a non-empty string, got {self.frame_id!r}")
-        object.__setattr__(self, "values", values)
-        object.__setattr__(self, "covariance", 0.5 * (covariance + covariance.T))
-        if self.rotation_world_from_sensor is not None:
-            rotation = np.asarray(self.rotation_world_from_sensor, dtype=np.float64)
+        if not isinstance(given.frame_id, str) or not given.frame_id:
+            raise InputError(f"tare frame_id must be a non-empty string, got {given.frame_id!r}")
+        out = {"values": values, "covariance": 0.5 * (covariance + covariance.T)}
+        if given.rotation_world_from_sensor is not None:
+            rotation = np.asarray(given.rotation_world_from_sensor, dtype=np.float64)
             if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6):
                 raise InputError(f"tare rotation_world_from_sensor must be a rotation matrix, got {rotation!r}")
-            object.__setattr__(self, "rotation_world_from_sensor", rotation)
+            out["rotation_world_from_sensor"] = rotation
+        return out
 
     # ---- parameters ----------------------------------------------------------------------------------
 

@@ -67,7 +67,7 @@ def test_an_augmented_problem_solves_from_its_blocks_as_from_the_joined_regresso
     assert len(wide.blocks) == 2 and wide.blocks[0] is problem.blocks[0]  # nothing copied
     solved = reweighted_values(wide)
     residual = solved.residual(wide)  # from the blocks
-    assert "_joint_rows" not in wide.__dict__  # the values and the residual never joined them
+    assert not any(wide.regressors.joined(j) for j in range(data.n_joints))  # the values and residual never joined them
     joined = np.concatenate((_dense(problem), np.where(problem.rows[..., None], extra, 0.0)), axis=2)
     expected = np.where(problem.rows, wide.torque - joined @ solved.values, 0.0)
     np.testing.assert_allclose(residual, expected, rtol=0, atol=1e-12)
