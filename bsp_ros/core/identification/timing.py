@@ -171,12 +171,19 @@ class _JointColumns:
     columns: list[np.ndarray]  # per joint i (N, n - i + k + nuisances)
     indices: list[np.ndarray]  # per joint, where its columns sit among the p parameters
     n_parameters: int
-    nuisances: _Nuisances
+    nuisances: _Nuisances | None  # None: gravity and friction alone
 
     @classmethod
-    def of(cls, data: IdentificationData, passive: PassiveModel, nuisances: _Nuisances | None = None) -> _JointColumns:
-        """The gravity and passive columns of ``data``, and beside them the nuisances' (``nuisances``: those of a
-        reference, which a small shift of the wrench stamps hardly changes; None: ``data``'s own)."""
+    def of(
+        cls,
+        data: IdentificationData,
+        passive: PassiveModel,
+        nuisances: _Nuisances | None = None,
+        *,
+        wide: bool = True,
+    ) -> _JointColumns:
+        """The gravity and passive columns of ``data``, and beside them (``wide``) the nuisances' (``nuisances``:
+        those of a reference, which a small shift of the wrench stamps hardly changes; None: ``data``'s own)."""
         n, k = data.n_joints, len(passive.local)
         # Joint i carries the segments j >= i: its row of gravity_regressor, without the zeros before them.
         gravity = GRAVITY_M_S2 * np.cos(absolute_angles_rad(data.q_rad))
@@ -184,6 +191,8 @@ class _JointColumns:
         for i in range(n):
             columns.append(np.hstack((gravity[:, i:], passive.columns(data.passive_q_rad, data.velocity_rad_s, i))))
             indices.append(np.concatenate((np.arange(i, n), n + i * k + np.arange(k))))
+        if not wide:
+            return cls(columns, indices, n + n * k, None)
         nuisances = nuisances or _Nuisances.of(data, columns, indices, n + n * k)
         p = n + n * k
         m = nuisances.offsets.shape[2]
@@ -249,11 +258,12 @@ class _LinearFit:
     rows: np.ndarray  # (N, n) rows used (direction of motion clear at the reference)
     weights: np.ndarray  # (n,) 1 / sigma^2 per joint
     nuisances: _Nuisances | None = None  # the reference's, shared by every candidate
+    wide: bool = True  # the nuisances fitted beside gravity and friction
 
     def solve(self, data: IdentificationData, columns: _JointColumns | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Parameters (p,) and residuals (N, n) (0 off the rows) of one candidate (``columns``: its model's, when
         already built)."""
-        columns = columns or _JointColumns.of(data, self.passive, self.nuisances)
+        columns = columns or _JointColumns.of(data, self.passive, self.nuisances, wide=self.wide)
         # Normal equations: a p x p solve (the columns are few and well scaled); lstsq's SVD of the tall
         # matrix would cost 10 times more for each candidate delay.
         design, moment = columns.products(np.where(self.rows, self.weights[None, :], 0.0), data.tau_nm)
@@ -267,7 +277,7 @@ class _LinearFit:
 
 
 def _linear_fit(
-    reference: IdentificationData, passive: PassiveModel, columns: _JointColumns | None = None
+    reference: IdentificationData, passive: PassiveModel, columns: _JointColumns | None = None, wide: bool = True
 ) -> _LinearFit:
     speed = np.abs(reference.velocity_rad_s)
     rows = np.ones_like(speed, dtype=bool)
@@ -277,15 +287,15 @@ def _linear_fit(
         noise = np.nan_to_num(reference.velocity_noise_rad_s, nan=0.0)
         deadband = np.maximum(0.1 * np.percentile(speed, 95, axis=0), 4.0 * noise)
         rows = speed > deadband[None, :]
-    columns = columns or _JointColumns.of(reference, passive)
-    fit = _LinearFit(passive, rows, np.ones(reference.n_joints), columns.nuisances)
+    columns = columns or _JointColumns.of(reference, passive, wide=wide)
+    fit = _LinearFit(passive, rows, np.ones(reference.n_joints), columns.nuisances, wide)
     _, residual = fit.solve(reference, columns)
     sigma = np.sqrt((residual**2).sum(axis=0) / np.maximum(rows.sum(axis=0), 1))
     sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(reference.tau_nm).max()), 1e-9))
     return dataclasses.replace(fit, weights=1.0 / sigma**2)
 
 
-def linear_rss(reference: IdentificationData, passive: PassiveModel | None = None) -> FitRss:
+def linear_rss(reference: IdentificationData, passive: PassiveModel | None = None, wide: bool = True) -> FitRss:
     """The default ``fit_rss``: the stacked linear model of ``identify_joint`` (static moments and the passive
     terms as sign steps), weighted per joint by its residual variance at ``reference``, rows fixed there.
 
@@ -293,8 +303,9 @@ def linear_rss(reference: IdentificationData, passive: PassiveModel | None = Non
     ----------
     reference : the samples at the starting delay (0); every candidate must hold the same samples.
     passive : the passive model (Coulomb by default).
+    wide : fit the nuisances (off-axis moments, marker offsets, a linear spring) beside gravity and friction.
     """
-    return _linear_fit(reference, passive or PassiveModel()).rss
+    return _linear_fit(reference, passive or PassiveModel(), wide=wide).rss
 
 
 def _parabola(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -306,7 +317,12 @@ def _parabola(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
 
 
 def _autocorrelation_inflation(
-    minus: IdentificationData, centre: IdentificationData, plus: IdentificationData, h: float, passive: PassiveModel
+    minus: IdentificationData,
+    centre: IdentificationData,
+    plus: IdentificationData,
+    h: float,
+    passive: PassiveModel,
+    wide: bool = True,
 ) -> float:
     """How much correlated errors widen the delay's std beyond the curvature's (>= 1), from the samples at a delay
     (``centre``) and at ``h`` s either side of it (``minus``, ``plus``).
@@ -315,12 +331,12 @@ def _autocorrelation_inflation(
     goes through the same Newey-West sandwich as the parameters' (``identify_joint``); its std over the
     curvature's ``1 / sqrt(information)`` is the inflation.
     """
-    columns = _JointColumns.of(centre, passive)
-    fit = _linear_fit(centre, passive, columns)
+    columns = _JointColumns.of(centre, passive, wide=wide)
+    fit = _linear_fit(centre, passive, columns, wide)
     values, residual = fit.solve(centre, columns)
     if plus.t_ns.size != centre.t_ns.size or minus.t_ns.size != centre.t_ns.size:
         return 1.0
-    predicted = lambda d: d.tau_nm - _JointColumns.of(d, passive, columns.nuisances).predicted(values)  # noqa: E731
+    predicted = lambda d: d.tau_nm - _JointColumns.of(d, passive, columns.nuisances, wide=wide).predicted(values)  # noqa: E731
     slope = (predicted(plus) - predicted(minus)) / (2.0 * h)  # d(residual)/d(delay), (N, n)
     w = np.where(fit.rows, fit.weights[None, :], 0.0)
     # Partial the parameters out: the part of the slope the model's columns cannot take up.
@@ -405,7 +421,45 @@ def estimate_wrench_delay(
     problem = session_or_problem
     if not isinstance(problem, DelayProblem):
         problem = delay_problem(problem, kinematics_config)
-    profile = _DelayProfile(_rows_at_every_delay(problem, max_delay_s + step_s), fit_rss, passive or PassiveModel())
+    kept = _rows_at_every_delay(problem, max_delay_s + step_s)
+    passive = passive or PassiveModel()
+    narrow = _profile_delay(_DelayProfile(kept, fit_rss, passive), max_delay_s, step_s, resolved_sd)
+    if fit_rss is not None:
+        return narrow  # a caller's own misfit: its model is the one it means
+    wide = _profile_delay(_DelayProfile(kept, None, passive, wide=True), max_delay_s, step_s, resolved_sd)
+    return _agreed(narrow, wide, resolved_sd)
+
+
+def _agreed(narrow: WrenchDelay, wide: WrenchDelay, resolved_sd: float) -> WrenchDelay:
+    """The delay both profiles resolve alike, else none: the one of gravity and friction alone (``narrow``) and the
+    one that also fits off-axis moments, marker offsets and a linear spring (``wide``).
+
+    Each model alone can resolve a delay that is not there: the narrow one from a few mm of marker placement (tens
+    of ms in 30 of 32 sessions of 2 mm placement, bench/placement_sharpness.py), the wide one on a short session,
+    where its extra columns leave the delay little to stand on (-49 +- 9 ms on 20 s). A delay the data show holds in
+    both; where they disagree the data cannot tell it, and it is not compensated. The estimate reported is the wide
+    profile's, its std the wider of the two.
+    """
+    n_fits = narrow.n_fits + wide.n_fits
+    warnings = list(dict.fromkeys([*narrow.warnings, *wide.warnings]))
+    if wide.source != "estimated":
+        return dataclasses.replace(wide, n_fits=n_fits, warnings=warnings)
+    std = max(wide.std_s, narrow.std_s) if math.isfinite(narrow.std_s) else wide.std_s
+    disagree = not math.isfinite(narrow.estimate_s) or abs(narrow.estimate_s - wide.estimate_s) > 2.0 * math.hypot(
+        narrow.std_s if math.isfinite(narrow.std_s) else 0.0, wide.std_s
+    )
+    if narrow.source != "estimated" or disagree:
+        warnings.append(
+            f"the wrench-marker delay the data suggest depends on the model ({1e3 * wide.estimate_s:+.3g} ms with "
+            f"marker offsets and springs fitted, {1e3 * narrow.estimate_s:+.3g} ms without): not compensated; give it "
+            "with --wrench-delay-s if the cell knows it"
+        )
+        return WrenchDelay(0.0, std, "none", wide.estimate_s, std, n_fits, warnings)
+    return WrenchDelay(wide.delay_s, std, "estimated", wide.estimate_s, std, n_fits, warnings)
+
+
+def _profile_delay(profile: _DelayProfile, max_delay_s: float, step_s: float, resolved_sd: float) -> WrenchDelay:
+    """The delay at ``profile``'s minimum over the grid ``[-max_delay_s, max_delay_s]`` in ``step_s``, s."""
     grid = np.arange(-max_delay_s, max_delay_s + 0.5 * step_s, step_s)
     values = _descend(grid, profile.misfit)
     best = int(np.nanargmin(values))
@@ -453,12 +507,13 @@ class _DelayProfile:
     passive : the passive model of the default fit and of the std's inflation.
     """
 
-    def __init__(self, kept: DelayProblem, fit_rss: FitRss | None, passive: PassiveModel) -> None:
+    def __init__(self, kept: DelayProblem, fit_rss: FitRss | None, passive: PassiveModel, wide: bool = False) -> None:
         self.kept: DelayProblem = kept
         self.passive: PassiveModel = passive
+        self.wide: bool = wide
         self.n_fits: int = 0
         self._samples: dict[int, IdentificationData] = {}
-        self.rss: FitRss = fit_rss or linear_rss(self.samples(0.0), passive)
+        self.rss: FitRss = fit_rss or linear_rss(self.samples(0.0), passive, wide)
 
     def samples(self, delay_s: float) -> IdentificationData:
         """The identification samples with the wrench stamps shifted by ``-delay_s`` (s)."""
@@ -504,7 +559,7 @@ def _delay_at_minimum(
         return WrenchDelay(
             0.0, math.nan, "none", n_fits=profile.n_fits, warnings=["the wrench-marker delay is not identifiable"]
         )
-    inflation = _autocorrelation_inflation(minus, centre, plus, h, profile.passive)
+    inflation = _autocorrelation_inflation(minus, centre, plus, h, profile.passive, profile.wide)
     std = math.sqrt(2.0 / curvature) * inflation
     n_fits = profile.n_fits + 4
     if abs(vertex) > resolved_sd * std:

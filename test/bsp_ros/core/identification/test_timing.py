@@ -73,7 +73,9 @@ def test_the_delay_of_a_late_filtered_wrench_is_found_within_its_std_cheaply(
     # Resolved to a few milliseconds from 60 s: the profile fits marker offsets, off-axis moments and springs beside
     # gravity and friction, whose share of the misfit would otherwise read as a delay.
     assert 0.0003 < delay.std_s < 0.006
-    assert delay.n_fits <= 20 and elapsed_s < 2.0  # a grid of 11 linear fits, 3 to refine, 4 for the std
+    # Two profiles (gravity and friction alone, and with the nuisances), each a grid of linear fits, 3 to refine and 4
+    # for the std.
+    assert delay.n_fits <= 40 and elapsed_s < 2.0
 
 
 def test_compensated_the_static_moments_and_coulomb_amplitudes_return_within_3_std(
