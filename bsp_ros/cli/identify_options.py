@@ -52,6 +52,26 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         help="the robot's PoseStamped of the contact point in world: where the bag has it, it stands for the hand "
         "marker ('' to use the marker) (default: /robot/handle_pose)",
     )
+    add_placement_arguments(parser)
+    parser.add_argument(
+        "--tare",
+        type=Path,
+        metavar="FILE",
+        help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
+    )
+    add_zero_arguments(parser)
+    parser.add_argument(
+        "--wrench-delay-s",
+        type=float_within(-10.0, 10.0),
+        metavar="S",
+        help="delay of the wrench stamps behind the marker stamps the cell knows (s; a wrench stamped t was "
+        "measured at t - S): compensated as given (default: estimated from the data, compensated when resolved)",
+    )
+
+
+def add_placement_arguments(parser: argparse.ArgumentParser | Any) -> None:
+    """``--marker-placement-sd-mm`` and ``--handle-pose-sd-mm``: the placement terms of every std (`bsp identify`,
+    and `bsp plan`, which predicts them)."""
     parser.add_argument(
         "--marker-placement-sd-mm",
         type=float_within(0.0, 50.0),
@@ -68,12 +88,10 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         help="how far (1 sd per axis) the robot's contact point may sit from the motion capture's: its registration "
         "to world; in the std like a skin marker's placement (2 mm) (default: 0.5)",
     )
-    parser.add_argument(
-        "--tare",
-        type=Path,
-        metavar="FILE",
-        help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
-    )
+
+
+def add_zero_arguments(parser: argparse.ArgumentParser | Any) -> None:
+    """``--zero-sd-n`` and ``--zero-sd-nm``: an untared sensor's zero, in every std (`bsp identify`, `bsp plan`)."""
     parser.add_argument(
         "--zero-sd-n",
         type=float_within(0.0, 100.0),
@@ -89,13 +107,6 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         default=ZERO_SD_NM,
         metavar="NM",
         help=f"the same for the sensor's moment zero, N m (default: {ZERO_SD_NM:g})",
-    )
-    parser.add_argument(
-        "--wrench-delay-s",
-        type=float_within(-10.0, 10.0),
-        metavar="S",
-        help="delay of the wrench stamps behind the marker stamps the cell knows (s; a wrench stamped t was "
-        "measured at t - S): compensated as given (default: estimated from the data, compensated when resolved)",
     )
 
 

@@ -16,7 +16,7 @@ from bsp_ros.cli.argtypes import (
     positive_at_most,
     positive_float,
 )
-from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
+from bsp_ros.cli.identify_options import add_placement_arguments, add_zero_arguments
 from bsp_ros.errors import InputError
 
 # The planner's own limits (bsp_ros.core.planning), spelled out so the parser needs no numpy (a test keeps them
@@ -257,22 +257,7 @@ def _add_identify_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group(
         "how the sessions will be identified (the predicted std holds what bsp identify's will)"
     )
-    group.add_argument(
-        "--marker-placement-sd-mm",
-        type=float_within(0.0, 50.0),
-        default=2.0,
-        metavar="MM",
-        help="as bsp identify's: how far (1 sd per in-plane axis) a skin marker may sit from its joint centre "
-        "(default: 2)",
-    )
-    group.add_argument(
-        "--handle-pose-sd-mm",
-        type=float_within(0.0, 50.0),
-        default=0.5,
-        metavar="MM",
-        help="as bsp identify's: the robot's contact point's registration to world, 1 sd per axis, with "
-        "--robot-handle-pose (default: 0.5)",
-    )
+    add_placement_arguments(group)
     group.add_argument(
         "--robot-handle-pose",
         action="store_true",
@@ -284,20 +269,7 @@ def _add_identify_arguments(parser: argparse.ArgumentParser) -> None:
         help="the sessions will be tared (bsp tare, then bsp identify --tare FILE): the zero's share is a tare's "
         "(a recording at rest), not --zero-sd-n/--zero-sd-nm",
     )
-    group.add_argument(
-        "--zero-sd-n",
-        type=float_within(0.0, 100.0),
-        default=ZERO_SD_N,
-        metavar="N",
-        help=f"as bsp identify's: without --tare, the sensor's force zero, 1 sd per axis (default: {ZERO_SD_N:g})",
-    )
-    group.add_argument(
-        "--zero-sd-nm",
-        type=float_within(0.0, 10.0),
-        default=ZERO_SD_NM,
-        metavar="NM",
-        help=f"as bsp identify's: the sensor's moment zero, N m (default: {ZERO_SD_NM:g})",
-    )
+    add_zero_arguments(group)
 
 
 def _session(args: argparse.Namespace) -> Any:
