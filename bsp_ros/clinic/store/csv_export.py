@@ -36,6 +36,7 @@ JOIN_COLUMNS = (
     "tare_applied",
     "tare_file",
     "estimate_schema",
+    "bsp_ros_version",
 )
 CSV_COLUMNS = (*_SESSION_COLUMNS, *JOIN_COLUMNS)
 
@@ -46,8 +47,8 @@ def join_cells(record: SessionRecord) -> list[str]:
     ``content_sha256`` is the recording's fingerprint (a bag's, or its estimate's for a result JSON without one);
     ``passive_model_configured`` the passive model the identification was configured with (the store keeps the
     configuration, not the model ``auto`` chose); ``tare_applied`` 1 or 0; ``estimate_schema`` the estimate's
-    schema tag, the nearest the store keeps to the software's version (the estimate's ``software.version`` is
-    not stored).
+    schema tag; ``bsp_ros_version`` the version that made the estimate (empty for a session stored before it was
+    kept).
     """
     passive = record.config.get("passive")
     return [
@@ -56,6 +57,7 @@ def join_cells(record: SessionRecord) -> list[str]:
         str(int(record.quality.tare_applied)),
         record.quality.tare_file or "",
         record.estimate_schema,
+        str(record.config.get("bsp_ros_version", "")),
     ]
 
 

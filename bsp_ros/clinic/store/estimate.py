@@ -167,6 +167,11 @@ def parse_estimate(
     config = session.get("config", data.get("config", {}))
     if not isinstance(config, dict):
         raise StoreError(f"session.config must be an object, got {type(config).__name__}")
+    software = data.get("software")
+    version = software.get("version") if isinstance(software, dict) else None
+    if isinstance(version, str) and "bsp_ros_version" not in config:
+        # What made the estimate, kept with its configuration: rows of an export join back to the run.
+        config = {**config, "bsp_ros_version": version[:40]}
     quality = _quality(data.get("quality"))
     curves, curve_parameters = passive_curves(data.get("joints"))
     parameters = _parameters(data, refuse_non_finite=quality.valid)

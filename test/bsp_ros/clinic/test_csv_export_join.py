@@ -6,6 +6,7 @@ import csv
 import io
 from pathlib import Path
 
+import bsp_ros
 from bsp_ros.cli import main
 from bsp_ros.clinic.store import CSV_COLUMNS, open_store, write_sessions_csv
 from bsp_ros.clinic.store.csv_export import JOIN_COLUMNS
@@ -32,5 +33,6 @@ def test_a_stored_session_joins_back_to_its_bag(tmp_path: Path, capsys) -> None:
         assert row["passive_model_configured"] == summary["passive_model"] == "coulomb+viscous"
         assert row["tare_applied"] == summary["tare_applied"] == "0" and row["tare_file"] == ""
         assert row["estimate_schema"] == "bsp_ros/core/estimate/1"
+        assert row["bsp_ros_version"] == bsp_ros.__version__
     elbow = next(r for r in rows if (r["part"], r["quantity"]) == ("elbow", "viscous_nms"))
     assert float(elbow["value"]) == float(summary["viscous_nms/elbow"])
