@@ -22,7 +22,7 @@ from typing import Any, TextIO
 
 from bsp_ros.bag.batch import bag_name, expand_bags
 from bsp_ros.cli.identify import BAG_EXIT_CODES, DATA_PROBLEMS, EXIT_INVALID
-from bsp_ros.core.findings import Severity, findings_of
+from bsp_ros.core.findings import findings_of, plain_cause, verdict_of
 from bsp_ros.core.quantities import quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
 
@@ -124,7 +124,7 @@ def row_of(index: int, bag: str, document: dict[str, Any]) -> BagRow:
     """The summary row of a bag's estimate ``document``: its verdict, exit code and parameters."""
     quality = document["quality"]
     findings = findings_of(quality)
-    invalid = next((f for f in findings if f.severity is Severity.INVALID), None)
+    invalid = verdict_of(findings)
     if quality["valid"]:
         code = 0
     elif any(f.code in DATA_PROBLEMS for f in findings):
@@ -134,7 +134,8 @@ def row_of(index: int, bag: str, document: dict[str, Any]) -> BagRow:
     row = BagRow(index, bag, code, valid=bool(quality["valid"]))
     if not quality["valid"]:
         if invalid is not None:
-            row.cause_code, row.cause = str(invalid.code), invalid.spec.cause or invalid.text
+            plain = plain_cause([invalid])
+            row.cause_code, row.cause = str(invalid.code), plain[0] if plain else invalid.text
         else:  # a document without findings (an older writer): its message says why
             row.cause = _one_line(quality.get("message", ""))
     row.values = parameter_values(document)

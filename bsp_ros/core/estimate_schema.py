@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-from bsp_ros.core.findings import Finding, Severity, findings_of
+from bsp_ros.core.findings import Finding, findings_of, verdict_of
 from bsp_ros.core.quantities import PASSIVE_CURVE
 
 __all__ = ["SCHEMA", "Estimate", "Level", "Quality", "Quantity", "Source"]
@@ -116,7 +116,7 @@ class Quality:
     @property
     def verdict(self) -> Finding | None:
         """The first finding that makes the estimate invalid, or None."""
-        return next((f for f in self.findings if f.severity is Severity.INVALID), None)
+        return verdict_of(self.findings)
 
     @property
     def tare_applied(self) -> bool:

@@ -28,6 +28,7 @@ __all__ = [
     "note",
     "note_texts",
     "plain_cause",
+    "verdict_of",
 ]
 
 
@@ -217,10 +218,15 @@ def findings_of(quality: Mapping[str, Any]) -> list[Finding]:
     return out
 
 
+def verdict_of(findings: Iterable[Finding]) -> Finding | None:
+    """The first finding that makes an estimate invalid (the likeliest cause of the others), or None."""
+    return next((f for f in findings if f.severity is Severity.INVALID), None)
+
+
 def plain_cause(findings: Iterable[Finding]) -> tuple[str, str] | None:
     """The cause and the action, in a clinic's words, of the first finding that makes an estimate invalid (its
     joint or segment named); None where none does or it has no plain cause."""
-    verdict = next((f for f in findings if f.severity is Severity.INVALID), None)
+    verdict = verdict_of(findings)
     if verdict is None or not verdict.spec.cause:
         return None
     where = verdict.where.replace("_", " ")

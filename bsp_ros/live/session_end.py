@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from bsp_ros.core.findings import FindingCode, Severity, findings_of
+from bsp_ros.core.findings import FindingCode, findings_of, verdict_of
 
 # Findings of `bsp_identifier` that mean its inputs stopped or have not started (BspIdentifierNode.stale_reason).
 INPUT_STOPPED = frozenset({FindingCode.INPUT_STALE, FindingCode.INPUT_WAITING, FindingCode.WAITING_FOR_CHECK})
@@ -45,7 +45,7 @@ class SessionEndDetector:
         """
         quality = document.get("quality") if isinstance(document, dict) else None
         found = findings_of(quality) if isinstance(quality, dict) else []
-        verdict = next((f for f in found if f.severity is Severity.INVALID), None)
+        verdict = verdict_of(found)
         if verdict is None or verdict.code not in INPUT_STOPPED:
             self.last_seen_ns = now_ns
         if isinstance(document, dict) and isinstance(quality := document.get("quality"), dict) and quality.get("valid"):

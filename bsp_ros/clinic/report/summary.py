@@ -9,7 +9,7 @@ import numpy as np
 from bsp_ros.clinic.report.analysis import RETEST_LETTERS, Analysis, Change, Series
 from bsp_ros.clinic.report.labels import PART_NAMES, plain_name, plain_number, short_label, with_unit
 from bsp_ros.clinic.store.records import ParamKey, SessionRecord, format_time, ns_to_datetime
-from bsp_ros.core.findings import Severity
+from bsp_ros.core.findings import Severity, plain_cause
 from bsp_ros.core.weight_support import support_wrench
 from bsp_ros.errors import InputError
 
@@ -299,11 +299,7 @@ def tare_sentences(analysis: Analysis) -> list[str]:
 def invalid_cause(record: SessionRecord) -> tuple[str, str]:
     """Why a session could not be evaluated and what to do, in plain words: the cause and action of the estimator's
     first finding that made it invalid (a session stored without findings gives a general line)."""
-    verdict = record.quality.verdict()
-    if verdict is None or not verdict.spec.cause:
-        return "the measurement could not be evaluated", "repeat the session"
-    where = PART_NAMES.get(verdict.where, verdict.where).lower()
-    return verdict.spec.cause.format(where=where), verdict.spec.action or "repeat the session"
+    return plain_cause(record.quality.findings) or ("the measurement could not be evaluated", "repeat the session")
 
 
 @dataclass(frozen=True)

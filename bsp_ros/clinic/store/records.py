@@ -6,7 +6,7 @@ import datetime as dt
 from dataclasses import dataclass, field
 from typing import Any
 
-from bsp_ros.core.findings import Finding, Severity
+from bsp_ros.core.findings import Finding, verdict_of
 
 SOURCES = ("data", "prior", "data+prior")
 GROUPS = ("segments", "joints")
@@ -64,7 +64,7 @@ class Quality:
 
     def verdict(self) -> Finding | None:
         """The first finding that made the estimate invalid, or None."""
-        return next((f for f in self.findings if f.severity is Severity.INVALID), None)
+        return verdict_of(self.findings)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 
 from bsp_ros.cli import main
-from bsp_ros.cli.identify_each import BagRow, BagTask, Progress, run_tasks
+from bsp_ros.cli.identify_each import BagRow, BagTask, Progress, row_of, run_tasks
+from bsp_ros.core.estimate import invalid_document
 from bsp_ros.core.findings import Finding, FindingCode
 
 # Coulomb only: the stiff arm's elastic moment then makes its estimate invalid (the others stay valid).
@@ -174,3 +175,9 @@ def test_progress_is_one_line_rewritten_on_a_terminal_and_nothing_elsewhere() ->
         progress(BagRow(1, "b", 15))
     assert terminal.getvalue() == "\ridentify --each: 1/2 bags, 0 not valid\ridentify --each: 2/2 bags, 1 not valid\n"
     assert pipe.getvalue() == ""
+
+
+def test_a_row_names_the_joint_its_cause_is_at() -> None:
+    still = Finding(code=FindingCode.NO_MOTION, where="upper_arm", values={"range_deg": 0.01, "min_range_deg": 2.0})
+    row = row_of(0, "day1", invalid_document("joint", still))
+    assert (row.exit_code, row.cause_code, row.cause) == (3, "no_motion", "the upper arm did not move")
