@@ -191,18 +191,22 @@ class _JointColumns:
         for i in range(n):
             columns.append(np.hstack((gravity[:, i:], passive.columns(data.passive_q_rad, data.velocity_rad_s, i))))
             indices.append(np.concatenate((np.arange(i, n), n + i * k + np.arange(k))))
-        if not wide:
-            return cls(columns, indices, n + n * k, None)
-        nuisances = nuisances or _Nuisances.of(data, columns, indices, n + n * k)
         p = n + n * k
+        narrow = cls(columns, indices, p, None)
+        if not wide:
+            return narrow
+        nuisances = nuisances or _Nuisances.of(data, narrow)
         m = nuisances.offsets.shape[2]
+        wide_columns, wide_indices = [], []
         for i in range(n):
             spring = np.column_stack((np.ones(data.t_ns.size), data.passive_q_rad[:, i]))
-            columns[i] = np.hstack((columns[i], nuisances.sin[:, i:], nuisances.offsets[:, i, :], spring))
-            indices[i] = np.concatenate(
-                (indices[i], p + np.arange(i, n), p + n + np.arange(m), p + n + m + 2 * i + np.arange(2))
+            wide_columns.append(np.hstack((columns[i], nuisances.sin[:, i:], nuisances.offsets[:, i, :], spring)))
+            wide_indices.append(
+                np.concatenate(
+                    (indices[i], p + np.arange(i, n), p + n + np.arange(m), p + n + m + 2 * i + np.arange(2))
+                )
             )
-        return cls(columns, indices, p + n + m + 2 * n, nuisances)
+        return cls(wide_columns, wide_indices, p + n + m + 2 * n, nuisances)
 
     def predicted(self, values: np.ndarray) -> np.ndarray:
         """(N, n) the model's torques at ``values``."""
@@ -235,14 +239,11 @@ class _Nuisances:
     offsets: np.ndarray
 
     @classmethod
-    def of(cls, data: IdentificationData, columns: list[np.ndarray], indices: list[np.ndarray], p: int) -> _Nuisances:
-        """The nuisances of ``data``, given the gravity and passive ``columns`` (per joint, at ``indices`` of
-        ``p`` parameters) for the first fit."""
+    def of(cls, data: IdentificationData, narrow: _JointColumns) -> _Nuisances:
+        """The nuisances of ``data``, at the static moments of the unweighted fit of its gravity and passive
+        columns ``narrow``."""
         n = data.n_joints
-        design, moment = np.zeros((p, p)), np.zeros(p)
-        for i, (x, index) in enumerate(zip(columns, indices, strict=True)):
-            design[np.ix_(index, index)] += x.T @ x
-            moment[index] += x.T @ data.tau_nm[:, i]
+        design, moment = narrow.products(np.ones(data.tau_nm.shape), data.tau_nm)
         static = np.linalg.lstsq(design, moment, rcond=None)[0][:n]
         zeros = np.zeros_like(data.q_rad)
         base_values = np.concatenate((static, np.zeros(2 * n)))

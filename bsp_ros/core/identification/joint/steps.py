@@ -168,7 +168,8 @@ def add_marker_placement(stage: Stage) -> Stage:
     fit = stage.fit
     noise, _ = residual_covariance(stage.problem, fit.design, fit.weights, placement.residual)
     raw = stage.ledger.get(Term.SENSOR_NOISE)
-    raw_variance = np.diag(fit.covariance if raw is None else raw)
+    assert raw is not None  # every stage's ledger starts with the fit's own covariance
+    raw_variance = np.diag(raw)
     ratio = np.divide(np.diag(noise), raw_variance, out=np.ones_like(raw_variance), where=raw_variance > 0)
     placed = dataclasses.replace(placed, noise_scale=np.sqrt(np.clip(ratio, 0.0, None)))
     return placed.apply(

@@ -11,7 +11,6 @@ from bsp_ros.core import model
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.findings import FindingCode, Severity, findings_of
 from bsp_ros.core.fusion import SubjectInfo
-from bsp_ros.core.identification import joint as joint_package
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint, judgement
 from bsp_ros.core.identification.joint import refit as refit_module
@@ -170,10 +169,6 @@ def test_a_prior_that_cannot_be_fused_is_a_note_not_a_failure(data: Identificati
     posterior, noted = fused(result, data, SubjectInfo())
     assert posterior is None and noted.valid
     assert noted.findings[-1].code is FindingCode.FUSION_FAILED and "singular matrix" in noted.warnings[-1]
-
-
-def test_the_package_exports_the_stacked_identification() -> None:
-    assert joint_package.identify_joint is identify_joint
 
 
 def test_the_prior_s_assumptions_are_notes_of_the_estimate(session: sim.SimulatedSession) -> None:
