@@ -1,0 +1,148 @@
+"""The recorder's sessions on disk: each running session's input messages go into its own bag as they arrive."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bsp_ros.bag import TopicMap
+from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, WORLD_FRAME, WRENCH_TYPE
+from bsp_ros.live.session.control import EndCause, Reply, SessionControl, SessionEnd, SessionStart
+from bsp_ros.live.session.spool import SessionSpool, SpoolSummary, spool_dir_name
+
+__all__ = ["Change", "SessionRecording", "topic_types"]
+
+# /tf_static messages kept between sessions (each session's bag starts with them: they are sent once, latched).
+STATIC_KEPT = 100
+
+
+def topic_types(topics: TopicMap, with_tf: bool = True) -> dict[str, str]:
+    """Topic -> message type of every input a session records (the tf topics only ``with_tf``)."""
+    types = {topic: POSE_TYPE for topic in (*topics.markers.values(), topics.handle_pose) if topic}
+    if with_tf:
+        types.update({topics.tf_static: TF_TYPE, topics.tf: TF_TYPE})
+    types[topics.wrench] = WRENCH_TYPE
+    return types
+
+
+@dataclass(frozen=True, kw_only=True)
+class Change:
+    """What a call changed: a session started (and its bag), one finished (its bag complete), one discarded."""
+
+    started: SessionStart | None = None
+    path: Path | None = None
+    finished: tuple[SessionEnd, SpoolSummary] | None = None
+    discarded: tuple[SessionEnd, Path] | None = None
+
+
+class SessionRecording:
+    """Sessions as bags: a :class:`SessionControl` decides, this opens, fills and closes each session's bag.
+
+    Parameters
+    ----------
+    control : the session state (subject, starts and ends).
+    recordings_dir : the folder the session bags go into (one ``live_<UTC time>`` bag per session).
+    topics : the input topic names.
+    with_tf : whether /tf_static and /tf are heard (tf2_msgs installed).
+    rotation_xyzw : (4,) rotation world <- wrench frame written into each bag as /tf_static where ``with_tf`` is
+        False, so that the bag says what the live identifier assumed (None: nothing written).
+    """
+
+    def __init__(
+        self,
+        control: SessionControl,
+        recordings_dir: Path,
+        topics: TopicMap,
+        with_tf: bool,
+        rotation_xyzw: Sequence[float] | None = None,
+    ) -> None:
+        self.control = control
+        self.recordings_dir = Path(recordings_dir)
+        self.topics = topics
+        # Every type a bag may hold: the tf topics too, where the rotation parameter stands in for /tf_static.
+        self.types = topic_types(topics)
+        self.rotation_xyzw = None if with_tf or rotation_xyzw is None else np.asarray(rotation_xyzw, dtype=float)
+        self.spool: SessionSpool | None = None
+        self.static_kept: deque[tuple[int, bytes]] = deque(maxlen=STATIC_KEPT)
+        self._rotation_written = False
+
+    def on_message(self, topic: str, t_ns: int, data: bytes) -> Change:
+        """A raw message of an input topic received at ``t_ns`` (ns, node clock); the wrench may start a session."""
+        change = Change()
+        if topic == self.topics.tf_static:
+            self.static_kept.append((t_ns, data))
+        if topic == self.topics.wrench:
+            started = self.control.on_input(t_ns)
+            if started is not None:
+                change = self._open(started)
+            if self.spool is not None and self.rotation_xyzw is not None and not self._rotation_written:
+                self._write_rotation(t_ns, data)
+        if self.spool is not None:
+            self.spool.add(topic, t_ns, data)
+        return change
+
+    def start(self, now_ns: int, retest: bool = False) -> tuple[Reply, Change]:
+        """The start service."""
+        reply = self.control.start(now_ns, retest)
+        return reply, self._open(reply.started) if reply.started is not None else Change()
+
+    def stop(self, now_ns: int, cause: EndCause = EndCause.STOP) -> tuple[Reply, Change]:
+        """The stop service, the end message (``cause``), or the recorder's shutdown."""
+        reply = self.control.stop(now_ns, cause)
+        return reply, self._close(reply.ended) if reply.ended is not None else Change()
+
+    def reset(self, now_ns: int) -> tuple[Reply, Change]:
+        """The reset service: the running session's bag is deleted and a new session's opened."""
+        reply = self.control.reset(now_ns)
+        if reply.ended is None or reply.started is None:
+            return reply, Change()
+        discarded = self._close(reply.ended)
+        opened = self._open(reply.started)
+        return reply, Change(started=opened.started, path=opened.path, discarded=discarded.discarded)
+
+    def tick(self, now_ns: int) -> Change:
+        """Periodically: end a session by silence or time limit, and flush the open bag's chunk to the OS."""
+        ended = self.control.due(now_ns)
+        if ended is not None:
+            return self._close(ended)
+        if self.spool is not None:
+            self.spool.flush()
+        return Change()
+
+    def _open(self, started: SessionStart) -> Change:
+        path = self.recordings_dir / spool_dir_name(started.started_ns)
+        suffix = 1
+        while path.exists():
+            suffix += 1
+            path = self.recordings_dir / f"{spool_dir_name(started.started_ns)}_{suffix}"
+        latched = frozenset({self.topics.tf_static})
+        self.spool = SessionSpool(path, self.types, latched)
+        self._rotation_written = False
+        for t_ns, data in self.static_kept:
+            self.spool.add(self.topics.tf_static, t_ns, data)
+        return Change(started=started, path=path)
+
+    def _close(self, ended: SessionEnd) -> Change:
+        spool, self.spool = self.spool, None
+        assert spool is not None
+        if ended.cause is EndCause.RESET:
+            spool.discard()
+            return Change(discarded=(ended, spool.path))
+        return Change(finished=(ended, spool.finish()))
+
+    def _write_rotation(self, t_ns: int, wrench: bytes) -> None:
+        """The parameter's rotation as /tf_static world -> the wrench's frame, before the session's first wrench."""
+        from msg_adapters import TransformSample, build_tf_message
+
+        assert self.spool is not None and self.rotation_xyzw is not None
+        frame = str(self.spool.decode(self.topics.wrench, wrench).header.frame_id)
+        self._rotation_written = True
+        if not frame or frame == WORLD_FRAME:
+            return
+        transform = TransformSample(t_ns, WORLD_FRAME, frame, np.zeros(3), self.rotation_xyzw)
+        message = build_tf_message(self.spool.message_type, [transform])
+        self.spool.add_message(self.topics.tf_static, t_ns, message)
