@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import mujoco
 import numpy as np
@@ -339,8 +339,22 @@ def _handle_poses(q: np.ndarray, lengths: Sequence[float], shoulder: Sequence[fl
     return pos, quat
 
 
-def run_engine(arm: ArmParams, options: CellOptions) -> EngineRun:
-    """Drive the handle along ``options.trajectory`` and record the engine's state and sensors at every step."""
+class EngineHook(Protocol):
+    """What a caller adds to the engine per step (a patient's joint torques, a moving contact point...)."""
+
+    def prepare(self, model: Any, data: Any, t_s: np.ndarray) -> None:
+        """Once, before the first ``mj_forward``; ``t_s`` (N,) every step's time since the session start, s."""
+
+    def before_step(self, k: int, model: Any, data: Any) -> None:
+        """Before step ``k`` (index into ``t_s``), after the handle's commanded pose is set."""
+
+
+def run_engine(arm: ArmParams, options: CellOptions, hook: EngineHook | None = None) -> EngineRun:
+    """Drive the handle along ``options.trajectory`` and record the engine's state and sensors at every step.
+
+    ``hook`` (optional) may change the model before the run and the data before each step; without it the run
+    is the cell's alone.
+    """
     model = mujoco.MjModel.from_xml_string(mjcf_text(arm, options))
     data = mujoco.MjData(model)
     dt = options.timestep_s
@@ -354,6 +368,8 @@ def run_engine(arm: ArmParams, options: CellOptions) -> EngineRun:
     data.qpos[:] = q_cmd[0]
     data.qvel[:] = options.trajectory.velocities_rad_s(t_all[:1])[0]
     data.mocap_pos[0], data.mocap_quat[0] = pos[0], quat[0]
+    if hook is not None:
+        hook.prepare(model, data, t_all)
     mujoco.mj_forward(model, data)
 
     site = model.site("ft_site").id
@@ -367,6 +383,8 @@ def run_engine(arm: ArmParams, options: CellOptions) -> EngineRun:
         data.mocap_pos[0] = pos[k]
         data.mocap_quat[0] = quat[k]
         r = k - n_lead
+        if hook is not None:
+            hook.before_step(k, model, data)
         if r >= 0:  # the state the step starts from; sensors, kinematics and qacc below belong to it too
             q[r], qdot[r] = data.qpos, data.qvel
         mujoco.mj_step(model, data)
@@ -443,6 +461,7 @@ __all__ = [
     "SPRING_REF_RAD",
     "ArmParams",
     "CellOptions",
+    "EngineHook",
     "EngineRun",
     "angle_deg",
     "degrees_range",
