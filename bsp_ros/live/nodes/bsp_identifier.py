@@ -8,15 +8,18 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.contact_point import CONTACT_FROM_ROBOT
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.streams import segments_for
 from bsp_ros.core.weight_support import live_support
 from bsp_ros.live.nodes import estimate_jobs as jobs
 from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue
+from bsp_ros.live.online.identifier_modes import ModeEstimate
 from bsp_ros.live.online.identifier_settings import NAME, PARAMETERS, IdentifierSettings
 from bsp_ros.live.online.live_identifier import LiveIdentifier
+from bsp_ros.live.online.precision import PrecisionState, PrecisionTracker
 from bsp_ros.live.runtime.parameters import declare_parameters
-from bsp_ros.live.runtime.qos import rclpy_qos
+from bsp_ros.live.runtime.qos import QosSpec, rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
 from msg_adapters.diagnostics import (
@@ -37,6 +40,8 @@ TF_TYPE = "tf2_msgs/msg/TFMessage"
 
 # Invalid estimates that wait for a session to start (a warning on /diagnostics, not an error).
 WAITING = frozenset({FindingCode.INPUT_WAITING, FindingCode.WAITING_FOR_CHECK})
+# bsp/precision_reached: latched (reliable, transient local, depth 1), so session logic that starts later reads it.
+LATCHED = QosSpec(reliable=True, depth=1, transient_local=True)
 
 
 class BspIdentifierNode(RosNode):
@@ -60,7 +65,11 @@ class BspIdentifierNode(RosNode):
         # ms: bench/live_window_update.py), while the wrenches wait in their subscription's queue (1 s deep) and
         # are taken right after it. A worker thread kept the callbacks going, but the two traded the interpreter
         # lock every 0.2 ms and the update took longer in the node (bench/README.md, live latency).
-        self.identifier = LiveIdentifier(settings, jobs.outputs_from_estimate, self.get_logger().error)
+        target = settings.precision_target
+        self.precision = PrecisionTracker(target) if target is not None else None
+        self.precision_state: PrecisionState | None = None
+        self.precision_sent: bool | None = None
+        self.identifier = LiveIdentifier(settings, self._outputs, self.get_logger().error)
         self.support_estimate: dict[str, Any] | None = None  # set with each estimate
         self.support_diagnostics: dict[str, str] = {}
         self.published = 0
@@ -102,6 +111,10 @@ class BspIdentifierNode(RosNode):
             message_class("geometry_msgs/msg/WrenchStamped"), "bsp/weight_support", rclpy_qos("default")
         )
         self.diag_pub = self.create_publisher(diagnostics, "/diagnostics", rclpy_qos("default"))
+        if self.precision is not None:
+            boolean = message_class("std_msgs/msg/Bool")
+            self.precision_pub = self.create_publisher(boolean, "bsp/precision_reached", rclpy_qos(LATCHED))
+            self._publish_precision(False)
 
     def _create_subscriptions(self) -> None:
         settings = self.settings
@@ -153,12 +166,14 @@ class BspIdentifierNode(RosNode):
             # Samples already buffered were rotated the old way: they must not mix with new ones.
             self.get_logger().warning(f"transform of {frame_id} changed: estimate restarted")
             self.identifier.reset()
+            self._restart_precision()
 
     def on_contact_point(self, msg: Any) -> None:
         """Where the angles' contact point comes from (`joint_angle_estimator`): the robot's handle pose holds
         the robot's registration sd in the estimate, a skin marker the marker placement sd."""
         if self.identifier.set_contact_from_robot(msg.data == CONTACT_FROM_ROBOT):
             self.get_logger().info(f"contact point: {msg.data}; estimate restarted")
+            self._restart_precision()
 
     def on_lengths(self, msg: Any) -> None:
         """Segment lengths from the joint angle estimator."""
@@ -212,6 +227,26 @@ class BspIdentifierNode(RosNode):
         """Compute and publish the estimate (invalid if an input is stale) and the node's health."""
         self.publish(self.identifier.update(self.now_ns()))
 
+    def _outputs(self, estimate: ModeEstimate) -> jobs.EstimateOutputs:
+        """An update's estimate serialised for its topics; with a precision target, the signal after it joins the
+        document (``precision``)."""
+        if self.precision is not None:
+            self.precision_state = self.precision.update(Estimate.from_json(estimate.document), self.now_ns())
+            estimate.document["precision"] = self.precision_state.to_json()
+        return jobs.outputs_from_estimate(estimate)
+
+    def _restart_precision(self) -> None:
+        """The estimate restarted: the session's precision signal starts over."""
+        if self.precision is not None:
+            self.precision.reset()
+            self._publish_precision(False)
+
+    def _publish_precision(self, reached: bool) -> None:
+        """bsp/precision_reached, latched, whenever it changes."""
+        if reached != self.precision_sent:
+            self.precision_pub.publish(message_class("std_msgs/msg/Bool")(data=reached))
+            self.precision_sent = reached
+
     def publish(self, outputs: jobs.EstimateOutputs) -> None:
         """Write an estimate's serialised messages, then the node's health on /diagnostics."""
         self.estimate_pub.publish(outputs.cdr["estimate"])
@@ -223,6 +258,8 @@ class BspIdentifierNode(RosNode):
             self.passive_pub.publish(outputs.cdr["passive"])
         self.published += 1
         self.support_estimate = outputs.support
+        if self.precision_state is not None:
+            self._publish_precision(self.precision_state.reached)
         waiting = any(f.code in WAITING for f in outputs.findings)
         level = OK if outputs.valid else (WARN if waiting else ERROR)
         status = DiagnosticStatusData.with_values(level, NAME, outputs.message, "", self._health())
@@ -243,7 +280,24 @@ class BspIdentifierNode(RosNode):
             **frames,
             **self.support_diagnostics,
             "wrench_delay": self.settings.wrench_delay_note,
+            **self._precision_health(),
         }
+
+    def _precision_health(self) -> dict[str, str]:
+        """The precision signal on /diagnostics: reached, and the parameter furthest from its target."""
+        state = self.precision_state
+        if state is None:
+            return {}
+        out = {"precision.reached": str(state.reached).lower(), "precision.hold_s": f"{state.hold_s:g}"}
+        worst = state.worst
+        if worst is not None:
+            relative = "unknown" if worst.relative_std is None else f"{100 * worst.relative_std:.2f}"
+            out["precision.worst"] = f"{worst.owner} {worst.quantity}"
+            out["precision.worst_std_percent"] = relative
+            out["precision.target_percent"] = f"{100 * worst.target:g}"
+        if state.reached_after_s is not None:
+            out["precision.reached_after_s"] = f"{state.reached_after_s:.1f}"
+        return out
 
 
 def main(args: list[str] | None = None) -> int:

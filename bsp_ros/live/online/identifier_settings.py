@@ -13,9 +13,11 @@ from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
+from bsp_ros.core.streams import segments_for
 from bsp_ros.core.tare import Tare, read_tare_file
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.online.frames import FrameSource, frame_source, rotation_from_quaternion_xyzw
+from bsp_ros.live.online.precision import PrecisionTarget
 from bsp_ros.live.runtime.parameters import Param
 
 __all__ = ["MODES", "NAME", "PARAMETERS", "IdentifierSettings"]
@@ -99,6 +101,30 @@ PARAMETERS = (
         lo=0.0,
         hi=60.0,
     ),
+    Param(
+        "target_std_percent",
+        0.0,
+        "the session is precise enough once the static moment of every segment of target_segments has a relative "
+        "std at or below this in valid estimates for precision_hold_s: bsp/precision_reached (latched Bool) turns "
+        "true for the rest of the session, the estimate JSON says so under `precision` (0: off, nothing published)",
+        "%",
+        lo=0.0,
+        hi=100.0,
+    ),
+    Param(
+        "precision_hold_s",
+        5.0,
+        "how long every targeted std must stay within target_std_percent before the signal comes",
+        "s",
+        lo=0.0,
+        hi=600.0,
+    ),
+    Param(
+        "target_segments",
+        ["upper_arm", "forearm"],
+        "the segments whose static moment target_std_percent is for (the hand's short lever leaves its static moment "
+        "15-40 % uncertain from skin markers: add it where the robot gives the contact point)",
+    ),
 )
 
 _BY_NAME = {p.name: p for p in PARAMETERS}
@@ -152,6 +178,8 @@ class IdentifierSettings:
     support_fraction : the weight support's share (0: not published).
     wrench_delay_s : the wrench delay the cell knows (s), or None when unset (live applies 0:
         :attr:`live_wrench_delay_s`).
+    target_std_percent, precision_hold_s, target_segments : the precision signal's target (%, 0: off), hold (s) and
+        the segments whose static moments it is for: :attr:`precision_target`.
     """
 
     mode: str
@@ -170,6 +198,9 @@ class IdentifierSettings:
     support_fraction: float
     wrench_delay_s: float | None
     tf_wait_s: float
+    target_std_percent: float = 0.0
+    precision_hold_s: float = 5.0
+    target_segments: tuple[str, ...] = ("upper_arm", "forearm")
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> IdentifierSettings:
@@ -218,6 +249,18 @@ class IdentifierSettings:
             support_fraction=float(p["support_fraction"]),
             wrench_delay_s=p["wrench_delay_s"],
             tf_wait_s=p["tf_wait_s"],
+            target_std_percent=p["target_std_percent"],
+            precision_hold_s=p["precision_hold_s"],
+            target_segments=_target_segments(p["target_segments"], p["n_segments"]),
+        )
+
+    @property
+    def precision_target(self) -> PrecisionTarget | None:
+        """What the session is for (every static moment within ``target_std_percent``), or None when off."""
+        if self.target_std_percent <= 0.0:
+            return None
+        return PrecisionTarget.static_moments(
+            self.target_std_percent, self.target_segments, hold_s=self.precision_hold_s
         )
 
     @property
@@ -247,6 +290,19 @@ class IdentifierSettings:
             return frame_source(self.wrench_frame_source, tf_installed, self.wrench_frame_topic)
         except ValueError as exc:
             raise InputError(f"{NAME}: {exc}") from exc
+
+
+def _target_segments(names: list[Any], n_segments: int) -> tuple[str, ...]:
+    """The segments of ``target_segments``, each one of the chain's, at least one."""
+    chain = segments_for(n_segments)
+    segments = tuple(str(name) for name in names)
+    unknown = [name for name in segments if name not in chain]
+    if unknown or not segments:
+        raise InputError(
+            f"{NAME}: parameter target_segments must name segments of the {n_segments}-segment chain "
+            f"({', '.join(chain)}), got {list(segments)!r}"
+        )
+    return segments
 
 
 def _passive(label: str) -> PassiveModel:

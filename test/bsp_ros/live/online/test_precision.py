@@ -15,6 +15,8 @@ from live_inputs import WindowFeed, orientation
 from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.errors import InputError
+from bsp_ros.live.online.identifier_settings import IdentifierSettings
 from bsp_ros.live.online.precision import (
     ParameterPrecision,
     PrecisionState,
@@ -165,3 +167,20 @@ def test_on_a_simulated_session_the_signal_waits_for_valid_windows_then_stays_an
             assert q is not None and q.value is not None and q.std is not None
             assert abs(q.value - truth[owner][key]) < 3 * q.std
     assert all(np.isfinite(s.worst.ratio) for s in states[first:])  # type: ignore[union-attr]
+
+
+def test_the_identifier_parameters_make_the_target_or_leave_it_off() -> None:
+    assert IdentifierSettings.from_parameters({}).precision_target is None  # default off
+    settings = IdentifierSettings.from_parameters({"target_std_percent": 4.0, "precision_hold_s": 2.5})
+    target = settings.precision_target
+    assert target is not None and target.hold_s == 2.5
+    assert target.relative_std == {("upper_arm", "static_moment_kgm"): 0.04, ("forearm", "static_moment_kgm"): 0.04}
+    with_hand = IdentifierSettings.from_parameters({"target_std_percent": 4.0, "target_segments": ["hand"]})
+    assert with_hand.precision_target is not None
+    assert list(with_hand.precision_target.relative_std) == [("hand", "static_moment_kgm")]
+
+
+@pytest.mark.parametrize("segments", [["wrist"], [], ["hand"]])
+def test_target_segments_outside_the_chain_are_refused_naming_the_parameter(segments: list[str]) -> None:
+    with pytest.raises(InputError, match="target_segments"):
+        IdentifierSettings.from_parameters({"target_std_percent": 4.0, "target_segments": segments, "n_segments": 2})
