@@ -13,12 +13,13 @@ from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.streams import segments_for
 from bsp_ros.core.weight_support import live_support
 from bsp_ros.live.nodes import estimate_jobs as jobs
+from bsp_ros.live.online.frame_notices import FrameNotices, stated_rotation
 from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue
 from bsp_ros.live.online.identifier_modes import ModeEstimate
 from bsp_ros.live.online.identifier_settings import NAME, PARAMETERS, IdentifierSettings
 from bsp_ros.live.online.live_identifier import LiveIdentifier
 from bsp_ros.live.online.precision import PrecisionState, PrecisionTracker
-from bsp_ros.live.runtime.parameters import declare_parameters
+from bsp_ros.live.runtime.cell_parameters import IDENTIFIER_FROM_CELL, declare_with_cell
 from bsp_ros.live.runtime.qos import QosSpec, rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
@@ -54,12 +55,15 @@ class BspIdentifierNode(RosNode):
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        self.settings = settings = IdentifierSettings.from_parameters(declare_parameters(self, PARAMETERS))
+        values, self.cell = declare_with_cell(self, PARAMETERS, IDENTIFIER_FROM_CELL)
+        self.settings = settings = IdentifierSettings.from_parameters(values)
         self.frame_source = settings.frame_source(has_message(TF_TYPE))
         self.frames = WrenchFrames(
             settings.world_frame, self.frame_source.transforms, settings.wrench_frame_rotation, settings.tf_wait_s
         )
         self.wrench_queue = WrenchQueue(self.frames)  # a turning sensor's wrench waits for the /tf after it
+        stated = stated_rotation(settings.wrench_frame_rotation_xyzw, self.cell)
+        self.frame_notices = FrameNotices(self.frame_source.description, stated)
         # Every estimate is computed in the timer's callback, on the executor thread: a windowed update refits the
         # model its last check chose (~8 ms for 30 s at 1 kHz, the checks every elastic_check_every updates ~25
         # ms: bench/live_window_update.py), while the wrenches wait in their subscription's queue (1 s deep) and
@@ -82,13 +86,10 @@ class BspIdentifierNode(RosNode):
     def _log_settings(self) -> None:
         """Where the wrench frame's rotation comes from, the tare and the wrench delay, once at start."""
         settings, logger = self.settings, self.get_logger()
+        stated = f"{self.frame_notices.stated} = {list(settings.wrench_frame_rotation_xyzw)}"
         logger.info(
             f"wrench frame rotation from {self.frame_source.description}"
-            + (
-                ""
-                if self.frame_source.transforms
-                else f" = {list(settings.wrench_frame_rotation_xyzw)} ({TF_TYPE} not used)"
-            )
+            + (f"; where none comes within tf_wait_s, {stated}" if self.frame_source.transforms else f": {stated}")
         )
         tare = settings.options.tare
         if tare is not None:
@@ -226,6 +227,8 @@ class BspIdentifierNode(RosNode):
     def on_update(self) -> None:
         """Compute and publish the estimate (invalid if an input is stale) and the node's health."""
         self.publish(self.identifier.update(self.now_ns()))
+        for line in self.frame_notices.new_lines(self.frames):  # each once: a missing or disagreeing rotation
+            self.get_logger().warning(line)
 
     def _outputs(self, estimate: ModeEstimate) -> jobs.EstimateOutputs:
         """An update's estimate serialised for its topics; with a precision target, the signal after it joins the
@@ -278,6 +281,7 @@ class BspIdentifierNode(RosNode):
             **self.identifier.update_times(),
             "wrench_frame_source": self.frame_source.description,
             **frames,
+            **self.frame_notices.diagnostics(self.frames),
             **self.support_diagnostics,
             "wrench_delay": self.settings.wrench_delay_note,
             **self._precision_health(),

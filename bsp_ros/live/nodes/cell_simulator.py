@@ -1,4 +1,5 @@
-"""`cell_simulator`: the simulated cell publishing wrench, marker poses, /tf_static or /tf (if tf2_msgs), truth."""
+"""`cell_simulator`: the simulated cell (its frames, topics and sensor mounting from the cell file) publishing wrench,
+marker poses, the sensor's transform (TransformStamped; /tf_static or /tf where tf2_msgs is installed), truth."""
 
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ import numpy as np
 
 from bsp_ros.core import simulation as sim
 from bsp_ros.errors import InputError
-from bsp_ros.live.runtime.parameters import Param, declare_parameters
+from bsp_ros.live.runtime.cell_parameters import CELL_FILE, SIMULATOR_FROM_CELL, declare_with_cell
+from bsp_ros.live.runtime.parameters import Param
 from bsp_ros.live.runtime.qos import rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
@@ -27,6 +29,7 @@ NAME = "cell_simulator"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
 
 PARAMETERS = (
+    CELL_FILE,
     Param(
         "subject",
         "human",
@@ -48,7 +51,7 @@ PARAMETERS = (
     Param(
         "sensor_roll_pitch_yaw_deg",
         [180.0, 0.0, 30.0],
-        "fixed-axis roll, pitch, yaw of the sensor frame in world",
+        "fixed-axis roll, pitch, yaw of the sensor frame in world (default: the cell file's mounting)",
         "deg",
     ),
     Param("force_bias_n", [0.0, 0.0, 0.0], "sensor force offset, sensor frame (an imperfect tare)", "N"),
@@ -67,8 +70,8 @@ PARAMETERS = (
     Param(
         "transform_topic",
         "",
-        "also publish the sensor frame's transform in world as geometry_msgs/TransformStamped here, per wrench "
-        "sample if it turns ('': not)",
+        "also publish the sensor frame's transform in world as geometry_msgs/TransformStamped here: per wrench "
+        "sample if it turns, else at the start and once a second (default: the cell file's transform topic; '': not)",
     ),
     Param("wrench_filter_delay_s", 0.0, "group delay of the sensor's causal low-pass (0: none)", "s", lo=0.0, hi=1.0),
     Param("wrench_filter", "first_order", "the sensor's low-pass", choices=("first_order", "moving_average")),
@@ -111,16 +114,19 @@ class CellSimulatorNode(RosNode):
     """Paces :class:`bsp_ros.core.simulation.CellSimulator` against the clock and publishes its streams.
 
     The physics (inertia, a sensor turning with the handle, its filter and clock, skin markers) is the
-    core's. The sensor frame's transform goes out on /tf_static when tf2_msgs is installed, or for a turning
-    sensor on /tf with every wrench sample; the node logs the (mounting) quaternion either way (the
-    identifier's ``wrench_frame_rotation_xyzw`` without tf). Faults on request
+    core's. Its frames, topics and the sensor's mounting are the cell file's (``cell_file``, the shipped cell
+    when unset), as the other nodes and `bsp record` / `bsp play` read them. The sensor frame's transform goes
+    out as TransformStamped on ``transform_topic`` (the cell file's; once a second, or with every wrench sample
+    of a turning sensor) and, where tf2_msgs is installed, on /tf_static (or /tf when it turns); the node logs
+    the (mounting) quaternion either way. Faults on request
     (parameters): marker dropouts, a one-frame marker jump, NaN bursts in the wrench, a stalled sensor (stops
     publishing the wrench), a dying process, and a backwards clock jump of the stamps.
     """
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        p = declare_parameters(self, PARAMETERS)
+        p, cell = declare_with_cell(self, PARAMETERS, SIMULATOR_FROM_CELL)
+        self.world_frame = cell.world_frame
         self.speed = p["speed"]
         self.duration_s = p["duration_s"]
         self.nan_burst_period_s = p["nan_burst_period_s"]
@@ -159,6 +165,7 @@ class CellSimulatorNode(RosNode):
             duration_s=max(self.duration_s, 1.0),
             sensor=dataclasses.replace(
                 base.sensor,
+                frame_id=cell.sensor_frame,
                 wrench_hz=wrench_hz,
                 roll_pitch_yaw_deg=tuple(rpy),
                 force_bias_n=tuple(p["force_bias_n"]),
@@ -208,7 +215,8 @@ class CellSimulatorNode(RosNode):
         pose = message_class("geometry_msgs/msg/PoseStamped")
         self.handle_pose_pub = None  # the contact point from the robot's kinematics, exact
         if p["robot_handle_pose"]:
-            self.handle_pose_pub = self.create_publisher(pose, "/robot/handle_pose", sensor_data)
+            topic = cell.handle_pose_topic or "/robot/handle_pose"
+            self.handle_pose_pub = self.create_publisher(pose, topic, sensor_data)
         self.marker_pubs = {
             name: self.create_publisher(pose, p["marker_topic_prefix"] + name, sensor_data)
             for name in self.simulator.marker_names
@@ -218,7 +226,8 @@ class CellSimulatorNode(RosNode):
         self.tf_pub = None  # /tf of a turning sensor, one transform per wrench sample
         self.static_pub = None  # /tf_static of a fixed one, sent when the session starts
         self.transform_pub = None  # the same as TransformStamped (a robot publishing its flange pose)
-        if p["transform_topic"] and self.turns:
+        self.transform_sent_ns = 0  # a fixed sensor's transform goes out once a second (late subscribers)
+        if p["transform_topic"]:
             transform_type = message_class("geometry_msgs/msg/TransformStamped")
             self.transform_pub = self.create_publisher(transform_type, p["transform_topic"], 100)
         where = "/tf (per sample)" if self.turns else "/tf_static"
@@ -228,10 +237,12 @@ class CellSimulatorNode(RosNode):
             else:
                 self.static_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
         xyzw = [round(float(v), 9) for v in self.quaternion]
+        on_topic = f"on {p['transform_topic']} (TransformStamped)" if p["transform_topic"] else "on no transform topic"
         self.get_logger().info(
-            f"sensor frame {self.frame_id}: rotation world <- sensor xyzw {xyzw} "
+            f"sensor frame {self.frame_id}: rotation {self.world_frame} <- sensor xyzw {xyzw} "
             + ("at the mean handle pitch; " if self.turns else "")
-            + (f"on {where}" if has_message(TF_TYPE) else f"(not on {where}: {TF_TYPE} is not installed)")
+            + on_topic
+            + (f" and {where}" if has_message(TF_TYPE) else f" (not on {where}: {TF_TYPE} is not installed)")
         )
         self.truth_pub = self.create_publisher(
             message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static")
@@ -250,8 +261,9 @@ class CellSimulatorNode(RosNode):
         """Start the session on the node clock: the transform of a fixed sensor and the truth go out."""
         self.start_wall_ns = now_ns
         if self.static_pub is not None:
-            transform = TransformSample(now_ns, "world", self.frame_id, np.zeros(3), self.quaternion)
+            transform = TransformSample(now_ns, self.world_frame, self.frame_id, np.zeros(3), self.quaternion)
             self.static_pub.publish(build_tf_message(message_class, [transform]))
+        self._send_fixed_transform(now_ns)
         truth = {**self.simulator.truth.to_dict(), "start_time_ns": now_ns}
         truth["simulation"] = {**truth["simulation"], "start_ns": now_ns}  # the trajectory's t = 0, as stamped
         self.truth_pub.publish(message_class("std_msgs/msg/String")(data=json.dumps(truth)))
@@ -285,6 +297,8 @@ class CellSimulatorNode(RosNode):
         if self.duration_s and elapsed_s >= self.duration_s:
             now = min(now, self.sim_start_ns + int(self.duration_s * 1e9))
         stalled = bool(self.stall_at_s and elapsed_s >= self.stall_at_s)
+        if wall_ns - self.transform_sent_ns >= 1_000_000_000:
+            self._send_fixed_transform(wall_ns)
         wrench_due = self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench)
         for wrench, transform, handle in wrench_due:
             if self.handle_pose_pub is not None:  # the robot's kinematics go on when the sensor stalls
@@ -293,10 +307,19 @@ class CellSimulatorNode(RosNode):
                 self.wrench_pub.publish(build_wrench_stamped(self.types, wrench))
             if self.tf_pub is not None:  # the robot still reports its flange when the sensor stalls
                 self.tf_pub.publish(build_tf_message(self.types, [transform]))
-            if self.transform_pub is not None:
+            if self.transform_pub is not None and transform is not None:  # a turning sensor's, per sample
                 self.transform_pub.publish(build_transform_stamped(self.types, transform))
         for name, pose in self._due(self.marker_queue, now, self.marker_period_ns, self._simulate_markers):
             self.marker_pubs[name].publish(build_pose_stamped(self.types, pose))
+
+    def _send_fixed_transform(self, wall_ns: int) -> None:
+        """A fixed sensor's transform on the transform topic, stamped now on the stamps' clock."""
+        if self.transform_pub is None or self.turns:
+            return
+        stamp = int(self._stamp(np.array([self._sim_now_ns(wall_ns)], dtype=np.int64))[0])
+        transform = TransformSample(stamp, self.world_frame, self.frame_id, np.zeros(3), self.quaternion)
+        self.transform_pub.publish(build_transform_stamped(self.types, transform))
+        self.transform_sent_ns = wall_ns
 
     def _due(
         self, queue: _Queue, now_ns: int, period_ns: int, simulate: Callable[[np.ndarray], list[Any]]
@@ -327,7 +350,7 @@ class CellSimulatorNode(RosNode):
             rotations = self.simulator.rotations_world_from_sensor(self.simulator.seconds_since_start(tf_ns))
             tf_stamps = self._stamp(tf_ns)
             transforms = [
-                TransformSample(int(t), "world", self.frame_id, np.zeros(3), quaternion_from_matrix(r))
+                TransformSample(int(t), self.world_frame, self.frame_id, np.zeros(3), quaternion_from_matrix(r))
                 for t, r in zip(tf_stamps.tolist(), rotations, strict=True)
             ]
         handles: list[PoseSample | None] = [None] * stamps.size
@@ -336,7 +359,7 @@ class CellSimulatorNode(RosNode):
             contact_m = self.simulator.handle_positions_m(self.simulator.seconds_since_start(pose_ns))
             identity = np.array([0.0, 0.0, 0.0, 1.0])
             handles = [
-                PoseSample(int(t), "world", c, identity)
+                PoseSample(int(t), self.world_frame, c, identity)
                 for t, c in zip(self._stamp(pose_ns).tolist(), contact_m, strict=True)
             ]
         # Messages are built when published.
@@ -356,7 +379,7 @@ class CellSimulatorNode(RosNode):
                     self.marker_jumped = True
                     self.get_logger().warning(f"fault: marker {name} jumps by {self.marker_jump_m} m for one frame")
             for k in range(stamps.size):
-                pose = PoseSample(int(stamps[k]), "world", position_m[k], identity)
+                pose = PoseSample(int(stamps[k]), self.world_frame, position_m[k], identity)
                 out.append((int(series.t_ns[k]), (name, pose)))
         out.sort(key=lambda item: item[0])  # frames in time order, markers of a frame together
         return out

@@ -12,7 +12,8 @@ from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
 from bsp_ros.core.streams import joints_for, markers_for, segments_for
 from bsp_ros.live.online.causal_angles import CausalAnglesConfig, CausalJointAngles
 from bsp_ros.live.online.contact_track import RobotContactTrack
-from bsp_ros.live.runtime.parameters import Param, declare_parameters
+from bsp_ros.live.runtime.cell_parameters import ANGLES_FROM_CELL, CELL_FILE, declare_with_cell
+from bsp_ros.live.runtime.parameters import Param
 from bsp_ros.live.runtime.qos import rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, message_class
 from bsp_ros.live.runtime.spin import run_node
@@ -31,6 +32,7 @@ NAME = "joint_angle_estimator"
 
 
 PARAMETERS = (
+    CELL_FILE,
     Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
     Param("marker_hz", 50.0, "nominal mocap frame rate", "Hz", lo=1.0, hi=1000.0),
     Param("cutoff_hz", 5.0, "causal low-pass of the angles", "Hz", lo=0.1, hi=100.0),
@@ -67,7 +69,7 @@ class JointAngleEstimatorNode(RosNode):
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        p = declare_parameters(self, PARAMETERS)
+        p, _ = declare_with_cell(self, PARAMETERS, ANGLES_FROM_CELL)
         n_segments = p["n_segments"]
         self.stale_s = p["stale_s"]
         self.n = n_segments

@@ -9,11 +9,26 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.cell import angle_between_deg
 from msg_adapters.rotation import matrix_from_quaternion
 from msg_adapters.rotation_track import TransformBuffer
 from msg_adapters.tf import TransformSample
 
-__all__ = ["FrameSource", "WrenchFrames", "WrenchQueue", "frame_source", "rotation_from_quaternion_xyzw"]
+__all__ = [
+    "DISAGREE_DEG",
+    "NO_TRANSFORM",
+    "FrameSource",
+    "WrenchFrames",
+    "WrenchQueue",
+    "frame_source",
+    "rotation_from_quaternion_xyzw",
+]
+
+#: A transform further than this from the stated rotation (``wrench_frame_rotation_xyzw``, the cell file's
+#: mounting) is reported: one of the two describes another sensor mounting, deg.
+DISAGREE_DEG = 1.0
+#: The source of a frame whose transform did not come within ``tf_wait_s``: the stated rotation stands in.
+NO_TRANSFORM = "parameter (no transform)"
 
 
 def rotation_from_quaternion_xyzw(quaternion_xyzw: Iterable[float]) -> np.ndarray:
@@ -51,7 +66,8 @@ class FrameSource:
 
 def frame_source(choice: str, tf_installed: bool, topic: str) -> FrameSource:
     """The source a ``wrench_frame_source`` parameter names: ``tf``, ``topic`` (the TransformStamped ``topic``),
-    ``parameter``, or ``auto`` (tf where tf2_msgs is installed, else the parameter).
+    ``parameter``, or ``auto`` (tf where tf2_msgs is installed, else the TransformStamped ``topic``). Where a
+    transform source sends nothing, the parameter's rotation stands in (:class:`WrenchFrames`).
 
     Raises
     ------
@@ -61,11 +77,13 @@ def frame_source(choice: str, tf_installed: bool, topic: str) -> FrameSource:
     if choice == "tf" and not tf_installed:
         raise ValueError(
             "wrench_frame_source is tf but tf2_msgs/msg/TFMessage is not installed; "
-            "give wrench_frame_rotation_xyzw with wrench_frame_source:=parameter"
+            f"use wrench_frame_source:=topic (TransformStamped on {topic}) or :=parameter (wrench_frame_rotation_xyzw)"
         )
     if choice == "topic":
         return FrameSource(False, True, f"topic {topic} (TransformStamped)")
-    if choice == "tf" or (choice == "auto" and tf_installed):
+    if choice == "auto" and not tf_installed:
+        return FrameSource(False, True, f"topic {topic} (TransformStamped; tf2_msgs is not installed)")
+    if choice in ("tf", "auto"):
         return FrameSource(True, False, "tf (/tf_static, /tf)")
     return FrameSource(False, False, "parameter wrench_frame_rotation_xyzw")
 
@@ -78,17 +96,19 @@ class WrenchFrames:
     links turn (a sensor on the robot's flange turning with the handle) is slerped at each wrench stamp
     between its /tf samples; a wrench newer than the newest /tf sample holds that one (the next transform
     has not come yet: :class:`WrenchQueue` makes it wait instead). A fixed chain (/tf_static) gives one
-    rotation. A frame without a transform after ``tf_wait_s`` is taken as world (docs/contract.md). Without TF
-    (no tf2_msgs installed) the fixed ``parameter_rotation`` applies to every frame other than world.
+    rotation. A frame without a transform after ``tf_wait_s`` takes the stated ``parameter_rotation`` (the cell
+    file's mounting; world where it is the identity). Without transforms (``use_tf`` False) that rotation applies
+    to every frame other than world. A fixed transform more than :data:`DISAGREE_DEG` from the stated rotation is
+    used and noted in :attr:`disagreement_deg`.
 
     Parameters
     ----------
     world_frame : str
         Frame of the markers and of gravity.
     use_tf : bool
-        Read the TF tree (False when tf2_msgs cannot be imported).
+        Stamped transforms feed the rotation (/tf_static and /tf, or a TransformStamped topic).
     parameter_rotation : (3, 3) array
-        ``R_world_from_sensor`` to use without TF.
+        The stated ``R_world_from_sensor``: used without transforms, or where none came within ``tf_wait_s``.
     tf_wait_s : float
         How long to wait for a transform before taking the frame as world, s.
     history_s : float
@@ -111,7 +131,18 @@ class WrenchFrames:
         self.rotations: dict[str, np.ndarray] = {}  # fixed rotations, per frame
         self.turning: set[str] = set()  # frames whose rotation is evaluated per wrench stamp
         self.sources: dict[str, str] = {}
+        self.disagreement_deg: dict[str, float] = {}  # frames whose fixed transform is off the stated rotation
         self._first_ns: int | None = None
+
+    def _fixed(self, frame_id: str, rotation: np.ndarray) -> None:
+        """Take a fixed ``rotation`` of ``frame_id`` from the transforms, noting how far it is off the stated one."""
+        self.rotations[frame_id] = rotation
+        self.sources[frame_id] = "tf"
+        angle = angle_between_deg(rotation, self.parameter_rotation)
+        if angle > DISAGREE_DEG:
+            self.disagreement_deg[frame_id] = angle
+        else:
+            self.disagreement_deg.pop(frame_id, None)
 
     def on_transforms(self, transforms: Iterable[TransformSample], static: bool = False) -> list[str]:
         """Add transforms (``static``: from /tf_static); return the frames whose fixed rotation changed.
@@ -124,7 +155,8 @@ class WrenchFrames:
         (self.buffer.add_static if static else self.buffer.add)(samples)
         changed = []
         for frame_id, old in list(self.rotations.items()):
-            if self.sources.get(frame_id) not in ("tf", "world (no transform)"):
+            source = self.sources.get(frame_id)
+            if source not in ("tf", NO_TRANSFORM):
                 continue
             track = self.buffer.track(self.world_frame, frame_id, [0])
             if track is None:
@@ -133,10 +165,10 @@ class WrenchFrames:
                 del self.rotations[frame_id]
                 self.turning.add(frame_id)
                 self.sources[frame_id] = "tf (per sample)"
-            elif not np.allclose(track.rotations[0], old, atol=1e-9):
-                self.rotations[frame_id] = track.rotations[0]
-                self.sources[frame_id] = "tf"
-                changed.append(frame_id)
+            elif source == NO_TRANSFORM or not np.allclose(track.rotations[0], old, atol=1e-9):
+                self._fixed(frame_id, np.asarray(track.rotations[0]))
+                if not np.allclose(track.rotations[0], old, atol=1e-9):
+                    changed.append(frame_id)
         return changed
 
     def rotation_for(self, frame_id: str, now_ns: int, t_ns: int | None = None) -> np.ndarray | None:
@@ -159,13 +191,14 @@ class WrenchFrames:
                 self._first_ns = self._first_ns if self._first_ns is not None else now_ns
                 if now_ns - self._first_ns < self.tf_wait_s * 1e9:
                     return None
-                rotation, source = np.eye(3), "world (no transform)"
+                rotation, source = self.parameter_rotation, NO_TRANSFORM
             elif track.turning:
                 self.turning.add(frame_id)
                 self.sources[frame_id] = "tf (per sample)"
                 return np.asarray(track.rotations[0])
             else:
-                rotation, source = track.rotations[0], "tf"
+                self._fixed(frame_id, np.asarray(track.rotations[0]))
+                return self.rotations[frame_id]
         self.rotations[frame_id] = rotation
         self.sources[frame_id] = source
         return rotation

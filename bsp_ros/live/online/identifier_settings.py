@@ -18,6 +18,7 @@ from bsp_ros.core.tare import Tare, read_tare_file
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.online.frames import FrameSource, frame_source, rotation_from_quaternion_xyzw
 from bsp_ros.live.online.precision import PrecisionTarget
+from bsp_ros.live.runtime.cell_parameters import CELL_FILE
 from bsp_ros.live.runtime.parameters import Param
 
 __all__ = ["MODES", "NAME", "PARAMETERS", "IdentifierSettings"]
@@ -26,6 +27,7 @@ NAME = "bsp_identifier"
 MODES = ("windowed", "recursive")
 
 PARAMETERS = (
+    CELL_FILE,
     Param("mode", "windowed", "windowed (sliding window) or recursive (per sample)", choices=MODES),
     Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
     Param("window_s", 30.0, "sliding window length", "s", lo=1.0, hi=3600.0),
@@ -45,7 +47,8 @@ PARAMETERS = (
         "auto",
         "where the wrench frame's rotation comes from: tf (/tf_static and /tf), topic (TransformStamped of the "
         "wrench frame in world on wrench_frame_topic, e.g. the robot's flange: a sensor that turns without tf2_msgs), "
-        "parameter (wrench_frame_rotation_xyzw), or auto (tf if tf2_msgs is installed, else the parameter)",
+        "parameter (wrench_frame_rotation_xyzw), or auto (tf if tf2_msgs is installed, else the topic); where tf or "
+        "the topic sends nothing within tf_wait_s, wrench_frame_rotation_xyzw stands in",
         choices=("auto", "tf", "topic", "parameter"),
     ),
     Param(
@@ -56,7 +59,8 @@ PARAMETERS = (
     Param(
         "wrench_frame_rotation_xyzw",
         [0.0, 0.0, 0.0, 1.0],
-        "rotation world <- wrench frame as a unit quaternion [x, y, z, w], used without tf",
+        "rotation world <- wrench frame as a unit quaternion [x, y, z, w] (default: the cell file's mounting), used "
+        "without a transform; a transform more than 1 deg off it is reported",
     ),
     Param(
         "tare_file",
@@ -96,7 +100,7 @@ PARAMETERS = (
     Param(
         "tf_wait_s",
         2.0,
-        "wait this long for the wrench frame's transform before taking it as world",
+        "wait this long for the wrench frame's transform before taking wrench_frame_rotation_xyzw",
         "s",
         lo=0.0,
         hi=60.0,

@@ -136,10 +136,11 @@ def _window_end_s(document: dict, start_ns: int) -> float:
 
 
 def test_a_rotated_sensor_without_tf_is_identified_with_the_quaternion_parameter(cell) -> None:
-    # Where tf2_msgs is not installed (the PyPI wheels), the wrench frame's rotation is a parameter.
+    # Where tf2_msgs is not installed (the PyPI wheels), the wrench frame's rotation is a parameter (forced here:
+    # by default the simulator's TransformStamped topic gives it).
     rpy = (90.0, -20.0, 135.0)
     simulator = ["speed:=2.0", "seed:=8", f"sensor_roll_pitch_yaw_deg:=[{rpy[0]}, {rpy[1]}, {rpy[2]}]"]
-    c = cell(3, simulator, [wrench_frame_parameter(rpy)])
+    c = cell(3, simulator, [wrench_frame_parameter(rpy), "wrench_frame_source:=parameter"])
     assert c.spin_until(lambda: _valid(c), 60), c.latest()
     c.spin_until(lambda: False, 10)
     document = c.latest()
@@ -149,10 +150,11 @@ def test_a_rotated_sensor_without_tf_is_identified_with_the_quaternion_parameter
 
 
 def test_a_rotated_sensor_taken_as_unrotated_gives_a_wrong_or_invalid_estimate(cell) -> None:
-    # The control of the test above: the same sensor with the identity quaternion is not estimated right.
+    # The control of the test above: the same sensor with the identity quaternion is not estimated right (the
+    # parameter forced: by default the simulator's TransformStamped would give the identifier the right rotation).
     rpy = (90.0, -20.0, 135.0)
     simulator = ["speed:=2.0", "seed:=8", f"sensor_roll_pitch_yaw_deg:=[{rpy[0]}, {rpy[1]}, {rpy[2]}]"]
-    c = cell(4, simulator, [wrench_frame_parameter((0.0, 0.0, 0.0))])
+    c = cell(4, simulator, [wrench_frame_parameter((0.0, 0.0, 0.0)), "wrench_frame_source:=parameter"])
     c.spin_until(lambda: len(c.estimates) > 60, 60)
     document = c.latest()
     assert document is not None

@@ -1,4 +1,4 @@
-"""The wrench frame's rotation: TF tree, fixed quaternion parameter, or world."""
+"""The wrench frame's rotation: TF tree or TransformStamped topic, else the stated quaternion (the cell's)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core.simulation import rotation_from_rpy_deg
-from bsp_ros.live.online.frames import WrenchFrames, rotation_from_quaternion_xyzw
+from bsp_ros.live.online.frames import NO_TRANSFORM, WrenchFrames, rotation_from_quaternion_xyzw
 from msg_adapters.rotation import quaternion_from_matrix
 from msg_adapters.tf import TransformSample
 
@@ -42,18 +42,35 @@ def test_with_tf_the_transform_wins_and_a_change_is_reported() -> None:
     np.testing.assert_allclose(frames.rotation_for("ft_sensor", 0), turned, atol=1e-12)
 
 
-def test_with_tf_a_frame_without_transform_waits_then_is_world() -> None:
+def test_with_tf_a_frame_without_transform_waits_then_takes_the_stated_rotation() -> None:
     frames = WrenchFrames("world", use_tf=True, parameter_rotation=R_SENSOR, tf_wait_s=2.0)
     assert frames.rotation_for("ft_sensor", 1_000_000_000) is None
     assert frames.rotation_for("ft_sensor", 2_500_000_000) is None
-    np.testing.assert_allclose(frames.rotation_for("ft_sensor", 3_000_000_001), np.eye(3))
-    assert frames.sources["ft_sensor"] == "world (no transform)"
+    np.testing.assert_allclose(frames.rotation_for("ft_sensor", 3_000_000_001), R_SENSOR)
+    assert frames.sources["ft_sensor"] == NO_TRANSFORM
+    # A transform that comes later replaces it (the same rotation: the source changes, nothing restarts).
+    assert frames.on_transforms([_transform(R_SENSOR)]) == []
+    assert frames.sources["ft_sensor"] == "tf" and not frames.disagreement_deg
+
+
+def test_a_transform_off_the_stated_rotation_is_used_and_its_angle_noted() -> None:
+    frames = WrenchFrames("world", use_tf=True, parameter_rotation=R_SENSOR, tf_wait_s=2.0)
+    mounted = rotation_from_rpy_deg(180.0, 0.0, 30.0 + 12.5)  # 12.5 deg about z from the stated mounting
+    frames.on_transforms([_transform(mounted)])
+    np.testing.assert_allclose(frames.rotation_for("ft_sensor", 0), mounted, atol=1e-12)
+    assert frames.disagreement_deg["ft_sensor"] == pytest.approx(12.5, abs=1e-6)
+    near = rotation_from_rpy_deg(180.0, 0.0, 30.5)  # within a degree: not a disagreement
+    assert frames.on_transforms([_transform(near)]) == ["ft_sensor"]
+    assert frames.rotation_for("ft_sensor", 0) is not None and not frames.disagreement_deg
 
 
 def test_the_wrench_frame_source_parameter_picks_tf_a_topic_or_the_quaternion() -> None:
     from bsp_ros.live.online.frames import frame_source
 
-    assert frame_source("auto", True, "t").tf and not frame_source("auto", False, "t").transforms
+    assert frame_source("auto", True, "t").tf
+    auto = frame_source("auto", False, "ft_sensor/transform")  # no tf2_msgs: the TransformStamped topic
+    assert auto.topic and not auto.tf and "ft_sensor/transform" in auto.description
+    assert not frame_source("parameter", False, "t").transforms
     topic = frame_source("topic", False, "ft_sensor/transform")
     assert topic.topic and not topic.tf and topic.transforms and "ft_sensor/transform" in topic.description
     assert frame_source("parameter", True, "t").description == "parameter wrench_frame_rotation_xyzw"
