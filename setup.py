@@ -13,6 +13,7 @@ LIVE = [
     "ros-jazzy-diagnostic-msgs",
     "ros-jazzy-nav-msgs",
     "ros-jazzy-trajectory-msgs",
+    "ros-jazzy-std-srvs",
 ]
 NODES = ["cell_simulator", "joint_angle_estimator", "bsp_identifier", "session_recorder"]
 

@@ -7,6 +7,7 @@ from launch.actions import DeclareLaunchArgument
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
+from launch_ros.parameter_descriptions import ParameterValue
 
 from launch import LaunchDescription
 
@@ -19,6 +20,11 @@ def generate_launch_description() -> LaunchDescription:
             DeclareLaunchArgument("params_file", default_value=config, description="ros__parameters YAML"),
             DeclareLaunchArgument("simulate", default_value="false", description="also start the simulated cell"),
             DeclareLaunchArgument("record_sessions", default_value="false", description="start session_recorder"),
+            DeclareLaunchArgument(
+                "subject",
+                default_value="",
+                description="pseudonymous id of the patient whose sessions session_recorder stores (never a name)",
+            ),
             Node(
                 package="bsp_ros",
                 executable="cell_simulator",
@@ -30,7 +36,8 @@ def generate_launch_description() -> LaunchDescription:
             Node(
                 package="bsp_ros",
                 executable="session_recorder",
-                parameters=[params],
+                # A string even where the id is all digits (subject:=007 would otherwise be an integer).
+                parameters=[params, {"subject": ParameterValue(LaunchConfiguration("subject"), value_type=str)}],
                 condition=IfCondition(LaunchConfiguration("record_sessions")),
             ),
         ]

@@ -48,6 +48,7 @@ DECLARED: dict[str, tuple[str | None, str | None]] = {
     "diagnostic_msgs": ("ros-jazzy-diagnostic-msgs", "diagnostic_msgs"),
     "nav_msgs": ("ros-jazzy-nav-msgs", "nav_msgs"),
     "trajectory_msgs": ("ros-jazzy-trajectory-msgs", "trajectory_msgs"),
+    "std_srvs": ("ros-jazzy-std-srvs", "std_srvs"),
     # Not on PyPI: on a cell from apt; elsewhere the nodes take the sensor rotation from a parameter.
     "tf2_msgs": (None, "tf2_msgs"),
 }

@@ -1,88 +1,309 @@
-"""`session_recorder`: stores the final valid live estimate of a session in the session store, once."""
+"""`session_recorder`: records each live session of a named subject whole, identifies it and stores it."""
 
 from __future__ import annotations
 
-import json
 import sys
+from concurrent.futures import Future, ThreadPoolExecutor
+from pathlib import Path
 from typing import Any
 
-from bsp_ros.clinic.store import check_subject_id, open_store
-from bsp_ros.errors import BspError
+from bsp_ros.bag import TopicMap
+from bsp_ros.bag.topics import TF_TYPE
+from bsp_ros.clinic.store import is_database_url, open_store
+from bsp_ros.clinic.store.location import default_location
+from bsp_ros.errors import InputError
 from bsp_ros.live.runtime.parameters import Param, declare_parameters
 from bsp_ros.live.runtime.qos import rclpy_qos
-from bsp_ros.live.runtime.ros import RosNode, message_class
+from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
-from bsp_ros.live.session_end import SessionEndDetector
+from bsp_ros.live.session.control import EndCause, Reply, SessionControl, naming_hint
+from bsp_ros.live.session.recording import Change, SessionRecording
+from bsp_ros.live.session.storing import IdentifySettings, SessionJob, SessionOutcome, add_command, store_session
 
 NAME = "session_recorder"
-
+SERVICE_TYPE = "std_srvs/srv/Trigger"
+#: The services, relative to the node's namespace: what each does is docs/contract.md's.
+SERVICES = ("bsp/session/start", "bsp/session/start_retest", "bsp/session/stop", "bsp/session/reset")
 
 PARAMETERS = (
-    Param("subject", "", "pseudonymous subject id (required)"),
+    Param(
+        "subject",
+        "",
+        "pseudonymous id of the subject whose sessions are recorded (empty: nothing is recorded); may be set while "
+        "no session records (ros2 param set)",
+    ),
     Param("store", "", "store file or postgresql:// URL (empty: the per-user default)"),
-    Param("end_timeout_s", 5.0, "estimates silent this long end the session", "s", lo=0.5, hi=3600.0),
+    Param(
+        "recordings_dir",
+        "",
+        "folder of the session bags (empty: live_recordings beside a SQLite store, else in the per-user data folder)",
+    ),
+    Param("auto_start", True, "a session starts when the wrench stream starts (else only bsp/session/start)"),
+    Param("end_timeout_s", 5.0, "the wrench stream silent this long ends a session", "s", lo=0.5, hi=3600.0),
+    Param("max_session_s", 1800.0, "a session longer than this ends (and is stored)", "s", lo=1.0, hi=14400.0),
+    Param("keep_recordings", False, "keep the bag of a valid stored session (else removed; never a failed one's)"),
+    Param("cell", "", "the robot cell's name stored with each session (empty: none)"),
+    Param("method", "joint", "identification method", choices=("joint", "paper")),
+    Param("passive", "", "passive model as `bsp identify --passive` (empty: its default)"),
+    Param("tare_file", "", "tare file of `bsp tare` (empty: none)"),
+    Param("wrench_delay_s", None, "the wrench delay the cell knows (unset: estimated from the data)", "s", kind=float),
+    Param("marker_placement_sd_mm", 2.0, "skin marker placement sd", "mm", lo=0.0, hi=50.0),
+    Param("handle_pose_sd_mm", 0.5, "the robot's contact point registration sd", "mm", lo=0.0, hi=50.0),
+    Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
+    Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
+    Param("handle_pose_topic", "/robot/handle_pose", "the robot's contact point (PoseStamped; empty: not recorded)"),
+    Param(
+        "wrench_frame_rotation_xyzw",
+        [0.0, 0.0, 0.0, 1.0],
+        "rotation world <- wrench frame [x, y, z, w] written into each session's bag as /tf_static where tf2_msgs is "
+        "missing (the identity: nothing written)",
+    ),
 )
 
 
-class SessionRecorderNode(RosNode):
-    """Listens to `bsp/estimate_json`; on the end of a session stores its last valid estimate.
+def recordings_dir_for(given: str, store_location: str) -> Path:
+    """The folder of the session bags: ``given``, else ``live_recordings`` beside a SQLite store, else beside the
+    per-user default store."""
+    if given:
+        return Path(given).expanduser()
+    beside = default_location() if is_database_url(store_location) else store_location
+    return Path(beside).expanduser().parent / "live_recordings"
 
-    The end is silence on the estimate topic for ``end_timeout_s`` or any message on `bsp/session_end`.
-    The subject is a pseudonymous id (a parameter): never a name.
+
+class SessionRecorderNode(RosNode):
+    """Records each session of the named subject whole (its wrench, markers and transforms, into a bag) and, when
+    it ends, identifies it as `bsp sessions add BAG` would, with the subject record's body data, and stores it.
+
+    Sessions start with the service ``bsp/session/start`` (``start_retest``: a same-day retest) or, with
+    ``auto_start``, when the wrench stream starts; they end with ``bsp/session/stop``, a message on
+    ``bsp/session_end``, the wrench stream silent for ``end_timeout_s``, or ``max_session_s``;
+    ``bsp/session/reset`` discards the running session and starts a new one. The subject is a pseudonymous id
+    (parameter ``subject``, settable while no session records): never a name, and never in a file name.
     """
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        p = declare_parameters(self, PARAMETERS)
-        self.subject = check_subject_id(p["subject"])
+        p = declare_parameters(self, [param for param in PARAMETERS if param.name != "subject"])
+        self._declare_subject()
+        self.settings = self._identify_settings(p)
+        try:
+            self.settings.check()
+        except InputError as error:
+            raise InputError(
+                f"{NAME}: its identification parameters make `bsp identify` options it refuses: {error}"
+            ) from None
+        with open_store(p["store"] or None) as store:  # a store that cannot be opened stops the node now
+            self.store_name = store.location
         self.store_location = p["store"] or None
-        self.detector = SessionEndDetector(p["end_timeout_s"])
-        self.end_requested = False
-        self.stored_ids: list[int] = []
+        self.cell = p["cell"] or None
+        self.keep_recordings = p["keep_recordings"]
+        with_tf = has_message(TF_TYPE)
+        control = SessionControl(NAME, p["end_timeout_s"], p["max_session_s"], p["auto_start"])
+        self.recording = SessionRecording(
+            control,
+            recordings_dir_for(p["recordings_dir"], self.store_name),
+            self.settings.topics,
+            with_tf,
+            p["wrench_frame_rotation_xyzw"],
+        )
+        self._name_subject(str(self.get_parameter("subject").value))
+        self.add_on_set_parameters_callback(self.on_set_parameters)
+        # A whole session takes seconds to identify: off the executor thread, one session at a time.
+        self.worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="session_identify")
+        self.jobs: list[tuple[SessionJob, Future[SessionOutcome]]] = []
+        self.outcomes: list[SessionOutcome] = []
+        self._create_interfaces(with_tf)
+        self.create_timer(0.25, self.on_timer)
+
+    def _declare_subject(self) -> None:
+        """``subject``: the one parameter settable at run time (checked by :meth:`on_set_parameters`)."""
+        from rcl_interfaces.msg import ParameterDescriptor
+
+        (subject,) = [param for param in PARAMETERS if param.name == "subject"]
+        from rclpy.exceptions import InvalidParameterTypeException
+
+        descriptor = ParameterDescriptor(description=subject.text(), read_only=False)
+        try:
+            self.declare_parameter("subject", "", descriptor)
+        except InvalidParameterTypeException as error:  # subject:=007 is an integer to ROS
+            raise InputError(
+                f"parameter 'subject' of node {NAME!r} must be a string id ({error}); quote a numeric one: "
+                "subject:=\"'007'\""
+            ) from None
+
+    @staticmethod
+    def _identify_settings(p: dict[str, Any]) -> IdentifySettings:
+        markers = {name: p["marker_topic_prefix"] + name for name in TopicMap().markers}
+        topics = TopicMap(p["wrench_topic"], markers, handle_pose=p["handle_pose_topic"])
+        return IdentifySettings(
+            method=p["method"],
+            passive=p["passive"],
+            tare_file=p["tare_file"],
+            wrench_delay_s=p["wrench_delay_s"],
+            marker_placement_sd_mm=p["marker_placement_sd_mm"],
+            handle_pose_sd_mm=p["handle_pose_sd_mm"],
+            topics=topics,
+        )
+
+    def _create_interfaces(self, with_tf: bool) -> None:
+        from std_srvs.srv import Trigger
+
+        topics = self.settings.topics
+        for topic, type_name in self.recording.types.items():
+            if type_name == TF_TYPE and not with_tf:
+                continue
+            qos = {topics.tf_static: "tf_static_listener", topics.tf: "tf"}.get(topic, "sensor_input")
+            self.create_subscription(message_class(type_name), topic, self._on_raw(topic), rclpy_qos(qos), raw=True)
         string = message_class("std_msgs/msg/String")
-        self.create_subscription(string, "bsp/estimate_json", self.on_estimate, rclpy_qos("estimates"))
-        self.create_subscription(string, "bsp/session_end", self.on_end, rclpy_qos("estimates"))
-        self.create_timer(0.5, self.on_timer)
+        self.create_subscription(string, "bsp/session_end", self.on_end_message, rclpy_qos("estimates"))
+        handlers = (self.on_start, self.on_start_retest, self.on_stop, self.on_reset)
+        for name, handler in zip(SERVICES, handlers, strict=True):
+            self.create_service(Trigger, name, handler)
 
     def now_ns(self) -> int:
         """The node clock, ns."""
         return int(self.get_clock().now().nanoseconds)
 
-    def on_estimate(self, msg: Any) -> None:
-        """Track an estimate."""
+    # Subject ------------------------------------------------------------------------------------------------
+    def _name_subject(self, subject: str) -> None:
+        """Take ``subject`` for the next sessions and say where they go (InputError for a bad id)."""
+        named = self.recording.control.name_subject(subject)
+        if named is None:
+            self.get_logger().warning(f"no subject named: nothing is recorded; {naming_hint(NAME)}")
+        else:
+            self.get_logger().info(f"recording sessions for {named} into {self.store_name}")
+
+    def on_set_parameters(self, params: list[Any]) -> Any:
+        """Accept a new ``subject`` if it is pseudonymous and no session of another subject records."""
+        from rcl_interfaces.msg import SetParametersResult
+
+        for param in params:
+            if param.name == "subject":
+                try:
+                    self._name_subject(str(param.value))
+                except InputError as error:
+                    return SetParametersResult(successful=False, reason=str(error))
+        return SetParametersResult(successful=True)
+
+    # Input ----------------------------------------------------------------------------------------------------
+    def _on_raw(self, topic: str) -> Any:
+        def on_message(data: bytes) -> None:
+            try:
+                change = self.recording.on_message(topic, self.now_ns(), data)
+            except OSError as error:
+                self._write_failed(error)
+                return
+            self._apply(change)
+
+        return on_message
+
+    def _write_failed(self, error: OSError) -> None:
+        """The bag cannot be written (a full disk): end the session, keeping what was written."""
+        path = self.recording.spool.path if self.recording.spool is not None else None
+        self.get_logger().error(f"cannot write the session's recording at {path}: {error}")
         try:
-            document = json.loads(msg.data)
-        except ValueError:
-            self.get_logger().warning("bsp/estimate_json: not JSON, ignored")
+            _, change = self.recording.stop(self.now_ns(), EndCause.SHUTDOWN)
+        except OSError as again:  # the session has ended; its bag may lack its summary (readable up to the cut)
+            self.get_logger().error(f"the recording at {path} could not be closed: {again}")
             return
-        self.detector.on_estimate(document, self.now_ns())
+        self._apply(change)
 
-    def on_end(self, msg: Any) -> None:
-        """An explicit end of session."""
-        self.end_requested = True
-        self.on_timer()
+    # Services and the end message -----------------------------------------------------------------------------
+    def _answer(self, result: tuple[Reply, Change], response: Any) -> Any:
+        reply, change = result
+        self._apply(change)
+        response.success, response.message = reply.success, reply.message
+        if not reply.success:
+            self.get_logger().warning(f"request refused: {reply.message}")
+        return response
 
+    def on_start(self, request: Any, response: Any) -> Any:
+        """``bsp/session/start``."""
+        return self._answer(self.recording.start(self.now_ns()), response)
+
+    def on_start_retest(self, request: Any, response: Any) -> Any:
+        """``bsp/session/start_retest``: a session stored as the same day's retest."""
+        return self._answer(self.recording.start(self.now_ns(), retest=True), response)
+
+    def on_stop(self, request: Any, response: Any) -> Any:
+        """``bsp/session/stop``."""
+        return self._answer(self.recording.stop(self.now_ns()), response)
+
+    def on_reset(self, request: Any, response: Any) -> Any:
+        """``bsp/session/reset``."""
+        return self._answer(self.recording.reset(self.now_ns()), response)
+
+    def on_end_message(self, msg: Any) -> None:
+        """A message on ``bsp/session_end`` ends the running session, as ``bsp/session/stop`` does."""
+        _, change = self.recording.stop(self.now_ns(), EndCause.END_MESSAGE)
+        self._apply(change)
+
+    # Sessions ending, identified off the executor thread --------------------------------------------------------
     def on_timer(self) -> None:
-        """Store the session's final valid estimate when it ends."""
-        document = self.detector.due(self.now_ns(), self.end_requested)
-        self.end_requested = False
-        if document is None:
-            return
-        session = document.get("session", {})
+        """End a session by silence or time limit, flush the bag, and log the sessions identified meanwhile."""
         try:
-            with open_store(self.store_location) as store:
-                record = store.add_estimate(
-                    document,
-                    self.subject,
-                    session_time_ns=session.get("start_time_ns") or self.now_ns(),
-                    source=session.get("source", "live"),
-                )
-        except BspError as error:  # a refused estimate must not stop the recorder of later sessions
-            self.get_logger().error(f"session not stored: {error}")
+            self._apply(self.recording.tick(self.now_ns()))
+        except OSError as error:
+            self._write_failed(error)
+        control = self.recording.control
+        if control.unnamed_input():
+            self.get_logger().warning(
+                f"the wrench streams in but no subject is named: nothing is recorded; {naming_hint(NAME)}"
+            )
+        for job, future in [j for j in self.jobs if j[1].done()]:
+            self.jobs.remove((job, future))
+            outcome = future.result()
+            self.outcomes.append(outcome)
+            log = self.get_logger().info if outcome.valid else self.get_logger().warning
+            log(outcome.log_line())
+
+    def _apply(self, change: Change) -> None:
+        """Log what ``change`` did and hand a finished session to the worker."""
+        logger = self.get_logger()
+        if change.discarded is not None:
+            ended, path = change.discarded
+            logger.info(f"session of {ended.session.subject} discarded (reset): {path} deleted")
+        if change.started is not None:
+            started = change.started
+            kind = "retest" if started.retest else "session"
+            logger.info(f"{kind} of {started.subject} started ({started.cause}), recording into {change.path}")
+        if change.finished is None:
             return
-        if record.id is not None:
-            self.stored_ids.append(record.id)
-        self.get_logger().info(f"stored session {record.id} of subject {self.subject}")
+        ended, spool = change.finished
+        subject = ended.session.subject
+        if not ended.stored:
+            logger.warning(
+                f"session of {subject} not identified ({ended.cause}); its recording is kept at {spool.path}: add it "
+                f"with `{add_command(spool.path, subject, ended.session.retest)}`"
+            )
+            return
+        logger.info(f"session of {subject} ended ({ended.cause}, {spool.duration_s:.1f} s): identifying it")
+        job = SessionJob(
+            ended=ended,
+            spool=spool,
+            store_location=self.store_location,
+            settings=self.settings,
+            cell=self.cell,
+            keep_recording=self.keep_recordings,
+        )
+        self.jobs.append((job, self.worker.submit(store_session, job, self.store_name)))
+
+    def destroy_node(self) -> None:
+        """Keep a running session's bag (complete, not identified) and finish the identification under way."""
+        _, change = self.recording.stop(self.now_ns(), EndCause.SHUTDOWN)
+        self._apply(change)
+        self.worker.shutdown(wait=True, cancel_futures=True)
+        for job, future in self.jobs:
+            if future.cancelled():
+                path, session = job.spool.path, job.ended.session
+                self.get_logger().warning(
+                    f"session of {session.subject} not identified (the recorder stopped); its recording is kept at "
+                    f"{path}: add it with `{add_command(path, session.subject, session.retest)}`"
+                )
+            else:
+                self.get_logger().info(future.result().log_line())
+        self.jobs.clear()
+        super().destroy_node()
 
 
 def main(args: list[str] | None = None) -> int:

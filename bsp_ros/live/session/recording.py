@@ -18,6 +18,7 @@ __all__ = ["Change", "SessionRecording", "topic_types"]
 
 # /tf_static messages kept between sessions (each session's bag starts with them: they are sent once, latched).
 STATIC_KEPT = 100
+IDENTITY_XYZW = (0.0, 0.0, 0.0, 1.0)
 
 
 def topic_types(topics: TopicMap, with_tf: bool = True) -> dict[str, str]:
@@ -49,7 +50,7 @@ class SessionRecording:
     topics : the input topic names.
     with_tf : whether /tf_static and /tf are heard (tf2_msgs installed).
     rotation_xyzw : (4,) rotation world <- wrench frame written into each bag as /tf_static where ``with_tf`` is
-        False, so that the bag says what the live identifier assumed (None: nothing written).
+        False, so that the bag says what the live identifier assumed (None or the identity: nothing written).
     """
 
     def __init__(
@@ -65,7 +66,9 @@ class SessionRecording:
         self.topics = topics
         # Every type a bag may hold: the tf topics too, where the rotation parameter stands in for /tf_static.
         self.types = topic_types(topics)
-        self.rotation_xyzw = None if with_tf or rotation_xyzw is None else np.asarray(rotation_xyzw, dtype=float)
+        given = None if with_tf or rotation_xyzw is None else np.asarray(rotation_xyzw, dtype=float)
+        # The identity is no information: without it the bag reads as `bsp identify` reads a bag without tf.
+        self.rotation_xyzw = None if given is None or np.allclose(given, IDENTITY_XYZW) else given
         self.spool: SessionSpool | None = None
         self.static_kept: deque[tuple[int, bytes]] = deque(maxlen=STATIC_KEPT)
         self._rotation_written = False
