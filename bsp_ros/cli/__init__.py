@@ -31,6 +31,7 @@ COMMANDS: tuple[str, ...] = (
     "simulate",
     "subjects",
     "tare",
+    "watch",
 )
 
 

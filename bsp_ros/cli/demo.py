@@ -13,6 +13,9 @@ import time
 from typing import Any
 
 from bsp_ros.cli.argtypes import float_within, positive_float
+from bsp_ros.cli.live_table import estimate_rows, state_line, support_line
+
+__all__ = ["add_parser", "introduction", "render", "render_support", "run", "state_line", "verdict"]
 
 NODES = ("cell_simulator", "joint_angle_estimator", "bsp_identifier")
 # bsp_identifier's default window (its `window_s` parameter), simulated seconds: until it has filled, or the
@@ -84,26 +87,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def _rows(
     document: dict[str, Any], truth: dict[str, Any]
 ) -> list[tuple[str, float | None, float | None, float | None]]:
-    rows = []
-    for group, key in (("segments", "static_moment_kgm"), ("joints", "coulomb_nm")):
-        for owner, quantities in document.get(group, {}).items():
-            q = quantities.get(key, {})
-            true = truth.get(group, {}).get(owner, {}).get(key)
-            rows.append((f"{owner} {key}", q.get("value"), q.get("std"), true))
-    return rows
-
-
-def state_line(document: dict[str, Any], warming_up: bool) -> str:
-    """VALID, a warm-up that is expected, or INVALID (a real problem), with the estimator's message."""
-    quality = document["quality"]
-    if quality["valid"]:
-        return f"VALID: {quality.get('message', '')}"
-    if warming_up:
-        return (
-            "warming up (expected: the window is still filling, and every joint must have moved both ways): "
-            f"{quality.get('message', '')}"
-        )
-    return f"INVALID: {quality.get('message', '')}"
+    return [
+        (f"{owner} {key}", q.get("value"), q.get("std"), truth.get(group, {}).get(owner, {}).get(key))
+        for group, owner, key, q in estimate_rows(document)
+    ]
 
 
 def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: float, warming_up: bool = False) -> str:
@@ -126,13 +113,8 @@ def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: fl
 
 def render_support(msg: Any, support_fraction: float) -> str:
     """One line: the latest bsp/weight_support wrench, or that none is published (no valid estimate yet)."""
-    if msg is None:
-        return f"weight support ({support_fraction:g} of the arm's gravity torques): none yet (no valid estimate)"
-    force, torque = msg.wrench.force, msg.wrench.torque
-    return (
-        f"weight support ({support_fraction:g} of the arm's gravity torques), on the hand in world: "
-        f"F_y {force.y:+.2f} N, F_z {force.z:+.2f} N, M_x {torque.x:+.3f} Nm (follows the arm's posture)"
-    )
+    wrench = None if msg is None else (msg.wrench.force.y, msg.wrench.force.z, msg.wrench.torque.x)
+    return support_line(wrench, support_fraction)
 
 
 def introduction(args: argparse.Namespace, middleware: str, domain: int) -> str:
