@@ -12,7 +12,8 @@ from bsp_ros.bag.topics import TF_TYPE
 from bsp_ros.clinic.store import is_database_url, open_store
 from bsp_ros.clinic.store.location import default_location
 from bsp_ros.errors import InputError
-from bsp_ros.live.runtime.parameters import Param, declare_parameters
+from bsp_ros.live.runtime.cell_parameters import CELL_FILE, FromCell, declare_with_cell
+from bsp_ros.live.runtime.parameters import Param
 from bsp_ros.live.runtime.qos import rclpy_qos
 from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
@@ -26,6 +27,7 @@ SERVICE_TYPE = "std_srvs/srv/Trigger"
 SERVICES = ("bsp/session/start", "bsp/session/start_retest", "bsp/session/stop", "bsp/session/reset")
 
 PARAMETERS = (
+    CELL_FILE,
     Param(
         "subject",
         "",
@@ -56,9 +58,19 @@ PARAMETERS = (
         "wrench_frame_rotation_xyzw",
         [0.0, 0.0, 0.0, 1.0],
         "rotation world <- wrench frame [x, y, z, w] written into each session's bag as /tf_static where tf2_msgs is "
-        "missing (the identity: nothing written)",
+        "missing (default: the cell's mounting; the identity: nothing written)",
     ),
 )
+
+
+#: The parameters whose defaults the cell description gives (as bsp_identifier's and joint_angle_estimator's).
+RECORDER_FROM_CELL: FromCell = {
+    "wrench_topic": lambda c: c.wrench_topic,
+    "marker_topic_prefix": lambda c: c.marker_topic_prefix,
+    "handle_pose_topic": lambda c: c.handle_pose_topic,
+    "tare_file": lambda c: "" if c.tare_file is None else str(c.tare_file),
+    "wrench_frame_rotation_xyzw": lambda c: [float(v) for v in c.rotation_xyzw],
+}
 
 
 def recordings_dir_for(given: str, store_location: str) -> Path:
@@ -83,7 +95,7 @@ class SessionRecorderNode(RosNode):
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        p = declare_parameters(self, [param for param in PARAMETERS if param.name != "subject"])
+        p, _ = declare_with_cell(self, [param for param in PARAMETERS if param.name != "subject"], RECORDER_FROM_CELL)
         self._declare_subject()
         self.settings = self._identify_settings(p)
         try:

@@ -10,7 +10,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from live_cell import wrench_frame_parameter
 from node_processes import NodeProcesses, Peer
 from ros_domains import next_domain_id
 
@@ -81,8 +80,7 @@ def cell(tmp_path: Path) -> Iterator[tuple[Callable[[], InProcessRecorder], Node
         f"store:={store}",
         f"recordings_dir:={tmp_path / 'recordings'}",
         "end_timeout_s:=1.0",
-        "auto_start:=false",
-        wrench_frame_parameter(),
+        "auto_start:=false",  # the sensor's mounting comes from the shipped cell description, the simulator's
     ]
     nodes = NodeProcesses(domain, tmp_path)
     peer = Peer(domain)
@@ -110,6 +108,7 @@ def test_a_session_started_for_a_named_subject_is_stored_whole_with_its_body_dat
     start, nodes, peer, store = cell
     node = start().node
     # No subject: the start is refused, saying how to name one, and the streaming cell records nothing.
+    truth = peer.listen_json("sim/truth", "tf_static_listener")
     refused = _call(peer, "bsp/session/start")
     assert not refused.success and "ros2 param set /session_recorder subject" in refused.message
     nodes.start(
@@ -138,6 +137,13 @@ def test_a_session_started_for_a_named_subject_is_stored_whole_with_its_body_dat
     assert record.subject == SUBJECT
     assert record.subject_info == BODY  # the prior from the subject's record, not the male population's
     assert record.arm == "right"
+    # The simulated arm's truth within 3 std (the sensor's mounting written into the bag from the cell description).
+    assert outcome.valid, outcome.log_line()
+    assert truth, "no sim/truth"
+    for segment, true in truth[-1][1]["segments"].items():
+        q = record.parameters[("segments", segment, "static_moment_kgm")]
+        assert q.value is not None and q.std is not None
+        assert abs(q.value - true["static_moment_kgm"]) < 3 * q.std, (segment, q.value, true, q.std)
     # The whole session (from the start call to the simulator's end), not the identifier's 30 s window.
     assert outcome.estimate_s is not None and 32.0 < outcome.estimate_s <= SIM_DURATION_S
     assert (record.quality.n_samples or 0) > 30 * 100  # the wrench at 100 Hz
