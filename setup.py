@@ -14,8 +14,9 @@ LIVE = [
     "ros-jazzy-nav-msgs",
     "ros-jazzy-trajectory-msgs",
     "ros-jazzy-std-srvs",
+    "ros-jazzy-visualization-msgs",
 ]
-NODES = ["cell_simulator", "joint_angle_estimator", "bsp_identifier", "session_recorder"]
+NODES = ["cell_simulator", "joint_angle_estimator", "bsp_identifier", "session_recorder", "arm_visualizer"]
 
 setup(
     name=PACKAGE,

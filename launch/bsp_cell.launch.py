@@ -21,6 +21,9 @@ def generate_launch_description() -> LaunchDescription:
             DeclareLaunchArgument("simulate", default_value="false", description="also start the simulated cell"),
             DeclareLaunchArgument("record_sessions", default_value="false", description="start session_recorder"),
             DeclareLaunchArgument(
+                "visualize", default_value="true", description="start arm_visualizer (bsp/arm_markers, segment /tf)"
+            ),
+            DeclareLaunchArgument(
                 "subject",
                 default_value="",
                 description="pseudonymous id of the patient whose sessions session_recorder stores (never a name)",
@@ -39,6 +42,12 @@ def generate_launch_description() -> LaunchDescription:
                 # A string even where the id is all digits (subject:=007 would otherwise be an integer).
                 parameters=[params, {"subject": ParameterValue(LaunchConfiguration("subject"), value_type=str)}],
                 condition=IfCondition(LaunchConfiguration("record_sessions")),
+            ),
+            Node(
+                package="bsp_ros",
+                executable="arm_visualizer",
+                parameters=[params],
+                condition=IfCondition(LaunchConfiguration("visualize")),
             ),
         ]
     )
