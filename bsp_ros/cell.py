@@ -15,6 +15,7 @@ from bsp_ros.errors import InputError
 
 __all__ = [
     "CELL_SCHEMA",
+    "DISAGREE_DEG",
     "SHIPPED_CELL",
     "CellDescription",
     "angle_between_deg",
@@ -24,6 +25,9 @@ __all__ = [
 ]
 
 CELL_SCHEMA = "bsp_ros/cell/1"
+#: A recorded or received rotation further than this from the one a cell states is reported (one of the two
+#: describes another sensor mounting), deg.
+DISAGREE_DEG = 1.0
 #: The shipped description (the simulated cell): the default of the nodes' ``cell_file`` and of `bsp record` /
 #: `bsp play` ``--cell``.
 SHIPPED_CELL = Path(__file__).resolve().parent / "config" / "cell.yaml"

@@ -139,14 +139,9 @@ def encode_fixed(t_ns: np.ndarray, frame_id: str, values: np.ndarray) -> np.ndar
     return records.view(np.uint8).reshape(stamps.size, layout.itemsize)
 
 
-def decode_tf_message(raw: bytes) -> list[TransformSample] | None:
-    """A little-endian CDR ``tf2_msgs/msg/TFMessage`` read without a type store, or None where the bytes do not
-    fit its layout (decode those with rosbags'; its type store costs `bsp identify` 0.08 s to build).
-
-    Layout after the 4-byte encapsulation header (alignment counted from its end): ``uint32`` count, then per
-    transform ``int32 sec, uint32 nanosec``, ``frame_id`` and ``child_frame_id`` (``uint32`` length, bytes with
-    their NUL, each length 4-aligned), the translation (3 float64) and rotation (4 float64) 8-aligned.
-    """
+def _transforms(raw: bytes, count: int | None) -> list[TransformSample] | None:
+    """``count`` transforms after a ``uint32`` count (None: the count is read first, a TFMessage), or one bare
+    TransformStamped (``count`` 1 without a count field); None where the bytes do not fit the layout."""
     if len(raw) < 8 or raw[0] != 0 or raw[1] != 1:
         return None
     body = memoryview(raw)[4:]
@@ -162,8 +157,11 @@ def decode_tf_message(raw: bytes) -> list[TransformSample] | None:
             return None
         return bytes(body[at + 4 : end - 1]).decode("utf-8", errors="replace"), end
 
-    (count,) = struct.unpack_from("<I", body, 0)
-    at, samples = 4, []
+    at = 0
+    if count is None:
+        (count,) = struct.unpack_from("<I", body, 0)
+        at = 4
+    samples = []
     for _ in range(count):
         if at + 8 > size:
             return None
@@ -181,3 +179,21 @@ def decode_tf_message(raw: bytes) -> list[TransformSample] | None:
         at += 56
         samples.append(TransformSample(int(sec) * int(_NS) + int(nanosec), parent[0], child[0], values[:3], values[3:]))
     return samples
+
+
+def decode_tf_message(raw: bytes) -> list[TransformSample] | None:
+    """A little-endian CDR ``tf2_msgs/msg/TFMessage`` read without a type store, or None where the bytes do not
+    fit its layout (decode those with rosbags'; its type store costs `bsp identify` 0.08 s to build).
+
+    Layout after the 4-byte encapsulation header (alignment counted from its end): ``uint32`` count, then per
+    transform ``int32 sec, uint32 nanosec``, ``frame_id`` and ``child_frame_id`` (``uint32`` length, bytes with
+    their NUL, each length 4-aligned), the translation (3 float64) and rotation (4 float64) 8-aligned.
+    """
+    return _transforms(raw, None)
+
+
+def decode_transform_stamped(raw: bytes) -> TransformSample | None:
+    """A little-endian CDR ``geometry_msgs/msg/TransformStamped`` (one transform of :func:`decode_tf_message`'s
+    layout, without the count), or None where the bytes do not fit it."""
+    samples = _transforms(raw, 1)
+    return samples[0] if samples else None

@@ -36,6 +36,7 @@ class BagMetadata:
     topics: dict[str, TopicEntry] = field(default_factory=dict)
     compression_mode: str = ""
     compression_format: str = ""
+    custom: dict[str, str] = field(default_factory=dict)
 
 
 def _loader() -> type[yaml.SafeLoader]:
@@ -70,9 +71,17 @@ def read_metadata(path: Path) -> BagMetadata:
             topics=topics,
             compression_mode=str(info.get("compression_mode") or ""),
             compression_format=str(info.get("compression_format") or ""),
+            custom=_custom_data(info.get("custom_data")),
         )
     except (yaml.YAMLError, KeyError, TypeError, ValueError, UnicodeDecodeError) as error:
         raise NotABagError(f"{path} is not a rosbag2 metadata file ({error.__class__.__name__}: {error})") from None
+
+
+def _custom_data(data: Any) -> dict[str, str]:
+    """``custom_data`` as string pairs ({} where absent or not a mapping: rosbag2 writes ``~`` for none)."""
+    if not isinstance(data, dict):
+        return {}
+    return {str(key): str(value) for key, value in data.items()}
 
 
 def qos_profile(*, transient_local: bool = False, depth: int = 10) -> dict[str, Any]:

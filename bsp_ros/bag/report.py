@@ -73,8 +73,9 @@ class ReadReport:
     truncated : a file ended before its footer (an interrupted recording or a cut copy).
     damage : one line per damaged place (file, byte offset, what).
     bytes_read, bytes_total : progress over all files, bytes.
-    rotation_source : how ``rotation_world_from_sensor`` was found: ``tf``, ``alias`` or ``assumed``
-        (no transform: the wrench frame taken as ``world``).
+    rotation_source : how ``rotation_world_from_sensor`` was found: ``tf`` (/tf_static, /tf), ``topic`` (the
+        TransformStamped topic), ``alias``, ``cell`` (the cell file given for the read), ``metadata`` (the cell
+        file's mounting `bsp record` wrote into the bag) or ``assumed`` (none: the wrench frame taken as ``world``).
     warnings : human-readable warnings, one per finding.
     """
 

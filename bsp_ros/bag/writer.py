@@ -25,9 +25,10 @@ from bsp_ros.bag.metadata import (
     dump_metadata,
     qos_profile,
 )
-from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, WORLD_FRAME, WRENCH_TYPE, TopicMap
+from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, TRANSFORM_TYPE, WORLD_FRAME, WRENCH_TYPE, TopicMap
 from bsp_ros.core.streams import MARKERS_3, Session
 from msg_adapters import TransformSample, build_tf_message, quaternion_from_matrix
+from msg_adapters.tf import build_transform_stamped
 
 TRUTH_FILE = "truth.json"
 DEFAULT_CHUNK_BYTES = 64 * 1024
@@ -73,6 +74,8 @@ def write_session_bag(
     chunk_bytes: int = DEFAULT_CHUNK_BYTES,
     tf_static: bool = True,
     tf_samples: Sequence[TransformSample] = (),
+    transform_samples: Sequence[TransformSample] = (),
+    custom_data: Mapping[str, str] | None = None,
 ) -> Path:
     """Write ``session`` as a rosbag2 (Jazzy, metadata version 9) bag directory with one MCAP file.
 
@@ -99,6 +102,9 @@ def write_session_bag(
         orientation on ``/tf`` only).
     tf_samples : transforms written on ``/tf``, one TFMessage each, stamped and received at their stamp
         (e.g. a sensor whose orientation changes during a tare recording).
+    transform_samples : transforms written on ``topics.transform`` as TransformStamped, stamped and received at
+        their stamp (a cell without tf2_msgs).
+    custom_data : more ``custom_data`` pairs for ``metadata.yaml`` (e.g. the cell's stated sensor mounting).
 
     Returns
     -------
@@ -160,6 +166,14 @@ def write_session_bag(
             for s in tf_samples
         ]
         payloads.append((topic_map.tf, TF_TYPE, tf_rows, tf_stamps, np.maximum.accumulate(tf_stamps), False))
+    if transform_samples:
+        transform_stamps = np.array([s.t_ns for s in transform_samples], dtype=np.int64)
+        transform_rows = [
+            bytes(typestore.serialize_cdr(build_transform_stamped(lambda n: typestore.types[n], s), TRANSFORM_TYPE))
+            for s in transform_samples
+        ]
+        receive = np.maximum.accumulate(transform_stamps)
+        payloads.append((topic_map.transform, TRANSFORM_TYPE, transform_rows, transform_stamps, receive, False))
     if tf_static and w.frame_id != world_frame:
         try:
             rotation_xyzw = quaternion_from_matrix(session.rotation_world_from_sensor)
@@ -213,7 +227,8 @@ def write_session_bag(
                 )
             start_ns = int(log_all.min()) if log_all.size else 0
             end_ns = int(log_all.max()) if log_all.size else 0
-            metadata = build_metadata(mcap_name, records, start_ns, end_ns, {"writer": f"bsp_ros {__version__}"})
+            custom = {"writer": f"bsp_ros {__version__}", **(custom_data or {})}
+            metadata = build_metadata(mcap_name, records, start_ns, end_ns, custom)
             info = dump_metadata(metadata["rosbag2_bagfile_information"])
             writer.add_metadata("rosbag2", {"serialized_metadata": info, "ROS_DISTRO": "jazzy"})
             writer.finish()

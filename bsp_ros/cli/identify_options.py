@@ -60,6 +60,15 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         help="tare file of `bsp tare`: remove the sensor offset and handle load; its std joins the estimate's",
     )
     add_zero_arguments(parser)
+    cell_help = (
+        "the cell description (bsp_ros/cell/1, as the nodes read it): its topics, for options left at their "
+        "defaults; its tare, without --tare; and its sensor mounting, where the bag records no rotation "
+        "(default: the bag's own, /tf_static, /tf, the transform topic, or what `bsp record` wrote)"
+    )
+    try:
+        parser.add_argument("--cell", dest="cell_file", type=Path, metavar="FILE", help=cell_help)
+    except argparse.ArgumentError:  # `bsp sessions add` has --cell NAME already (the cell's name in the store)
+        parser.add_argument("--cell-file", dest="cell_file", type=Path, metavar="FILE", help=cell_help)
     parser.add_argument(
         "--wrench-delay-s",
         type=float_within(-10.0, 10.0),
@@ -138,19 +147,45 @@ def read_tare(path: Path | None) -> Any:
         raise InputError(f"--tare {path}: {error}") from None
 
 
-def topics_from_args(args: argparse.Namespace) -> Any:
-    """The bag's topic names (:class:`bsp_ros.bag.TopicMap`) from ``--wrench-topic``, ``--marker-topic``, ..."""
-    from bsp_ros.bag import TopicMap
+def cell_from_args(args: argparse.Namespace) -> Any:
+    """The cell description of ``--cell`` (``--cell-file`` for `bsp sessions add`:
+    :class:`bsp_ros.cell.CellDescription`), or None without it."""
+    from bsp_ros.cell import read_cell_file
 
-    markers = dict(TopicMap().markers)
+    path = getattr(args, "cell_file", None)
+    return None if path is None else read_cell_file(path)
+
+
+def tare_path(args: argparse.Namespace) -> Path | None:
+    """The tare file: ``--tare``, else the ``--cell`` file's, else None."""
+    cell = cell_from_args(args) if args.tare is None else None
+    return args.tare if cell is None else cell.tare_file
+
+
+def topics_from_args(args: argparse.Namespace) -> Any:
+    """The bag's topic names (:class:`bsp_ros.bag.TopicMap`) from ``--wrench-topic``, ``--marker-topic``, ...;
+    with ``--cell``, the cell's names for the options left at their defaults, and the mounting it states."""
+    from dataclasses import replace
+
+    from bsp_ros.bag import TopicMap
+    from bsp_ros.bag.cell_metadata import topic_map_from_cell
+
+    cell = cell_from_args(args)
+    default = TopicMap()
+    base = default if cell is None else topic_map_from_cell(cell)
+    # An option left at its default takes the cell's name.
+    wrench = base.wrench if args.wrench_topic == default.wrench else args.wrench_topic
+    handle_pose = base.handle_pose if args.handle_pose_topic == default.handle_pose else args.handle_pose_topic
+    markers = dict(base.markers)
     for item in args.marker_topic:
         name, _, topic = item.partition("=")
         if name not in markers or not topic:
             raise InputError(f"--marker-topic takes NAME=TOPIC with NAME in {sorted(markers)}, got {item!r}")
-        if topic in (args.wrench_topic, args.tf_topic, args.tf_static_topic, args.handle_pose_topic):
+        if topic in (wrench, args.tf_topic, args.tf_static_topic, handle_pose):
             raise InputError(f"--marker-topic {item}: {topic} is already the wrench, a tf or the handle pose topic")
         markers[name] = topic
-    return TopicMap(args.wrench_topic, markers, args.tf_static_topic, args.tf_topic, args.handle_pose_topic)
+    topics = TopicMap(wrench, markers, args.tf_static_topic, args.tf_topic, handle_pose)
+    return replace(topics, transform=base.transform, stated=base.stated, world_frame=base.world_frame)
 
 
 def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = None) -> Any:
@@ -181,7 +216,7 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
         passive=passive,
         elastic_fallback=args.passive is None,
         subject=subject,
-        tare=read_tare(args.tare),
+        tare=read_tare(tare_path(args)),
         wrench_delay_s=args.wrench_delay_s,
         marker_placement_sd_m=args.marker_placement_sd_mm / 1000.0,
         handle_pose_sd_m=args.handle_pose_sd_mm / 1000.0,
@@ -193,15 +228,16 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
 def options_record(args: argparse.Namespace, options: Any) -> dict[str, Any]:
     """What a stored session keeps of how it was identified: the settings, the body data and the tare file."""
     config = dict(options.config())
+    topics = topics_from_args(args)
     config.update(
         {
             "body_mass_kg": options.subject.body_mass_kg,
             "height_m": options.subject.height_m,
             "sex": options.subject.sex,
-            "tare_file": None if args.tare is None else Path(args.tare).name,
-            "wrench_topic": args.wrench_topic,
+            "tare_file": None if options.tare is None else Path(tare_path(args) or "").name,
+            "wrench_topic": topics.wrench,
             "marker_topics": list(args.marker_topic),
-            "handle_pose_topic": args.handle_pose_topic,
+            "handle_pose_topic": topics.handle_pose,
         }
     )
     return config

@@ -23,7 +23,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "Publish the messages of a rosbag2 MCAP bag on their topics (rclpy, serialized messages as recorded), "
             "timed by their receive times. Wrench and marker streams go out best effort (sensor_data), /tf_static "
             "transient-local and first, other topics reliable. A damaged bag plays its intact part and says what "
-            "was lost. A topic whose message package is not installed (e.g. tf2_msgs) is skipped, by name."
+            "was lost. Where tf2_msgs is not installed, /tf_static and /tf go out as the cell's sensor rotation on "
+            "its transform topic (geometry_msgs/TransformStamped, which bsp_identifier reads); another topic whose "
+            "message package is not installed is skipped, by name. Exit codes: 0 played, 1 the bag was damaged or "
+            "a topic the nodes need (wrench, markers, handle pose, the sensor's rotation) was dropped, 4 not a "
+            "playable bag, 6 no rclpy."
         ),
     )
     parser.add_argument("bag", type=Path, metavar="BAG", help="bag directory, its metadata.yaml, or an .mcap file")
@@ -43,6 +47,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--ack-timeout", type=float, default=5.0, metavar="S", help="wait for reliable acks at the end (default 5)"
+    )
+    parser.add_argument(
+        "--cell",
+        type=Path,
+        metavar="FILE",
+        help="the cell description (bsp_ros/cell/1): its frames and transform topic, and the topics the nodes need "
+        "(default: the shipped bsp_ros/config/cell.yaml, as the nodes read it)",
     )
     return parser
 
@@ -78,11 +89,14 @@ def _announce(out: Callable[[str], None]) -> Callable[[Any], None]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Play the bag; return the exit code (0, or 1 if the bag was damaged)."""
+    """Play the bag; return the exit code (0, or 1 if the bag was damaged or what the nodes need was dropped)."""
+    from bsp_ros.cell import read_cell_file
     from bsp_ros.live.replay import play_bag
+    from bsp_ros.live.replay.report import dropped_for_nodes
 
     if args.wait_subscribers < 0 or args.ack_timeout < 0:
         raise InputError("--wait-subscribers and --ack-timeout must be >= 0")
+    cell = read_cell_file(args.cell)
 
     def say(line: str) -> None:
         print(line, flush=True)
@@ -100,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
             ack_timeout_s=args.ack_timeout,
             stop=stop,
             on_start=_announce(say),
+            cell=cell,
         )
     for line in report.summary_lines():
         say(line)
@@ -107,7 +122,9 @@ def run(args: argparse.Namespace) -> int:
     passes = f", {report.loops} complete passes" if args.loop else ""
     stopped = " (interrupted)" if report.interrupted else ""
     say(f"published {total} messages in {report.wall_s:.2f} s{passes}{stopped}")
+    dropped = dropped_for_nodes(report, cell)
+    if dropped:
+        print(f"bsp play: warning: not played, though the nodes need it: {'; '.join(dropped)}", file=sys.stderr)
     if report.damaged:
         print("bsp play: warning: the bag is damaged; only its intact part was played", file=sys.stderr)
-        return 1
-    return 0
+    return 1 if report.damaged or dropped else 0

@@ -21,6 +21,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "loses well under a second). Types come from the publishers or from TOPIC:TYPE (a type whose message "
             "package is not installed is refused). Each topic's metadata.yaml entry and MCAP channel list the same "
             "QoS profiles, those its publishers offered when its first message arrived, as rosbag2 records them. "
+            "The cell file's sensor mounting (frames and rotation) goes into metadata.yaml's custom_data, where "
+            "`bsp identify` finds it if the bag records no transform; where tf2_msgs is not installed, /tf_static "
+            "and /tf give way to the cell's transform topic (geometry_msgs/TransformStamped). "
             "Stop with Ctrl-C/SIGTERM or --duration. Exit codes: 0 recorded, 2 bad argument "
             "(topic or type name, a type not installed), 3 nothing recorded (no message arrived: no bag is left), "
             "4 the bag exists, 6 no rclpy. Never name the bag after a person."
@@ -34,16 +37,30 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--flush-interval", type=float, default=0.25, metavar="S", help="longest time data stays unwritten"
     )
+    parser.add_argument(
+        "--cell",
+        type=Path,
+        metavar="FILE",
+        help="the cell description (bsp_ros/cell/1) whose sensor mounting and transform topic go with the bag "
+        "(default: the shipped bsp_ros/config/cell.yaml, as the nodes read it)",
+    )
     return parser
 
 
 def run(args: argparse.Namespace) -> int:
     """Record until stopped; return the exit code."""
-    from bsp_ros.live.recorder import parse_topic_specs, record
+    from bsp_ros.bag.cell_metadata import custom_data_from_cell
+    from bsp_ros.cell import read_cell_file
+    from bsp_ros.live.recorder import parse_topic_specs, record, transform_topic_for_tf
+    from bsp_ros.live.runtime.ros import has_message
     from bsp_ros.validation import check_output_dir
 
     check_output_dir("--out", args.out)  # a clear error before subscribing (the recorder refuses an existing bag)
-    specs = parse_topic_specs(args.topics)
+    cell = read_cell_file(args.cell)
+    tf_installed = has_message("tf2_msgs/msg/TFMessage")
+    specs, note = transform_topic_for_tf(parse_topic_specs(args.topics), cell.transform_topic, tf_installed)
+    if note:
+        print(f"note: {note}", flush=True)
 
     def subscribed(topic: str, msgtype: str) -> None:
         print(f"subscribed {topic} [{msgtype}]", flush=True)
@@ -59,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
             flush_interval_s=args.flush_interval,
             stop=stop,
             on_subscribe=subscribed,
+            custom_data=custom_data_from_cell(cell),
         )
     for line in report.summary_lines():
         print(line, flush=True)

@@ -7,7 +7,7 @@ import os
 import re
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -18,7 +18,15 @@ from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, cha
 from bsp_ros.errors import DataError, InputError, RuntimeBackendError
 from bsp_ros.live.sensor_topics import is_sensor_topic
 
-__all__ = ["RecordReport", "TopicSpec", "offered_profile", "parse_topic_specs", "record", "subscription_qos"]
+__all__ = [
+    "RecordReport",
+    "TopicSpec",
+    "offered_profile",
+    "parse_topic_specs",
+    "record",
+    "subscription_qos",
+    "transform_topic_for_tf",
+]
 
 _LOG = logging.getLogger("bsp_ros.live.recorder")
 
@@ -59,6 +67,32 @@ def parse_topic_specs(specs: Sequence[str]) -> list[TopicSpec]:
     if not out:
         raise InputError("give at least one topic to record")
     return out
+
+
+def transform_topic_for_tf(
+    specs: Sequence[TopicSpec], transform_topic: str, tf_installed: bool
+) -> tuple[list[TopicSpec], str]:
+    """Where tf2_msgs is not installed, /tf_static and /tf (which cannot be subscribed) give way to the cell's
+    TransformStamped topic of the sensor frame: the topics to record, and a note saying so ('' if nothing changed).
+
+    Parameters
+    ----------
+    specs : the topics asked for.
+    transform_topic : the cell's TransformStamped topic ('' none).
+    tf_installed : tf2_msgs/msg/TFMessage can be imported.
+    """
+    tf_topics = [s.topic for s in specs if s.topic in ("/tf_static", "/tf")]
+    if tf_installed or not tf_topics:
+        return list(specs), ""
+    kept = [s for s in specs if s.topic not in tf_topics]
+    if not transform_topic:
+        return kept, f"{', '.join(tf_topics)}: tf2_msgs is not installed and the cell names no transform topic"
+    if transform_topic not in {s.topic for s in kept}:
+        kept.append(TopicSpec(transform_topic, "geometry_msgs/msg/TransformStamped"))
+    return kept, (
+        f"{', '.join(tf_topics)}: tf2_msgs is not installed; the sensor's rotation is recorded from {transform_topic} "
+        "(geometry_msgs/TransformStamped) instead"
+    )
 
 
 def subscription_qos(topic: str, offered: Sequence[tuple[bool, bool]]) -> tuple[bool, bool]:
@@ -178,7 +212,9 @@ class _Sub:
 class _Recorder:
     """The raw rclpy subscriptions and the MCAP writer of one recording (all used from one thread)."""
 
-    def __init__(self, out: Path, domain_id: int | None, chunk_bytes: int) -> None:
+    def __init__(
+        self, out: Path, domain_id: int | None, chunk_bytes: int, custom_data: Mapping[str, str] | None = None
+    ) -> None:
         from mcap.writer import CompressionType, Writer
         from rosbags.typesys import Stores, get_typestore
 
@@ -203,6 +239,7 @@ class _Recorder:
         self.start_ns = 0
         self.end_ns = 0
         self.unflushed = 0
+        self.custom_data = dict(custom_data or {})
 
     def discovered(self, topics: Sequence[str]) -> dict[str, dict[bytes, _Publisher]]:
         """ROS topic -> {publisher gid: publisher} of ``topics`` (rclpy ``get_publishers_info_by_topic``)."""
@@ -330,7 +367,7 @@ class _Recorder:
         return replace(sub.record, message_count=sub.count)
 
     def _custom(self) -> dict[str, str]:
-        return {"writer": f"bsp_ros {__version__} recorder"}
+        return {"writer": f"bsp_ros {__version__} recorder", **self.custom_data}
 
     def close(self) -> None:
         """Leave the ROS graph (the file is closed by :meth:`finish`, or left as is after a failure)."""
@@ -349,6 +386,7 @@ def record(
     flush_interval_s: float = DEFAULT_FLUSH_S,
     stop: threading.Event | None = None,
     on_subscribe: Callable[[str, str], None] | None = None,
+    custom_data: Mapping[str, str] | None = None,
 ) -> RecordReport:
     """Record ROS 2 topics into a new rosbag2 bag (metadata version 9, one ``.mcap``).
 
@@ -374,6 +412,7 @@ def record(
     flush_interval_s : longest time a received message stays in memory, s.
     stop : set it (e.g. from a SIGINT/SIGTERM handler) to finish the recording.
     on_subscribe : called with ``(topic, type)`` when a topic is subscribed.
+    custom_data : more ``custom_data`` pairs for ``metadata.yaml`` (the cell's stated sensor mounting).
 
     Returns
     -------
@@ -403,7 +442,7 @@ def record(
     report = RecordReport(path=str(out))
     started = time.monotonic()
     deadline = None if duration_s is None else started + duration_s
-    rec = _Recorder(out, domain_id, chunk_bytes)
+    rec = _Recorder(out, domain_id, chunk_bytes, custom_data)
     try:
         pending = {s.topic: s for s in specs}
         last_flush = time.monotonic()

@@ -8,6 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from bsp_ros.bag.cell_metadata import stated_from_custom_data
 from bsp_ros.bag.layout import resolve_bag
 from bsp_ros.bag.mcap_scan import ProgressCallback, ScanResult, scan_mcap
 from bsp_ros.bag.metadata import BagMetadata
@@ -22,7 +23,7 @@ from bsp_ros.bag.reader.refusals import (
 from bsp_ros.bag.reader.rotation import usable_transform, wrench_rotation
 from bsp_ros.bag.reader.sink import Collected, SessionSink, Streams, collect_streams
 from bsp_ros.bag.report import ReadReport
-from bsp_ros.bag.topics import WORLD_FRAME, TopicMap
+from bsp_ros.bag.topics import StatedRotation, TopicMap
 from bsp_ros.core.streams import MarkerSeries, Session, WrenchSeries
 from msg_adapters.rotation_track import TransformBuffer
 
@@ -46,7 +47,7 @@ def read_session(
     path: str | Path,
     *,
     topics: TopicMap | None = None,
-    world_frame: str = WORLD_FRAME,
+    world_frame: str | None = None,
     frame_aliases: Mapping[str, str] | None = None,
     strict: bool = False,
     progress: ProgressCallback | None = None,
@@ -63,7 +64,7 @@ def read_session(
     ----------
     path : bag directory, its ``metadata.yaml``, or an ``.mcap`` file.
     topics : topic names (default: docs/contract.md's).
-    world_frame : name of the ``world`` frame.
+    world_frame : name of the ``world`` frame (default: ``topics.world_frame``, ``world``).
     frame_aliases : frame id -> frame it coincides with (no rotation), used when TF does not connect
         the wrench frame to ``world_frame`` (e.g. ``{"ft_link": "world"}`` silences the warning).
     strict : raise :class:`BagCorruptError` on any CRC error, truncation or lost message instead of
@@ -82,6 +83,7 @@ def read_session(
         All subclasses of :class:`bsp_ros.errors.BagError`, each with a ``code``.
     """
     topic_map = topics or TopicMap()
+    world_frame = world_frame or topic_map.world_frame
     aliases = dict(frame_aliases or {})
     root = Path(path)
     report = ReadReport(path=str(root))
@@ -102,7 +104,9 @@ def read_session(
 
     streams = collect_streams(sink, topic_map, report.present)
     _count_streams(streams, topic_map, world_frame, counter)
-    transforms = _read_transforms(sink, topic_map, counter)
+    transforms = _read_transforms(sink, topic_map, counter, (topic_map.tf_static, topic_map.tf))
+    topic_transforms = _read_transforms(sink, topic_map, counter, (topic_map.transform,))
+    stated = topic_map.stated or _stated_in_metadata(metadata, report)
     _warn_of_anomalies(report)
 
     # Required streams (the robot's handle pose stands in for the hand marker).
@@ -112,7 +116,8 @@ def read_session(
     if strict:
         refuse_damage(root, report)
 
-    session = _session(streams, handle_pose, transforms, world_frame, aliases, report)
+    rotations = _Rotations(transforms, topic_transforms, stated)
+    session = _session(streams, handle_pose, rotations, world_frame, aliases, report)
     return BagRead(session, report, _receive_times(streams, handle_pose))
 
 
@@ -174,10 +179,15 @@ def _count_streams(streams: Streams, topic_map: TopicMap, world_frame: str, coun
             counter.report.warnings.append(f"{rep.topic}: positions stamped in {foreign}, expected {world_frame}")
 
 
-def _read_transforms(sink: SessionSink, topic_map: TopicMap, counter: TopicCounter) -> TransformBuffer:
-    """Report the /tf_static and /tf topics and buffer their usable transforms, in receive order."""
+def _read_transforms(
+    sink: SessionSink, topic_map: TopicMap, counter: TopicCounter, topics: tuple[str, ...]
+) -> TransformBuffer:
+    """Report transform ``topics`` (/tf_static and /tf, or the TransformStamped topic) and buffer their usable
+    transforms, in receive order (/tf_static's as fixed)."""
     transforms = TransformBuffer()
-    for topic in (topic_map.tf_static, topic_map.tf):
+    for topic in topics:
+        if not topic:
+            continue
         stream = sink.streams.get(topic)
         if topic in counter.report.present:
             rep = counter.count(topic, len(stream.transforms) if stream else 0)
@@ -233,10 +243,29 @@ def _topics_may_be_lost(metadata: BagMetadata | None, scans: list[ScanResult], l
     return bool(metadata is None and not all(scan.channels_complete for scan in scans) and (losses.unknown or orphans))
 
 
+class _Rotations(NamedTuple):
+    """What the wrench's rotation may come from: TF, the TransformStamped topic, a cell's stated mounting."""
+
+    tf: TransformBuffer
+    topic: TransformBuffer
+    stated: StatedRotation | None
+
+
+def _stated_in_metadata(metadata: BagMetadata | None, report: ReadReport) -> StatedRotation | None:
+    """The sensor mounting `bsp record` wrote into ``metadata.yaml`` from its cell file (None: none, or unusable,
+    with a warning)."""
+    if metadata is None:
+        return None
+    stated, problem = stated_from_custom_data(metadata.custom)
+    if problem:
+        report.warnings.append(problem)
+    return stated
+
+
 def _session(
     streams: Streams,
     handle_pose: MarkerSeries | None,
-    transforms: TransformBuffer,
+    rotations: _Rotations,
     world_frame: str,
     frame_aliases: Mapping[str, str],
     report: ReadReport,
@@ -244,7 +273,9 @@ def _session(
     """The Session of the collected streams, the wrench rotated into ``world_frame`` (warnings to ``report``)."""
     t_w, v_w, _, frames_w, _ = streams.wrench
     wrench_frame = frames_w[0] if frames_w else world_frame
-    rotation = wrench_rotation(transforms, t_w, wrench_frame, world_frame, frame_aliases, report)
+    rotation = wrench_rotation(
+        rotations.tf, t_w, wrench_frame, world_frame, frame_aliases, report, rotations.topic, rotations.stated
+    )
     markers = {
         name: MarkerSeries(t_ns=data[0], position_m=np.ascontiguousarray(data[1][:, :3]))
         for name, data in streams.markers.items()

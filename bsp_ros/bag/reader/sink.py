@@ -8,15 +8,16 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.bag.cdr import FIXED_LAYOUT_FLOATS, decode_fixed, decode_tf_message
+from bsp_ros.bag.cdr import FIXED_LAYOUT_FLOATS, decode_fixed, decode_tf_message, decode_transform_stamped
 from bsp_ros.bag.mcap_scan import ChannelInfo
-from bsp_ros.bag.topics import TF_TYPE, TopicMap
+from bsp_ros.bag.topics import TF_TYPE, TRANSFORM_TYPE, TopicMap
 from msg_adapters import (
     TransformSample,
     read_pose_stamped,
     read_tf_message,
     read_wrench_stamped,
 )
+from msg_adapters.tf import read_transform_stamped
 
 #: A stream's stamps, values, frame indexes, frame names and receive times (:func:`collect_stream`).
 Collected = tuple[np.ndarray, np.ndarray, np.ndarray, list[str], np.ndarray]
@@ -122,20 +123,26 @@ class SessionSink:
         self, stream: Stream, buf: np.ndarray, offsets: np.ndarray, lengths: np.ndarray, log_ns: np.ndarray
     ) -> None:
         for offset, length, log in zip(offsets.tolist(), lengths.tolist(), log_ns.tolist(), strict=True):
+            raw = buf[offset : offset + length].tobytes()
             if stream.msgtype == TF_TYPE:
-                transforms = decode_tf_message(buf[offset : offset + length].tobytes())
-                if transforms is not None:
-                    stream.transforms.append((int(log), transforms))
-                    continue
-            decoded = self._deserialize(stream, buf, offset, length)
-            if decoded is None:
+                transforms = decode_tf_message(raw)
+            elif stream.msgtype == TRANSFORM_TYPE:
+                one = decode_transform_stamped(raw)
+                transforms = None if one is None else [one]
+            else:
+                transforms = None
+            if transforms is not None:
+                stream.transforms.append((int(log), transforms))
                 continue
-            if stream.msgtype == TF_TYPE:
-                try:
-                    stream.transforms.append((int(log), read_tf_message(decoded)))
-                except ValueError as error:
-                    stream.undecodable += 1
-                    stream.first_error = stream.first_error or str(error)
+            decoded = self._deserialize(stream, buf, offset, length)
+            if decoded is None or stream.msgtype not in (TF_TYPE, TRANSFORM_TYPE):
+                continue
+            try:
+                read = read_tf_message(decoded) if stream.msgtype == TF_TYPE else [read_transform_stamped(decoded)]
+                stream.transforms.append((int(log), read))
+            except ValueError as error:
+                stream.undecodable += 1
+                stream.first_error = stream.first_error or str(error)
 
 
 def collect_stream(stream: Stream | None, n_floats: int) -> Collected:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.cell import angle_between_deg
+from bsp_ros.cell import DISAGREE_DEG, angle_between_deg
 from msg_adapters.rotation import matrix_from_quaternion
 from msg_adapters.rotation_track import TransformBuffer
 from msg_adapters.tf import TransformSample
@@ -24,9 +24,6 @@ __all__ = [
     "rotation_from_quaternion_xyzw",
 ]
 
-#: A transform further than this from the stated rotation (``wrench_frame_rotation_xyzw``, the cell file's
-#: mounting) is reported: one of the two describes another sensor mounting, deg.
-DISAGREE_DEG = 1.0
 #: The source of a frame whose transform did not come within ``tf_wait_s``: the stated rotation stands in.
 NO_TRANSFORM = "parameter (no transform)"
 

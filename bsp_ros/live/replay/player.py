@@ -7,6 +7,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -14,14 +15,21 @@ import numpy as np
 
 from bsp_ros.bag.errors import UnsupportedBagError
 from bsp_ros.bag.mcap_scan import ScanResult
+from bsp_ros.bag.topics import TF_TYPE, TRANSFORM_TYPE
+from bsp_ros.cell import CellDescription
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.replay.batches import Batch, scan_thread
 from bsp_ros.live.replay.clock import CLOCK_QOS, CLOCK_TYPE, clock_bytes, sleep_until
 from bsp_ros.live.replay.plan import TopicPlan, bag_files, plan_topics
 from bsp_ros.live.replay.report import PlayReport, note_damage
+from bsp_ros.live.replay.transform_bridge import TransformBridge
+from bsp_ros.live.runtime.qos import QosSpec
+from msg_adapters.tf import TransformSample, build_transform_stamped
 
 _LOG = logging.getLogger("bsp_ros.live.replay")
 _QUEUE_BATCHES = 4
+#: The bridged sensor rotation: reliable and transient-local (a late subscriber gets the latest ones).
+BRIDGE_QOS = QosSpec(reliable=True, depth=100, transient_local=True)
 
 
 def play_bag(
@@ -38,12 +46,15 @@ def play_bag(
     ack_timeout_s: float = 5.0,
     stop: threading.Event | None = None,
     on_start: Callable[[PlayReport], None] | None = None,
+    cell: CellDescription | None = None,
 ) -> PlayReport:
     """Publish a bag's messages on ROS 2 topics (rclpy), timed by their receive (log) times.
 
     Messages are read raw from the MCAP file(s) with CRC checking and published as serialized CDR, byte
-    for byte as recorded; a topic whose message package is not installed (e.g. ``tf2_msgs`` outside a
-    cell) is skipped with a warning naming its type. The wrench and marker streams go out best effort
+    for byte as recorded; a topic whose message package is not installed is skipped, named in the report. Where
+    tf2_msgs is not installed, /tf_static and /tf are played as the ``cell``'s sensor rotation on its transform
+    topic (geometry_msgs/TransformStamped, :class:`TransformBridge`) unless the bag has that topic. The wrench and
+    marker streams go out best effort
     (``sensor_data``), latched (transient-local) topics such as ``/tf_static`` reliable transient-local
     and ahead of the timeline, everything else reliable. A damaged bag plays its intact part; the report
     says what was lost.
@@ -63,6 +74,7 @@ def play_bag(
         (at most 0.5 s when stopped early).
     stop : set it (e.g. from a signal handler) to stop the playback early.
     on_start : called once the publishers exist and playback begins (with the report so far).
+    cell : the cell description (its frames and transform topic; None: TF topics without tf2_msgs are skipped).
 
     Returns
     -------
@@ -86,7 +98,7 @@ def play_bag(
         reasons = "; ".join(f"{topic}: {why}" for topic, why in sorted(report.skipped.items()))
         raise UnsupportedBagError(f"{path}: nothing to play, every topic is skipped ({reasons})")
 
-    from bsp_ros.live.runtime.ros import Client, message_class
+    from bsp_ros.live.runtime.ros import Client, has_message, message_class
 
     client = Client("rosbag2_player", domain_id)
     started = time.monotonic()
@@ -94,28 +106,37 @@ def play_bag(
         writers: dict[str, Callable[[bytes], None]] = {}
         publishers: dict[str, Any] = {}
         plan_of: dict[str, TopicPlan] = {}
+        bridge: _Bridge | None = None
+        bridged = cell is not None and not has_message(TF_TYPE) and cell.transform_topic not in {p.topic for p in plans}
         for plan in plans:
-            try:
-                message_class(plan.msgtype)
-            except BspError as error:
-                report.skipped[plan.topic] = f"type {plan.msgtype or '<none>'} not installed: {error}"
-                _LOG.warning("skipping %s: %s", plan.topic, report.skipped[plan.topic])
-                continue
-            pub = client.publisher(plan.msgtype, plan.topic, plan.qos)
-            publishers[plan.topic] = pub
-            writers[plan.topic] = _raw_writer(pub)
+            if bridged and plan.msgtype == TF_TYPE:
+                assert cell is not None
+                bridge = bridge or _Bridge.start(client, cell)
+                writers[plan.topic] = bridge.converter.writer(static=plan.latched)
+                report.bridged[plan.topic] = cell.transform_topic
+            else:
+                try:
+                    message_class(plan.msgtype)
+                except BspError:
+                    report.skipped[plan.topic] = f"its type {plan.msgtype or '<none>'} is not installed"
+                    continue
+                publishers[plan.topic] = client.publisher(plan.msgtype, plan.topic, plan.qos)
+                writers[plan.topic] = _raw_writer(publishers[plan.topic])
             plan_of[plan.topic] = plan
             report.published[plan.topic] = 0
             report.expected[plan.topic] = plan.expected
         clock_write = _raw_writer(client.publisher(CLOCK_TYPE, "/clock", CLOCK_QOS)) if clock else None
 
-        _wait_for_subscribers(publishers, wait_subscribers_s, settle_s, stop)
-        report.matched = {t: p.get_subscription_count() for t, p in publishers.items()}
+        waited = {**publishers, **({} if bridge is None else {bridge.topic: bridge.publisher})}
+        _wait_for_subscribers(waited, wait_subscribers_s, settle_s, stop)
+        report.matched = {t: p.get_subscription_count() for t, p in waited.items()}
         if on_start is not None:
             on_start(report)
         _play_passes(files, writers, plan_of, report, rate, loop, clock_write, clock_hz, stop)
         report.interrupted = stop.is_set()
+        report.bridge_sent = 0 if bridge is None else bridge.converter.sent
         reliable = [p for t, p in publishers.items() if plan_of[t].qos.reliable and report.published[t]]
+        reliable += [bridge.publisher] if bridge is not None and bridge.converter.sent else []
         if reliable:
             # Interrupted: do not hang on a subscriber that may be dead (DDS notices only after its lease).
             deadline = time.monotonic() + (min(ack_timeout_s, 0.5) if report.interrupted else ack_timeout_s)
@@ -125,6 +146,27 @@ def play_bag(
         report.wall_s = time.monotonic() - started
         client.close()
     return report
+
+
+@dataclass(frozen=True)
+class _Bridge:
+    """The TransformStamped publisher of the cell's sensor rotation and the bridge feeding it."""
+
+    topic: str
+    publisher: Any
+    converter: TransformBridge
+
+    @classmethod
+    def start(cls, client: Any, cell: CellDescription) -> _Bridge:
+        """The publisher (reliable, transient-local: a node that starts late still gets the rotation)."""
+        from bsp_ros.live.runtime.ros import message_class
+
+        publisher = client.publisher(TRANSFORM_TYPE, cell.transform_topic, BRIDGE_QOS)
+
+        def publish(sample: TransformSample) -> None:
+            publisher.publish(build_transform_stamped(message_class, sample))
+
+        return cls(cell.transform_topic, publisher, TransformBridge(cell.world_frame, cell.sensor_frame, publish))
 
 
 def _raw_writer(publisher: Any) -> Callable[[bytes], None]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from bsp_ros.bag.mcap_scan import ScanResult
+from bsp_ros.cell import CellDescription
 
 
 @dataclass
@@ -17,6 +18,8 @@ class PlayReport:
     published : topic -> messages published (over all loops).
     expected : topic -> messages the bag lists per pass (None if unknown).
     skipped : topic -> why it was not played (unknown type, not CDR, not selected).
+    bridged : TF topic -> the TransformStamped topic its sensor rotation went out on (tf2_msgs not installed).
+    bridge_sent : TransformStamped messages the bridged TF topics gave.
     matched : topic -> matched subscriptions when playback started.
     loops : complete passes over the bag.
     crc_errors, truncated : damage found in the (first) pass.
@@ -32,6 +35,8 @@ class PlayReport:
     published: dict[str, int] = field(default_factory=dict)
     expected: dict[str, int | None] = field(default_factory=dict)
     skipped: dict[str, str] = field(default_factory=dict)
+    bridged: dict[str, str] = field(default_factory=dict)
+    bridge_sent: int = 0
     matched: dict[str, int] = field(default_factory=dict)
     loops: int = 0
     first_pass: dict[str, int] = field(default_factory=dict)
@@ -65,13 +70,19 @@ class PlayReport:
                 continue
             count = self.published.get(topic, 0)
             expected = self.expected.get(topic)
-            text = f"{topic}: {count} published"
+            bridged = self.bridged.get(topic)
+            text = f"{topic}: {count} {'played as its sensor rotation' if bridged else 'published'}"
             if expected is not None:
                 text += f" (bag lists {expected}{' per pass' if self.loops > 1 else ''})"
             lost = self.lost(topic)
             if lost:
                 text += f", {lost} lost to damage"
             lines.append(text)
+        if self.bridged:
+            lines.append(
+                f"{', '.join(sorted(self.bridged))}: tf2_msgs is not installed; the sensor's rotation went out as "
+                f"{self.bridge_sent} geometry_msgs/TransformStamped on {', '.join(sorted(set(self.bridged.values())))}"
+            )
         for topic, why in sorted(self.skipped.items()):
             lines.append(f"{topic}: skipped ({why})")
         if self.damaged:
@@ -84,6 +95,23 @@ class PlayReport:
         if self.acked is False:
             lines.append("not every reliable subscriber acknowledged all messages before the timeout")
         return lines
+
+
+def dropped_for_nodes(report: PlayReport, cell: CellDescription) -> list[str]:
+    """What the nodes need that the playback dropped: a skipped wrench, marker, handle pose, transform or TF topic,
+    or TF topics that gave no rotation of the cell's sensor frame."""
+    needed = {cell.wrench_topic, cell.transform_topic, cell.handle_pose_topic, "/tf_static", "/tf"} - {""}
+    out = [
+        f"{topic} ({why})"
+        for topic, why in sorted(report.skipped.items())
+        if topic in needed or topic.startswith(cell.marker_topic_prefix)
+    ]
+    if report.bridged and report.bridge_sent == 0 and any(report.published.get(t) for t in report.bridged):
+        out.append(
+            f"the sensor's rotation ({', '.join(sorted(report.bridged))} hold no transform "
+            f"{cell.world_frame} -> {cell.sensor_frame})"
+        )
+    return out
 
 
 def note_damage(report: PlayReport, scan: ScanResult) -> None:

@@ -27,9 +27,11 @@ from bsp_ros.live.runtime.ros import has_message
 ROOT = Path(__file__).resolve().parents[3]
 PEER = Path(__file__).with_name("play_record_peer.py")
 TOPICS = ["/ft_sensor/wrench", "/mocap/shoulder", "/mocap/elbow", "/mocap/wrist", "/mocap/hand", "/tf_static"]
-#: /tf_static needs tf2_msgs, which the PyPI wheels lack: there it is skipped (play) and never subscribed (record).
+#: /tf_static needs tf2_msgs, which the PyPI wheels lack: there play sends its rotation as the cell's TransformStamped
+#: (/ft_sensor/transform) and record records that topic in its place.
 TF_INSTALLED = has_message("tf2_msgs/msg/TFMessage")
 PLAYABLE = TOPICS if TF_INSTALLED else TOPICS[:-1]
+TRANSFORM_TOPIC = "/ft_sensor/transform"
 pytestmark = pytest.mark.dds
 
 
@@ -139,9 +141,9 @@ def test_play_into_recorder_loses_nothing_and_is_bit_identical(
     procs.append(player)
     played, err = player.communicate(timeout=40)
     assert player.returncode == 0, err
-    assert f"playing {len(PLAYABLE)} topics" in played and "without subscribers" not in played
-    if not TF_INSTALLED:
-        assert "/tf_static" in played and "tf2_msgs/msg/TFMessage" in played  # skipped, by name
+    assert f"playing {len(TOPICS)} topics" in played and "without subscribers" not in played
+    if not TF_INSTALLED:  # /tf_static's rotation went out on the transform topic, said once
+        assert played.count("tf2_msgs is not installed") == 1 and TRANSFORM_TOPIC in played, played
     time.sleep(0.5)
     recorder.send_signal(signal.SIGINT)
     _, err = recorder.communicate(timeout=20)
@@ -149,12 +151,14 @@ def test_play_into_recorder_loses_nothing_and_is_bit_identical(
 
     source, copy = _raw(source_bag), _raw(out)
     source = {t: v for t, v in source.items() if t in PLAYABLE}
+    transforms = copy.pop(TRANSFORM_TOPIC, [])
+    assert len(transforms) == (0 if TF_INSTALLED else 1)
     assert {t: len(v) for t, v in copy.items()} == {t: len(v) for t, v in source.items()}
     for topic in source:
         assert copy[topic] == source[topic], topic  # every payload, byte for byte, in order
     meta = yaml.safe_load((out / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert meta["version"] == 9 and meta["storage_identifier"] == "mcap" and len(meta["relative_file_paths"]) == 1
-    assert meta["message_count"] == sum(len(v) for v in source.values())
+    assert meta["message_count"] == sum(len(v) for v in source.values()) + len(transforms)
 
     original, again = read_session(source_bag), read_session(out)
     assert again.report.clean or not TF_INSTALLED, again.report.warnings
@@ -164,10 +168,10 @@ def test_play_into_recorder_loses_nothing_and_is_bit_identical(
     assert again.session.wrench.torque_nm.tobytes() == original.session.wrench.torque_nm.tobytes()
     for name, series in original.session.markers.items():
         assert again.session.markers[name].position_m.tobytes() == series.position_m.tobytes()
-    if TF_INSTALLED:
-        np.testing.assert_array_equal(
-            again.session.rotation_world_from_sensor, original.session.rotation_world_from_sensor
-        )
+    assert again.report.rotation_source == ("tf" if TF_INSTALLED else "topic")
+    np.testing.assert_allclose(
+        again.session.rotation_world_from_sensor, original.session.rotation_world_from_sensor, atol=1e-12
+    )
 
 
 @pytest.mark.skipif(not TF_INSTALLED, reason="tf2_msgs is not installed")
@@ -234,7 +238,8 @@ def test_killed_recorder_leaves_a_bag_read_up_to_the_cut(
     assert read.session.wrench.t_ns.size >= 150  # ~2.5 s at 100 Hz, less the loss
     source = _raw(source_bag)
     for topic, payloads in _raw(out).items():
-        assert payloads == source[topic][: len(payloads)], topic  # an intact prefix
+        if topic != TRANSFORM_TOPIC:  # the bridged rotation: not in the source bag
+            assert payloads == source[topic][: len(payloads)], topic  # an intact prefix
 
 
 def test_damaged_bag_plays_its_intact_part_and_says_so(
@@ -264,10 +269,11 @@ def test_damaged_bag_plays_its_intact_part_and_says_so(
     assert 0 < len(wrench) < len(source["/ft_sensor/wrench"])
     assert f"/ft_sensor/wrench: {len(wrench)} published (bag lists {len(source['/ft_sensor/wrench'])})" in played
     for topic, payloads in copy.items():
-        assert payloads == source[topic][: len(payloads)], topic
+        if topic != TRANSFORM_TOPIC:  # the bridged rotation: not in the source bag
+            assert payloads == source[topic][: len(payloads)], topic
 
 
-def test_tf_static_without_tf2_msgs_is_skipped_by_name_and_clock_runs(
+def test_tf_static_without_tf2_msgs_goes_out_as_the_transform_topic_and_clock_runs(
     source_bag: Path, procs: list[subprocess.Popen[str]]
 ) -> None:
     from bsp_ros.live.runtime.ros import Client
@@ -293,7 +299,8 @@ def test_tf_static_without_tf2_msgs_is_skipped_by_name_and_clock_runs(
     player.send_signal(signal.SIGINT)
     stdout, stderr = player.communicate(timeout=20)
     if not TF_INSTALLED:
-        assert "/tf_static" in stdout + stderr and "tf2_msgs/msg/TFMessage" in stdout + stderr
+        assert "/tf_static" in stdout + stderr and "tf2_msgs is not installed" in stdout + stderr
+        assert "pip install" not in stdout + stderr
 
 
 @pytest.mark.parametrize("spec", ["/x:no_such_msgs/msg/Nothing", "/foo:geometry_msgs/msg/Nope"])
