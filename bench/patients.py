@@ -13,10 +13,11 @@ arm's segment parameters and its RELAXED passive moments; what the patient did i
 
 Per case: runs, valid-and-right, VALID-AND-WRONG (some |z| > 3 on a data-sourced parameter), invalid-and-right,
 invalid-and-wrong; two-sided calibration over the valid runs' data-sourced parameters (``calibration.py``: z RMS,
-share within 1 and 2 std); the cause-naming rate: of the runs that are invalid or flagged (a finding of severity
-``weak``, or any finding beyond the routine notes of :data:`ROUTINE`), the share whose ``quality.findings[].code``
-include a code of :data:`CAUSES` for the case (``-`` for the controls, which have no cause: there the column
-counts runs naming any patient cause, a false alarm); the codes seen most often beyond the routine ones.
+share within 1 and 2 std); the cause-naming rate: of the runs with a cause that are invalid or flagged (a finding of
+severity ``weak``, or any finding beyond the routine notes of :data:`ROUTINE`), the share whose
+``quality.findings[].code`` include a code of :data:`CAUSES` for the case; ``false n/m``: of the runs without a
+cause (the controls, and a reflex that never fired: truth.json's ``patient.spasticity.active_fraction`` 0), those
+whose codes name some patient cause (:data:`PATIENT_CODES`); the codes seen most often beyond the routine ones.
 
 ``--quick``: 2 seeds of 60 s, wrench at 250 Hz. ``--write-bags DIR``: one bag per case (the first seed) with its
 truth.json into ``DIR/<case>/``, nothing identified.
@@ -86,8 +87,11 @@ PATIENT_CODES = frozenset(
     {"arm_active", "too_little_relaxed", "spasticity", "tremor", "tremor_friction", "handle_shaken", "hand_slipped"}
     | {"grip_compliant", "skin_sliding"}
 )
-# Notes every session may carry; a valid run with only these is not flagged.
-ROUTINE = frozenset({"prior_note", "bag_note", "timing_note", "tare_note", "data_note", "held_from_check"})
+# Notes every session may carry (the prior, the bag, samples cleaned); a valid run with only these is not flagged.
+ROUTINE = frozenset(
+    {"prior_note", "bag_note", "timing_note", "tare_note", "data_note", "held_from_check"}
+    | {"wrench_spikes_removed", "fit_outliers_removed"}
+)
 
 
 @dataclass(frozen=True)
@@ -134,14 +138,19 @@ class Tally:
     failed: int = 0
     flagged: int = 0
     named: int = 0
-    patient_code_runs: int = 0
+    quiet_runs: int = 0
+    false_alarms: int = 0
     worst_z: float = 0.0
     worst_param: str = ""
     codes: collections.Counter[str] = field(default_factory=collections.Counter)
     two_sided: calibration.Tally = field(default_factory=calibration.Tally)
 
     def add(self, estimate: dict[str, Any], truth: dict[str, Any], causes: frozenset[str]) -> dict[str, Any]:
-        """Score one estimate; return its row (valid, worst |z|, codes, flagged, named)."""
+        """Score one estimate; return its row (valid, worst |z|, codes, flagged, named).
+
+        ``causes`` empty: the run had no cause (a control, a reflex that never fired); it counts as quiet, and as
+        a false alarm if a patient-cause code shows.
+        """
         self.runs += 1
         quality = estimate["quality"]
         valid = bool(quality["valid"])
@@ -156,34 +165,52 @@ class Tally:
         codes = sorted({str(f["code"]) for f in findings})
         flagged = (not valid) or any(f["severity"] == "weak" or f["code"] not in ROUTINE for f in findings)
         named = bool(causes & set(codes))
-        self.flagged += flagged
-        self.named += flagged and named
-        self.patient_code_runs += bool(PATIENT_CODES & set(codes))
+        if causes:
+            self.flagged += flagged
+            self.named += flagged and named
+        else:
+            self.quiet_runs += 1
+            self.false_alarms += bool(PATIENT_CODES & set(codes))
         self.codes.update(c for c in codes if c not in ROUTINE)
         worst = max(z, key=lambda k: z[k]) if z else ""
         if worst and z[worst] > self.worst_z:
             self.worst_z, self.worst_param = z[worst], worst
         return {"valid": valid, "wrong": wrong, "worst_z": z.get(worst, 0.0), "worst": worst, "codes": codes}
 
-    def naming(self, has_cause: bool) -> str:
-        """``named/flagged`` and its share; for a control, the runs naming any patient cause over all runs."""
-        if not has_cause:
-            return f"false {self.patient_code_runs}/{self.runs}"
-        if self.flagged == 0:
-            return "0/0"
-        return f"{self.named}/{self.flagged} {100 * self.named / self.flagged:3.0f}%"
+    def naming(self) -> str:
+        """``named/flagged`` and its share over the runs with a cause; ``false n/m``: of the runs without one, those
+        naming some patient cause."""
+        parts = []
+        if self.flagged:
+            parts.append(f"{self.named}/{self.flagged} {100 * self.named / self.flagged:3.0f}%")
+        elif self.runs > self.quiet_runs:
+            parts.append("0/0")
+        if self.quiet_runs:
+            parts.append(f"false {self.false_alarms}/{self.quiet_runs}")
+        return " ".join(parts)
 
-    def to_json(self, has_cause: bool) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         return {
             **{
                 k: getattr(self, k)
                 for k in ("runs", "valid_right", "valid_wrong", "invalid_right", "invalid_wrong", "failed")
             },
-            **{k: getattr(self, k) for k in ("flagged", "named", "patient_code_runs", "worst_z", "worst_param")},
-            "naming": self.naming(has_cause),
+            **{k: getattr(self, k) for k in ("flagged", "named", "quiet_runs", "false_alarms")},
+            "worst_z": self.worst_z,
+            "worst_param": self.worst_param,
+            "naming": self.naming(),
             "calibration": dataclasses.asdict(self.two_sided.calibration()),
             "codes": dict(self.codes),
         }
+
+
+def cause_imposed(truth: dict[str, Any]) -> bool:
+    """Whether the patient of truth.json did anything: a reflex that never fired (a stretch below its threshold
+    speed) leaves the run without a cause to name."""
+    patient = truth.get("patient", {})
+    acting = [k for k in ("activity", "tremor", "skin", "slip", "strap") if k in patient]
+    reflex = patient.get("spasticity", {}).get("active_fraction", 0.0) > 0.0
+    return bool(acting) or reflex
 
 
 def identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
@@ -231,7 +258,7 @@ def run_case(case: Case, seeds: list[int], args: argparse.Namespace, workdir: Pa
             tally.failed += 1
             rows.append({"case": case.name, "seed": seed, "exit": code})
             continue
-        row = tally.add(estimate, truth, CAUSES[case.name])
+        row = tally.add(estimate, truth, CAUSES[case.name] if cause_imposed(truth) else frozenset())
         rows.append({"case": case.name, "seed": seed, "exit": code, **row})
         if args.verbose:
             print(f"  seed {seed}: valid={row['valid']} worst |z| {row['worst_z']:.2f} ({row['worst']}) {row['codes']}")
@@ -250,7 +277,7 @@ def row_text(name: str, t: Tally) -> str:
     fail = f" failed {t.failed}" if t.failed else ""
     return (
         f"{name:16} {t.runs:4} {t.valid_right:8} {t.valid_wrong:7} {t.invalid_right:9} {t.invalid_wrong:9} "
-        f"{calibration.calibration_columns(t.two_sided.calibration())}  {t.naming(bool(CAUSES[name])):13} "
+        f"{calibration.calibration_columns(t.two_sided.calibration())}  {t.naming():13} "
         f"{t.worst_z:8.3g} ({t.worst_param})  {codes}{fail}"
     )
 
@@ -311,7 +338,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         document = {
             "settings": {"seeds": seeds, "duration_s": args.duration, "wrench_hz": args.wrench_hz, "passive": model},
-            "cases": {k: t.to_json(bool(CAUSES[k])) for k, t in tallies.items()},
+            "cases": {k: t.to_json() for k, t in tallies.items()},
             "runs": runs,
         }
         args.json.write_text(json.dumps(document, indent=1))
