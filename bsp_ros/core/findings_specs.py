@@ -283,10 +283,10 @@ SPECS: dict[FindingCode, FindingSpec] = {
     ),
     C.ROTATION_ASSUMED: FindingSpec(
         INVALID,
-        "missing transform world -> {frame} (/tf_static lost or never recorded): the wrench was taken as given in "
-        "world",
+        "missing transform world -> {frame} (no /tf_static, /tf or transform topic recorded, no cell mounting "
+        "given): the wrench was taken as given in world",
         "the force sensor's orientation was not recorded",
-        "check that the cell publishes the sensor's transform on /tf_static and record it with the session",
+        "record the sensor's transform with the session, or give its mounting with --cell FILE",
     ),
     C.INPUT_WAITING: FindingSpec(
         INVALID, "waiting for {what}", "the session has not started", "start the robot and the motion capture"

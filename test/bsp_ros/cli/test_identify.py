@@ -148,8 +148,8 @@ def test_a_rotated_sensor_bag_without_tf_static_is_invalid_naming_the_transform(
     # The verdict a user reads: the cause in plain words and what to do, then the estimator's reasons.
     first, *reasons = capsys.readouterr().err.splitlines()
     assert first == (
-        "bsp identify: estimate INVALID: the force sensor's orientation was not recorded; check that the cell "
-        "publishes the sensor's transform on /tf_static and record it with the session"
+        "bsp identify: estimate INVALID: the force sensor's orientation was not recorded; record the sensor's "
+        "transform with the session, or give its mounting with --cell FILE"
     )
     assert reasons[0].startswith("  because: missing transform world -> ft_sensor") and len(first) < 200
 
