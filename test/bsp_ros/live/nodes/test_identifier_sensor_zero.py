@@ -40,8 +40,9 @@ def _last_estimate(inputs, *params: str) -> dict:
     from bsp_ros.live.nodes.estimate_jobs import _typestore
 
     _, stamps, wrench_yzx, _, raw = inputs
+    # The rotation from the parameter at once (by default the node waits tf_wait_s for a transform first).
     frame = "wrench_frame_rotation_xyzw:=[0.0, 0.0, 0.0, 1.0]"
-    args = ["--ros-args", "-p", frame, *(a for p in params for a in ("-p", p))]
+    args = ["--ros-args", "-p", frame, "-p", "wrench_frame_source:=parameter", *(a for p in params for a in ("-p", p))]
     rclpy.init(args=args, domain_id=next_domain_id())
     node = BspIdentifierNode()
     published = []

@@ -18,7 +18,14 @@ def _node(*params: str):
     rclpy = pytest.importorskip("rclpy")
     from bsp_ros.live.nodes.bsp_identifier import BspIdentifierNode
 
-    args = ["--ros-args", "-p", "wrench_frame_rotation_xyzw:=[0.0, 0.0, 0.0, 1.0]"]
+    # The rotation from the parameter at once (by default the node waits tf_wait_s for a transform first).
+    args = [
+        "--ros-args",
+        "-p",
+        "wrench_frame_rotation_xyzw:=[0.0, 0.0, 0.0, 1.0]",
+        "-p",
+        "wrench_frame_source:=parameter",
+    ]
     rclpy.init(args=[*args, *(a for p in params for a in ("-p", p))], domain_id=next_domain_id())
     return rclpy, BspIdentifierNode()
 
