@@ -56,6 +56,7 @@ class FindingCode(StrEnum):
     NOT_IDENTIFIABLE = "not_identifiable"
     # The model and the data disagree.
     FAR_OFF_SAMPLES = "far_off_samples"
+    TOO_LITTLE_RELAXED = "too_little_relaxed"
     HANGS_ON_FEW_SAMPLES = "hangs_on_few_samples"
     MODEL_MISFIT = "model_misfit"
     STATIC_MOMENT_AT_BOUND = "static_moment_at_bound"
@@ -77,11 +78,14 @@ class FindingCode(StrEnum):
     CONFOUNDED = "confounded"
     UNCERTAIN_STATIC_MOMENT = "uncertain_static_moment"
     ELASTIC_TERM = "elastic_term"
+    TREMOR_FRICTION = "tremor_friction"
     DIRECTION_NOISY = "direction_noisy"
     # Notes on the model.
     FRICTION_SMOOTH = "friction_smooth"
     FRICTION_TRANSITION_WEAK = "friction_transition_weak"
     FIT_OUTLIERS_REMOVED = "fit_outliers_removed"
+    ARM_ACTIVE = "arm_active"
+    TREMOR = "tremor"
     WRENCH_SPIKES_REMOVED = "wrench_spikes_removed"
     MODEL_CHOICE_SPREAD = "model_choice_spread"
     DRIFT_MODELLED = "drift_modelled"

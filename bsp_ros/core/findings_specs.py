@@ -240,6 +240,13 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "the measurement does not match the arm model",
         _SENSOR,
     ),
+    C.TOO_LITTLE_RELAXED: FindingSpec(
+        INVALID,
+        "the arm was relaxed for only {relaxed_s:.0f} s ({relaxed_percent:.0f} % of the session): muscle activity "
+        "in {n_stretches} stretches leaves too little to identify the relaxed arm",
+        "the patient's arm was not relaxed for most of the session",
+        "ask the patient to let the robot move the arm without helping or resisting, and record again",
+    ),
     C.HANGS_ON_FEW_SAMPLES: FindingSpec(
         INVALID,
         "the fit hangs on a few samples: removing {n_far} far off it moves {key} at the {where} by {shift_sd:.1f} std",
@@ -330,6 +337,13 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "a longer session or wider movements (bsp plan)",
     ),
     C.ELASTIC_TERM: FindingSpec(WEAK, _elastic_term, "the relaxed joint behaves like a spring", ""),
+    C.TREMOR_FRICTION: FindingSpec(
+        WEAK,
+        "tremor shook the {where} by {angle_deg:.2f} deg RMS at {frequency_hz:.1f} Hz: the friction it shows is this "
+        "session's, lowered by the shaking, and may be less than the relaxed arm's",
+        "a tremor shook the joint, which lowers the friction a session shows",
+        "compare its friction only with sessions of a similar tremor",
+    ),
     C.DIRECTION_NOISY: FindingSpec(
         WEAK,
         "uncertain direction of motion at the {where}: velocity noise {noise_rad_s:.2g} rad/s against a typical "
@@ -348,6 +362,20 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "Coulomb amplitude is weakly identified, and its std says by how much",
     ),
     C.FIT_OUTLIERS_REMOVED: FindingSpec(NOTE, _fit_outliers),
+    C.TREMOR: FindingSpec(
+        NOTE,
+        "tremor at {frequency_hz:.1f} Hz: {torque_nm:.3f} N m RMS at the {where} ({angle_deg:.2f} deg RMS in its "
+        "angle), taken out of the fit",
+        "the patient's arm shook (tremor) during the session",
+        "note it for the therapist; a tremor does not change the arm's weight",
+    ),
+    C.ARM_ACTIVE: FindingSpec(
+        NOTE,
+        "the arm was not relaxed in {n_stretches} stretch(es), {active_s:.1f} s ({active_percent:.0f} % of the "
+        "session; up to {peak_nm:.2f} N m at the {where}): muscle activity the relaxed-arm model lacks, left out",
+        "the patient's arm was active during parts of the session",
+        "ask the patient to relax; if it recurs, note it for the therapist",
+    ),
     C.WRENCH_SPIKES_REMOVED: FindingSpec(NOTE, _spikes),
     C.MODEL_CHOICE_SPREAD: FindingSpec(
         NOTE,

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bsp_ros.core.identification.joint.activity import ActivitySettings
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.placement import chain_placement_sd_m
 from bsp_ros.core.identification.priors import BasePrior
@@ -54,6 +55,8 @@ class JointConfig:
     elastic_fallback : when the elastic check finds an elastic passive moment the model lacks, identify again
         with the elastic terms chosen by the data (``--passive auto``) instead of returning an invalid estimate:
         what `bsp identify` does when no passive model was asked for.
+    check_activity : find stretches where the arm was not relaxed (bursts of muscle activity) and leave them out;
+        ``activity`` says how they are told from the relaxed arm.
     """
 
     passive: PassiveModel = field(default_factory=PassiveModel)
@@ -77,6 +80,8 @@ class JointConfig:
     marker_placement_sd_m: float = 0.002
     handle_pose_sd_m: float = 0.0005
     elastic_fallback: bool = False
+    check_activity: bool = True
+    activity: ActivitySettings = field(default_factory=ActivitySettings)
 
     def __post_init__(self) -> None:
         check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)

@@ -23,6 +23,7 @@ from bsp_ros.core.identification.joint.judgement import (
     unidentifiable_problem,
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
+from bsp_ros.core.identification.joint.relaxed import leave_out_activity
 from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.stage import Outcome, Stage, Step
 from bsp_ros.core.identification.joint.steps import (
@@ -36,6 +37,7 @@ from bsp_ros.core.identification.joint.steps import (
     remove_far_off_samples,
 )
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
+from bsp_ros.core.identification.joint.tremor_step import calm_tremor
 from bsp_ros.core.identification.ledger import Ledger, Term
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.stacked import fit_problem
@@ -68,6 +70,7 @@ def _direction_rows(stage: Stage) -> Stage:
 # the model checks (what the model lacks; a live window runs them on some updates only).
 STEPS: tuple[Step, ...] = (
     _direction_rows,
+    leave_out_activity,
     fit_friction_transitions,
     choose_passive_model,
     remove_far_off_samples,
@@ -100,8 +103,11 @@ def failed_result(
 
 
 def _start(data: IdentificationData, config: JointConfig) -> Stage | IdentificationResult:
-    """The usable samples and the first fit, or the result where too few samples are usable."""
+    """The usable samples (tremor taken out of their torques) and the first fit, or the result where too few
+    samples are usable."""
+    data, tremor = calm_tremor(data, config)
     samples = usable_samples(data, config)
+    samples = dataclasses.replace(samples, warnings=[*tremor, *samples.warnings])
     if samples.too_few is not None:
         return failed_result(data, samples.problem.names, samples.problems or [samples.too_few], samples.warnings)
     fit = fit_problem(samples.problem)
