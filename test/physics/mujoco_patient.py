@@ -147,8 +147,8 @@ class HandSlip:
 class CompliantStrap:
     """A soft weld between the hand's contact point and the handle (MuJoCo ``solref`` of the strap).
 
-    The defaults sag about 3 mm and 1.5-2 deg under a 75 kg person's arm at the paper's posture (measured in
-    ``Imposed.weld_sag_m``, ``weld_sag_rad``).
+    The defaults sag 2.6-2.7 mm and 1.1-1.8 deg on average (up to 5 mm and 2.8 deg) under the arms of seeds 0-2
+    of ``draw_arm`` on the paper's sines (measured in ``Imposed.weld_sag_m``, ``weld_sag_rad``).
 
     Attributes
     ----------
