@@ -21,7 +21,8 @@ the bag are those of ``mujoco_cell`` and ``mujoco_bag``; a :class:`Patient` adds
   amplitude and frequency, as joint torques or as the handle shaken (a compliant robot handle moved by the
   tremor);
 - :class:`SkinSliding`: skin markers that slide along their segment with the joint angle (soft-tissue artefact:
-  the acromion marker 1-2 cm over the humeral elevation, Cereatti et al., J Biomech 2017 review; 3-20 mm);
+  Leardini et al., Gait Posture 21:212-225, 2005, review it; the acromion marker most, 1-2 cm over the humeral
+  elevation; 3-20 mm);
 - :class:`HandSlip`: the hand's contact point drifting 5-15 mm along the hand in the handle during the session
   (the wrench then acts where the hand marker is not);
 - :class:`CompliantStrap`: a soft weld (palm tissue: about 3 mm and 1-2 deg of sag under the arm's weight), so
