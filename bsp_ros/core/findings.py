@@ -79,6 +79,7 @@ class FindingCode(StrEnum):
     UNCERTAIN_STATIC_MOMENT = "uncertain_static_moment"
     ELASTIC_TERM = "elastic_term"
     TREMOR_FRICTION = "tremor_friction"
+    SPASTICITY = "spasticity"
     DIRECTION_NOISY = "direction_noisy"
     # Notes on the model.
     FRICTION_SMOOTH = "friction_smooth"

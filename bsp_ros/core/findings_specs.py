@@ -337,6 +337,13 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "a longer session or wider movements (bsp plan)",
     ),
     C.ELASTIC_TERM: FindingSpec(WEAK, _elastic_term, "the relaxed joint behaves like a spring", ""),
+    C.SPASTICITY: FindingSpec(
+        WEAK,
+        "resistance at the {where} grows with the speed of motion in one direction only ({increase_nm:.2f} N m more "
+        "at {fast_rad_s:.2f} rad/s): possible spasticity, which the relaxed-arm model does not hold",
+        "the joint resisted faster motion in one direction, as spasticity does",
+        "compare with a session at the paper's slow speeds; its static moments are the relaxed arm's",
+    ),
     C.TREMOR_FRICTION: FindingSpec(
         WEAK,
         "tremor shook the {where} by {angle_deg:.2f} deg RMS at {frequency_hz:.1f} Hz: the friction it shows is this "

@@ -1,5 +1,6 @@
 """The model checks of the stacked identification, in order: friction at low speed, an elastic moment the model
-lacks, the markers' placement, an implausible off-axis moment. Each finds what the model lacks on a fit that the
+lacks, the markers' placement, resistance growing with speed in one direction (spasticity), an implausible off-axis
+moment. Each finds what the model lacks on a fit that the
 data support; what it finds makes the estimate invalid or widens its std (a named term of the ledger)."""
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from bsp_ros.core.identification.joint.elastic_check import elastic_check
 from bsp_ros.core.identification.joint.fallback import family_result
 from bsp_ros.core.identification.joint.placement_covariance import covariance_from_products
 from bsp_ros.core.identification.joint.placement_scale import placement_scale
+from bsp_ros.core.identification.joint.spasticity import speed_dependence
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
 from bsp_ros.core.identification.joint.steps import with_drift_terms, with_placement
 from bsp_ros.core.identification.joint.stribeck import stribeck_check
@@ -21,8 +23,12 @@ from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.priors import implausible_perpendicular_moments
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.stacked import build_problem
+from bsp_ros.core.streams import joints_for
 
-__all__ = ["check_elastic", "check_perpendicular", "check_placement", "check_stribeck"]
+__all__ = ["check_elastic", "check_perpendicular", "check_placement", "check_spasticity", "check_stribeck"]
+
+# Speed-dependent resistance below this is not named (it moves no estimate a clinic reads), Nm.
+MIN_SPASTIC_NM = 0.02
 
 
 def check_stribeck(stage: Stage) -> Stage:
@@ -110,6 +116,21 @@ def check_placement(stage: Stage) -> Stage:
     wider = covariance_from_products(placement_fit, placement.products * found.column_factor)
     notes = (found.note,) if found.note is not None else ()
     return stage.apply(Outcome(replaced=((Term.MARKER_PLACEMENT, wider),), notes=notes), from_checks=True)
+
+
+def check_spasticity(stage: Stage) -> Stage:
+    """Resistance that grows with speed in one direction of motion only (:func:`speed_dependence`): named as
+    possible spasticity at that joint, beside the estimate (also where an earlier check found the friction's speed
+    dependence invalidating: spasticity may be its cause)."""
+    if not stage.config.check_elastic or stage.data_problems:
+        return stage
+    notes = []
+    for j, joint in enumerate(joints_for(stage.n)):
+        found = speed_dependence(stage.data.t_ns, stage.data.velocity_rad_s[:, j], stage.fit.residual[:, j])
+        if found.direction and found.increase_nm > MIN_SPASTIC_NM:
+            values = {"increase_nm": found.increase_nm, "fast_rad_s": found.fast_rad_s, "direction": found.direction}
+            notes.append(Finding(code=FindingCode.SPASTICITY, where=joint, values=values))
+    return stage.apply(Outcome(notes=tuple(notes)), from_checks=True)
 
 
 def check_perpendicular(stage: Stage) -> Stage:

@@ -12,6 +12,7 @@ from bsp_ros.core.identification.joint.checks import (
     check_elastic,
     check_perpendicular,
     check_placement,
+    check_spasticity,
     check_stribeck,
 )
 from bsp_ros.core.identification.joint.config import JointConfig
@@ -83,6 +84,7 @@ STEPS: tuple[Step, ...] = (
     check_stribeck,
     check_elastic,
     check_placement,
+    check_spasticity,
     check_perpendicular,
 )
 

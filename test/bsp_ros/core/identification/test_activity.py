@@ -99,3 +99,21 @@ def test_torque_that_recurs_with_the_state_is_not_activity(data: IdentificationD
     fit = _start(shaped, EXACT).fit
     found = active_stretches(data.t_ns, data.q_rad, data.velocity_rad_s, fit.residual, np.full(3, 1e-3))
     assert found.share < 0.02
+
+
+def test_resistance_growing_with_speed_in_one_direction_is_named_as_possible_spasticity(
+    data: IdentificationData,
+) -> None:
+    # A stretch reflex at the elbow (Lance 1980): above 0.6 of the typical speed, motion in one direction meets a
+    # resistance growing with its speed (at most 0.085 Nm here, as in the MuJoCo patient cell's faster session);
+    # the other direction and the slower motion meet none. The measured torque carries a resistance with the
+    # motion's sign.
+    velocity = data.velocity_rad_s[:, 1]
+    threshold = 0.6 * np.percentile(np.abs(velocity), 90)
+    reflex = np.zeros_like(data.tau_nm)
+    reflex[:, 1] = -20.0 * np.clip(-velocity - threshold, 0.0, None)
+    spastic = identify_joint(dataclasses.replace(data, tau_nm=data.tau_nm + reflex), EXACT)
+    codes = [(f.code, f.where) for f in spastic.findings]
+    assert (FindingCode.SPASTICITY, "elbow") in codes
+    relaxed = identify_joint(data, EXACT)
+    assert FindingCode.SPASTICITY not in [f.code for f in relaxed.findings]
