@@ -9,9 +9,9 @@ from typing import Any
 from bsp_ros.bag import TopicMap, read_session
 from bsp_ros.bag.fingerprint import content_sha256, recordings_sha256
 from bsp_ros.bag.reader import BagRead
-from bsp_ros.core.estimate import add_finding
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode, note
-from bsp_ros.core.pipeline import IdentifyOptions, identify_recordings, identify_session
+from bsp_ros.core.pipeline import IdentifyOptions, estimate_recordings
 
 
 def identify_bag(
@@ -40,57 +40,57 @@ def estimate_from_read(
 ) -> dict[str, Any]:
     """:func:`identify_bag` on a bag already read (``read_session`` of ``path``): a caller that needs the streams
     too (the session store's within-session cycles) reads the bag once."""
+    return typed_estimate_from_read(read, path, options, sha256).to_json()
+
+
+def typed_estimate_from_read(
+    read: BagRead, path: str | Path, options: IdentifyOptions | None = None, sha256: str | None = None
+) -> Estimate:
+    """The typed estimate of a bag already read (``read_session`` of ``path``), with what the read found."""
     # The content hash lets the session store refuse this recording's result JSON once the bag is stored.
-    document = identify_session(
-        read.session, options, {"source": Path(path).name, "content_sha256": sha256 or content_sha256(path)}
-    )
-    _attach_read(document, read)
-    return document
+    info = {"source": Path(path).name, "content_sha256": sha256 or content_sha256(path)}
+    return with_read(estimate_recordings([read.session], options, session_info=info), read)
 
 
-def _attach_read(document: dict[str, Any], read: BagRead, recording: int | None = None) -> None:
-    """What the read of one bag found (damage, the rotation's source, implausible samples) into ``document``:
-    its ``bag`` section (appended to ``bags`` for ``recording`` k of several) and the warnings."""
+def with_read(estimate: Estimate, read: BagRead, recording: int | None = None) -> Estimate:
+    """``estimate`` with what the read of one bag found (damage, the rotation's source, implausible samples): its
+    ``bag`` section (appended to ``bags`` for ``recording`` k of several) and the findings."""
     report = read.report
-    quality = document["quality"]
-    warnings = quality["warnings"]
 
     def in_recording(finding: Finding) -> Finding:
         return finding if recording is None else finding.in_recording(recording + 1)
 
+    quality = estimate.quality
     if report.damaged:
         values = {
             "crc_errors": report.crc_errors,
             "truncated": bool(report.truncated),
             "lost_messages": report.lost_messages,
         }
-        add_finding(quality, in_recording(Finding(code=FindingCode.BAG_DAMAGED, values=values)), at=0)
+        quality = quality.with_finding(in_recording(Finding(code=FindingCode.BAG_DAMAGED, values=values)), at=0)
     at = 1
     for text in report.warnings:
         finding = in_recording(note(FindingCode.BAG_NOTE, text))
-        if finding.text not in warnings:
-            add_finding(quality, finding, at=at)
+        if finding.text not in quality.warnings:
+            quality = quality.with_finding(finding, at=at)
             at += 1
-    if "rotation" in quality:  # where the bag's sensor orientation came from (the pipeline knows only its shape)
-        sources = [] if not recording else str(quality["rotation"].get("source", "")).split(", ")
-        quality["rotation"]["source"] = ", ".join(dict.fromkeys([*sources, report.rotation_source]))
-    if report.rotation_source == "assumed" and not quality["valid"]:
+    rotation = quality.extra.get("rotation")
+    if isinstance(rotation, dict):  # where the bag's sensor orientation came from (the pipeline knows only its shape)
+        sources = [] if not recording else str(rotation.get("source", "")).split(", ")
+        source = ", ".join(dict.fromkeys([*sources, report.rotation_source]))
+        quality = quality.with_extra({"rotation": {**rotation, "source": source}})
+    if report.rotation_source == "assumed" and not quality.valid:
         frame = read.session.wrench.frame_id
-        add_finding(quality, Finding(code=FindingCode.ROTATION_ASSUMED, values={"frame": frame}))
+        quality = quality.with_finding(Finding(code=FindingCode.ROTATION_ASSUMED, values={"frame": frame}))
     # Samples implausible in themselves (not merely off the model's fit): the signature of bit damage.
-    implausible = {k: v for k, v in quality.get("removed_samples", {}).items() if k.startswith(("wrench", "marker"))}
+    removed = quality.extra.get("removed_samples", {})
+    implausible = {k: v for k, v in removed.items() if k.startswith(("wrench", "marker"))}
     if report.chunks_without_crc and implausible:
         # Without chunk CRCs, bit damage shows only as implausible values: say how many were removed.
-        add_finding(
-            quality,
-            in_recording(
-                Finding(
-                    code=FindingCode.BAG_POSSIBLY_DAMAGED,
-                    values={"implausible": tuple((k, v) for k, v in implausible.items())},
-                )
-            ),
-            at=0,
+        possibly = Finding(
+            code=FindingCode.BAG_POSSIBLY_DAMAGED, values={"implausible": tuple((k, v) for k, v in implausible.items())}
         )
+        quality = quality.with_finding(in_recording(possibly), at=0)
     section = {
         "files": [Path(f).name for f in report.files],
         "messages": {topic: t.read for topic, t in report.topics.items()},
@@ -102,10 +102,10 @@ def _attach_read(document: dict[str, Any], read: BagRead, recording: int | None 
         "damage": list(report.damage),
         "implausible_samples_removed": implausible,
     }
+    estimate = estimate.with_quality(quality)
     if recording is None:
-        document["bag"] = section
-    else:
-        document.setdefault("bags", []).append(section)
+        return estimate.with_extra({"bag": section})
+    return estimate.with_extra({"bags": [*estimate.extra.get("bags", []), section]})
 
 
 def identify_bags(
@@ -142,7 +142,7 @@ def estimate_from_reads(
     combined, hashes = recordings_sha256(paths)
     info = {"source": " + ".join(Path(path).name for path in paths), "content_sha256": combined}
     recordings = [{"source": Path(path).name, "content_sha256": sha} for path, sha in zip(paths, hashes, strict=True)]
-    document = identify_recordings([r.session for r in reads], options, trunk_tilts_rad, info, recordings)
+    estimate = estimate_recordings([r.session for r in reads], options, trunk_tilts_rad, info, recordings)
     for k, read in enumerate(reads):
-        _attach_read(document, read, k)
-    return document
+        estimate = with_read(estimate, read, k)
+    return estimate.to_json()

@@ -1,65 +1,105 @@
-"""The `bsp_ros/core/estimate/1` document of docs/contract.md, built from an identification and a fused prior."""
+"""The one assembly of an :class:`~bsp_ros.core.estimate_schema.Estimate` from an identification and a fused prior.
+
+:func:`estimate_from_result` builds the typed estimate for every path (a recorded session, a live window, the
+recursive filter); what is known only later (the tare's share, the stream timing, what a bag read found) is added
+with the Estimate's own typed operations, and JSON is written only where a document leaves (``to_json()``).
+"""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from bsp_ros import __version__
 from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
-from bsp_ros.core.estimate_schema import SCHEMA
+from bsp_ros.core.estimate_schema import Estimate, Level, Quality, Quantity, Source
 from bsp_ros.core.findings import Finding, FindingCode, Severity, note
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.quantities import PASSIVE_CURVE
 from bsp_ros.core.streams import joints_for, segments_for
 
 
-def quantity(value: float, std: float, source: str) -> dict[str, Any]:
-    """One docs/contract.md quantity; a value that could not be computed is ``null``, never NaN."""
-
-    def clean(number: float) -> float | None:
-        return float(number) if math.isfinite(number) else None
-
-    return {"value": clean(value), "std": clean(std), "source": source}
+def quantity(value: float, std: float, source: str) -> Quantity:
+    """One docs/contract.md quantity; a value that could not be computed is None (``null``), never NaN."""
+    return Quantity(value=_clean(value), std=_clean(std), source=Source(source))
 
 
 def invalid_document(method: str, finding: Finding) -> dict[str, Any]:
-    """An estimate document with no parameters, made invalid by ``finding`` (live inputs not usable)."""
-    return {
-        "schema": SCHEMA,
-        "method": method,
-        "segments": {},
-        "joints": {},
-        "quality": {
-            "valid": False,
-            "n_samples": 0,
-            "condition_number": None,
-            "residual_rms_nm": {},
-            "warnings": [],
-            "message": finding.text,
-            "findings": [finding.to_json()],
-            "level": "invalid",
-        },
-    }
+    """The JSON of :meth:`Estimate.invalid`: no parameters, made invalid by ``finding`` (live inputs not usable)."""
+    return Estimate.invalid(method, finding).to_json()
 
 
 def add_finding(quality: dict[str, Any], finding: Finding, at: int | None = None) -> None:
-    """Add ``finding`` to an estimate document's ``quality`` block, in place: to ``findings``, and its text to the
-    ``message`` (an invalid one, first) or to the ``warnings`` (at index ``at``, else last)."""
-    findings = quality.setdefault("findings", [])
-    if finding.severity is Severity.INVALID:
-        # The likeliest cause of what else the estimate found (a lost transform makes the model misfit): first.
-        findings.insert(0, finding.to_json())
-        quality["message"] = finding.text + (f"; {quality['message']}" if not quality["valid"] else "")
-        quality["valid"], quality["level"] = False, "invalid"
-        return
-    findings.append(finding.to_json())
-    warnings = quality.setdefault("warnings", [])
-    warnings.insert(len(warnings) if at is None else at, finding.text)
+    """Add ``finding`` to a written document's ``quality`` block, in place, as :meth:`Quality.with_finding` adds it
+    to a typed one (``findings``, ``warnings``, ``message``, ``valid`` and ``level`` change; nothing else)."""
+    added = Quality.from_json(quality).with_finding(finding, at).to_json()
+    invalid = finding.severity is Severity.INVALID
+    changed = ("findings", "message", "valid", "level") if invalid else ("findings", "warnings")
+    quality.update({key: added[key] for key in changed})
+
+
+def estimate_from_result(
+    result: IdentificationResult,
+    *,
+    lengths_m: np.ndarray,
+    posterior: Posterior | None,
+    subject: SubjectInfo,
+    lengths_std_m: np.ndarray | None = None,
+    placement_sd_m: float | np.ndarray = 0.0,
+    contact_from_robot: bool = False,
+    removed_samples: Mapping[str, int] | None = None,
+    session: Mapping[str, Any] | None = None,
+) -> Estimate:
+    """The typed estimate of docs/contract.md, from an identification: the one place it is assembled.
+
+    ``static_moment_kgm`` is the grouped, identifiable static moment ``beta_j``; ``first_moment_kgm`` is the
+    segment's own ``m_j l_j``, which like ``mass_kg`` and ``com_m`` needs the anthropometric prior.
+
+    Parameters
+    ----------
+    result : the identification (a batch fit, a live window's, the recursive filter's).
+    lengths_m : (n,) the segment lengths it used, m.
+    posterior : masses and COMs fused with the prior, None if the fusion could not run.
+    subject : the subject facts used for the prior.
+    lengths_std_m : (n,) the lengths' standard errors, m (None: none known, as the recursive filter's).
+    placement_sd_m : how far (1 sd per axis, m) a skin marker may sit from its joint centre, one value or
+        (n + 1,) per chain point (:func:`bsp_ros.core.identification.placement.chain_placement_sd_m`): a segment
+        length is the distance of two points, so its std holds both.
+    contact_from_robot : the contact point came from the robot's handle pose, not the hand's skin marker.
+    removed_samples : implausible samples removed before the fit, by kind (the fit adds those it removed).
+    session : the ``session`` block (times, source, configuration); None or empty: none.
+
+    Returns
+    -------
+    Estimate
+        Frozen; ``to_json()`` is the document (strict JSON: no NaN).
+    """
+    n = lengths_m.size
+    lengths_std = np.zeros(n) if lengths_std_m is None else lengths_std_m
+    # Two markers' offsets along the segment move the measured length; the truth is the joint centres' distance.
+    sd_m = np.broadcast_to(np.asarray(placement_sd_m, dtype=np.float64), (n + 1,))
+    lengths_std = np.hypot(lengths_std, np.hypot(sd_m[:-1], sd_m[1:]))
+    correlation = _correlation(result.covariance)
+    return Estimate(
+        method=result.method,
+        segments=_segments(result, lengths_m, lengths_std, posterior),
+        joints=_joints(result),
+        passive_curves=_passive_curves(result),
+        quality=_quality(result, posterior, contact_from_robot, removed_samples or {}),
+        subject={"body_mass_kg": subject.body_mass_kg, "height_m": subject.height_m, "sex": subject.sex},
+        diagnostics={
+            "parameters": [f"{key}/{owner}" for key, owner in result.names],
+            "correlation": [[_finite(c) for c in row] for row in correlation],
+            **{k: v for k, v in result.diagnostics.items() if k not in ("paper_pi", "passive_curves")},
+            **({"paper_pi": result.diagnostics["paper_pi"]} if "paper_pi" in result.diagnostics else {}),
+        },
+        software={"name": "bsp_ros", "version": __version__},
+        session=dict(session) if session else None,
+    )
 
 
 def estimate_document(
@@ -70,74 +110,41 @@ def estimate_document(
     session: dict[str, Any] | None = None,
     marker_placement_sd_m: float | np.ndarray = 0.0,
 ) -> dict[str, Any]:
-    """Build the estimate JSON (as a dict) of docs/contract.md.
-
-    ``static_moment_kgm`` is the grouped, identifiable static moment ``beta_j``; ``first_moment_kgm`` is the
-    segment's own ``m_j l_j``, which like ``mass_kg`` and ``com_m`` needs the anthropometric prior.
-
-    Parameters
-    ----------
-    result : the identification.
-    data : what it was identified from (segment lengths).
-    posterior : masses and COMs fused with the prior, None if the fusion could not run.
-    subject : the subject facts used for the prior.
-    session : extra facts about the session (times, source, configuration).
-    marker_placement_sd_m : how far (1 sd per axis, m) a skin marker may sit from its joint centre, one value or
-        (n + 1,) per chain point (:func:`chain_placement_sd_m`): a segment length is the distance of two points,
-        so its std holds both.
-
-    Returns
-    -------
-    A JSON-ready dict (strict JSON: no NaN).
-    """
-    segments = _segments(result, data, posterior, marker_placement_sd_m)
-    joints = _joints(result)
-    correlation = _correlation(result.covariance)
-    document: dict[str, Any] = {
-        "schema": SCHEMA,
-        "method": result.method,
-        "segments": segments,
-        "joints": joints,
-        "quality": _quality(result, data, posterior),
-        "subject": {"body_mass_kg": subject.body_mass_kg, "height_m": subject.height_m, "sex": subject.sex},
-        "diagnostics": {
-            "parameters": [f"{key}/{owner}" for key, owner in result.names],
-            "correlation": [[_finite(c) for c in row] for row in correlation],
-            **{k: v for k, v in result.diagnostics.items() if k not in ("paper_pi", "passive_curves")},
-            **({"paper_pi": result.diagnostics["paper_pi"]} if "paper_pi" in result.diagnostics else {}),
-        },
-        "software": {"name": "bsp_ros", "version": __version__},
-    }
-    if session:
-        document["session"] = session
-    return document
+    """The JSON of :func:`estimate_from_result` for a fit of ``data`` (its lengths, contact point and removed
+    samples): for callers that write the document at once (benches)."""
+    return estimate_from_result(
+        result,
+        lengths_m=data.lengths_m,
+        lengths_std_m=data.lengths_std_m,
+        posterior=posterior,
+        subject=subject,
+        placement_sd_m=marker_placement_sd_m,
+        contact_from_robot=data.contact_from_robot,
+        removed_samples=data.removed_samples,
+        session=session,
+    ).to_json()
 
 
-def identified(result: IdentificationResult, i: int, source: str = "data") -> dict[str, Any]:
-    """Parameter ``i`` of ``result`` as a docs/contract.md quantity, with its uncertainty budget (``budget``: each
-    ledger term's standard uncertainty, whose squares sum to the std's) where the result keeps a ledger."""
+def identified(result: IdentificationResult, i: int, source: str = "data") -> Quantity:
+    """Parameter ``i`` of ``result`` as a quantity, with its uncertainty budget (``budget``: each ledger term's
+    standard uncertainty, whose squares sum to the std's) where the result keeps a ledger."""
     out = quantity(result.values[i], result.std[i], source)
     budget = result.budget(i)
-    if budget and out["std"] is not None:
-        out["budget"] = {term: float(u) if math.isfinite(u) else None for term, u in budget.items()}
+    if budget and out.std is not None:
+        terms = {term: float(u) if math.isfinite(u) else None for term, u in budget.items()}
+        return Quantity(value=out.value, std=out.std, source=out.source, budget=terms)
     return out
 
 
 def _segments(
-    result: IdentificationResult,
-    data: IdentificationData,
-    posterior: Posterior | None,
-    marker_placement_sd_m: float | np.ndarray,
-) -> dict[str, dict[str, Any]]:
+    result: IdentificationResult, lengths_m: np.ndarray, lengths_std_m: np.ndarray, posterior: Posterior | None
+) -> dict[str, dict[str, Quantity]]:
     """The ``segments`` block: length, static moment, the fused masses and COMs, the base quantities."""
-    n = data.n_joints
-    # Two markers' offsets along the segment move the measured length; the truth is the joint centres' distance.
-    sd_m = np.broadcast_to(np.asarray(marker_placement_sd_m, dtype=np.float64), (n + 1,))
-    lengths_std_m = np.hypot(data.lengths_std_m, np.hypot(sd_m[:-1], sd_m[1:]))
-    segments: dict[str, dict[str, Any]] = {}
+    n = lengths_m.size
+    segments: dict[str, dict[str, Quantity]] = {}
     for j, segment in enumerate(segments_for(n)):
         entry = {
-            "length_m": quantity(data.lengths_m[j], lengths_std_m[j], "data"),
+            "length_m": quantity(lengths_m[j], lengths_std_m[j], "data"),
             "static_moment_kgm": identified(result, result.index("static_moment_kgm", segment)),
         }
         if posterior is not None:
@@ -153,56 +160,66 @@ def _segments(
         else:
             for key in ("mass_kg", "com_m", "first_moment_kgm"):
                 entry[key] = quantity(float("nan"), float("nan"), "prior")
-        entry.update(base_quantities(result, posterior, data.lengths_m, j, segment))
+        entry.update(base_quantities(result, posterior, lengths_m, j, segment))
         segments[segment] = entry
     return segments
 
 
-def _joints(result: IdentificationResult) -> dict[str, dict[str, Any]]:
-    """The ``joints`` block: each passive parameter, and the passive curves of a valid estimate."""
-    joints: dict[str, dict[str, Any]] = {joint: {} for joint in joints_for(result.n_joints)}
+def _joints(result: IdentificationResult) -> dict[str, dict[str, Quantity]]:
+    """The ``joints`` block: each passive parameter."""
+    joints: dict[str, dict[str, Quantity]] = {joint: {} for joint in joints_for(result.n_joints)}
     for i, (key, owner) in enumerate(result.names):
         if owner in joints:
             joints[owner][key] = identified(result, i)
-    curves: dict[str, Any] = result.diagnostics.get("passive_curves") or {}  # type: ignore[assignment]
-    for joint, curve in curves.items():
-        # The elastic passive moment over the measured range: what a clinician compares day to day.
-        if joint in joints and result.valid:
-            joints[joint][PASSIVE_CURVE] = curve
     return joints
 
 
-def _quality(result: IdentificationResult, data: IdentificationData, posterior: Posterior | None) -> dict[str, Any]:
+def _passive_curves(result: IdentificationResult) -> dict[str, Any]:
+    """The passive curves of a valid estimate, by joint: the elastic passive moment over the measured range, what a
+    clinician compares day to day."""
+    curves: dict[str, Any] = result.diagnostics.get("passive_curves") or {}  # type: ignore[assignment]
+    joints = joints_for(result.n_joints)
+    return {joint: curve for joint, curve in curves.items() if joint in joints and result.valid}
+
+
+def _quality(
+    result: IdentificationResult,
+    posterior: Posterior | None,
+    contact_from_robot: bool,
+    removed: Mapping[str, int],
+) -> Quality:
     """The ``quality`` block: the verdict, its findings, and what the std holds."""
     notes = list(posterior.notes) if posterior else []
-    quality: dict[str, Any] = {
-        "valid": bool(result.valid),
-        "n_samples": int(result.n_samples),
-        "condition_number": float(result.condition_number) if math.isfinite(result.condition_number) else None,
-        "residual_rms_nm": {k: float(v) for k, v in result.residual_rms_nm.items()},
-        "warnings": list(result.warnings) + notes,
-        "message": result.message,
-        "findings": [f.to_json() for f in result.findings] + [note(FindingCode.PRIOR_NOTE, t).to_json() for t in notes],
-        "level": "invalid" if not result.valid else ("weak" if result.weak else "ok"),
-        "removed_samples": removed_samples(result, data),
+    extra: dict[str, Any] = {
+        "removed_samples": removed_samples(result, removed),
         # Where the handle wrench's point of action came from: it sets the lever arms (and their placement std).
-        "contact_point": CONTACT_FROM_ROBOT if data.contact_from_robot else CONTACT_FROM_MARKER,
+        "contact_point": CONTACT_FROM_ROBOT if contact_from_robot else CONTACT_FROM_MARKER,
     }
     placement = result.diagnostics.get("marker_placement")
     if placement:
         # The skin markers' placement the std holds: as assumed, or wider where the data put them further off.
-        quality["marker_placement"] = placement
+        extra["marker_placement"] = placement
     sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
     if sensitivity:
         # What the data cannot test at one operating point, and what it would cost if false.
-        quality["assumptions"] = [
+        extra["assumptions"] = [
             {
                 "assumption": "no elastic passive offset at any joint (a constant passive moment is confounded "
                 "with gravity over a small range of motion)",
                 "static_moment_shift_kgm_per_0_05_nm": sensitivity,
             }
         ]
-    return quality
+    return Quality(
+        valid=bool(result.valid),
+        level=Level.INVALID if not result.valid else (Level.WEAK if result.weak else Level.OK),
+        message=result.message,
+        findings=(*result.findings, *(note(FindingCode.PRIOR_NOTE, t) for t in notes)),
+        warnings=(*result.warnings, *notes),
+        n_samples=int(result.n_samples),
+        condition_number=float(result.condition_number) if math.isfinite(result.condition_number) else None,
+        residual_rms_nm={k: float(v) for k, v in result.residual_rms_nm.items()},
+        extra=extra,
+    )
 
 
 def source_from_prior_share(share: float | None) -> str:
@@ -214,7 +231,7 @@ def source_from_prior_share(share: float | None) -> str:
 
 def base_quantities(
     result: IdentificationResult, posterior: Posterior | None, lengths_m: np.ndarray, j: int, segment: str
-) -> dict[str, dict[str, Any]]:
+) -> dict[str, Quantity]:
     """The perpendicular moment and the inertias of segment ``j`` (empty when the model had no dynamics).
 
     ``grouped_inertia_kgm2`` is the identifiable base parameter (about the proximal joint, the distal masses
@@ -223,7 +240,7 @@ def base_quantities(
     """
     shares = result.diagnostics.get("prior_share", {})
     shares = shares if isinstance(shares, dict) else {}
-    out: dict[str, dict[str, Any]] = {}
+    out: dict[str, Quantity] = {}
     for key in ("perpendicular_moment_kgm", "grouped_inertia_kgm2"):
         if (key, segment) in result.names:
             i = result.index(key, segment)
@@ -237,9 +254,9 @@ def base_quantities(
     distal_mass = float(masses[distal].sum()) if distal else 0.0
     distal_var = float(cov[np.ix_(distal, distal)].sum()) if distal else 0.0
     a2 = float(lengths_m[j]) ** 2
-    own = zeta["value"] - a2 * distal_mass if zeta["value"] is not None else float("nan")
-    own_std = math.sqrt((zeta["std"] or 0.0) ** 2 + a2**2 * distal_var)
-    source = zeta["source"] if not distal else ("prior" if zeta["source"] == "prior" else "data+prior")
+    own = zeta.value - a2 * distal_mass if zeta.value is not None else float("nan")
+    own_std = math.sqrt((zeta.std or 0.0) ** 2 + a2**2 * distal_var)
+    source = zeta.source if not distal else (Source.PRIOR if zeta.source is Source.PRIOR else Source.DATA_PRIOR)
     out["inertia_kgm2"] = quantity(own, own_std, source)
     m, com = float(masses[j]), float(masses[n + j])
     about_com = own - m * com**2
@@ -248,18 +265,23 @@ def base_quantities(
     gradient[j], gradient[n + j] = com**2, 2 * m * com
     com_var = float(gradient @ cov @ gradient)
     out["inertia_com_kgm2"] = quantity(
-        about_com, math.sqrt(own_std**2 + com_var), "prior" if source == "prior" else "data+prior"
+        about_com, math.sqrt(own_std**2 + com_var), "prior" if source is Source.PRIOR else "data+prior"
     )
     return out
 
 
-def removed_samples(result: IdentificationResult, data: IdentificationData) -> dict[str, int]:
-    """Implausible samples removed before or during the fit, by kind (``wrench_spikes``, ``marker_elbow``...)."""
+def removed_samples(result: IdentificationResult, removed: Mapping[str, int]) -> dict[str, int]:
+    """Implausible samples removed before (``removed``) or during the fit, by kind (``wrench_spikes``,
+    ``marker_elbow``...)."""
     found = result.diagnostics.get("removed_samples", {})
-    merged = dict(data.removed_samples)
+    merged = dict(removed)
     if isinstance(found, dict):
         merged.update({str(k): int(v) for k, v in found.items()})
     return merged
+
+
+def _clean(number: float) -> float | None:
+    return float(number) if math.isfinite(number) else None
 
 
 def _finite(number: float) -> float | None:

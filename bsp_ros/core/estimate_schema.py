@@ -9,12 +9,12 @@ in ``extra`` so that nothing recorded is lost and the round trip is exact.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import Any
 
-from bsp_ros.core.findings import Finding, findings_of, verdict_of
+from bsp_ros.core.findings import Finding, Severity, findings_of, verdict_of
 from bsp_ros.core.quantities import PASSIVE_CURVE
 
 __all__ = ["SCHEMA", "Estimate", "Level", "Quality", "Quantity", "Source"]
@@ -124,6 +124,28 @@ class Quality:
         tare = self.extra.get("tare")
         return isinstance(tare, Mapping) and tare.get("applied") is True
 
+    @property
+    def tare_file(self) -> str | None:
+        """The applied tare's file name, or None."""
+        tare = self.extra.get("tare")
+        name = tare.get("file") if isinstance(tare, Mapping) else None
+        return name if isinstance(name, str) else None
+
+    def with_finding(self, finding: Finding, at: int | None = None) -> Quality:
+        """This quality with ``finding`` added: an invalid one first, its text leading the ``message``, the
+        estimate made invalid; any other last, its text into the ``warnings`` (at index ``at``, else last)."""
+        if finding.severity is Severity.INVALID:
+            # The likeliest cause of what else the estimate found (a lost transform makes the model misfit): first.
+            message = finding.text + (f"; {self.message}" if not self.valid else "")
+            return replace(self, findings=(finding, *self.findings), message=message, valid=False, level=Level.INVALID)
+        warnings = list(self.warnings)
+        warnings.insert(len(warnings) if at is None else at, finding.text)
+        return replace(self, findings=(*self.findings, finding), warnings=tuple(warnings))
+
+    def with_extra(self, keys: Mapping[str, Any]) -> Quality:
+        """This quality with the untyped blocks ``keys`` (tare, timing, rotation...) set, after those it has."""
+        return replace(self, extra={**self.extra, **keys})
+
     def to_json(self) -> dict[str, Any]:
         """The JSON ``quality`` block, its keys in docs/contract.md's order and then the others."""
         return {
@@ -197,6 +219,37 @@ class Estimate:
         """The quantity ``key`` of segment or joint ``owner``, or None."""
         group = self.segments if owner in self.segments else self.joints
         return group.get(owner, {}).get(key)
+
+    def quantities(self) -> Iterator[tuple[str, str, str, Quantity]]:
+        """``(group, owner, key, quantity)`` for every quantity, segments first (``segments``/``joints``)."""
+        for group, owners in (("segments", self.segments), ("joints", self.joints)):
+            for owner, quantities in owners.items():
+                for key, q in quantities.items():
+                    yield group, owner, key, q
+
+    @classmethod
+    def invalid(cls, method: str, finding: Finding) -> Estimate:
+        """An estimate with no parameters, made invalid by ``finding`` (live inputs not usable)."""
+        quality = Quality(valid=False, level=Level.INVALID, message=finding.text, findings=(finding,))
+        return cls(method=method, segments={}, joints={}, quality=quality)
+
+    def with_quality(self, quality: Quality) -> Estimate:
+        """This estimate with ``quality`` in place of its own."""
+        return replace(self, quality=quality)
+
+    def with_findings(self, *findings: Finding, at: int | None = None) -> Estimate:
+        """This estimate with ``findings`` added in order (:meth:`Quality.with_finding`; ``at``: where the first
+        weak or note finding's text goes in the warnings, the next ones after it)."""
+        quality = self.quality
+        for finding in findings:
+            quality = quality.with_finding(finding, at)
+            if at is not None and finding.severity is not Severity.INVALID:
+                at += 1
+        return replace(self, quality=quality)
+
+    def with_extra(self, keys: Mapping[str, Any]) -> Estimate:
+        """This estimate with the top-level blocks ``keys`` (``bag``, ``bags``, ``mode``...) set, after its own."""
+        return replace(self, extra={**self.extra, **keys})
 
     def to_json(self) -> dict[str, Any]:
         """The docs/contract.md document (JSON-ready: no NaN; key order as written by the estimator)."""

@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
-from bsp_ros.core.estimate import add_finding, estimate_document
+from bsp_ros.core.estimate import estimate_from_result
+from bsp_ros.core.estimate_schema import Estimate, Quality
 from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.fusion import (
     Posterior,
@@ -183,7 +184,18 @@ def identify_recordings(
     session_info: dict[str, Any] | None = None,
     recording_info: Sequence[dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
-    """Identify one arm from one or more recordings, each with its trunk's tilt; the docs/contract.md estimate.
+    """The docs/contract.md document of :func:`estimate_recordings` (its ``to_json()``)."""
+    return estimate_recordings(sessions, options, trunk_tilts_rad, session_info, recording_info).to_json()
+
+
+def estimate_recordings(
+    sessions: Sequence[Session],
+    options: IdentifyOptions | None = None,
+    trunk_tilts_rad: Sequence[float] | None = None,
+    session_info: dict[str, Any] | None = None,
+    recording_info: Sequence[dict[str, Any]] | None = None,
+) -> Estimate:
+    """Identify one arm from one or more recordings, each with its trunk's tilt; the typed estimate.
 
     Each recording is corrected (tare, stream delay) and turned into samples on its own; the samples are
     then identified together (:func:`combine_recordings`). With several recordings the estimate's
@@ -229,12 +241,19 @@ def identify_recordings(
             }
             for k, (r, tilt) in enumerate(zip(recordings, tilts, strict=True))
         ]
-    document = estimate_document(
-        result, data, posterior, options.subject, info, marker_placement_sd_m=options.placement_sd_used_m(result, data)
+    estimate = estimate_from_result(
+        result,
+        lengths_m=data.lengths_m,
+        lengths_std_m=data.lengths_std_m,
+        posterior=posterior,
+        subject=options.subject,
+        placement_sd_m=options.placement_sd_used_m(result, data),
+        contact_from_robot=data.contact_from_robot,
+        removed_samples=data.removed_samples,
+        session=info,
     )
-    document["quality"].update(offsets)
-    _add_timing_and_rotation(document["quality"], [p.timing for p in prepared], rotation)
-    return document
+    quality = _with_timing_and_rotation(estimate.quality.with_extra(offsets), [p.timing for p in prepared], rotation)
+    return estimate.with_quality(quality)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -277,21 +296,23 @@ def _session_info(
     }
 
 
-def _add_timing_and_rotation(quality: dict[str, Any], timings: Sequence[WrenchDelay], rotation: np.ndarray) -> None:
-    """The stream timing of each recording and the sensor rotation's shape into ``quality``, in place (timing.py,
+def _with_timing_and_rotation(quality: Quality, timings: Sequence[WrenchDelay], rotation: np.ndarray) -> Quality:
+    """``quality`` with the stream timing of each recording and the sensor rotation's shape (timing.py,
     sensor_rotation.py); the timing's notes as findings."""
-    quality["timing"] = timings[0].quality() if len(timings) == 1 else {"recordings": [t.quality() for t in timings]}
-    for timing in timings:
-        for text in timing.warnings:
-            if text not in quality["warnings"]:
-                add_finding(quality, note(FindingCode.TIMING_NOTE, text))
-    quality["rotation"] = rotation_quality(rotation, "session")
+    timing = timings[0].quality() if len(timings) == 1 else {"recordings": [t.quality() for t in timings]}
+    quality = quality.with_extra({"timing": timing})
+    for delay in timings:
+        for text in delay.warnings:
+            if text not in quality.warnings:
+                quality = quality.with_finding(note(FindingCode.TIMING_NOTE, text))
+    return quality.with_extra({"rotation": rotation_quality(rotation, "session")})
 
 
 __all__ = [
     "METHODS",
     "BspError",
     "IdentifyOptions",
+    "estimate_recordings",
     "fuse",
     "fused",
     "identify_data",
