@@ -67,6 +67,9 @@ class FindingCode(StrEnum):
     NOT_SAME_ARM = "not_same_arm"
     NON_FINITE = "non_finite"
     ROTATION_ASSUMED = "rotation_assumed"
+    # The live wrench rotation: the cell's mounting stood in for a transform (note), or a transform disagrees (weak).
+    ROTATION_FROM_MOUNTING = "rotation_from_mounting"
+    ROTATION_DISAGREES = "rotation_disagrees"
     # Live inputs and checks.
     INPUT_WAITING = "input_waiting"
     INPUT_STALE = "input_stale"

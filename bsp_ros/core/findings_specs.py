@@ -295,6 +295,21 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "the force sensor's orientation was not recorded",
         "record the sensor's transform with the session, or give its mounting with --cell FILE",
     ),
+    C.ROTATION_FROM_MOUNTING: FindingSpec(
+        NOTE,
+        "no transform {world} -> {frame} from {source} within tf_wait_s ({tf_wait_s:g} s): the stated rotation "
+        "{stated} = {rotation_xyzw} is used; publish the sensor's transform or check that rotation",
+        "the force sensor's orientation was not received: the cell file's mounting was used",
+        "publish the sensor's transform, or check the cell file's ft_sensor.rotation_xyzw",
+    ),
+    C.ROTATION_DISAGREES: FindingSpec(
+        WEAK,
+        "the transform {world} -> {frame} from {source} is {received_xyzw}, {angle_deg:.1f} deg off the stated "
+        "rotation {stated} = {stated_xyzw} (more than {limit_deg:g} deg): the transform is used; set that rotation "
+        "to the transform's if the sensor is mounted so",
+        "the force sensor's transform and the cell file's mounting disagree",
+        "check how the sensor is mounted and set the cell file's ft_sensor.rotation_xyzw to match",
+    ),
     C.INPUT_WAITING: FindingSpec(
         INVALID, "waiting for {what}", "the session has not started", "start the robot and the motion capture"
     ),

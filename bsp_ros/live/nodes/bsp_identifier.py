@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -73,7 +74,9 @@ class BspIdentifierNode(RosNode):
         self.precision = PrecisionTracker(target) if target is not None else None
         self.precision_state: PrecisionState | None = None
         self.precision_sent: bool | None = None
-        self.identifier = LiveIdentifier(settings, self._outputs, self.get_logger().error)
+        # A rotation that stood in for a missing transform, or a transform off the cell's: in every estimate.
+        frame_findings = partial(self.frame_notices.findings, self.frames)
+        self.identifier = LiveIdentifier(settings, self._outputs, self.get_logger().error, frame_findings)
         self.support_estimate: dict[str, Any] | None = None  # set with each estimate
         self.support_diagnostics: dict[str, str] = {}
         self.published = 0

@@ -1,8 +1,10 @@
-"""What `bsp_identifier` says about its wrench frame's rotation: once in its log, and on /diagnostics while it lasts.
+"""What `bsp_identifier` says about its wrench frame's rotation: a typed finding in every estimate while it lasts,
+once in its log, and on /diagnostics.
 
 Two things make an estimate wrong without making it look wrong: a rotation source that sends nothing (the stated
-rotation then stands in) and a transform that disagrees with the stated rotation (the transform is used). Each is
-said once, naming the parameter to set.
+rotation then stands in: :attr:`FindingCode.ROTATION_FROM_MOUNTING`, a note) and a transform that disagrees with the
+stated rotation (the transform is used: :attr:`FindingCode.ROTATION_DISAGREES`, weak). Each names the parameter to
+set; its text is rendered from the code's spec, the same in the estimate, the log and /diagnostics.
 """
 
 from __future__ import annotations
@@ -12,9 +14,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bsp_ros.cell import CellDescription
+from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.online.frames import DISAGREE_DEG, NO_TRANSFORM, WrenchFrames
 
 __all__ = ["FrameNotices", "stated_rotation"]
+
+#: The /diagnostics key suffix of each code (``wrench_frame.<frame>.<kind>``).
+KINDS = {FindingCode.ROTATION_FROM_MOUNTING: "missing", FindingCode.ROTATION_DISAGREES: "disagrees"}
 
 
 def _xyzw(rotation: np.ndarray) -> list[float]:
@@ -38,26 +44,32 @@ class FrameNotices:
     stated: str
     said: set[tuple[str, str]] = field(default_factory=set)
 
-    def _lines(self, frames: WrenchFrames) -> dict[tuple[str, str], str]:
-        """(kind, frame) -> its notice, for every notice that holds now."""
-        out = {}
+    def findings(self, frames: WrenchFrames) -> list[Finding]:
+        """The findings that hold now: a frame whose stated rotation stands in for a transform that did not come
+        within ``tf_wait_s``, and a frame whose fixed transform is more than :data:`DISAGREE_DEG` off it."""
+        out = []
+        common = {"world": frames.world_frame, "source": self.source, "stated": self.stated}
+        stated_xyzw = _xyzw(frames.parameter_rotation)
         for frame, origin in frames.sources.items():
             if origin == NO_TRANSFORM:
-                out[("missing", frame)] = (
-                    f"no transform {frames.world_frame} -> {frame} from {self.source} within tf_wait_s "
-                    f"({frames.tf_wait_s:g} s): the stated rotation {self.stated} = "
-                    f"{_xyzw(frames.parameter_rotation)} is used; publish the sensor's transform or check that "
-                    "rotation"
-                )
+                values = {**common, "frame": frame, "tf_wait_s": frames.tf_wait_s, "rotation_xyzw": stated_xyzw}
+                out.append(Finding(code=FindingCode.ROTATION_FROM_MOUNTING, values=values))
         for frame, angle in frames.disagreement_deg.items():
             if frame in frames.rotations:
-                out[("disagrees", frame)] = (
-                    f"the transform {frames.world_frame} -> {frame} from {self.source} is "
-                    f"{_xyzw(frames.rotations[frame])}, {angle:.1f} deg off the stated rotation {self.stated} = "
-                    f"{_xyzw(frames.parameter_rotation)} (more than {DISAGREE_DEG:g} deg): the transform is used; "
-                    "set that rotation to the transform's if the sensor is mounted so"
-                )
+                values = {
+                    **common,
+                    "frame": frame,
+                    "received_xyzw": _xyzw(frames.rotations[frame]),
+                    "angle_deg": angle,
+                    "limit_deg": DISAGREE_DEG,
+                    "stated_xyzw": stated_xyzw,
+                }
+                out.append(Finding(code=FindingCode.ROTATION_DISAGREES, values=values))
         return out
+
+    def _lines(self, frames: WrenchFrames) -> dict[tuple[str, str], str]:
+        """(kind, frame) -> its notice, for every notice that holds now."""
+        return {(KINDS[f.code], str(f.values["frame"])): f.text for f in self.findings(frames)}
 
     def new_lines(self, frames: WrenchFrames) -> list[str]:
         """The notices not said yet (each once per node)."""

@@ -7,12 +7,12 @@ from __future__ import annotations
 import time
 import traceback
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Generic, TypeVar
 
 import numpy as np
 
-from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.estimate import add_finding, invalid_document
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.online.identifier_modes import IdentifierMode, ModeEstimate, Orientation, mode_for
 from bsp_ros.live.online.identifier_settings import IdentifierSettings
@@ -37,6 +37,8 @@ class LiveIdentifier(Generic[Outputs]):
     serialize : what an update's estimate becomes (the node's: its messages, ``estimate_jobs.outputs_from_estimate``);
         a computed estimate is timed with it.
     log_error : where an estimate that failed unexpectedly logs its traceback (it is published invalid).
+    frame_findings : what holds now of the wrench frame's rotation (the node's
+        :meth:`bsp_ros.live.online.frame_notices.FrameNotices.findings`): added to every estimate.
     """
 
     def __init__(
@@ -44,6 +46,7 @@ class LiveIdentifier(Generic[Outputs]):
         settings: IdentifierSettings,
         serialize: Callable[[ModeEstimate], Outputs],
         log_error: Callable[[str], None],
+        frame_findings: Callable[[], Sequence[Finding]] = tuple,
     ) -> None:
         self.n = settings.n_segments
         self.stale_s = settings.stale_s
@@ -63,6 +66,7 @@ class LiveIdentifier(Generic[Outputs]):
         self.update_s: deque[tuple[float, float]] = deque(maxlen=int(10 * settings.update_hz) + 1)
         self._serialize = serialize
         self._log_error = log_error
+        self._frame_findings = frame_findings
 
     def _count(self, key: str) -> None:
         self.counts[key] = self.counts.get(key, 0) + 1
@@ -148,10 +152,10 @@ class LiveIdentifier(Generic[Outputs]):
         fails unexpectedly is published invalid with its traceback logged."""
         update = self.mode.update(now_ns, self.stale_reason(now_ns), self.orientation, self.lengths)
         if isinstance(update, ModeEstimate):  # a quick verdict
-            return self._serialize(update)
+            return self._serialize(self._with_frame_findings(update))
         started, started_cpu = time.perf_counter(), time.thread_time()
         try:
-            outputs = self._serialize(update())
+            outputs = self._serialize(self._with_frame_findings(update()))
         except Exception as exc:
             self._log_error(f"estimate failed: {traceback.format_exc()}")
             finding = Finding(code=FindingCode.INTERNAL_ERROR, values={"error": repr(exc)})
@@ -160,6 +164,18 @@ class LiveIdentifier(Generic[Outputs]):
             outputs = self._serialize(ModeEstimate(document, now_ns, with_passive=False))
         self.update_s.append((time.perf_counter() - started, time.thread_time() - started_cpu))
         return outputs
+
+    def _with_frame_findings(self, estimate: ModeEstimate) -> ModeEstimate:
+        """``estimate`` with the wrench frame's findings in its quality (a copy: a mode may hand out a document
+        again)."""
+        findings = self._frame_findings()
+        if not findings:
+            return estimate
+        quality = dict(estimate.document.get("quality") or {})
+        quality.update(findings=list(quality.get("findings") or []), warnings=list(quality.get("warnings") or []))
+        for finding in findings:
+            add_finding(quality, finding)
+        return ModeEstimate({**estimate.document, "quality": quality}, estimate.stamp_ns, estimate.with_passive)
 
     def counters(self) -> dict[str, int]:
         """The samples taken, refused and waiting, and the mode's own counters."""
