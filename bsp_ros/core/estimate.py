@@ -102,6 +102,30 @@ def estimate_from_result(
     )
 
 
+def estimate_from_fit(
+    result: IdentificationResult,
+    data: IdentificationData,
+    *,
+    posterior: Posterior | None,
+    subject: SubjectInfo,
+    placement_sd_m: float | np.ndarray = 0.0,
+    session: Mapping[str, Any] | None = None,
+) -> Estimate:
+    """:func:`estimate_from_result` of a fit of ``data``: its segment lengths and their std, its contact point and
+    the samples removed before the fit."""
+    return estimate_from_result(
+        result,
+        lengths_m=data.lengths_m,
+        lengths_std_m=data.lengths_std_m,
+        posterior=posterior,
+        subject=subject,
+        placement_sd_m=placement_sd_m,
+        contact_from_robot=data.contact_from_robot,
+        removed_samples=data.removed_samples,
+        session=session,
+    )
+
+
 def estimate_document(
     result: IdentificationResult,
     data: IdentificationData,
@@ -110,19 +134,11 @@ def estimate_document(
     session: dict[str, Any] | None = None,
     marker_placement_sd_m: float | np.ndarray = 0.0,
 ) -> dict[str, Any]:
-    """The JSON of :func:`estimate_from_result` for a fit of ``data`` (its lengths, contact point and removed
-    samples): for callers that write the document at once (benches)."""
-    return estimate_from_result(
-        result,
-        lengths_m=data.lengths_m,
-        lengths_std_m=data.lengths_std_m,
-        posterior=posterior,
-        subject=subject,
-        placement_sd_m=marker_placement_sd_m,
-        contact_from_robot=data.contact_from_robot,
-        removed_samples=data.removed_samples,
-        session=session,
-    ).to_json()
+    """The JSON of :func:`estimate_from_fit`, for callers that write the document at once (benches)."""
+    fit = estimate_from_fit(
+        result, data, posterior=posterior, subject=subject, placement_sd_m=marker_placement_sd_m, session=session
+    )
+    return fit.to_json()
 
 
 def identified(result: IdentificationResult, i: int, source: str = "data") -> Quantity:

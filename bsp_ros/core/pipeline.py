@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
-from bsp_ros.core.estimate import estimate_from_result
+from bsp_ros.core.estimate import estimate_from_fit, estimate_from_result
 from bsp_ros.core.estimate_schema import Estimate, Quality
 from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.fusion import (
@@ -152,15 +152,43 @@ def fused(
     result: IdentificationResult, data: IdentificationData, subject: SubjectInfo
 ) -> tuple[Posterior | None, IdentificationResult]:
     """:func:`fuse`, and ``result`` with a finding where the fusion failed (a numerical failure, not the data's)."""
+    return fused_on_lengths(result, data.lengths_m, subject)
+
+
+def fused_on_lengths(
+    result: IdentificationResult, lengths_m: np.ndarray, subject: SubjectInfo
+) -> tuple[Posterior | None, IdentificationResult]:
+    """:func:`fused` for segment lengths ``lengths_m`` (n,) m, without the samples (the recursive filter's)."""
     _, beta, beta_cov = result.block("static_moment_kgm")
     if not (np.isfinite(beta).all() and np.isfinite(beta_cov).all()):
         return None, result
     try:
-        prior = anthropometric_prior(subject, data.lengths_m)
-        return fuse_static_moments(prior, data.lengths_m, beta, beta_cov), result
+        prior = anthropometric_prior(subject, lengths_m)
+        return fuse_static_moments(prior, lengths_m, beta, beta_cov), result
     except (np.linalg.LinAlgError, ValueError) as error:
         failed = Finding(code=FindingCode.FUSION_FAILED, values={"error": str(error)})
         return None, result.with_findings(failed)
+
+
+def recursive_estimate(
+    result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, contact_from_robot: bool = False
+) -> Estimate:
+    """The estimate of the recursive filter's ``result`` on segment lengths ``lengths_m`` (n,) m, fused with the
+    anthropometric prior when valid, assembled as every other (:func:`estimate_from_result`): the lengths' std is
+    the markers' placement alone; ``contact_from_robot``: the contact point came from the robot's handle pose (its
+    placement sd)."""
+    posterior, result = fused_on_lengths(result, lengths_m, options.subject) if result.valid else (None, result)
+    placement_sd_m = chain_placement_sd_m(
+        lengths_m.size, options.marker_placement_sd_m, options.handle_pose_sd_m, contact_from_robot
+    )
+    return estimate_from_result(
+        result,
+        lengths_m=lengths_m,
+        posterior=posterior,
+        subject=options.subject,
+        placement_sd_m=placement_sd_m,
+        contact_from_robot=contact_from_robot,
+    )
 
 
 def identify_session(
@@ -241,15 +269,12 @@ def estimate_recordings(
             }
             for k, (r, tilt) in enumerate(zip(recordings, tilts, strict=True))
         ]
-    estimate = estimate_from_result(
+    estimate = estimate_from_fit(
         result,
-        lengths_m=data.lengths_m,
-        lengths_std_m=data.lengths_std_m,
+        data,
         posterior=posterior,
         subject=options.subject,
         placement_sd_m=options.placement_sd_used_m(result, data),
-        contact_from_robot=data.contact_from_robot,
-        removed_samples=data.removed_samples,
         session=info,
     )
     quality = _with_timing_and_rotation(estimate.quality.with_extra(offsets), [p.timing for p in prepared], rotation)
@@ -315,7 +340,9 @@ __all__ = [
     "estimate_recordings",
     "fuse",
     "fused",
+    "fused_on_lengths",
     "identify_data",
     "identify_recordings",
     "identify_session",
+    "recursive_estimate",
 ]

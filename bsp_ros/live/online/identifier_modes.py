@@ -9,11 +9,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from bsp_ros.core.estimate import estimate_document, invalid_document
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding
-from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.pipeline import IdentifyOptions, fused
+from bsp_ros.core.pipeline import IdentifyOptions, recursive_estimate
 from bsp_ros.live.online.identifier_settings import IdentifierSettings
 from bsp_ros.live.online.recursive_check import WindowCheck
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
@@ -53,30 +52,16 @@ _WINDOW_STALE_S = 60.0
 
 def _invalid(name: str, method: str, reason: Finding, now_ns: int, with_passive: bool) -> ModeEstimate:
     """An invalid estimate stamped ``now_ns`` saying why (an input stale or waiting)."""
-    document = invalid_document(method, reason)
-    document["mode"] = name
+    document = Estimate.invalid(method, reason).with_extra({"mode": name}).to_json()
     return ModeEstimate(document, now_ns, with_passive)
 
 
 def recursive_document(
     result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, contact_from_robot: bool = False
 ) -> dict[str, Any]:
-    """The estimate document of a recursive result (fused with the anthropometric prior when valid);
-    ``contact_from_robot``: the contact point came from the robot's handle pose (its placement sd)."""
-    n = lengths_m.size
-    data = IdentificationData(
-        np.zeros(0, dtype=np.int64),
-        np.zeros((0, n)),
-        np.zeros((0, n)),
-        np.zeros((0, n)),
-        lengths_m,
-        np.zeros(n),
-        np.zeros(n),
-        contact_from_robot=contact_from_robot,
-    )
-    posterior, result = fused(result, data, options.subject) if result.valid else (None, result)
-    placement_sd_m = options.placement_sd_m(data)
-    return estimate_document(result, data, posterior, options.subject, marker_placement_sd_m=placement_sd_m)
+    """The document of :func:`bsp_ros.core.pipeline.recursive_estimate` (fused with the anthropometric prior when
+    valid); ``contact_from_robot``: the contact point came from the robot's handle pose (its placement sd)."""
+    return recursive_estimate(result, lengths_m, options, contact_from_robot).to_json()
 
 
 class IdentifierMode(Protocol):
@@ -162,14 +147,14 @@ class WindowedMode:
         # one) joins the std, as `bsp identify` adds it.
         window = self.window.snapshot(orientation=orientation)
         if isinstance(window, WindowEstimate):
-            window.document["mode"] = self.name
-            return ModeEstimate(window.document, window.last_wrench_t_ns or now_ns, with_passive=True)
+            document = window.estimate.with_extra({"mode": self.name}).to_json()
+            return ModeEstimate(document, window.last_wrench_t_ns or now_ns, with_passive=True)
         estimator = self.window.estimator
 
         def job() -> ModeEstimate:
             estimate = estimator.estimate_window(window)
-            estimate.document["mode"] = self.name
-            return ModeEstimate(estimate.document, estimate.last_wrench_t_ns or 0, with_passive=True)
+            document = estimate.estimate.with_extra({"mode": self.name}).to_json()
+            return ModeEstimate(document, estimate.last_wrench_t_ns or 0, with_passive=True)
 
         return job
 
@@ -226,9 +211,8 @@ class RecursiveMode:
         def job() -> ModeEstimate:
             self.window_check.tick(orientation)  # the window's model checks, when due (timed with the update)
             result = self.window_check.checked(self.feed.identifier.result())
-            document = recursive_document(result, lengths, self.options, robot)
-            document["mode"] = self.name
-            return ModeEstimate(document, stamp, with_passive=False)
+            estimate = recursive_estimate(result, lengths, self.options, robot).with_extra({"mode": self.name})
+            return ModeEstimate(estimate.to_json(), stamp, with_passive=False)
 
         return job
 

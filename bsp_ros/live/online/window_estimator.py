@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from bsp_ros.core.estimate import estimate_document, invalid_document
+from bsp_ros.core.estimate import estimate_from_fit
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.held import HeldModel
@@ -94,8 +95,8 @@ class WindowEstimator:
         self._hold.reset()
 
     def _invalid(self, detail: str, last_wrench_t_ns: int) -> WindowEstimate:
-        document = invalid_document(self.config.options.method, note(FindingCode.INPUT_UNUSABLE, detail))
-        return WindowEstimate(document, False, last_wrench_t_ns)
+        estimate = Estimate.invalid(self.config.options.method, note(FindingCode.INPUT_UNUSABLE, detail))
+        return WindowEstimate(estimate, False, last_wrench_t_ns)
 
     def _window_data(
         self, window: WindowSamples, held: WindowSettings | None = None
@@ -203,13 +204,13 @@ class WindowEstimator:
             else:
                 result = identify_data(data, self.config.options, held=self._held)
                 self._since_check += 1
-            quality = None
+            tare_blocks: dict[str, Any] = {}
             if window.rotation_world_from_sensor is not None:
                 # The sensor zero's share of the std (the tare's, or the assumed zero's), from the estimate's own
                 # response to a torque change (no refits).
                 options = self.config.options
                 refit = refit_options(result, options)
-                result, quality = account_for_tare(
+                result, tare_blocks = account_for_tare(
                     result,
                     data,
                     window.rotation_world_from_sensor,
@@ -230,15 +231,15 @@ class WindowEstimator:
             "clock_jumps": window.clock_jumps,
             "config": self.config.options.config(),
         }
-        document = estimate_document(
+        estimate = estimate_from_fit(
             result,
             data,
-            posterior,
-            self.config.options.subject,
-            info,
-            marker_placement_sd_m=self.config.options.placement_sd_used_m(result, data),
+            posterior=posterior,
+            subject=self.config.options.subject,
+            placement_sd_m=self.config.options.placement_sd_used_m(result, data),
+            session=info,
         )
-        document["quality"]["timing"] = parameter_timing(self.config.options.wrench_delay_s)  # the node shifts stamps
-        if quality is not None:
-            document["quality"].update(quality)
-        return WindowEstimate(document, result.valid, last_wrench)
+        # The node shifts the wrench stamps by the delay the cell states: its timing, then the sensor zero's share.
+        timing = {"timing": parameter_timing(self.config.options.wrench_delay_s)}
+        quality = estimate.quality.with_extra({**timing, **tare_blocks})
+        return WindowEstimate(estimate.with_quality(quality), result.valid, last_wrench)

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.validation import check_finite_scalar, check_positive
 
@@ -44,11 +45,16 @@ class WindowConfig:
 
 @dataclass(frozen=True)
 class WindowEstimate:
-    """One update: the estimate document (docs/contract.md schema) and the newest wrench stamp it used."""
+    """One update: the typed estimate, whether it is valid, and the newest wrench stamp it used."""
 
-    document: dict[str, Any]
+    estimate: Estimate
     valid: bool
     last_wrench_t_ns: int | None
+
+    @property
+    def document(self) -> dict[str, Any]:
+        """The estimate's docs/contract.md document (JSON-ready, made anew on each call)."""
+        return self.estimate.to_json()
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.online.buffer import TimedBuffer
 from bsp_ros.live.online.guard import StreamGuard, absurd_wrench_yzx
@@ -76,8 +76,7 @@ class WindowedIdentifier:
         self.estimator.restart_checks()
 
     def _invalid(self, finding: Finding) -> WindowEstimate:
-        document = invalid_document(self.config.options.method, finding)
-        return WindowEstimate(document, False, self.wrench.last_t_ns)
+        return WindowEstimate(Estimate.invalid(self.config.options.method, finding), False, self.wrench.last_t_ns)
 
     def estimate(self, now_ns: int | None = None, orientation: tuple[str, np.ndarray] | None = None) -> WindowEstimate:
         """Identify over the newest window: :meth:`snapshot` then :meth:`estimate_window`.
