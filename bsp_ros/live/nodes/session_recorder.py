@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import sys
 from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from bsp_ros.bag import TopicMap
 from bsp_ros.bag.topics import TF_TYPE
+from bsp_ros.cell import CellDescription
 from bsp_ros.clinic.store import is_database_url, open_store
 from bsp_ros.clinic.store.location import default_location
 from bsp_ros.errors import InputError
@@ -19,7 +21,14 @@ from bsp_ros.live.runtime.ros import RosNode, has_message, message_class
 from bsp_ros.live.runtime.spin import run_node
 from bsp_ros.live.session.control import EndCause, Reply, SessionControl, naming_hint
 from bsp_ros.live.session.recording import Change, SessionRecording
-from bsp_ros.live.session.storing import IdentifySettings, SessionJob, SessionOutcome, add_command, store_session
+from bsp_ros.live.session.storing import (
+    IdentifySettings,
+    SessionJob,
+    SessionOutcome,
+    add_command,
+    cell_file_for,
+    store_session,
+)
 
 NAME = "session_recorder"
 SERVICE_TYPE = "std_srvs/srv/Trigger"
@@ -57,8 +66,8 @@ PARAMETERS = (
     Param(
         "wrench_frame_rotation_xyzw",
         [0.0, 0.0, 0.0, 1.0],
-        "rotation world <- wrench frame [x, y, z, w] written into each session's bag as /tf_static where tf2_msgs is "
-        "missing (default: the cell's mounting; the identity: nothing written)",
+        "rotation world <- wrench frame [x, y, z, w] written into each session's bag metadata where tf2_msgs is "
+        "missing, read where the bag records no transform (default: the cell's mounting; the identity: none)",
     ),
 )
 
@@ -95,9 +104,11 @@ class SessionRecorderNode(RosNode):
 
     def __init__(self) -> None:
         super().__init__(NAME)
-        p, _ = declare_with_cell(self, [param for param in PARAMETERS if param.name != "subject"], RECORDER_FROM_CELL)
+        p, cell = declare_with_cell(
+            self, [param for param in PARAMETERS if param.name != "subject"], RECORDER_FROM_CELL
+        )
         self._declare_subject()
-        self.settings = self._identify_settings(p)
+        self.settings = self._identify_settings(p, cell)
         try:
             self.settings.check()
         except InputError as error:
@@ -117,6 +128,7 @@ class SessionRecorderNode(RosNode):
             self.settings.topics,
             with_tf,
             p["wrench_frame_rotation_xyzw"],
+            cell,
         )
         self._name_subject(str(self.get_parameter("subject").value))
         self.add_on_set_parameters_callback(self.on_set_parameters)
@@ -144,9 +156,11 @@ class SessionRecorderNode(RosNode):
             ) from None
 
     @staticmethod
-    def _identify_settings(p: dict[str, Any]) -> IdentifySettings:
+    def _identify_settings(p: dict[str, Any], cell: CellDescription) -> IdentifySettings:
         markers = {name: p["marker_topic_prefix"] + name for name in TopicMap().markers}
         topics = TopicMap(p["wrench_topic"], markers, handle_pose=p["handle_pose_topic"])
+        # Without tf2_msgs the cell's TransformStamped topic is recorded: identified with the cell file that names it.
+        topics = replace(topics, transform=cell.transform_topic, world_frame=cell.world_frame)
         return IdentifySettings(
             method=p["method"],
             passive=p["passive"],
@@ -155,6 +169,7 @@ class SessionRecorderNode(RosNode):
             marker_placement_sd_mm=p["marker_placement_sd_mm"],
             handle_pose_sd_mm=p["handle_pose_sd_mm"],
             topics=topics,
+            cell_file=cell_file_for(cell, p["wrench_frame_rotation_xyzw"], p["tare_file"]),
         )
 
     def _create_interfaces(self, with_tf: bool) -> None:
@@ -164,7 +179,8 @@ class SessionRecorderNode(RosNode):
         for topic, type_name in self.recording.types.items():
             if type_name == TF_TYPE and not with_tf:
                 continue
-            qos = {topics.tf_static: "tf_static_listener", topics.tf: "tf"}.get(topic, "sensor_input")
+            qos_of = {topics.tf_static: "tf_static_listener", topics.tf: "tf", topics.transform: "tf"}
+            qos = qos_of.get(topic, "sensor_input")
             self.create_subscription(message_class(type_name), topic, self._on_raw(topic), rclpy_qos(qos), raw=True)
         string = message_class("std_msgs/msg/String")
         self.create_subscription(string, "bsp/session_end", self.on_end_message, rclpy_qos("estimates"))

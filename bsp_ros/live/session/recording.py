@@ -1,4 +1,10 @@
-"""The recorder's sessions on disk: each running session's input messages go into its own bag as they arrive."""
+"""The recorder's sessions on disk: each running session's input messages go into its own bag as they arrive.
+
+Where tf2_msgs is installed a bag records /tf_static and /tf; where it is not, the cell's TransformStamped topic in
+their place (a sensor that turns with the handle sends its rotation there) and, in ``metadata.yaml``'s
+``custom_data``, the sensor mounting the cell states: the bag then reads as one `bsp record` made, its rotation from
+the transforms recorded, else from that mounting.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from bsp_ros.bag import TopicMap
-from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, WORLD_FRAME, WRENCH_TYPE
+from bsp_ros.bag.cell_metadata import custom_data_from_cell
+from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, TRANSFORM_TYPE, WRENCH_TYPE
+from bsp_ros.cell import CellDescription
 from bsp_ros.live.session.control import EndCause, Reply, SessionControl, SessionEnd, SessionStart
 from bsp_ros.live.session.spool import SessionSpool, SpoolSummary, spool_dir_name
 
@@ -22,10 +30,13 @@ IDENTITY_XYZW = (0.0, 0.0, 0.0, 1.0)
 
 
 def topic_types(topics: TopicMap, with_tf: bool = True) -> dict[str, str]:
-    """Topic -> message type of every input a session records (the tf topics only ``with_tf``)."""
+    """Topic -> message type of every input a session records: the tf topics ``with_tf`` (tf2_msgs installed), else
+    the TransformStamped topic ``topics.transform`` in their place."""
     types = {topic: POSE_TYPE for topic in (*topics.markers.values(), topics.handle_pose) if topic}
     if with_tf:
         types.update({topics.tf_static: TF_TYPE, topics.tf: TF_TYPE})
+    elif topics.transform:
+        types[topics.transform] = TRANSFORM_TYPE
     types[topics.wrench] = WRENCH_TYPE
     return types
 
@@ -47,10 +58,14 @@ class SessionRecording:
     ----------
     control : the session state (subject, starts and ends).
     recordings_dir : the folder the session bags go into (one ``live_<UTC time>`` bag per session).
-    topics : the input topic names.
+    topics : the input topic names (``topics.transform``: the TransformStamped topic recorded without tf2_msgs;
+        ``topics.world_frame``: the frame the mounting is stated in).
     with_tf : whether /tf_static and /tf are heard (tf2_msgs installed).
-    rotation_xyzw : (4,) rotation world <- wrench frame written into each bag as /tf_static where ``with_tf`` is
-        False, so that the bag says what the live identifier assumed (None or the identity: nothing written).
+    rotation_xyzw : (4,) the sensor's mounting, rotation world <- wrench frame, written into each bag's metadata
+        where ``with_tf`` is False: read where the bag records no transform, as the live identifier takes it where
+        none arrives (None or the identity: nothing written).
+    cell : the cell description the recorder was given: named in the bag's metadata where ``rotation_xyzw`` is its
+        mounting (a parameter that overrides the mounting is named as such).
     """
 
     def __init__(
@@ -60,30 +75,37 @@ class SessionRecording:
         topics: TopicMap,
         with_tf: bool,
         rotation_xyzw: Sequence[float] | None = None,
+        cell: CellDescription | None = None,
     ) -> None:
         self.control = control
         self.recordings_dir = Path(recordings_dir)
         self.topics = topics
-        # Every type a bag may hold: the tf topics too, where the rotation parameter stands in for /tf_static.
-        self.types = topic_types(topics)
+        self.types = topic_types(topics, with_tf)
         given = None if with_tf or rotation_xyzw is None else np.asarray(rotation_xyzw, dtype=float)
         # The identity is no information: without it the bag reads as `bsp identify` reads a bag without tf.
         self.rotation_xyzw = None if given is None or np.allclose(given, IDENTITY_XYZW) else given
+        self.mounting_from = "session_recorder parameter wrench_frame_rotation_xyzw"
+        if cell is not None and given is not None and np.allclose(given, cell.rotation_xyzw, atol=1e-9):
+            self.mounting_from = cell.source
         self.spool: SessionSpool | None = None
         self.static_kept: deque[tuple[int, bytes]] = deque(maxlen=STATIC_KEPT)
-        self._rotation_written = False
+        # The newest TransformStamped: each bag starts with it (a fixed sensor may send its transform seldom).
+        self.transform_kept: tuple[int, bytes] | None = None
+        self.sensor_frame = ""  # the running session's wrench frame
 
     def on_message(self, topic: str, t_ns: int, data: bytes) -> Change:
         """A raw message of an input topic received at ``t_ns`` (ns, node clock); the wrench may start a session."""
         change = Change()
         if topic == self.topics.tf_static:
             self.static_kept.append((t_ns, data))
+        if topic == self.topics.transform and topic in self.types:
+            self.transform_kept = (t_ns, data)
         if topic == self.topics.wrench:
             started = self.control.on_input(t_ns)
             if started is not None:
                 change = self._open(started)
-            if self.spool is not None and self.rotation_xyzw is not None and not self._rotation_written:
-                self._write_rotation(t_ns, data)
+            if self.spool is not None and not self.sensor_frame:
+                self.sensor_frame = str(self.spool.decode(topic, data).header.frame_id)
         if self.spool is not None:
             self.spool.add(topic, t_ns, data)
         return change
@@ -124,9 +146,11 @@ class SessionRecording:
             path = self.recordings_dir / f"{spool_dir_name(started.started_ns)}_{suffix}"
         latched = frozenset({self.topics.tf_static})
         self.spool = SessionSpool(path, self.types, latched)
-        self._rotation_written = False
+        self.sensor_frame = ""
         for t_ns, data in self.static_kept:
             self.spool.add(self.topics.tf_static, t_ns, data)
+        if self.transform_kept is not None:
+            self.spool.add(self.topics.transform, *self.transform_kept)
         return Change(started=started, path=path)
 
     def _close(self, ended: SessionEnd) -> Change:
@@ -135,17 +159,17 @@ class SessionRecording:
         if ended.cause is EndCause.RESET:
             spool.discard()
             return Change(discarded=(ended, spool.path))
-        return Change(finished=(ended, spool.finish()))
+        return Change(finished=(ended, spool.finish(self._mounting())))
 
-    def _write_rotation(self, t_ns: int, wrench: bytes) -> None:
-        """The parameter's rotation as /tf_static world -> the wrench's frame, before the session's first wrench."""
-        from msg_adapters import TransformSample, build_tf_message
-
-        assert self.spool is not None and self.rotation_xyzw is not None
-        frame = str(self.spool.decode(self.topics.wrench, wrench).header.frame_id)
-        self._rotation_written = True
-        if not frame or frame == WORLD_FRAME:
-            return
-        transform = TransformSample(t_ns, WORLD_FRAME, frame, np.zeros(3), self.rotation_xyzw)
-        message = build_tf_message(self.spool.message_type, [transform])
-        self.spool.add_message(self.topics.tf_static, t_ns, message)
+    def _mounting(self) -> dict[str, str]:
+        """The ``custom_data`` stating the sensor's mounting for the session's wrench frame ({}: nothing to state)."""
+        if self.rotation_xyzw is None or not self.sensor_frame or self.sensor_frame == self.topics.world_frame:
+            return {}
+        x, y, z, w = (float(v) for v in self.rotation_xyzw)
+        cell = CellDescription(
+            source=self.mounting_from,
+            world_frame=self.topics.world_frame,
+            sensor_frame=self.sensor_frame,
+            rotation_xyzw=(x, y, z, w),
+        )
+        return custom_data_from_cell(cell)

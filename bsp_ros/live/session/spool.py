@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -134,17 +135,9 @@ class SessionSpool:
         self.first_ns = t_ns if not self.first_ns else min(self.first_ns, t_ns)
         self.last_ns = max(self.last_ns, t_ns)
 
-    def add_message(self, topic: str, t_ns: int, message: Any) -> None:
-        """Write a rosbags message object of ``topic`` (serialized here), e.g. a /tf_static the cell cannot send."""
-        self.add(topic, t_ns, bytes(self._typestore.serialize_cdr(message, self._types[topic])))
-
     def decode(self, topic: str, data: bytes) -> Any:
         """A serialized message of ``topic`` as a rosbags message object (e.g. to read a wrench's frame id)."""
         return self._typestore.deserialize_cdr(data, self._types[topic])
-
-    def message_type(self, type_name: str) -> Any:
-        """The rosbags class of ``type_name`` (to build a message for :meth:`add_message`)."""
-        return self._typestore.types[type_name]
 
     def flush(self) -> None:
         """Close the open chunk and hand it to the OS: a killed recorder keeps everything written so far."""
@@ -152,14 +145,15 @@ class SessionSpool:
             self._writer.flush()
             self._stream.flush()
 
-    def finish(self) -> SpoolSummary:
-        """Write the MCAP summary and ``metadata.yaml``; the bag is then complete (`bsp identify` reads it)."""
+    def finish(self, custom_data: Mapping[str, str] | None = None) -> SpoolSummary:
+        """Write the MCAP summary and ``metadata.yaml`` (with ``custom_data``, e.g. the sensor mounting the cell
+        states); the bag is then complete (`bsp identify` reads it)."""
         if not self.finished:
             records = [
                 TopicRecord(r.name, r.msgtype, r.type_hash, r.qos, self.counts[name])
                 for name, r in self._records.items()
             ]
-            custom = {"writer": f"bsp_ros {__version__} session_recorder"}
+            custom = {"writer": f"bsp_ros {__version__} session_recorder", **(custom_data or {})}
             meta = build_metadata(self.mcap_name, records, self.first_ns, self.last_ns, custom)
             self._writer.add_metadata(
                 "rosbag2",

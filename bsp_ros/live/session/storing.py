@@ -8,18 +8,30 @@ from __future__ import annotations
 
 import argparse
 import shutil
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from bsp_ros.bag import TopicMap
+from bsp_ros.cell import CellDescription
 from bsp_ros.clinic.store import WALL_CLOCK_START_NS, open_store
 from bsp_ros.errors import BspError
 from bsp_ros.live.session.control import SessionEnd
 from bsp_ros.live.session.spool import SpoolSummary
 
-__all__ = ["IdentifySettings", "OutcomeKind", "SessionJob", "SessionOutcome", "add_command", "store_session"]
+__all__ = [
+    "IdentifySettings",
+    "OutcomeKind",
+    "SessionJob",
+    "SessionOutcome",
+    "add_command",
+    "cell_file_for",
+    "store_session",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -35,6 +47,8 @@ class IdentifySettings:
     wrench_delay_s : the wrench delay the cell knows, s (None: estimated from the data).
     marker_placement_sd_mm, handle_pose_sd_mm : the placement terms of every std, mm.
     topics : the session's topic names.
+    cell_file : the cell description the session is identified with (`bsp identify --cell`: its transform topic,
+        and its mounting where the bag records no transform); '' none.
     """
 
     method: str = "joint"
@@ -44,6 +58,7 @@ class IdentifySettings:
     marker_placement_sd_mm: float = 2.0
     handle_pose_sd_mm: float = 0.5
     topics: TopicMap = field(default_factory=TopicMap)
+    cell_file: str = ""
 
     def command_line(self) -> list[str]:
         """These settings as `bsp identify` / `bsp sessions add` options."""
@@ -59,6 +74,8 @@ class IdentifySettings:
             line += ["--tare", self.tare_file]
         if self.wrench_delay_s is not None:
             line += ["--wrench-delay-s", repr(self.wrench_delay_s)]
+        if self.cell_file:
+            line += ["--cell", self.cell_file]
         return line
 
     def arguments(self) -> argparse.Namespace:
@@ -171,6 +188,15 @@ class SessionOutcome:
         verdict = "valid" if self.valid else f"NOT VALID: {self.cause}"
         line = f"stored session {self.number} of {self.subject} ({what}, {verdict}) into {self.store}"
         return line if self.kept is None else f"{line}; its recording is kept at {self.kept}"
+
+
+def cell_file_for(cell: CellDescription, rotation_xyzw: Sequence[float], tare_file: str) -> str:
+    """The cell file a recorded session is identified with (:attr:`IdentifySettings.cell_file`): the recorder's, so
+    that its TransformStamped topic is read; '' where the recorder's parameters override the cell's mounting or tare
+    (``--cell`` would bring the cell's back; the bag's metadata states the parameter's mounting)."""
+    same_mounting = np.allclose(np.asarray(rotation_xyzw, dtype=np.float64), cell.rotation_xyzw, atol=1e-9)
+    cell_tare = "" if cell.tare_file is None else str(cell.tare_file)
+    return cell.source if same_mounting and tare_file == cell_tare else ""
 
 
 def add_command(path: Path, subject: str, retest: bool) -> str:
