@@ -115,10 +115,21 @@ def identify_bags(
     progress: Callable[[int, int], None] | None = None,
     trunk_tilts_rad: Sequence[float] | None = None,
 ) -> dict[str, Any]:
-    """The estimate of one arm from several recordings (bags) identified together, each with its trunk's tilt
-    (:func:`bsp_ros.core.pipeline.identify_recordings`); one bag without a tilt is :func:`identify_bag`.
+    """The document of :func:`estimate_bags` (its ``to_json()``)."""
+    return estimate_bags(paths, options, topics, progress, trunk_tilts_rad).to_json()
 
-    The document's ``session.source`` joins the bags' names, ``session.content_sha256`` hashes their hashes in
+
+def estimate_bags(
+    paths: Sequence[str | Path],
+    options: IdentifyOptions | None = None,
+    topics: TopicMap | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    trunk_tilts_rad: Sequence[float] | None = None,
+) -> Estimate:
+    """The estimate of one arm from several recordings (bags) identified together, each with its trunk's tilt
+    (:func:`bsp_ros.core.pipeline.estimate_recordings`); one bag without a tilt is :func:`identify_bag`'s.
+
+    The estimate's ``session.source`` joins the bags' names, ``session.content_sha256`` hashes their hashes in
     order, ``session.recordings`` lists each, and ``bags`` holds each bag's ``bag`` section.
 
     Raises
@@ -127,9 +138,9 @@ def identify_bags(
         Any bag fails as in :func:`identify_bag`; InputError for recordings that are not of one arm.
     """
     if len(paths) == 1 and not any(trunk_tilts_rad or ()):
-        return identify_bag(paths[0], options, topics, progress)
+        return typed_estimate_from_read(read_session(paths[0], topics=topics, progress=progress), paths[0], options)
     reads = [read_session(path, topics=topics, progress=progress) for path in paths]
-    return estimate_from_reads(reads, paths, options, trunk_tilts_rad)
+    return typed_estimate_from_reads(reads, paths, options, trunk_tilts_rad)
 
 
 def estimate_from_reads(
@@ -139,10 +150,20 @@ def estimate_from_reads(
     trunk_tilts_rad: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """:func:`identify_bags` of recordings already read (``reads[k]`` of ``paths[k]``)."""
+    return typed_estimate_from_reads(reads, paths, options, trunk_tilts_rad).to_json()
+
+
+def typed_estimate_from_reads(
+    reads: Sequence[BagRead],
+    paths: Sequence[str | Path],
+    options: IdentifyOptions | None = None,
+    trunk_tilts_rad: Sequence[float] | None = None,
+) -> Estimate:
+    """:func:`estimate_bags` of recordings already read (``reads[k]`` of ``paths[k]``)."""
     combined, hashes = recordings_sha256(paths)
     info = {"source": " + ".join(Path(path).name for path in paths), "content_sha256": combined}
     recordings = [{"source": Path(path).name, "content_sha256": sha} for path, sha in zip(paths, hashes, strict=True)]
     estimate = estimate_recordings([r.session for r in reads], options, trunk_tilts_rad, info, recordings)
     for k, read in enumerate(reads):
         estimate = with_read(estimate, read, k)
-    return estimate.to_json()
+    return estimate

@@ -19,8 +19,8 @@ from bsp_ros.cli.identify_options import (  # noqa: F401
 )
 
 # METHODS (bsp_ros.core.pipeline's, spelled out so the parser needs no scipy; a test keeps the two equal).
-from bsp_ros.core.findings import FindingCode, findings_of, invalid_texts, plain_cause
-from bsp_ros.core.quantities import passive_curves_of, quantities_of
+from bsp_ros.core.estimate_schema import Estimate, Quality
+from bsp_ros.core.findings import FindingCode, invalid_texts, plain_cause
 from bsp_ros.errors import BspError, DataError, InputError
 
 # Distinct exit codes per failure, so scripts can tell them apart (0 valid, 1 written but invalid).
@@ -98,13 +98,13 @@ def _progress_bar() -> Any:
     return show
 
 
-def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
-    """(owner, key, value, std, source) for every quantity of an estimate document, then each joint's passive
-    curve point by point (``passive_moment_nm@<angle>deg``) and its stiffness at the reference angle."""
-    out: list[tuple[str, str, Any, Any, str]] = [
-        (owner, key, q["value"], q["std"], q["source"]) for _, owner, key, q in quantities_of(document)
+def rows(estimate: Estimate) -> list[tuple[str, str, float | None, float | None, str]]:
+    """(owner, key, value, std, source) for every quantity of an estimate, then each joint's passive curve point by
+    point (``passive_moment_nm@<angle>deg``) and its stiffness at the reference angle."""
+    out: list[tuple[str, str, float | None, float | None, str]] = [
+        (owner, key, q.value, q.std, str(q.source)) for _, owner, key, q in estimate.quantities()
     ]
-    for joint, curve in passive_curves_of(document):
+    for joint, curve in estimate.passive_curves.items():
         for angle, moment, std in zip(curve["angle_deg"], curve["moment_nm"], curve["std_nm"], strict=True):
             out.append((joint, f"passive_moment_nm@{angle:.1f}deg", moment, std, "data"))
         if curve.get("reference_angle_deg") is not None:
@@ -113,14 +113,14 @@ def rows(document: dict[str, Any]) -> list[tuple[str, str, Any, Any, str]]:
     return out
 
 
-def tare_line(quality: dict[str, Any]) -> str:
+def tare_line(quality: Quality) -> str:
     """One line on the tare: applied (which file), or not, with how much 0.1 N of offset would matter."""
-    tare = quality.get("tare") or {}
-    if tare.get("applied"):
-        return f"tare: {tare.get('file')} applied (its uncertainty is in the std)"
-    percent = [p for p in (quality.get("offset_sensitivity") or {}).get("static_moment_percent", {}).values() if p]
+    if quality.tare_applied:
+        return f"tare: {quality.tare_file} applied (its uncertainty is in the std)"
+    sensitivity = quality.extra.get("offset_sensitivity") or {}
+    percent = [p for p in sensitivity.get("static_moment_percent", {}).values() if p]
     worst = f": 0.1 N of sensor offset moves a static moment by up to {max(percent):.2g}%" if percent else ""
-    zero = tare.get("zero_sd") or {}
+    zero = (quality.extra.get("tare") or {}).get("zero_sd") or {}
     assumed = f"; the std assumes the sensor's zero within {zero['force_n']:g} N" if zero.get("force_n") else ""
     return f"tare: none applied{worst}{assumed} (bsp tare, then --tare FILE)"
 
@@ -129,12 +129,11 @@ def tare_line(quality: dict[str, Any]) -> str:
 DATA_PROBLEMS = frozenset({FindingCode.TOO_FEW_SAMPLES, FindingCode.TOO_FEW_USABLE_SAMPLES, FindingCode.NO_MOTION})
 
 
-def data_problems(document: dict[str, Any]) -> list[str]:
+def data_problems(estimate: Estimate) -> list[str]:
     """The texts of an invalid estimate's findings that say the data are too few or do not move (exit 3)."""
-    quality = document["quality"]
-    if quality["valid"]:
+    if estimate.valid:
         return []
-    return [f.text for f in findings_of(quality) if f.code in DATA_PROBLEMS]
+    return [f.text for f in estimate.quality.findings if f.code in DATA_PROBLEMS]
 
 
 def _cell(value: Any) -> str:
@@ -149,45 +148,43 @@ def _cell(value: Any) -> str:
 TSV_HEADER = ("owner", "parameter", "value", "std", "source")
 
 
-def format_tsv(document: dict[str, Any]) -> str:
+def format_tsv(estimate: Estimate) -> str:
     """Tab-separated values: a header, then five columns on every row (empty where there is nothing).
 
     The first rows are the verdict (`quality valid`, `quality message`) and the tare note (`quality tare`),
     then one row per quantity.
     """
-    quality = document["quality"]
+    quality = estimate.quality
     table: list[tuple[Any, ...]] = [
         TSV_HEADER,
-        ("quality", "valid", quality["valid"], None, None),
-        ("quality", "message", quality.get("message"), None, None),
+        ("quality", "valid", quality.valid, None, None),
+        ("quality", "message", quality.message, None, None),
         ("quality", "tare", tare_line(quality).removeprefix("tare: "), None, None),
-        *rows(document),
+        *rows(estimate),
     ]
     return "\n".join("\t".join(_cell(value) for value in row) for row in table)
 
 
-def verdict_lines(document: dict[str, Any]) -> list[str]:
+def verdict_lines(estimate: Estimate) -> list[str]:
     """The verdict: ``VALID: <summary>``, or ``INVALID: <cause>; <action>`` in plain words and then each reason
     the estimator found, once."""
-    quality = document["quality"]
-    if quality["valid"]:
-        return [f"VALID: {quality.get('message', '')}"]
-    findings = findings_of(quality)
-    plain = plain_cause(findings)
-    reasons = list(dict.fromkeys(invalid_texts(findings))) or [str(quality.get("message", ""))]
+    quality = estimate.quality
+    if quality.valid:
+        return [f"VALID: {quality.message}"]
+    plain = plain_cause(quality.findings)
+    reasons = list(dict.fromkeys(invalid_texts(quality.findings))) or [quality.message]
     if plain is None:
         return [f"INVALID: {reasons[0]}", *(f"  because: {r}" for r in reasons[1:])]
     cause, action = plain
     return [f"INVALID: {cause}; {action}", *(f"  because: {r}" for r in reasons)]
 
 
-def largest_uncertainty(document: dict[str, Any]) -> str | None:
+def largest_uncertainty(estimate: Estimate) -> str | None:
     """Which source of uncertainty weighs most in the static moments' std, and what would shrink it."""
-    from bsp_ros.core.estimate_schema import Estimate
     from bsp_ros.core.identification.ledger import Term
 
     shares: dict[str, list[float]] = {}
-    for quantities in Estimate.from_json(document).segments.values():
+    for quantities in estimate.segments.values():
         largest = quantities["static_moment_kgm"].largest_term() if "static_moment_kgm" in quantities else None
         if largest is not None:
             shares.setdefault(largest[0], []).append(largest[1])
@@ -201,24 +198,24 @@ def largest_uncertainty(document: dict[str, Any]) -> str | None:
     )
 
 
-def format_table(document: dict[str, Any]) -> str:
-    """A human-readable table of an estimate document."""
-    quality = document["quality"]
-    condition = quality["condition_number"]
+def format_table(estimate: Estimate) -> str:
+    """A human-readable table of an estimate."""
+    quality = estimate.quality
+    condition = quality.condition_number
     condition_text = "n/a" if condition is None else f"{condition:.3g}"
     lines = [
-        f"method: {document['method']}   samples: {quality['n_samples']}   condition number: {condition_text}",
+        f"method: {estimate.method}   samples: {quality.n_samples}   condition number: {condition_text}",
         f"{'':10s} {'parameter':22s} {'value':>12s} {'+- std':>11s}  source",
     ]
-    for owner, key, value, std, source in rows(document):
+    for owner, key, value, std, source in rows(estimate):
         value_text = "n/a" if value is None else f"{value:.5g}"
         std_text = "n/a" if std is None else f"{std:.2g}"
         lines.append(f"{owner:10s} {key:22s} {value_text:>12s} {std_text:>11s}  {source}")
     lines.append(tare_line(quality))
-    uncertainty = largest_uncertainty(document) if quality["valid"] else None
+    uncertainty = largest_uncertainty(estimate) if quality.valid else None
     lines += [uncertainty] if uncertainty else []
-    lines += verdict_lines(document)
-    lines += [f"warning: {w}" for w in quality["warnings"]]
+    lines += verdict_lines(estimate)
+    lines += [f"warning: {w}" for w in quality.warnings]
     return "\n".join(lines)
 
 
@@ -226,7 +223,7 @@ def run(args: argparse.Namespace) -> int:
     """Identify the bag; print the result; write the JSON."""
 
     from bsp_ros.bag.errors import BagError
-    from bsp_ros.bag.offline import identify_bags
+    from bsp_ros.bag.offline import estimate_bags
     from bsp_ros.cli.identify_each import check_each_args, run_each
     from bsp_ros.validation import check_output_file
 
@@ -242,20 +239,20 @@ def run(args: argparse.Namespace) -> int:
     options = options_from_args(args)
     tilts_rad = trunk_tilts_rad(args.trunk_tilt_deg, len(args.bag))
     try:
-        document = identify_bags(args.bag, options, topics_from_args(args), _progress_bar(), tilts_rad)
+        estimate = estimate_bags(args.bag, options, topics_from_args(args), _progress_bar(), tilts_rad)
     except BagError as error:
         print(f"bsp identify: error: {error}", file=sys.stderr)
         return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)
     except BspError:
         raise
-    unusable = data_problems(document)
+    unusable = data_problems(estimate)
     if unusable:
         # One rule for too little data, however little (README "Exit codes": 3), whichever stage noticed it.
         raise DataError(f"the data cannot be used: {'; '.join(unusable)}")
     if json_stdout:
-        sys.stdout.write(json.dumps(document, indent=2, allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(estimate.to_json(), indent=2, allow_nan=False) + "\n")
     if json_path is not None:
-        text = json.dumps(document, indent=2, allow_nan=False) + "\n"
+        text = json.dumps(estimate.to_json(), indent=2, allow_nan=False) + "\n"
         try:
             json_path.parent.mkdir(parents=True, exist_ok=True)
             json_path.write_text(text)
@@ -264,17 +261,16 @@ def run(args: argparse.Namespace) -> int:
     output = args.format if args.format != "auto" else ("table" if sys.stdout.isatty() else "tsv")
     output = "none" if json_stdout else output
     if output == "table":
-        print(format_table(document))
+        print(format_table(estimate))
     elif output == "tsv":
-        print(format_tsv(document))
+        print(format_tsv(estimate))
     if output != "table":
         # The table says all of this on stdout; otherwise stdout is data, and the reasons go to stderr.
-        quality = document["quality"]
-        if not quality["valid"]:
-            first, *details = verdict_lines(document)
+        if not estimate.valid:
+            first, *details = verdict_lines(estimate)
             print(f"bsp identify: estimate {first}", file=sys.stderr)
             for line in details:
                 print(line, file=sys.stderr)
-        for warning in quality["warnings"] if output == "tsv" else ():
+        for warning in estimate.quality.warnings if output == "tsv" else ():
             print(f"warning: {warning}", file=sys.stderr)
-    return 0 if document["quality"]["valid"] else EXIT_INVALID
+    return 0 if estimate.valid else EXIT_INVALID

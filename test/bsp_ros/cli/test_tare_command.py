@@ -193,16 +193,17 @@ def test_live_tare_collects_the_running_wrench_topic(tmp_path, monkeypatch) -> N
 
 def test_identify_table_names_the_tare_or_the_sensitivity() -> None:
     from bsp_ros.cli.identify import tare_line
+    from bsp_ros.core.estimate_schema import Quality
 
     assert (
-        tare_line({"tare": {"applied": True, "file": "t.yaml"}})
+        tare_line(Quality.from_json({"tare": {"applied": True, "file": "t.yaml"}}))
         == "tare: t.yaml applied (its uncertainty is in the std)"
     )
     quality = {
         "tare": {"applied": False, "file": None},
         "offset_sensitivity": {"static_moment_percent": {"upper_arm": 0.33, "forearm": None, "hand": 1.17}},
     }
-    assert tare_line(quality) == (
+    assert tare_line(Quality.from_json(quality)) == (
         "tare: none applied: 0.1 N of sensor offset moves a static moment by up to 1.2% (bsp tare, then --tare FILE)"
     )
 
