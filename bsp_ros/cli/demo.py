@@ -15,7 +15,16 @@ from typing import Any
 from bsp_ros.cli.argtypes import float_within, positive_float
 from bsp_ros.cli.live_table import estimate_rows, state_line, support_line
 
-__all__ = ["add_parser", "introduction", "render", "render_support", "run", "state_line", "verdict"]
+__all__ = [
+    "add_parser",
+    "introduction",
+    "node_arguments",
+    "render",
+    "render_support",
+    "run",
+    "state_line",
+    "verdict",
+]
 
 NODES = ("cell_simulator", "joint_angle_estimator", "bsp_identifier")
 # bsp_identifier's default window (its `window_s` parameter), simulated seconds: until it has filled, or the
@@ -143,6 +152,9 @@ def introduction(args: argparse.Namespace, middleware: str, domain: int) -> str:
             "  joint_angle_estimator  the joint angles from the markers",
             f"  bsp_identifier         the static moments and passive joint moments, {mode};",
             f"{'':25s}and the weight support: what the robot would apply to carry {share:g} % of the arm's weight",
+            "Each reads the cell description bsp_ros/config/cell.yaml (the simulated cell's frames, topics and force "
+            "sensor",
+            "mounting), as the nodes of a real cell read theirs.",
             textwrap.fill(tail, WIDTH),
             "",
         ]
@@ -186,32 +198,40 @@ def verdict(document: dict[str, Any] | None, truth: dict[str, Any]) -> tuple[boo
     )
 
 
+def node_arguments(args: argparse.Namespace) -> dict[str, list[str]]:
+    """Each node's ``--ros-args``: the demo's options, and the cell description every node reads as on a real cell.
+
+    The shipped cell file describes the simulated cell: the simulator mounts its sensor and publishes its
+    transform as the file says, and the identifier takes the rotation from that transform (from the file's mounting
+    where none comes), so the demo runs the path a real cell runs, with or without tf2_msgs.
+    """
+    from bsp_ros.cell import SHIPPED_CELL
+
+    n_segments = "3" if args.subject == "human" else "2"
+    cell = ["-p", f"cell_file:={SHIPPED_CELL}"]
+    return {
+        "cell_simulator": [
+            *cell,
+            *("-p", f"speed:={args.speed}", "-p", f"subject:={args.subject}", "-p", f"seed:={args.seed}"),
+            *("-p", "wait_for_subscribers:=1"),  # the session starts once the identifier takes the wrench
+        ],
+        "joint_angle_estimator": [*cell, "-p", f"n_segments:={n_segments}"],
+        "bsp_identifier": [
+            *cell,
+            *("-p", f"n_segments:={n_segments}", "-p", f"mode:={args.mode}"),
+            *("-p", f"support_fraction:={float(args.support_fraction)}"),
+        ],
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     """Start the nodes, watch the estimates converge, print the final errors."""
-    from bsp_ros.live.runtime.ros import Client, has_message
+    from bsp_ros.live.runtime.ros import Client
 
     # 1..101: the ROS 2 domain ids safe on Linux; 0 (everyone's default) is left alone.
     domain = args.domain if args.domain is not None else 2 + os.getpid() % 100
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
-    n_segments = "3" if args.subject == "human" else "2"
-    identifier = ["-p", f"n_segments:={n_segments}", "-p", f"mode:={args.mode}"]
-    identifier += ["-p", f"support_fraction:={float(args.support_fraction)}"]
-    if not has_message("tf2_msgs/msg/TFMessage"):
-        # No /tf_static without tf2_msgs: the identifier gets the simulated sensor's rotation as a parameter.
-        from bsp_ros.core.simulation import human_arm_cell, paper_mechanical_arm_cell
-        from msg_adapters.rotation import quaternion_from_matrix
-
-        spec = human_arm_cell() if args.subject == "human" else paper_mechanical_arm_cell()
-        xyzw = quaternion_from_matrix(spec.sensor.rotation_world_from_sensor)
-        identifier += ["-p", "wrench_frame_rotation_xyzw:=[" + ", ".join(repr(float(v)) for v in xyzw) + "]"]
-    node_args = {
-        "cell_simulator": [
-            *("-p", f"speed:={args.speed}", "-p", f"subject:={args.subject}", "-p", f"seed:={args.seed}"),
-            *("-p", "wait_for_subscribers:=1"),  # the session starts once the identifier takes the wrench
-        ],
-        "joint_angle_estimator": ["-p", f"n_segments:={n_segments}"],
-        "bsp_identifier": identifier,
-    }
+    node_args = node_arguments(args)
     client = Client("bsp_demo_console", domain)
     print(introduction(args, _middleware(), domain), flush=True)
     latest: dict[str, Any] = {}

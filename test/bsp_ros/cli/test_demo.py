@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from bsp_ros.cli import build_parser
-from bsp_ros.cli.demo import VERDICT_STATIC_PERCENT, introduction, render, state_line, verdict
+from bsp_ros.cli.demo import NODES, VERDICT_STATIC_PERCENT, introduction, node_arguments, render, state_line, verdict
 from bsp_ros.core import simulation as sim
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -80,7 +80,32 @@ def test_the_introduction_names_the_processes_and_the_middleware() -> None:
     for word in ("simulated", "cell_simulator", "joint_angle_estimator", "bsp_identifier", "rclpy"):
         assert word in text
     assert "rmw_fastrtps_cpp" in text and "domain 42" in text and "50 % of the arm's weight" in text
+    assert "cell description bsp_ros/config/cell.yaml" in text
     assert max(len(line) for line in text.splitlines()) <= 110
+
+
+def test_every_node_reads_the_shipped_cell_and_no_rotation_is_passed_by_hand() -> None:
+    """The demo starts its nodes as a real cell does: with the cell file, whose mounting the simulator publishes as
+    its transform and the identifier takes where none comes."""
+    from bsp_ros.cell import SHIPPED_CELL, angle_between_deg, read_cell_file
+    from bsp_ros.live.nodes.bsp_identifier import PARAMETERS as IDENTIFIER
+    from bsp_ros.live.nodes.cell_simulator import PARAMETERS as SIMULATOR
+    from bsp_ros.live.online.frames import rotation_from_quaternion_xyzw
+    from bsp_ros.live.runtime.cell_parameters import IDENTIFIER_FROM_CELL, SIMULATOR_FROM_CELL, with_cell_defaults
+
+    for subject in ("human", "paper-arm"):
+        lines = node_arguments(_demo_parser().parse_args(["--subject", subject]))
+        assert set(lines) == set(NODES)
+        for name, line in lines.items():
+            assert f"cell_file:={SHIPPED_CELL}" in line, name
+            assert not [a for a in line if "rotation" in a or "frame" in a], (name, line)
+    cell = read_cell_file(SHIPPED_CELL)
+    simulator = {p.name: p.default for p in with_cell_defaults(SIMULATOR, cell, SIMULATOR_FROM_CELL)}
+    identifier = {p.name: p.default for p in with_cell_defaults(IDENTIFIER, cell, IDENTIFIER_FROM_CELL)}
+    mounted = sim.rotation_from_rpy_deg(*simulator["sensor_roll_pitch_yaw_deg"])
+    stated = rotation_from_quaternion_xyzw(identifier["wrench_frame_rotation_xyzw"])
+    assert angle_between_deg(mounted, stated) < 1e-6
+    assert simulator["transform_topic"] == identifier["wrench_frame_topic"] == cell.transform_topic
 
 
 @pytest.mark.dds
