@@ -3,21 +3,58 @@
 import os
 
 from ament_index_python.packages import get_package_share_directory
-from launch.actions import DeclareLaunchArgument
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 from launch_ros.parameter_descriptions import ParameterValue
 
-from launch import LaunchDescription
+from bsp_ros.live.runtime.launch_parameters import node_parameters
+from launch import LaunchContext, LaunchDescription
+
+
+def _nodes(context: LaunchContext) -> list[Node]:
+    """The nodes, each with the params file and, where the ``cell_file`` argument is given, that cell file."""
+    params = node_parameters(
+        LaunchConfiguration("params_file").perform(context), LaunchConfiguration("cell_file").perform(context)
+    )
+    # A string even where the id is all digits (subject:=007 would otherwise be an integer).
+    subject = {"subject": ParameterValue(LaunchConfiguration("subject"), value_type=str)}
+    return [
+        Node(
+            package="bsp_ros",
+            executable="cell_simulator",
+            parameters=params,
+            condition=IfCondition(LaunchConfiguration("simulate")),
+        ),
+        Node(package="bsp_ros", executable="joint_angle_estimator", parameters=params),
+        Node(package="bsp_ros", executable="bsp_identifier", parameters=params),
+        Node(
+            package="bsp_ros",
+            executable="session_recorder",
+            parameters=[*params, subject],
+            condition=IfCondition(LaunchConfiguration("record_sessions")),
+        ),
+        Node(
+            package="bsp_ros",
+            executable="arm_visualizer",
+            parameters=params,
+            condition=IfCondition(LaunchConfiguration("visualize")),
+        ),
+    ]
 
 
 def generate_launch_description() -> LaunchDescription:
     config = os.path.join(get_package_share_directory("bsp_ros"), "config", "bsp_cell.yaml")
-    params = LaunchConfiguration("params_file")
     return LaunchDescription(
         [
             DeclareLaunchArgument("params_file", default_value=config, description="ros__parameters YAML"),
+            DeclareLaunchArgument(
+                "cell_file",
+                default_value="",
+                description="the cell description (bsp_ros/cell/1 YAML) for every node; empty: the params file's "
+                "cell_file, else the shipped cell",
+            ),
             DeclareLaunchArgument("simulate", default_value="false", description="also start the simulated cell"),
             DeclareLaunchArgument("record_sessions", default_value="false", description="start session_recorder"),
             DeclareLaunchArgument(
@@ -28,26 +65,6 @@ def generate_launch_description() -> LaunchDescription:
                 default_value="",
                 description="pseudonymous id of the patient whose sessions session_recorder stores (never a name)",
             ),
-            Node(
-                package="bsp_ros",
-                executable="cell_simulator",
-                parameters=[params],
-                condition=IfCondition(LaunchConfiguration("simulate")),
-            ),
-            Node(package="bsp_ros", executable="joint_angle_estimator", parameters=[params]),
-            Node(package="bsp_ros", executable="bsp_identifier", parameters=[params]),
-            Node(
-                package="bsp_ros",
-                executable="session_recorder",
-                # A string even where the id is all digits (subject:=007 would otherwise be an integer).
-                parameters=[params, {"subject": ParameterValue(LaunchConfiguration("subject"), value_type=str)}],
-                condition=IfCondition(LaunchConfiguration("record_sessions")),
-            ),
-            Node(
-                package="bsp_ros",
-                executable="arm_visualizer",
-                parameters=[params],
-                condition=IfCondition(LaunchConfiguration("visualize")),
-            ),
+            OpaqueFunction(function=_nodes),
         ]
     )
