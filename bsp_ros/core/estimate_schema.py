@@ -174,7 +174,11 @@ class Quality:
             warnings=tuple(str(w) for w in block.get("warnings") or ()),
             n_samples=int(block.get("n_samples") or 0),
             condition_number=_number(block.get("condition_number")),
-            residual_rms_nm={str(k): float(v) for k, v in (block.get("residual_rms_nm") or {}).items()},
+            residual_rms_nm={
+                str(k): number
+                for k, v in (block.get("residual_rms_nm") or {}).items()
+                if (number := _number(v)) is not None
+            },
             extra={k: v for k, v in block.items() if k not in typed and k != "level"},
         )
 

@@ -7,6 +7,7 @@ import re
 from typing import Any
 
 from bsp_ros.clinic.store.records import ParamKey, Quantity
+from bsp_ros.core.estimate_schema import Source
 from bsp_ros.core.quantities import PASSIVE_CURVE
 from bsp_ros.errors import StoreError
 
@@ -95,5 +96,7 @@ def passive_curves(joints: Any) -> tuple[dict[str, Any], dict[ParamKey, Quantity
             curve = check_curve(str(joint), block[CURVE_KEY])
             curves[str(joint)] = curve
             for angle, (moment, std) in sample_curve(curve).items():
-                parameters[("joints", str(joint), angle_key(angle))] = Quantity(moment, std, "data")
+                parameters[("joints", str(joint), angle_key(angle))] = Quantity(
+                    value=moment, std=std, source=Source.DATA
+                )
     return curves, parameters

@@ -12,10 +12,11 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from bsp_ros.clinic.store.curves import CURVE_KEY, passive_curves
+from bsp_ros.clinic.store.curves import CURVE_KEY, check_curve, passive_curves
 from bsp_ros.clinic.store.records import ARMS, GROUPS, SOURCES, ParamKey, Quality, Quantity, SessionRecord
 from bsp_ros.clinic.store.subject import check_subject_id
-from bsp_ros.core.findings import findings_of
+from bsp_ros.core.estimate_schema import Estimate, Level
+from bsp_ros.core.estimate_schema import Quality as EstimateQuality
 from bsp_ros.errors import InputError, StoreError
 
 ESTIMATE_SCHEMA = "bsp_ros/core/estimate/1"
@@ -111,15 +112,76 @@ def parse_estimate(
     retest: bool | None = None,
     cell: str | None = None,
 ) -> SessionRecord:
-    """Check an estimate against `bsp_ros/core/estimate/1` and turn it into a session record.
+    """Check an estimate's JSON against `bsp_ros/core/estimate/1` and turn it into a session record.
+
+    The JSON is checked where the typed form would lose what is wrong (a string for a number, an unknown source,
+    a block of the wrong type), then read as an :class:`Estimate` (:func:`check_estimate_json`) and recorded
+    (:func:`record_from_estimate`, whose parameters this function takes).
+
+    Raises
+    ------
+    StoreError
+        If ``data`` is not an estimate of this schema or a field has the wrong type.
+    InputError
+        If the subject id or a subject fact is invalid.
+    """
+    subject = check_subject_id(subject)
+    return _record_of(
+        check_estimate_json(data),
+        data,
+        subject,
+        session_time_ns=session_time_ns,
+        source=source,
+        arm=arm,
+        retest=retest,
+        cell=cell,
+    )
+
+
+def check_estimate_json(data: Any) -> Estimate:
+    """The typed estimate of a `bsp_ros/core/estimate/1` JSON object, once its blocks are of the right types.
+
+    Raises
+    ------
+    StoreError
+        If ``data`` is not an object of this schema, or a block, quantity or quality field has the wrong type.
+    """
+    if not isinstance(data, Mapping):
+        raise StoreError(f"an estimate must be a JSON object, got {type(data).__name__}")
+    schema = data.get("schema")
+    if schema is None:
+        raise StoreError(f"foreign JSON: it has no 'schema' key; expected a {ESTIMATE_SCHEMA} result")
+    if schema != ESTIMATE_SCHEMA:
+        raise StoreError(f"unsupported estimate schema {schema!r}; this store reads {ESTIMATE_SCHEMA}")
+    for key in ("session", "subject"):
+        _optional_object(data, key)
+    _check_quality(data.get("quality"))
+    _check_quantities(data)
+    try:
+        return Estimate.from_json(data)
+    except (KeyError, TypeError, ValueError) as error:
+        raise StoreError(f"not a {ESTIMATE_SCHEMA} result: {error}") from None
+
+
+def record_from_estimate(
+    estimate: Estimate,
+    subject: str,
+    *,
+    session_time_ns: int | None = None,
+    source: str | None = None,
+    arm: str | None = None,
+    retest: bool | None = None,
+    cell: str | None = None,
+) -> SessionRecord:
+    """The session record of a typed estimate.
 
     Parameters
     ----------
-    data : Mapping
-        The estimate as parsed from JSON. Optional blocks ``subject`` (``body_mass_kg``, ``height_m``,
-        ``sex``) and ``session`` (``start_time_ns``, ``source``, ``method``, ``config``) are used.
+    estimate : Estimate
+        Its ``subject`` (``body_mass_kg``, ``height_m``, ``sex``) and ``session`` (``start_time_ns``, ``source``,
+        ``method``, ``config``) blocks are used where given.
     subject : str
-        Pseudonymous subject id.
+        Pseudonymous subject id (checked).
     session_time_ns : int, optional
         Session start (ns since the epoch); overrides ``session.start_time_ns``.
     source : str, optional
@@ -140,19 +202,38 @@ def parse_estimate(
     Raises
     ------
     StoreError
-        If ``data`` is not an estimate of this schema or a field has the wrong type.
+        If a session field has the wrong type, or a valid estimate holds a non-finite number.
     InputError
         If the subject id or a subject fact is invalid.
     """
+    return _record_of(
+        estimate,
+        estimate.to_json(),
+        subject,
+        session_time_ns=session_time_ns,
+        source=source,
+        arm=arm,
+        retest=retest,
+        cell=cell,
+    )
+
+
+def _record_of(
+    estimate: Estimate,
+    document: Mapping[str, Any],
+    subject: str,
+    *,
+    session_time_ns: int | None,
+    source: str | None,
+    arm: str | None,
+    retest: bool | None,
+    cell: str | None,
+) -> SessionRecord:
+    """:func:`record_from_estimate`, ``document`` the JSON the estimate was read from (or its own): where no
+    recording hash is given its numbers stand for the recording, as written, and it says whether the estimate
+    reported its sample count."""
     subject = check_subject_id(subject)
-    if not isinstance(data, Mapping):
-        raise StoreError(f"an estimate must be a JSON object, got {type(data).__name__}")
-    schema = data.get("schema")
-    if schema is None:
-        raise StoreError(f"foreign JSON: it has no 'schema' key; expected a {ESTIMATE_SCHEMA} result")
-    if schema != ESTIMATE_SCHEMA:
-        raise StoreError(f"unsupported estimate schema {schema!r}; this store reads {ESTIMATE_SCHEMA}")
-    session = _optional_object(data, "session")
+    session = dict(estimate.session or {})
     time_ns = session_time_ns if session_time_ns is not None else session.get("start_time_ns")
     if time_ns is None:
         raise StoreError(f"the estimate has no session.start_time_ns: {_TIME_HELP}")
@@ -161,20 +242,19 @@ def parse_estimate(
     name = source if source is not None else session.get("source")
     if not isinstance(name, str) or not name.strip():
         raise StoreError("the estimate has no session.source: give the recording name (--source)")
-    method = session.get("method", data.get("method"))
+    method = session.get("method", estimate.method if estimate.method else None)
     if method is not None and not isinstance(method, str):
         raise StoreError(f"session.method must be a string, got {method!r}")
-    config = session.get("config", data.get("config", {}))
+    config = session.get("config", estimate.extra.get("config", {}))
     if not isinstance(config, dict):
         raise StoreError(f"session.config must be an object, got {type(config).__name__}")
-    software = data.get("software")
-    version = software.get("version") if isinstance(software, dict) else None
+    version = (estimate.software or {}).get("version")
     if isinstance(version, str) and "bsp_ros_version" not in config:
         # What made the estimate, kept with its configuration: rows of an export join back to the run.
         config = {**config, "bsp_ros_version": version[:40]}
-    quality = _quality(data.get("quality"))
-    curves, curve_parameters = passive_curves(data.get("joints"))
-    parameters = _parameters(data, refuse_non_finite=quality.valid)
+    quality = _quality(estimate.quality, reported_samples=document["quality"].get("n_samples") is not None)
+    curves, curve_parameters = passive_curves({j: {CURVE_KEY: c} for j, c in estimate.passive_curves.items()})
+    parameters = _parameters(estimate, refuse_non_finite=quality.valid)
     parameters.update(curve_parameters)
     arm = arm if arm is not None else session.get("arm")
     if arm is not None and arm not in ARMS:
@@ -191,25 +271,25 @@ def parse_estimate(
         source=_basename(name),
         method=method,
         config=_json_safe(config, "session.config"),
-        subject_info=_subject_info(_optional_object(data, "subject"), config),
-        estimate_schema=schema,
+        subject_info=_subject_info(dict(estimate.subject or {}), config),
+        estimate_schema=estimate.schema,
         quality=quality,
         parameters=parameters,
-        repeatability=_repeatability(data.get("repeatability")),
+        repeatability=_repeatability(estimate.extra.get("repeatability")),
         arm=arm,
         retest=retest,
         cell=cell,
-        content_sha256=_content_sha256(data, session),
+        content_sha256=_content_sha256(document, session),
         passive_curves=curves,
     )
 
 
-def _content_sha256(data: Mapping[str, Any], session: Mapping[str, Any]) -> str:
+def _content_sha256(document: Mapping[str, Any], session: Mapping[str, Any]) -> str:
     given = session.get("content_sha256")
     if isinstance(given, str) and re.fullmatch(r"[0-9a-f]{64}", given):
         return given
     # No recording hash: the estimate's numbers stand for the recording (the same file added twice).
-    body = {k: data.get(k) for k in ("segments", "joints", "quality")}
+    body = {k: document.get(k) for k in ("segments", "joints", "quality")}
     text = json.dumps(body, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
@@ -293,8 +373,9 @@ def _finite_or_none(value: Any, name: str, *, refuse_non_finite: bool = False) -
     return number if math.isfinite(number) else None
 
 
-def _parameters(data: Mapping[str, Any], *, refuse_non_finite: bool) -> dict[ParamKey, Quantity]:
-    parameters: dict[ParamKey, Quantity] = {}
+def _check_quantities(data: Mapping[str, Any]) -> None:
+    """Each ``segments``/``joints`` entry of an estimate's JSON an object of well-named quantities (``value`` and
+    ``std`` numbers or null, a known ``source``), and its curves well-formed."""
     for group in GROUPS:
         parts = data.get(group)
         if not isinstance(parts, dict):
@@ -304,7 +385,8 @@ def _parameters(data: Mapping[str, Any], *, refuse_non_finite: bool) -> dict[Par
                 raise StoreError(f"{group}.{part!s:.64} must be an object named by a short key")
             for quantity, q in quantities.items():
                 if group == "joints" and quantity == CURVE_KEY:
-                    continue  # a curve, not a quantity: see passive_curves
+                    check_curve(str(part), q)  # a curve, not a quantity: see passive_curves
+                    continue
                 where = f"{group}.{part}.{quantity}"
                 if _NAME.fullmatch(quantity) is None:
                     raise StoreError(f"{group}.{part} has a malformed quantity key {quantity!r:.70}")
@@ -312,17 +394,27 @@ def _parameters(data: Mapping[str, Any], *, refuse_non_finite: bool) -> dict[Par
                     raise StoreError(f"{where} must be an object with 'value', 'std' and 'source'")
                 if q.get("source") not in SOURCES:
                     raise StoreError(f"{where}.source must be one of {SOURCES}, got {q.get('source')!r}")
-                std = _finite_or_none(q["std"], f"{where}.std", refuse_non_finite=refuse_non_finite)
-                if std is not None and std < 0.0:
-                    raise StoreError(f"{where}.std must not be negative, got {std}")
-                value = _finite_or_none(q["value"], f"{where}.value", refuse_non_finite=refuse_non_finite)
-                parameters[(group, part, quantity)] = Quantity(value, std, q["source"])
+                _finite_or_none(q["std"], f"{where}.std")
+                _finite_or_none(q["value"], f"{where}.value")
+
+
+def _parameters(estimate: Estimate, *, refuse_non_finite: bool) -> dict[ParamKey, Quantity]:
+    """Every quantity of ``estimate`` as stored: non-finite numbers as None (refused in a valid estimate)."""
+    parameters: dict[ParamKey, Quantity] = {}
+    for group, part, key, q in estimate.quantities():
+        where = f"{group}.{part}.{key}"
+        std = _finite_or_none(q.std, f"{where}.std", refuse_non_finite=refuse_non_finite)
+        if std is not None and std < 0.0:
+            raise StoreError(f"{where}.std must not be negative, got {std}")
+        value = _finite_or_none(q.value, f"{where}.value", refuse_non_finite=refuse_non_finite)
+        parameters[(group, part, key)] = Quantity(value=value, std=std, source=q.source)
     if not parameters:
         raise StoreError("the estimate holds no parameters")
     return parameters
 
 
-def _quality(block: Any) -> Quality:
+def _check_quality(block: Any) -> None:
+    """The ``quality`` block of an estimate's JSON of the right types."""
     if not isinstance(block, dict):
         raise StoreError(f"not a {ESTIMATE_SCHEMA} result: 'quality' must be an object")
     valid = block.get("valid")
@@ -334,28 +426,35 @@ def _quality(block: Any) -> Quality:
     residuals = block.get("residual_rms_nm", {}) or {}
     if not isinstance(residuals, dict):
         raise StoreError("quality.residual_rms_nm must be an object of joint: number")
-    rms = {str(k): v for k, v in ((k, _finite_or_none(v, f"residual_rms_nm.{k}")) for k, v in residuals.items())}
+    for k, v in residuals.items():
+        _finite_or_none(v, f"residual_rms_nm.{k}")
     warnings = block.get("warnings", []) or []
     if not isinstance(warnings, list) or not all(isinstance(w, str) for w in warnings):
         raise StoreError("quality.warnings must be a list of strings")
     tare = block.get("tare") or {}
     if not isinstance(tare, dict) or not isinstance(tare.get("applied", False), bool):
         raise StoreError(f"quality.tare must be an object with 'applied': true or false, got {tare!r:.80}")
-    tare_file = tare.get("file")
-    message = block.get("message", "")
     findings = block.get("findings", []) or []
     if not isinstance(findings, list) or not all(isinstance(f, dict) for f in findings):
         raise StoreError("quality.findings must be a list of objects")
+    level = block.get("level")
+    if level is not None and level not in {str(v) for v in Level}:
+        raise StoreError(f"quality.level must be one of {[str(v) for v in Level]}, got {level!r:.40}")
+
+
+def _quality(quality: EstimateQuality, *, reported_samples: bool) -> Quality:
+    """The stored form of an estimate's quality (``reported_samples``: its sample count was given)."""
+    tare_file = quality.tare_file
     return Quality(
-        message=message[:2000] if isinstance(message, str) else "",
-        valid=valid,
-        tare_applied=tare.get("applied") is True,
-        tare_file=_basename(tare_file) if isinstance(tare_file, str) and tare_file.strip() else None,
-        n_samples=n_samples,
-        condition_number=_finite_or_none(block.get("condition_number"), "quality.condition_number"),
-        residual_rms_nm={k: v for k, v in rms.items() if v is not None},
-        warnings=tuple(warnings),
-        findings=tuple(findings_of({"findings": findings})),
+        message=quality.message[:2000],
+        valid=quality.valid,
+        tare_applied=quality.tare_applied,
+        tare_file=_basename(tare_file) if tare_file is not None and tare_file.strip() else None,
+        n_samples=quality.n_samples if reported_samples else None,
+        condition_number=_finite_or_none(quality.condition_number, "quality.condition_number"),
+        residual_rms_nm={k: v for k, v in quality.residual_rms_nm.items() if math.isfinite(v)},
+        warnings=quality.warnings,
+        findings=quality.findings,
     )
 
 

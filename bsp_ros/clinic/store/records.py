@@ -6,6 +6,7 @@ import datetime as dt
 from dataclasses import dataclass, field
 from typing import Any
 
+from bsp_ros.core.estimate_schema import Quantity
 from bsp_ros.core.findings import Finding, verdict_of
 
 SOURCES = ("data", "prior", "data+prior")
@@ -15,24 +16,25 @@ AFFECTED = ("left", "right", "both", "neither")
 
 _EPOCH = dt.datetime(1970, 1, 1, tzinfo=dt.timezone.utc)
 
+__all__ = [
+    "AFFECTED",
+    "ARMS",
+    "GROUPS",
+    "SOURCES",
+    "ParamKey",
+    "Quality",
+    "Quantity",
+    "SessionRecord",
+    "SubjectRecord",
+    "SubjectSummary",
+    "describe_body",
+    "format_time",
+    "ns_to_datetime",
+]
+
+# A stored quantity is the estimate's own (value, std, source; no budget once stored).
 ParamKey = tuple[str, str, str]
 """``(group, part, quantity)``, e.g. ``("joints", "elbow", "coulomb_nm")``."""
-
-
-@dataclass(frozen=True)
-class Quantity:
-    """One estimated quantity.
-
-    Attributes
-    ----------
-    value : the estimate, or None if the estimate held no finite value.
-    std : one standard deviation, or None if not finite.
-    source : ``data``, ``prior`` or ``data+prior``.
-    """
-
-    value: float | None
-    std: float | None
-    source: str
 
 
 @dataclass(frozen=True)

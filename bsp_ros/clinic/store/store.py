@@ -11,7 +11,7 @@ from types import TracebackType
 from typing import Any
 
 from bsp_ros.clinic.store.backends import Backend, connect
-from bsp_ros.clinic.store.estimate import check_future, parse_estimate
+from bsp_ros.clinic.store.estimate import check_future, parse_estimate, record_from_estimate
 from bsp_ros.clinic.store.location import default_location, is_database_url
 from bsp_ros.clinic.store.records import (
     AFFECTED,
@@ -26,6 +26,7 @@ from bsp_ros.clinic.store.records import (
 )
 from bsp_ros.clinic.store.schema import APPLICATION, SCHEMA_VERSION, migration_statements
 from bsp_ros.clinic.store.subject import check_subject_id
+from bsp_ros.core.estimate_schema import Estimate, Source
 from bsp_ros.core.findings import findings_of
 from bsp_ros.errors import InputError, StoreError
 
@@ -77,7 +78,7 @@ class Store:
 
     def add_estimate(
         self,
-        estimate: Mapping[str, Any],
+        estimate: Estimate | Mapping[str, Any],
         subject: str,
         *,
         session_time_ns: int | None = None,
@@ -86,12 +87,13 @@ class Store:
         retest: bool | None = None,
         cell: str | None = None,
     ) -> SessionRecord:
-        """Check a `bsp_ros/core/estimate/1` dict and store it as a session of ``subject``.
+        """Store an estimate as a session of ``subject``: a typed one, or its JSON checked first.
 
         Parameters
         ----------
-        estimate : Mapping
-            The estimate (see :func:`bsp_ros.clinic.store.estimate.parse_estimate`).
+        estimate : Estimate or Mapping
+            The typed estimate (:func:`bsp_ros.clinic.store.estimate.record_from_estimate`), or its
+            `bsp_ros/core/estimate/1` JSON as read (:func:`bsp_ros.clinic.store.estimate.parse_estimate`).
         subject : str
             Pseudonymous subject id.
         session_time_ns : int, optional
@@ -106,10 +108,11 @@ class Store:
         SessionRecord
             The stored session, with its ``id``; returned only after the commit.
         """
-        record = parse_estimate(
-            estimate, subject, session_time_ns=session_time_ns, source=source, arm=arm, retest=retest, cell=cell
-        )
-        return self.add(record)
+        facts: dict[str, Any] = {"session_time_ns": session_time_ns, "source": source, "arm": arm}
+        facts.update(retest=retest, cell=cell)
+        if isinstance(estimate, Estimate):
+            return self.add(record_from_estimate(estimate, subject, **facts))
+        return self.add(parse_estimate(estimate, subject, **facts))
 
     def add(self, record: SessionRecord) -> SessionRecord:
         """Store one session; return it with ``id`` and ``added_ns`` set, after the commit.
@@ -184,7 +187,7 @@ class Store:
                     self._backend.query(
                         "INSERT INTO parameters (session_id, grp, part, quantity, value, std, source) "
                         "VALUES (?, ?, ?, ?, ?, ?, ?)",
-                        (session_id, group, part, quantity, q.value, q.std, q.source),
+                        (session_id, group, part, quantity, q.value, q.std, str(q.source)),
                     )
         except Exception as error:
             if self._backend.is_integrity_error(error):
@@ -320,7 +323,9 @@ class Store:
             f"WHERE session_id IN ({inner}) ORDER BY session_id, grp, part, quantity",
             params,
         ):
-            parameters[int(sid)][(group, part, quantity)] = Quantity(_float(value), _float(std), source)
+            parameters[int(sid)][(group, part, quantity)] = Quantity(
+                value=_float(value), std=_float(std), source=Source(source)
+            )
         return [replace(_record(row, parameters[int(row[0])]), number=numbers[int(row[0])]) for row in rows]
 
     def erase(self, subject: str) -> int:
