@@ -194,8 +194,7 @@ def _passive_curves(result: IdentificationResult) -> dict[str, Any]:
     """The passive curves of a valid estimate, by joint: the elastic passive moment over the measured range, what a
     clinician compares day to day."""
     curves: dict[str, Any] = result.diagnostics.get("passive_curves") or {}  # type: ignore[assignment]
-    joints = joints_for(result.n_joints)
-    return {joint: curve for joint, curve in curves.items() if joint in joints and result.valid}
+    return {joint: curves[joint] for joint in joints_for(result.n_joints) if joint in curves and result.valid}
 
 
 def _quality(
