@@ -83,6 +83,7 @@ class FindingCode(StrEnum):
     ELASTIC_TERM = "elastic_term"
     TREMOR_FRICTION = "tremor_friction"
     SPASTICITY = "spasticity"
+    HAND_SLIPPED = "hand_slipped"
     DIRECTION_NOISY = "direction_noisy"
     # Notes on the model.
     FRICTION_SMOOTH = "friction_smooth"

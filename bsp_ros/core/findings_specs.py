@@ -352,6 +352,13 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "a longer session or wider movements (bsp plan)",
     ),
     C.ELASTIC_TERM: FindingSpec(WEAK, _elastic_term, "the relaxed joint behaves like a spring", ""),
+    C.HAND_SLIPPED: FindingSpec(
+        WEAK,
+        "the hand moved in the handle by about {slip_mm:.0f} mm during the session (the contact point drifted along "
+        "the hand): the torques were corrected for it",
+        "the hand moved in the handle during the session",
+        "tighten the strap so the hand sits against the handle's stop, and record again if it keeps moving",
+    ),
     C.SPASTICITY: FindingSpec(
         WEAK,
         "resistance at the {where} grows with the speed of motion in one direction only ({increase_nm:.2f} N m more "

@@ -37,6 +37,10 @@ class Term(StrEnum):
     """A drifting force sensor's unknown level: a warmed-up, re-tared sensor removes it."""
     SENSOR_ZERO = "sensor_zero"
     """The force sensor's zero: a tare's own uncertainty, or without one the assumed zero; a tare shrinks it."""
+    CONTACT_SLIP = "contact_slip"
+    """A hand that slipped in the handle: how far the parameters move between the coarsest and the finest
+    estimate of the contact point's travel, and between counting it from the session's start and from its mean.
+    A strap that keeps the hand against the handle's stop removes it."""
     WINDOW_CHECK = "window_check"
     """The recursive mode: its window's checked variances and the filter's distance from that window's values."""
 
@@ -53,6 +57,7 @@ _REMEDIES = {
     "friction_shape": "a protocol that leaves the friction transition more often shrinks it",
     "drift": "a warmed-up, re-tared sensor removes it",
     "sensor_zero": "a tare shrinks it (bsp tare, then --tare FILE)",
+    "contact_slip": "a strap that keeps the hand against the handle's stop removes it",
     "window_check": "a longer window shrinks it",
 }
 

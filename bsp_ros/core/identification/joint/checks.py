@@ -142,6 +142,9 @@ def check_perpendicular(stage: Stage) -> Stage:
     perpendicular = [i for i, (key, _) in enumerate(names) if key == "perpendicular_moment_kgm"]
     model = stage.ledger.get(Term.MODEL_CHOICE)
     placed = stage.ledger.get(Term.MARKER_PLACEMENT)
+    slipped = stage.ledger.get(Term.CONTACT_SLIP)
+    if slipped is not None:  # what following a slipping hand leaves open is no evidence of a missing moment either
+        model = slipped if model is None else model + slipped
     model_sd = np.zeros(len(names)) if model is None else np.sqrt(np.clip(np.diag(model), 0.0, None))
     placement_sd = np.zeros(len(names)) if placed is None else np.sqrt(np.clip(np.diag(placed), 0.0, None))
     problems = implausible_perpendicular_moments(

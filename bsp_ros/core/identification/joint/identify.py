@@ -24,7 +24,7 @@ from bsp_ros.core.identification.joint.judgement import (
     unidentifiable_problem,
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
-from bsp_ros.core.identification.joint.relaxed import leave_out_activity
+from bsp_ros.core.identification.joint.relaxed import follow_the_hand, leave_out_activity
 from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.stage import Outcome, Stage, Step
 from bsp_ros.core.identification.joint.steps import (
@@ -71,6 +71,7 @@ def _direction_rows(stage: Stage) -> Stage:
 # the model checks (what the model lacks; a live window runs them on some updates only).
 STEPS: tuple[Step, ...] = (
     _direction_rows,
+    follow_the_hand,
     leave_out_activity,
     fit_friction_transitions,
     choose_passive_model,

@@ -1,4 +1,5 @@
-"""The step that keeps the relaxed part of a session: stretches of muscle activity are found and left out."""
+"""The steps that keep the relaxed arm of a session: stretches of muscle activity are found and left out, and a
+hand that slipped in the handle is followed."""
 
 from __future__ import annotations
 
@@ -8,12 +9,21 @@ import numpy as np
 
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.joint.activity import Activity, active_stretches
+from bsp_ros.core.identification.joint.contact_slip import MIN_TREND_SHARE, contact_slip, slip_lever_n
 from bsp_ros.core.identification.joint.outliers import MIN_OUTLIER_NM
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
+from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.stacked import build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
-__all__ = ["ACTIVITY_FLOOR_SHARE", "leave_out_activity"]
+__all__ = ["ACTIVITY_FLOOR_SHARE", "MIN_SLIP_M", "follow_the_hand", "leave_out_activity"]
+
+# Rounds of estimate the travel, take it out, refit: each on shorter windows, which follow a slip's step closer
+# once the first has taken out its trend, s.
+SLIP_WINDOWS_S = (10.0, 5.0, 2.5)
+
+# A contact point moving less than this over the session is not named (a strap's normal play), m.
+MIN_SLIP_M = 0.003
 
 # Activity below this share of a joint's RMS torque is not looked for: it moves no estimate beyond its std, and a
 # noise-free simulation would otherwise be judged against its rounding errors.
@@ -85,3 +95,41 @@ def leave_out_activity(stage: Stage) -> Stage:
     kept = dataclasses.replace(samples, rows=rows, problem=problem)
     stage = dataclasses.replace(stage, samples=kept)
     return stage.apply(Outcome(problem=problem, fit=fit, notes=(finding,)))
+
+
+def follow_the_hand(stage: Stage) -> Stage:
+    """A contact point that drifted along the hand (:func:`contact_slip`) is taken out of the torques and the model
+    refitted, twice (the first fit takes up part of the drift); the finding says by about how much the hand moved
+    in the handle."""
+    if not stage.config.check_activity:
+        return stage
+    data, fit = stage.data, stage.fit
+    lever = slip_lever_n(data.q_rad, data.lengths_m, data.tau_nm)
+    first = contact_slip(data.t_ns, fit.residual, lever)
+    if first.total_m < MIN_SLIP_M or first.trend_share < MIN_TREND_SHARE:
+        return stage
+    travel = np.zeros(data.t_ns.size)
+    fits = []
+    for window_s in SLIP_WINDOWS_S:
+        slip = contact_slip(data.t_ns, fit.residual, lever, window_s)
+        travel += slip.travel_m
+        held = dataclasses.replace(data, tau_nm=data.tau_nm - (travel * lever)[:, None])
+        problem = build_problem(held, stage.config.passive, stage.samples.rows, None, stage.samples.extras)
+        fit = fit_problem(problem)
+        fits.append(fit)
+    # How the travel is followed is itself uncertain: the coarsest and the finest estimate's difference joins the
+    # covariance (rank one), so that no check reads what the finest leaves over as a property of the arm. So does
+    # where the contact point sat to begin with: the travel is counted from the session's start, but the hand may
+    # have settled before it; its mean over the session is as likely a reference.
+    shift = fits[-1].values - fits[0].values
+    centred = dataclasses.replace(data, tau_nm=data.tau_nm - ((travel - travel.mean()) * lever)[:, None])
+    reference = fit_problem(
+        build_problem(centred, stage.config.passive, stage.samples.rows, None, stage.samples.extras)
+    )
+    settled = reference.values - fit.values
+    total_m = float(abs(travel[-1] - travel[0])) if travel.size else 0.0
+    values = {"slip_mm": 1e3 * max(total_m, first.total_m), "trend_percent": 100.0 * first.trend_share}
+    stage = dataclasses.replace(stage, data=held, samples=dataclasses.replace(stage.samples, problem=problem))
+    found = Finding(code=FindingCode.HAND_SLIPPED, values=values)
+    added = ((Term.CONTACT_SLIP, np.outer(shift, shift) + np.outer(settled, settled)),)
+    return stage.apply(Outcome(problem=problem, fit=fit, added=added, notes=(found,)))

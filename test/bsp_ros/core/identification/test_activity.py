@@ -12,7 +12,9 @@ from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.joint.activity import active_stretches
+from bsp_ros.core.identification.joint.contact_slip import slip_lever_n
 from bsp_ros.core.identification.joint.identify import _start
+from bsp_ros.core.model import contact_lever_sums
 
 # The simulated markers sit on the joint centres: no placement uncertainty to add.
 EXACT = JointConfig(marker_placement_sd_m=0.0)
@@ -117,3 +119,31 @@ def test_resistance_growing_with_speed_in_one_direction_is_named_as_possible_spa
     assert (FindingCode.SPASTICITY, "elbow") in codes
     relaxed = identify_joint(data, EXACT)
     assert FindingCode.SPASTICITY not in [f.code for f in relaxed.findings]
+
+
+def test_a_hand_that_slips_in_the_handle_is_followed_and_named(
+    data: IdentificationData, session: sim.SimulatedSession
+) -> None:
+    # The contact point moves 8 mm along the hand in three slips of half a second (a hand sliding in its strap):
+    # every joint's torque changes by the travel times the force's lever about the hand's direction.
+    t_s = (data.t_ns - data.t_ns[0]) * 1e-9
+    travel_m = 0.008 / 3 * sum(np.clip((t_s - start) / 0.5, 0.0, 1.0) for start in (12.0, 31.0, 47.0))
+    lever = slip_lever_n(data.q_rad, data.lengths_m, data.tau_nm)
+    slipped = dataclasses.replace(data, tau_nm=data.tau_nm + (travel_m * lever)[:, None])
+    result = identify_joint(slipped, EXACT)
+    assert result.valid
+    (found,) = [f for f in result.findings if f.code is FindingCode.HAND_SLIPPED]
+    assert 6.0 < found.values["slip_mm"] < 10.0
+    _, beta, covariance = result.block("static_moment_kgm")
+    z = (beta - np.asarray(session.truth.static_moments_kgm)) / np.sqrt(np.diag(covariance))
+    assert np.abs(z).max() < 2.5, z
+    assert FindingCode.HAND_SLIPPED not in [f.code for f in identify_joint(data, EXACT).findings]
+
+
+def test_a_drifting_force_sensor_is_not_taken_for_a_slipping_hand(data: IdentificationData) -> None:
+    # A vertical force offset creeping up by 0.6 N moves each joint's torque by its own lever (the shoulder's
+    # several times the wrist's); a slip moves them alike.
+    _, dz = contact_lever_sums(data.q_rad, data.lengths_m)
+    creep_n = 0.01 * (data.t_ns - data.t_ns[0]) * 1e-9
+    drifted = dataclasses.replace(data, tau_nm=data.tau_nm - dz * creep_n[:, None])
+    assert FindingCode.HAND_SLIPPED not in [f.code for f in identify_joint(drifted, EXACT).findings]
