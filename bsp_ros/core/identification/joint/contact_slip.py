@@ -22,8 +22,9 @@ __all__ = ["Slip", "contact_slip", "slip_lever_n"]
 # The travel is estimated window by window, s.
 WINDOW_S = 10.0
 
-# Each joint's own travel trend is at least this share of the largest one's under a slip.
-MIN_JOINT_AGREEMENT = 0.5
+# Each joint's own travel trend is at least this share of the largest one's under a slip (a fit takes up part of
+# it differently at each joint: 0.4 and more on the MuJoCo slipping hand; a vertical force drift gives 0.15).
+MIN_JOINT_AGREEMENT = 0.3
 
 # A trend explaining less of the windows' travel than this is no slip (bursts, a misfit, skin markers).
 MIN_TREND_SHARE = 0.6
