@@ -368,8 +368,9 @@ SPECS: dict[FindingCode, FindingSpec] = {
     ),
     C.TREMOR_FRICTION: FindingSpec(
         WEAK,
-        "tremor shook the {where} by {angle_deg:.2f} deg RMS at {frequency_hz:.1f} Hz: the friction it shows is this "
-        "session's, lowered by the shaking, and may be less than the relaxed arm's",
+        "tremor shook the {where} by {angle_deg:.3f} deg RMS at {frequency_hz:.1f} Hz ({speed_percent:.0f} % of its "
+        "typical speed): the friction it shows is this session's, lowered by the shaking, and may be less than the "
+        "relaxed arm's (its std says by how much)",
         "a tremor shook the joint, which lowers the friction a session shows",
         "compare its friction only with sessions of a similar tremor",
     ),

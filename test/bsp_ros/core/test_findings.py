@@ -33,7 +33,7 @@ SAMPLE_VALUES: dict[FindingCode, dict[str, object]] = {
     FindingCode.HAND_SLIPPED: {"slip_mm": 8.2, "trend_percent": 91.0},
     FindingCode.SPASTICITY: {"increase_nm": 0.08, "fast_rad_s": 0.04, "direction": -1},
     FindingCode.TREMOR: {"frequency_hz": 5.1, "torque_nm": 0.21, "angle_deg": 0.02},
-    FindingCode.TREMOR_FRICTION: {"angle_deg": 0.3, "frequency_hz": 5.1},
+    FindingCode.TREMOR_FRICTION: {"angle_deg": 0.3, "frequency_hz": 5.1, "speed_percent": 80.0},
     FindingCode.ARM_ACTIVE: {"n_stretches": 3, "active_s": 6.5, "active_percent": 10.8, "peak_nm": 1.2},
     FindingCode.MODEL_MISFIT: {"rms_nm": 0.186, "ratio": 5.8, "noise_nm": 0.032},
     FindingCode.PERPENDICULAR_IMPLAUSIBLE: {"prior_sd_off": 7.5, "value_kgm": 0.05, "family_chosen": False},

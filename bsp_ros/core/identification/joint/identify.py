@@ -38,7 +38,7 @@ from bsp_ros.core.identification.joint.steps import (
     remove_far_off_samples,
 )
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
-from bsp_ros.core.identification.joint.tremor_step import calm_tremor
+from bsp_ros.core.identification.joint.tremor_step import calm_tremor, widen_dithered_friction
 from bsp_ros.core.identification.ledger import Ledger, Term
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.stacked import fit_problem
@@ -77,6 +77,7 @@ STEPS: tuple[Step, ...] = (
     choose_passive_model,
     remove_far_off_samples,
     add_friction_shape,
+    widen_dithered_friction,
     add_marker_placement,
     add_model_choice,
     model_drift,

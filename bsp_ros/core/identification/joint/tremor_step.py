@@ -9,16 +9,20 @@ import numpy as np
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.identification.joint.stage import Outcome, Stage
 from bsp_ros.core.identification.joint.tremor import band_stopped, tremor_in
+from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.streams import joints_for
 
-__all__ = ["MIN_DITHER_DEG", "MIN_TREMOR_NM", "calm_tremor"]
+__all__ = ["MIN_DITHER_SHARE", "MIN_TREMOR_NM", "calm_tremor", "widen_dithered_friction"]
 
 # Tremor torque below this is not reported (no rehab cell's sensor resolves it at a joint), Nm RMS.
 MIN_TREMOR_NM = 0.005
 
-# A joint shaken by more than this has its friction dithered, deg RMS in the tremor band.
-MIN_DITHER_DEG = 0.05
+# A joint whose tremor-band speed (2 pi f times the angle's RMS in the band) is more than this share of its
+# typical speed (the median of its direction-of-motion speed) has its friction dithered: at each instant the
+# tremor, not the slow motion, decides the direction friction acts in.
+MIN_DITHER_SHARE = 0.5
 
 
 def _rate_hz(t_ns: np.ndarray) -> float:
@@ -32,14 +36,19 @@ def _findings(
     frequency_hz: float,
     torque_nm: np.ndarray,
     angle_deg: np.ndarray,
+    dither_share: np.ndarray,
 ) -> list[Finding]:
     """The tremor note at its strongest joint, and a friction warning at each joint it shook."""
     worst = int(np.argmax(torque_nm))
     values = {"frequency_hz": frequency_hz, "torque_nm": float(torque_nm[worst]), "angle_deg": float(angle_deg[worst])}
     out = [Finding(code=FindingCode.TREMOR, where=joints[worst], values=values)]
     if coulomb:
-        for j in np.flatnonzero(angle_deg > MIN_DITHER_DEG):
-            dither = {"angle_deg": float(angle_deg[j]), "frequency_hz": frequency_hz}
+        for j in np.flatnonzero(dither_share > MIN_DITHER_SHARE):
+            dither = {
+                "angle_deg": float(angle_deg[j]),
+                "frequency_hz": frequency_hz,
+                "speed_percent": float(100.0 * dither_share[j]),
+            }
             out.append(Finding(code=FindingCode.TREMOR_FRICTION, where=joints[j], values=dither))
     return out
 
@@ -54,10 +63,35 @@ def calm_tremor(data: IdentificationData, config: JointConfig) -> tuple[Identifi
     if not present.any():
         return data, []
     angle = tremor_in(data.q_rad, rate_hz)
-    angle_deg = np.where(angle.present, np.degrees(angle.rms), 0.0)
+    angle_rad = np.where(angle.present, angle.rms, 0.0)
+    typical_rad_s = np.median(np.abs(data.velocity_rad_s), axis=0)
+    dither_share = 2.0 * np.pi * angle.frequency_hz * angle_rad / np.maximum(typical_rad_s, 1e-9)
     calmed = dataclasses.replace(data, tau_nm=band_stopped(data.tau_nm, rate_hz, present))
     coulomb = "coulomb" in config.passive.terms
     found = _findings(
-        joints_for(data.n_joints), coulomb, torque.frequency_hz, np.where(present, torque.rms, 0.0), angle_deg
+        joints_for(data.n_joints),
+        coulomb,
+        torque.frequency_hz,
+        np.where(present, torque.rms, 0.0),
+        np.degrees(angle_rad),
+        np.nan_to_num(dither_share),
     )
     return calmed, found
+
+
+def widen_dithered_friction(stage: Stage) -> Stage:
+    """A Coulomb amplitude a tremor dithered is this session's, lowered by the shaking by an unknown amount up to
+    about the share the tremor's speed takes of the motion's: that much of it (half as one sd) joins its variance
+    (the friction-shape term), so that its std covers the relaxed arm's friction too."""
+    dithered = [f for f in stage.notes if f.code is FindingCode.TREMOR_FRICTION]
+    if not dithered or "coulomb" not in stage.config.passive.terms:
+        return stage
+    term = np.zeros_like(stage.fit.covariance)
+    k = len(stage.config.passive.local)
+    joints = list(joints_for(stage.n))
+    for finding in dithered:
+        j = joints.index(finding.where)
+        index = stage.n + j * k + stage.config.passive.local.index("coulomb")
+        share = min(1.0, float(finding.values["speed_percent"]) / 100.0)
+        term[index, index] = (0.5 * share * abs(stage.fit.values[index])) ** 2
+    return stage.apply(Outcome(added=((Term.FRICTION_SHAPE, term),)))

@@ -85,3 +85,8 @@ def test_a_joint_the_tremor_shakes_has_its_friction_called_the_sessions(data: Id
     result = identify_joint(dataclasses.replace(data, q_rad=shaken, tau_nm=torque), EXACT)
     codes = [(f.code, f.where) for f in result.findings]
     assert (FindingCode.TREMOR_FRICTION, "elbow") in codes and result.weak
+    assert [where for code, where in codes if code is FindingCode.TREMOR_FRICTION] == ["elbow"]
+    # Its Coulomb amplitude's std now covers the friction the shaking may have hidden.
+    plain = identify_joint(data, EXACT)
+    column = result.names.index(("coulomb_nm", "elbow"))
+    assert result.covariance[column, column] > 4 * plain.covariance[column, column]
