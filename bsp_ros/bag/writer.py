@@ -6,13 +6,15 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 import numpy.typing as npt
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
 
 from bsp_ros import __version__
 from bsp_ros.bag.cdr import encode_fixed
@@ -125,113 +127,42 @@ def write_session_bag(
     typestore = get_typestore(Stores.ROS2_JAZZY)
     rng = np.random.default_rng(seed)
 
-    # Serialized payloads per topic (rows of equal length), header stamps and receive times.
-    payloads: list[tuple[str, str, list[bytes], np.ndarray, np.ndarray, bool]] = []
-    w = session.wrench
-    t_w = np.asarray(w.t_ns, dtype=np.int64)
-    rows = encode_fixed(t_w, w.frame_id, np.hstack([np.asarray(w.force_n), np.asarray(w.torque_nm)]))
-    payloads.append(
-        (
-            topic_map.wrench,
-            WRENCH_TYPE,
-            [r.tobytes() for r in rows],
-            t_w,
-            _receive_times(t_w, transport_delay_ns, delay_jitter_ns, rng),
-            False,
-        )
-    )
-    poses = [(topic_map.markers[name], session.markers[name]) for name in MARKERS_3 if name in session.markers]
-    if session.handle_pose is not None:
-        poses.append((topic_map.handle_pose, session.handle_pose))
-    for topic, series in poses:
-        t_m = np.asarray(series.t_ns, dtype=np.int64)
-        values = np.hstack([np.asarray(series.position_m, dtype=np.float64), np.tile(_IDENTITY_XYZW, (t_m.size, 1))])
-        rows = encode_fixed(t_m, world_frame, values)
-        payloads.append(
-            (
-                topic,
-                POSE_TYPE,
-                [r.tobytes() for r in rows],
-                t_m,
-                _receive_times(t_m, transport_delay_ns, delay_jitter_ns, rng),
-                False,
-            )
-        )
-    starts = [int(p[3].min()) for p in payloads if p[3].size]
+    payloads = _stream_payloads(session, topic_map, world_frame, transport_delay_ns, delay_jitter_ns, rng)
+    starts = [int(p.stamps_ns.min()) for p in payloads if p.stamps_ns.size]
     t0 = min(starts) if starts else 1
-    if tf_samples:
-        tf_stamps = np.array([s.t_ns for s in tf_samples], dtype=np.int64)
-        tf_rows = [
-            bytes(typestore.serialize_cdr(build_tf_message(lambda n: typestore.types[n], [s]), TF_TYPE))
-            for s in tf_samples
-        ]
-        payloads.append((topic_map.tf, TF_TYPE, tf_rows, tf_stamps, np.maximum.accumulate(tf_stamps), False))
-    if transform_samples:
-        transform_stamps = np.array([s.t_ns for s in transform_samples], dtype=np.int64)
-        transform_rows = [
-            bytes(typestore.serialize_cdr(build_transform_stamped(lambda n: typestore.types[n], s), TRANSFORM_TYPE))
-            for s in transform_samples
-        ]
-        receive = np.maximum.accumulate(transform_stamps)
-        payloads.append((topic_map.transform, TRANSFORM_TYPE, transform_rows, transform_stamps, receive, False))
-    if tf_static and w.frame_id != world_frame:
-        try:
-            rotation_xyzw = quaternion_from_matrix(session.rotation_world_from_sensor)
-        except ValueError as error:
-            raise BagWriteError(f"rotation_world_from_sensor cannot go on /tf_static: {error}") from None
-        translation = np.asarray(sensor_translation_m, dtype=np.float64)
-        if translation.shape != (3,) or not np.isfinite(translation).all():
-            raise BagWriteError(f"sensor_translation_m must be 3 finite numbers, got {translation.tolist()}")
-        transform = TransformSample(t0, world_frame, w.frame_id, translation, rotation_xyzw)
-        tf_msg = build_tf_message(lambda n: typestore.types[n], [transform])
-        data = bytes(typestore.serialize_cdr(tf_msg, TF_TYPE))
-        payloads.insert(0, (topic_map.tf_static, TF_TYPE, [data], np.array([t0]), np.array([t0]), True))
+    payloads += _transform_payloads(tf_samples, transform_samples, topic_map, typestore)
+    if tf_static and session.wrench.frame_id != world_frame:
+        static = _tf_static_payload(session, world_frame, sensor_translation_m, t0, topic_map.tf_static, typestore)
+        payloads.insert(0, static)
 
-    # Merge every message by receive time (ties: /tf_static first, then topic order, then sequence).
-    log_all = np.concatenate([p[4] for p in payloads])
-    topic_all = np.concatenate([np.full(p[4].size, i) for i, p in enumerate(payloads)])
-    index_all = np.concatenate([np.arange(p[4].size) for p in payloads])
-    order = np.lexsort((index_all, topic_all, log_all))
+    _write_bag_directory(out, payloads, typestore, chunk_bytes, custom_data, truth_dict)
+    return out
 
+
+def _write_bag_directory(
+    out: Path,
+    payloads: Sequence[_TopicPayload],
+    typestore: Typestore,
+    chunk_bytes: int,
+    custom_data: Mapping[str, str] | None,
+    truth_dict: Mapping[str, Any] | None,
+) -> None:
+    """Create ``out`` with the MCAP file, ``metadata.yaml`` and (if given) ``truth.json``, or nothing at all.
+
+    Parameters
+    ----------
+    out : the bag directory (must not exist).
+    payloads : the topics' messages, in the order their channels are registered.
+    typestore : the Jazzy typestore (message definitions and type hashes).
+    chunk_bytes : target MCAP chunk size, bytes.
+    custom_data : more ``custom_data`` pairs for ``metadata.yaml``.
+    truth_dict : JSON-ready ground truth, or None for no ``truth.json``.
+    """
     out.mkdir(parents=True)
     mcap_name = f"{out.name}_0.mcap"
-    records: list[TopicRecord] = []
     try:
         with (out / mcap_name).open("xb") as stream:
-            writer = Writer(
-                stream,
-                chunk_size=chunk_bytes,
-                compression=CompressionType.NONE,
-                enable_crcs=True,
-                enable_data_crcs=True,
-            )
-            writer.start(profile="ros2", library=f"bsp_ros {__version__} (mcap python)")
-            schema_ids: dict[str, int] = {}
-            channel_ids: list[int] = []
-            for topic, msgtype, messages, _, _, latched in payloads:
-                if msgtype not in schema_ids:
-                    msgdef, _ = typestore.generate_msgdef(msgtype, ros_version=2)
-                    schema_ids[msgtype] = writer.register_schema(msgtype, "ros2msg", msgdef.encode("utf-8"))
-                qos = (qos_profile(transient_local=latched, depth=1 if latched else 10),)
-                record = TopicRecord(topic, msgtype, typestore.hash_rihs01(msgtype), qos, len(messages))
-                channel_ids.append(writer.register_channel(topic, "cdr", schema_ids[msgtype], channel_metadata(record)))
-                records.append(record)
-            stamps_all = [p[3] for p in payloads]
-            for k, i in zip(topic_all[order].tolist(), index_all[order].tolist(), strict=True):
-                writer.add_message(
-                    channel_ids[k],
-                    log_time=int(payloads[k][4][i]),
-                    data=payloads[k][2][i],
-                    publish_time=int(stamps_all[k][i]),
-                    sequence=i,
-                )
-            start_ns = int(log_all.min()) if log_all.size else 0
-            end_ns = int(log_all.max()) if log_all.size else 0
-            custom = {"writer": f"bsp_ros {__version__}", **(custom_data or {})}
-            metadata = build_metadata(mcap_name, records, start_ns, end_ns, custom)
-            info = dump_metadata(metadata["rosbag2_bagfile_information"])
-            writer.add_metadata("rosbag2", {"serialized_metadata": info, "ROS_DISTRO": "jazzy"})
-            writer.finish()
+            metadata = _write_mcap(stream, mcap_name, payloads, typestore, chunk_bytes, custom_data)
         _write_atomic(out / METADATA_FILE, dump_metadata(metadata))
         if truth_dict is not None:
             _write_atomic(out / TRUTH_FILE, json.dumps(_json_ready(truth_dict), indent=2) + "\n")
@@ -241,7 +172,198 @@ def write_session_bag(
             file.unlink()
         out.rmdir()
         raise
-    return out
+
+
+@dataclass(frozen=True, eq=False)
+class _TopicPayload:
+    """One topic's serialized messages, ready for the MCAP file.
+
+    Attributes
+    ----------
+    topic : topic name.
+    msgtype : ROS 2 message type (``pkg/msg/Type``).
+    messages : each message's CDR bytes, in stamp order.
+    stamps_ns : (n,) int64 header stamps, ns (the MCAP publish times).
+    log_ns : (n,) int64 receive times, ns (the MCAP log times), non-decreasing.
+    latched : True for a transient-local topic (``/tf_static``).
+    """
+
+    topic: str
+    msgtype: str
+    messages: list[bytes]
+    stamps_ns: np.ndarray
+    log_ns: np.ndarray
+    latched: bool = False
+
+
+def _stream_payloads(
+    session: Session,
+    topic_map: TopicMap,
+    world_frame: str,
+    delay_ns: int,
+    jitter_ns: int,
+    rng: np.random.Generator,
+) -> list[_TopicPayload]:
+    """The wrench, then each marker in ``MARKERS_3`` order, then the handle pose, encoded as fixed-size CDR rows.
+
+    Poses go out in ``world_frame`` with an identity orientation. Receive times are the stamps plus ``delay_ns``
+    and a jitter in ``[0, jitter_ns)`` ns drawn from ``rng`` topic after topic in this order, so a seed gives the
+    same bag.
+    """
+    w = session.wrench
+    t_w = np.asarray(w.t_ns, dtype=np.int64)
+    rows = encode_fixed(t_w, w.frame_id, np.hstack([np.asarray(w.force_n), np.asarray(w.torque_nm)]))
+    log_w = _receive_times(t_w, delay_ns, jitter_ns, rng)
+    payloads = [_TopicPayload(topic_map.wrench, WRENCH_TYPE, [r.tobytes() for r in rows], t_w, log_w)]
+    poses = [(topic_map.markers[name], session.markers[name]) for name in MARKERS_3 if name in session.markers]
+    if session.handle_pose is not None:
+        poses.append((topic_map.handle_pose, session.handle_pose))
+    for topic, series in poses:
+        t_m = np.asarray(series.t_ns, dtype=np.int64)
+        values = np.hstack([np.asarray(series.position_m, dtype=np.float64), np.tile(_IDENTITY_XYZW, (t_m.size, 1))])
+        rows = encode_fixed(t_m, world_frame, values)
+        log_m = _receive_times(t_m, delay_ns, jitter_ns, rng)
+        payloads.append(_TopicPayload(topic, POSE_TYPE, [r.tobytes() for r in rows], t_m, log_m))
+    return payloads
+
+
+def _transform_payloads(
+    tf_samples: Sequence[TransformSample],
+    transform_samples: Sequence[TransformSample],
+    topic_map: TopicMap,
+    typestore: Typestore,
+) -> list[_TopicPayload]:
+    """``/tf`` (one TFMessage per sample) and the TransformStamped topic, each received at its stamp.
+
+    A topic without samples is left out.
+    """
+    payloads = []
+    if tf_samples:
+        tf_stamps = np.array([s.t_ns for s in tf_samples], dtype=np.int64)
+        tf_rows = [
+            bytes(typestore.serialize_cdr(build_tf_message(lambda n: typestore.types[n], [s]), TF_TYPE))
+            for s in tf_samples
+        ]
+        payloads.append(_TopicPayload(topic_map.tf, TF_TYPE, tf_rows, tf_stamps, np.maximum.accumulate(tf_stamps)))
+    if transform_samples:
+        transform_stamps = np.array([s.t_ns for s in transform_samples], dtype=np.int64)
+        transform_rows = [
+            bytes(typestore.serialize_cdr(build_transform_stamped(lambda n: typestore.types[n], s), TRANSFORM_TYPE))
+            for s in transform_samples
+        ]
+        receive = np.maximum.accumulate(transform_stamps)
+        payloads.append(_TopicPayload(topic_map.transform, TRANSFORM_TYPE, transform_rows, transform_stamps, receive))
+    return payloads
+
+
+def _tf_static_payload(
+    session: Session,
+    world_frame: str,
+    sensor_translation_m: npt.ArrayLike,
+    t0_ns: int,
+    topic: str,
+    typestore: Typestore,
+) -> _TopicPayload:
+    """The latched ``world_frame -> sensor`` transform, stamped and received at ``t0_ns``.
+
+    Parameters
+    ----------
+    session : its ``rotation_world_from_sensor`` (3, 3) is the transform's rotation.
+    world_frame : the parent frame id.
+    sensor_translation_m : (3,) sensor origin in ``world_frame``, m.
+    t0_ns : the first stream message's header stamp, ns.
+    topic : the ``/tf_static`` topic name.
+    typestore : the Jazzy typestore that serializes the message.
+
+    Raises
+    ------
+    BagWriteError
+        If the rotation is no rotation or the translation is not 3 finite numbers.
+    """
+    try:
+        rotation_xyzw = quaternion_from_matrix(session.rotation_world_from_sensor)
+    except ValueError as error:
+        raise BagWriteError(f"rotation_world_from_sensor cannot go on /tf_static: {error}") from None
+    translation = np.asarray(sensor_translation_m, dtype=np.float64)
+    if translation.shape != (3,) or not np.isfinite(translation).all():
+        raise BagWriteError(f"sensor_translation_m must be 3 finite numbers, got {translation.tolist()}")
+    transform = TransformSample(t0_ns, world_frame, session.wrench.frame_id, translation, rotation_xyzw)
+    tf_msg = build_tf_message(lambda n: typestore.types[n], [transform])
+    data = bytes(typestore.serialize_cdr(tf_msg, TF_TYPE))
+    return _TopicPayload(topic, TF_TYPE, [data], np.array([t0_ns]), np.array([t0_ns]), latched=True)
+
+
+def _write_mcap(
+    stream: BinaryIO,
+    mcap_name: str,
+    payloads: Sequence[_TopicPayload],
+    typestore: Typestore,
+    chunk_bytes: int,
+    custom_data: Mapping[str, str] | None,
+) -> dict[str, Any]:
+    """Write ``payloads`` into ``stream`` as one MCAP file, merged by receive time.
+
+    Chunks are ``chunk_bytes`` long (bytes), uncompressed, CRC-checked. Messages go out in receive-time order; ties
+    keep ``/tf_static`` first, then the payloads' order, then each topic's sequence.
+
+    Returns
+    -------
+    The bag's ``metadata.yaml`` document (also stored in the file's ``rosbag2`` metadata record).
+    """
+    log_all = np.concatenate([p.log_ns for p in payloads])
+    topic_all = np.concatenate([np.full(p.log_ns.size, i) for i, p in enumerate(payloads)])
+    index_all = np.concatenate([np.arange(p.log_ns.size) for p in payloads])
+    order = np.lexsort((index_all, topic_all, log_all))
+    writer = Writer(
+        stream,
+        chunk_size=chunk_bytes,
+        compression=CompressionType.NONE,
+        enable_crcs=True,
+        enable_data_crcs=True,
+    )
+    writer.start(profile="ros2", library=f"bsp_ros {__version__} (mcap python)")
+    records, channel_ids = _register_channels(writer, payloads, typestore)
+    for k, i in zip(topic_all[order].tolist(), index_all[order].tolist(), strict=True):
+        payload = payloads[k]
+        writer.add_message(
+            channel_ids[k],
+            log_time=int(payload.log_ns[i]),
+            data=payload.messages[i],
+            publish_time=int(payload.stamps_ns[i]),
+            sequence=i,
+        )
+    start_ns = int(log_all.min()) if log_all.size else 0
+    end_ns = int(log_all.max()) if log_all.size else 0
+    custom = {"writer": f"bsp_ros {__version__}", **(custom_data or {})}
+    metadata = build_metadata(mcap_name, records, start_ns, end_ns, custom)
+    info = dump_metadata(metadata["rosbag2_bagfile_information"])
+    writer.add_metadata("rosbag2", {"serialized_metadata": info, "ROS_DISTRO": "jazzy"})
+    writer.finish()
+    return metadata
+
+
+def _register_channels(
+    writer: Writer, payloads: Sequence[_TopicPayload], typestore: Typestore
+) -> tuple[list[TopicRecord], list[int]]:
+    """Register each payload's schema (once per type) and channel, with the QoS ``ros2 bag play`` offers again.
+
+    Returns
+    -------
+    The topics' records for ``metadata.yaml`` and their MCAP channel ids, both in the payloads' order.
+    """
+    schema_ids: dict[str, int] = {}
+    records: list[TopicRecord] = []
+    channel_ids: list[int] = []
+    for payload in payloads:
+        msgtype = payload.msgtype
+        if msgtype not in schema_ids:
+            msgdef, _ = typestore.generate_msgdef(msgtype, ros_version=2)
+            schema_ids[msgtype] = writer.register_schema(msgtype, "ros2msg", msgdef.encode("utf-8"))
+        qos = (qos_profile(transient_local=payload.latched, depth=1 if payload.latched else 10),)
+        record = TopicRecord(payload.topic, msgtype, typestore.hash_rihs01(msgtype), qos, len(payload.messages))
+        channel_ids.append(writer.register_channel(payload.topic, "cdr", schema_ids[msgtype], channel_metadata(record)))
+        records.append(record)
+    return records, channel_ids
 
 
 def _write_atomic(path: Path, text: str) -> None:
