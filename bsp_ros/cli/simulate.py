@@ -41,6 +41,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--wrench-hz", type=float, metavar="HZ", help="wrench rate (default: 100)")
     parser.add_argument("--marker-hz", type=float, metavar="HZ", help="marker frame rate (default: 50)")
     parser.add_argument("--seed", type=int, default=0, metavar="N", help="seed of every random draw (default: 0)")
+    _add_motion_arguments(parser)
+    _add_human_arguments(parser)
+    _add_noise_arguments(parser)
+    _add_passive_arguments(parser)
+    _add_cell_arguments(parser)
+    _add_sensor_arguments(parser)
+    _add_tare_arguments(parser)
+    return parser
+
+
+def _add_motion_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the motion group: the robot's motion (sines or a plan) and whether the arm has inertia."""
     motion = parser.add_argument_group("motion and physics")
     motion.add_argument(
         "--inertia",
@@ -61,10 +73,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="PLAN",
         help="follow a `bsp plan` trajectory (JSON or CSV) instead of the built-in sines (default: the sines)",
     )
+
+
+def _add_human_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the human subject's group: the body data that scale de Leva's table means."""
     human = parser.add_argument_group("human subject (de Leva table means)")
     human.add_argument("--body-mass", type=positive_float, metavar="KG", help="body mass (default: 75)")
     human.add_argument("--height", type=positive_float, metavar="M", help="stature (default: 1.78)")
     human.add_argument("--sex", choices=("male", "female"), help="table to use (default: male)")
+
+
+def _add_noise_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the noise group: the sensors' noise and the markers' occlusion."""
     noise = parser.add_argument_group("noise and occlusion")
     noise.add_argument("--force-noise", type=float, metavar="N", help="force noise per axis, N (1 sd) (default: 0.05)")
     noise.add_argument(
@@ -76,6 +96,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     noise.add_argument(
         "--dropout", type=float, metavar="FRACTION", help="fraction of marker frames lost (0-0.9) (default: 0)"
     )
+
+
+def _add_passive_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the passive group: the joints' passive moments, one value per joint."""
     passive = parser.add_argument_group("passive joint moments (one value per joint, shoulder first)")
     passive.add_argument(
         "--coulomb",
@@ -108,6 +132,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     passive.add_argument(
         "--stribeck-speed", type=float, metavar="RAD_S", help="Stribeck speed scale, rad/s (default: 0.01)"
     )
+
+
+def _add_cell_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the cell's nuisances: sensor offsets and drift, the handle, skin markers, spikes, trunk, start."""
     cell = parser.add_argument_group("cell nuisances (sensor frame unless stated)")
     cell.add_argument(
         "--force-offset", type=float, nargs=3, metavar="N", help="F/T force offset at the start, N (default: 0 0 0)"
@@ -173,6 +201,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="start this many seconds after the default start time (0-86400): a further recording of the same "
         "session (default: 0)",
     )
+
+
+def _add_sensor_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the F/T sensor's group: its mounting, filter and clock."""
     sensor = parser.add_argument_group("F/T sensor mounting and timing")
     sensor.add_argument(
         "--sensor-turns",
@@ -209,6 +241,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="S",
         help="the wrench clock runs this much behind the marker clock: samples are stamped S late (+-1) (default: 0)",
     )
+
+
+def _add_tare_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the tare group: the cell's tare recording in place of a session."""
     tare = parser.add_argument_group("tare recording (--tare: the handle free, no arm; --duration is its length)")
     tare.add_argument(
         "--tare", action="store_true", help="write the cell's tare recording instead of a session (default: a session)"
@@ -224,7 +260,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     tare.add_argument(
         "--tare-start", type=float, metavar="S", help="start relative to the session start, s (default: -60)"
     )
-    return parser
 
 
 def _check_option(option: str, value: float | None, lo: float, hi: float, unit: str = "") -> float | None:
@@ -255,7 +290,48 @@ def _trajectory(args: argparse.Namespace, spec: Any) -> Any:
 
 
 def _spec(args: argparse.Namespace) -> Any:
-    """The CellSpec the options describe (validation is the simulator's, or names the option here)."""
+    """The CellSpec the options describe (validation is the simulator's, or names the option here).
+
+    The options are checked group by group (subject, sensor, markers, passive moments, motion, trunk, start), so
+    that of several bad options the first group's is named.
+    """
+    spec = _subject_spec(args)
+    sensor = _sensor_changes(args)
+    markers = _marker_changes(args, spec.n_segments)
+    passive = _passive_changes(args, spec.n_segments)
+    trajectory = _trajectory(args, spec)
+    tilt_deg = _check_option("--trunk-tilt-deg", args.trunk_tilt_deg, -90.0, 90.0) or 0.0
+    if tilt_deg and args.trajectory is None:  # the robot moves the arm through the same postures relative to the trunk
+        centre = list(trajectory.center_deg)
+        centre[0] += tilt_deg
+        trajectory = dataclasses.replace(trajectory, center_deg=tuple(centre))
+    start_offset_s = _check_option("--start-offset-s", args.start_offset_s, 0.0, 86_400.0) or 0.0
+    duration = args.duration
+    if duration is None:
+        duration = trajectory.duration_s if args.trajectory is not None else 120.0
+    return dataclasses.replace(
+        spec,
+        sensor=dataclasses.replace(spec.sensor, **sensor),
+        markers=dataclasses.replace(spec.markers, **markers),
+        passive=dataclasses.replace(spec.passive, **passive),
+        trajectory=trajectory,
+        duration_s=duration,
+        seed=args.seed,
+        inertia=args.inertia,
+        robot_handle_pose=args.robot_handle_pose,
+        trunk_tilt_rad=math.radians(tilt_deg),
+        start_ns=spec.start_ns + round(start_offset_s * 1e9),
+    )
+
+
+def _subject_spec(args: argparse.Namespace) -> Any:
+    """The default CellSpec of ``--subject``: a human arm scaled by the body data given, or the paper's arm.
+
+    Raises
+    ------
+    InputError
+        If body data are given for the paper's mechanical arm.
+    """
     from bsp_ros.core import simulation
 
     if args.subject == "human":
@@ -264,18 +340,27 @@ def _spec(args: argparse.Namespace) -> Any:
             for key, value in (("sex", args.sex), ("body_mass_kg", args.body_mass), ("height_m", args.height))
             if value is not None
         }
-        spec = simulation.human_arm_cell(**subject)
-    else:
-        given = [
-            flag
-            for flag, value in (("--body-mass", args.body_mass), ("--height", args.height), ("--sex", args.sex))
-            if value is not None
-        ]
-        if given:
-            raise InputError(
-                f"{', '.join(given)} apply to a human subject only; --subject paper-arm is a fixed mechanical arm"
-            )
-        spec = simulation.paper_mechanical_arm_cell()
+        return simulation.human_arm_cell(**subject)
+    given = [
+        flag
+        for flag, value in (("--body-mass", args.body_mass), ("--height", args.height), ("--sex", args.sex))
+        if value is not None
+    ]
+    if given:
+        raise InputError(
+            f"{', '.join(given)} apply to a human subject only; --subject paper-arm is a fixed mechanical arm"
+        )
+    return simulation.paper_mechanical_arm_cell()
+
+
+def _sensor_changes(args: argparse.Namespace) -> dict[str, Any]:
+    """The ``SensorSpec`` fields the options set (rates in Hz, noise in N and Nm, offsets, handle, filter, clock).
+
+    Raises
+    ------
+    InputError
+        If ``--wrench-filter-delay-s`` is outside [0, 1] s or ``--wrench-clock-offset-s`` outside [-1, 1] s.
+    """
     sensor: dict[str, Any] = {}
     if args.wrench_hz is not None:
         sensor["wrench_hz"] = args.wrench_hz
@@ -312,6 +397,23 @@ def _spec(args: argparse.Namespace) -> Any:
     clock = _check_option("--wrench-clock-offset-s", args.wrench_clock_offset_s, -1.0, 1.0, " s")
     if clock is not None:
         sensor["clock_offset_s"] = clock
+    return sensor
+
+
+def _marker_changes(args: argparse.Namespace, n_segments: int) -> dict[str, Any]:
+    """The ``MarkerSpec`` fields the options set (frame rate in Hz, noise in m, dropout, skin offsets in m).
+
+    Parameters
+    ----------
+    args : the parsed options.
+    n_segments : the arm's segments; it carries ``n_segments + 1`` markers.
+
+    Raises
+    ------
+    InputError
+        If ``--skin-offset`` does not give (along, normal) for every marker or ``--skin-offset-mm`` is outside
+        [0, 100] mm.
+    """
     markers: dict[str, Any] = {}
     if args.marker_hz is not None:
         markers["marker_hz"] = args.marker_hz
@@ -320,7 +422,7 @@ def _spec(args: argparse.Namespace) -> Any:
     if args.dropout is not None:
         markers["dropout_fraction"] = args.dropout
     if args.skin_offset is not None:
-        n_markers = spec.n_segments + 1
+        n_markers = n_segments + 1
         if len(args.skin_offset) != 2 * n_markers:
             raise InputError(
                 f"--skin-offset needs {2 * n_markers} values ((along, normal) for each of {n_markers} markers), "
@@ -330,6 +432,22 @@ def _spec(args: argparse.Namespace) -> Any:
     bound_mm = _check_option("--skin-offset-mm", args.skin_offset_mm, 0.0, 100.0, " mm")
     if bound_mm is not None:
         markers["skin_offset_bound_m"] = bound_mm / 1000.0
+    return markers
+
+
+def _passive_changes(args: argparse.Namespace, n_segments: int) -> dict[str, Any]:
+    """The ``PassiveTruth`` fields the options set (friction shape, and per joint: Nm, Nm/rad, Nm s/rad, rad).
+
+    Parameters
+    ----------
+    args : the parsed options.
+    n_segments : the arm's segments, one joint each.
+
+    Raises
+    ------
+    InputError
+        If a per-joint option does not give one value per joint.
+    """
     passive: dict[str, Any] = {}
     for option, key in (
         ("friction_transition", "friction_transition_rad_s"),
@@ -347,35 +465,13 @@ def _spec(args: argparse.Namespace) -> Any:
     ):
         values = getattr(args, option)
         if values is not None:
-            if len(values) != spec.n_segments:
+            if len(values) != n_segments:
                 raise InputError(
-                    f"--{option.replace('_', '-')} needs {spec.n_segments} values (one per joint) "
+                    f"--{option.replace('_', '-')} needs {n_segments} values (one per joint) "
                     f"for --subject {args.subject}, got {len(values)}"
                 )
             passive[field] = tuple(values)
-    trajectory = _trajectory(args, spec)
-    tilt_deg = _check_option("--trunk-tilt-deg", args.trunk_tilt_deg, -90.0, 90.0) or 0.0
-    if tilt_deg and args.trajectory is None:  # the robot moves the arm through the same postures relative to the trunk
-        centre = list(trajectory.center_deg)
-        centre[0] += tilt_deg
-        trajectory = dataclasses.replace(trajectory, center_deg=tuple(centre))
-    start_offset_s = _check_option("--start-offset-s", args.start_offset_s, 0.0, 86_400.0) or 0.0
-    duration = args.duration
-    if duration is None:
-        duration = trajectory.duration_s if args.trajectory is not None else 120.0
-    return dataclasses.replace(
-        spec,
-        sensor=dataclasses.replace(spec.sensor, **sensor),
-        markers=dataclasses.replace(spec.markers, **markers),
-        passive=dataclasses.replace(spec.passive, **passive),
-        trajectory=trajectory,
-        duration_s=duration,
-        seed=args.seed,
-        inertia=args.inertia,
-        robot_handle_pose=args.robot_handle_pose,
-        trunk_tilt_rad=math.radians(tilt_deg),
-        start_ns=spec.start_ns + round(start_offset_s * 1e9),
-    )
+    return passive
 
 
 def run(args: argparse.Namespace) -> int:
