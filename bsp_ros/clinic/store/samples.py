@@ -61,26 +61,8 @@ def sample_estimate(
     """
     rng = random.Random(seed)
     chain = list(segments)
-    lengths = {s: _SEGMENTS[s][0] for s in chain}
-    masses = {s: _SEGMENTS[s][1] * (1 + rel_std * rng.uniform(-1, 1)) for s in chain}
-    coms = {s: _SEGMENTS[s][2] * (1 + rel_std * rng.uniform(-1, 1)) for s in chain}
-
-    def quantity(value: float, source: str = "data") -> dict[str, Any]:
-        return {"value": value, "std": abs(value) * rel_std, "source": source}
-
-    estimate: dict[str, Any] = {"schema": "bsp_ros/core/estimate/1", "segments": {}, "joints": {}}
-    for i, name in enumerate(chain):
-        distal_mass = sum(masses[s] for s in chain[i + 1 :])
-        estimate["segments"][name] = {
-            "length_m": quantity(lengths[name], "prior"),
-            "static_moment_kgm": quantity(masses[name] * coms[name] + lengths[name] * distal_mass),
-            "mass_kg": quantity(masses[name], "data+prior"),
-            "com_m": quantity(coms[name], "data+prior"),
-            "first_moment_kgm": quantity(masses[name] * coms[name], "data+prior"),
-        }
-        joint = _JOINTS[name]
-        coulomb = _COULOMB_NM[joint] * (1 + rel_std * rng.uniform(-1, 1))
-        estimate["joints"][joint] = {"coulomb_nm": quantity(coulomb)}
+    segment_blocks, joint_blocks = _chain_blocks(chain, rng, rel_std)
+    estimate: dict[str, Any] = {"schema": "bsp_ros/core/estimate/1", "segments": segment_blocks, "joints": joint_blocks}
     for (group, part, name), (value, std) in (overrides or {}).items():
         estimate[group].setdefault(part, {})[name] = {"value": value, "std": std, "source": "data"}
     estimate["quality"] = {
@@ -90,23 +72,76 @@ def sample_estimate(
         "residual_rms_nm": {_JOINTS[s]: 0.05 + 0.001 * (seed % 5) for s in chain},
         "warnings": list(warnings),
     }
-    fields = {"start_time_ns": start_time_ns, "source": source, "method": method}
-    session: dict[str, Any] = {k: v for k, v in fields.items() if v is not None}
-    if config is not None:
-        session["config"] = dict(config)
+    session = _session_block(start_time_ns, source, method, config)
     if session:
         estimate["session"] = session
     if subject is not None:
         estimate["subject"] = dict(subject)
     if sem_rel is not None:
-        estimate["repeatability"] = {
-            "method": "sample: SEM set to a fixed fraction of each value",
-            "n_cycles": 5,
-            "n_valid_cycles": 5,
-            "parameters": {
-                f"{group}.{part}.{name}": {"sem": abs(q["value"]) * sem_rel, "n": 5}
-                for group, part, name, q in quantities_of(estimate)
-                if q["source"] == "data" and isinstance(q["value"], float) and q["value"] == q["value"]
-            },
-        }
+        estimate["repeatability"] = _repeatability_block(estimate, sem_rel)
     return estimate
+
+
+def _chain_blocks(
+    chain: list[str], rng: random.Random, rel_std: float
+) -> tuple[dict[str, dict[str, Any]], dict[str, dict[str, Any]]]:
+    """The ``segments`` and ``joints`` blocks of a typical adult arm, each value within ``rel_std`` of the table.
+
+    Parameters
+    ----------
+    chain : segment names, proximal first.
+    rng : draws every segment's mass, then every COM, then each joint's Coulomb amplitude, in that order.
+    rel_std : deviation bound and standard deviation, relative to the value.
+
+    Returns
+    -------
+    The segments' quantities (length m, static moment kg m, mass kg, COM m, first moment kg m) and each segment's
+    proximal joint's Coulomb amplitude (Nm).
+    """
+    lengths = {s: _SEGMENTS[s][0] for s in chain}
+    masses = {s: _SEGMENTS[s][1] * (1 + rel_std * rng.uniform(-1, 1)) for s in chain}
+    coms = {s: _SEGMENTS[s][2] * (1 + rel_std * rng.uniform(-1, 1)) for s in chain}
+
+    def quantity(value: float, source: str = "data") -> dict[str, Any]:
+        return {"value": value, "std": abs(value) * rel_std, "source": source}
+
+    segment_blocks: dict[str, dict[str, Any]] = {}
+    joint_blocks: dict[str, dict[str, Any]] = {}
+    for i, name in enumerate(chain):
+        distal_mass = sum(masses[s] for s in chain[i + 1 :])
+        segment_blocks[name] = {
+            "length_m": quantity(lengths[name], "prior"),
+            "static_moment_kgm": quantity(masses[name] * coms[name] + lengths[name] * distal_mass),
+            "mass_kg": quantity(masses[name], "data+prior"),
+            "com_m": quantity(coms[name], "data+prior"),
+            "first_moment_kgm": quantity(masses[name] * coms[name], "data+prior"),
+        }
+        joint = _JOINTS[name]
+        coulomb = _COULOMB_NM[joint] * (1 + rel_std * rng.uniform(-1, 1))
+        joint_blocks[joint] = {"coulomb_nm": quantity(coulomb)}
+    return segment_blocks, joint_blocks
+
+
+def _session_block(
+    start_time_ns: int | None, source: str | None, method: str | None, config: Mapping[str, Any] | None
+) -> dict[str, Any]:
+    """The ``session`` block: the fields that are not None (``start_time_ns`` in ns), and ``config`` if given."""
+    fields = {"start_time_ns": start_time_ns, "source": source, "method": method}
+    session: dict[str, Any] = {k: v for k, v in fields.items() if v is not None}
+    if config is not None:
+        session["config"] = dict(config)
+    return session
+
+
+def _repeatability_block(estimate: dict[str, Any], sem_rel: float) -> dict[str, Any]:
+    """A ``repeatability`` block: the SEM of every finite ``data`` quantity is ``sem_rel`` times its value."""
+    return {
+        "method": "sample: SEM set to a fixed fraction of each value",
+        "n_cycles": 5,
+        "n_valid_cycles": 5,
+        "parameters": {
+            f"{group}.{part}.{name}": {"sem": abs(q["value"]) * sem_rel, "n": 5}
+            for group, part, name, q in quantities_of(estimate)
+            if q["source"] == "data" and isinstance(q["value"], float) and q["value"] == q["value"]
+        },
+    }
