@@ -135,13 +135,7 @@ class Store:
         known = self.subject_record(record.subject)
         if known is not None:
             record = replace(record, arm=record.arm or known.arm)
-        quality: dict[str, Any] = {
-            "residual_rms_nm": record.quality.residual_rms_nm,
-            "warnings": list(record.quality.warnings),
-            "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
-            "message": record.quality.message,
-            "findings": [f.to_json() for f in record.quality.findings],
-        }
+        row = _session_row(record, added_ns)
         duplicate = StoreError(
             f"duplicate session: subject {record.subject} already has a session at "
             f"{format_time(record.session_time_ns)} from {record.source!r}; nothing was added"
@@ -156,45 +150,25 @@ class Store:
                 self.refuse_stored_content(record.content_sha256)
                 if record.retest:
                     self._check_retest(record)
-                rows = self._backend.query(
-                    "INSERT INTO sessions (subject, session_time_ns, source, method, config_json, "
-                    "subject_info_json, estimate_schema, valid, n_samples, condition_number, quality_json, "
-                    "added_ns, repeatability_json, arm, retest, cell, content_sha256, curves_json) "
-                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
-                    (
-                        record.subject,
-                        record.session_time_ns,
-                        record.source,
-                        record.method,
-                        _dumps(record.config),
-                        _dumps(record.subject_info),
-                        record.estimate_schema,
-                        int(record.quality.valid),
-                        record.quality.n_samples,
-                        record.quality.condition_number,
-                        _dumps(quality),
-                        added_ns,
-                        _dumps(record.repeatability),
-                        record.arm,
-                        int(record.retest),
-                        record.cell,
-                        record.content_sha256,
-                        _dumps(record.passive_curves),
-                    ),
-                )
-                session_id = int(rows[0][0])
-                for (group, part, quantity), q in record.parameters.items():
-                    self._backend.query(
-                        "INSERT INTO parameters (session_id, grp, part, quantity, value, std, source) "
-                        "VALUES (?, ?, ?, ?, ?, ?, ?)",
-                        (session_id, group, part, quantity, q.value, q.std, str(q.source)),
-                    )
+                session_id = self._insert_session(row, record.parameters)
         except Exception as error:
             if self._backend.is_integrity_error(error):
                 raise duplicate from None
             raise
         number = self._number_of(record.subject, session_id)
         return replace(record, id=session_id, added_ns=added_ns, number=number)
+
+    def _insert_session(self, row: tuple[Any, ...], parameters: Mapping[ParamKey, Quantity]) -> int:
+        """Insert a session's row (:func:`_session_row`) and its parameters' rows; return the session's id.
+
+        Call it inside a transaction: a failure part way leaves nothing once the transaction rolls back.
+        """
+        rows = self._backend.query(_INSERT_SESSION_SQL, row)
+        session_id = int(rows[0][0])
+        for (group, part, quantity), q in parameters.items():
+            values = (session_id, group, part, quantity, q.value, q.std, str(q.source))
+            self._backend.query(_INSERT_PARAMETER_SQL, values)
+        return session_id
 
     def refuse_stored_content(self, content_sha256: str | None) -> None:
         """StoreError naming the session if a recording with this content hash is stored (None: no check)."""
@@ -440,10 +414,60 @@ def _float(value: Any) -> float | None:
 
 
 _NUMBERING_SQL = "SELECT id FROM sessions WHERE subject = ? ORDER BY session_time_ns, id"
+_INSERT_SESSION_SQL = (
+    "INSERT INTO sessions (subject, session_time_ns, source, method, config_json, "
+    "subject_info_json, estimate_schema, valid, n_samples, condition_number, quality_json, "
+    "added_ns, repeatability_json, arm, retest, cell, content_sha256, curves_json) "
+    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id"
+)
+_INSERT_PARAMETER_SQL = (
+    "INSERT INTO parameters (session_id, grp, part, quantity, value, std, source) VALUES (?, ?, ?, ?, ?, ?, ?)"
+)
 
 
 def _fields(record: SubjectRecord) -> tuple[Any, ...]:
     return (record.body_mass_kg, record.height_m, record.sex, record.arm, record.affected)
+
+
+def _session_row(record: SessionRecord, added_ns: int) -> tuple[Any, ...]:
+    """The sessions table's row of ``record`` in ``_INSERT_SESSION_SQL``'s column order (``_record`` reads it back).
+
+    Parameters
+    ----------
+    record : the session.
+    added_ns : when it is stored, ns since the epoch.
+
+    Returns
+    -------
+    The row's values, the JSON columns (config, body data, quality, repeatability, passive curves) dumped.
+    """
+    quality: dict[str, Any] = {
+        "residual_rms_nm": record.quality.residual_rms_nm,
+        "warnings": list(record.quality.warnings),
+        "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
+        "message": record.quality.message,
+        "findings": [f.to_json() for f in record.quality.findings],
+    }
+    return (
+        record.subject,
+        record.session_time_ns,
+        record.source,
+        record.method,
+        _dumps(record.config),
+        _dumps(record.subject_info),
+        record.estimate_schema,
+        int(record.quality.valid),
+        record.quality.n_samples,
+        record.quality.condition_number,
+        _dumps(quality),
+        added_ns,
+        _dumps(record.repeatability),
+        record.arm,
+        int(record.retest),
+        record.cell,
+        record.content_sha256,
+        _dumps(record.passive_curves),
+    )
 
 
 def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> SessionRecord:
