@@ -14,7 +14,7 @@ from bsp_ros.core.identification.joint.tremor import band_stopped, tremor_in
 from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.streams import joints_for
 
-__all__ = ["MIN_DITHER_SHARE", "MIN_TREMOR_NM", "calm_tremor", "widen_dithered_friction"]
+__all__ = ["MIN_DITHER_SHARE", "MIN_TREMOR_NM", "calm_tremor", "dithered_share", "widen_dithered_friction"]
 
 # Tremor torque below this is not reported (no rehab cell's sensor resolves it at a joint), Nm RMS.
 MIN_TREMOR_NM = 0.005
@@ -79,10 +79,22 @@ def calm_tremor(data: IdentificationData, config: JointConfig) -> tuple[Identifi
     return calmed, found
 
 
+def dithered_share(speed_rad_s: np.ndarray, dither_rms_rad_s: float) -> float:
+    """The share of a Coulomb amplitude a sinusoidal dither of RMS speed ``dither_rms_rad_s`` leaves a slow motion of
+    speeds ``speed_rad_s`` (the joint's rows): at each instant friction opposes the sum of both, so averaged over a
+    dither period it acts with ``2 / pi * arcsin(v / v_peak)`` of its amplitude where the slow speed ``v`` is below
+    the dither's peak ``v_peak``, in full above it."""
+    peak = np.sqrt(2.0) * dither_rms_rad_s
+    if peak <= 0 or speed_rad_s.size == 0:
+        return 1.0
+    return float(np.mean(2.0 / np.pi * np.arcsin(np.minimum(1.0, np.abs(speed_rad_s) / peak))))
+
+
 def widen_dithered_friction(stage: Stage) -> Stage:
-    """A Coulomb amplitude a tremor dithered is this session's, lowered by the shaking by an unknown amount up to
-    about the share the tremor's speed takes of the motion's: that much of it (half as one sd) joins its variance
-    (the friction-shape term), so that its std covers the relaxed arm's friction too."""
+    """A Coulomb amplitude a tremor dithered is this session's, lowered by the shaking to about
+    :func:`dithered_share` of the relaxed arm's: what that hides (the amplitude over the share, less the
+    amplitude) joins its variance as one sd (the friction-shape term), so that its std covers the relaxed arm's
+    friction too."""
     dithered = [f for f in stage.notes if f.code is FindingCode.TREMOR_FRICTION]
     if not dithered or "coulomb" not in stage.config.passive.terms:
         return stage
@@ -92,6 +104,8 @@ def widen_dithered_friction(stage: Stage) -> Stage:
     for finding in dithered:
         j = joints.index(finding.where)
         index = stage.n + j * k + stage.config.passive.local.index("coulomb")
-        share = min(1.0, float(finding.values["speed_percent"]) / 100.0)
-        term[index, index] = (0.5 * share * abs(stage.fit.values[index])) ** 2
+        dither_rad_s = 2.0 * np.pi * float(finding.values["frequency_hz"]) * np.radians(finding.values["angle_deg"])
+        rows = stage.samples.rows[:, j]
+        share = max(dithered_share(stage.data.velocity_rad_s[rows, j], dither_rad_s), 0.05)
+        term[index, index] = (abs(stage.fit.values[index]) * (1.0 / share - 1.0)) ** 2
     return stage.apply(Outcome(added=((Term.FRICTION_SHAPE, term),)))

@@ -90,3 +90,12 @@ def test_a_joint_the_tremor_shakes_has_its_friction_called_the_sessions(data: Id
     plain = identify_joint(data, EXACT)
     column = result.names.index(("coulomb_nm", "elbow"))
     assert result.covariance[column, column] > 4 * plain.covariance[column, column]
+
+
+def test_the_share_of_friction_a_dither_leaves_follows_the_arcsine_law() -> None:
+    from bsp_ros.core.identification.joint.tremor_step import dithered_share
+
+    assert dithered_share(np.array([0.02, -0.03]), 0.0) == 1.0
+    assert dithered_share(np.array([0.2, -0.3]), 0.01) == 1.0  # the motion always faster than the dither's peak
+    peak = np.sqrt(2.0) * 0.01
+    assert dithered_share(np.array([0.5 * peak]), 0.01) == pytest.approx(2.0 / np.pi * np.arcsin(0.5))
