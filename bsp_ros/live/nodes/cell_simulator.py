@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from bsp_ros.cell import CellDescription
 from bsp_ros.core import simulation as sim
 from bsp_ros.errors import InputError
 from bsp_ros.live.runtime.cell_parameters import CELL_FILE, SIMULATOR_FROM_CELL, declare_with_cell
@@ -110,6 +111,128 @@ class _Queue:
     items: collections.deque[tuple[int, Any]] = dataclasses.field(default_factory=collections.deque)
 
 
+@dataclasses.dataclass(frozen=True, kw_only=True, eq=False)
+class CellFaults:
+    """The faults the simulated cell injects on request; times are simulated seconds since the start (0: never).
+
+    Attributes
+    ----------
+    nan_burst_period_s : a NaN burst in the wrench's force every this many s.
+    nan_burst_s : length of each burst, s.
+    stall_at_s : the sensor stops publishing the wrench at this time.
+    die_at_s : the process exits (code 3) at this time.
+    clock_jump_at_s : stamps jump backwards at this time (the physics keeps going).
+    clock_jump_s : size of that jump, s.
+    marker_jump_at_s : one frame of ``marker_jump_name`` jumps at this time.
+    marker_jump_name : the marker of the one-frame jump.
+    marker_jump_m : (3,) the jump in world, m.
+    """
+
+    nan_burst_period_s: float
+    nan_burst_s: float
+    stall_at_s: float
+    die_at_s: float
+    clock_jump_at_s: float
+    clock_jump_s: float
+    marker_jump_at_s: float
+    marker_jump_name: str
+    marker_jump_m: np.ndarray
+
+    @classmethod
+    def from_parameters(cls, p: dict[str, Any]) -> CellFaults:
+        """The faults of the node's parameter values ``p``.
+
+        Raises
+        ------
+        InputError
+            If ``marker_jump_m`` is not 3 finite coordinates.
+        """
+        marker_jump_m = np.asarray(p["marker_jump_m"], dtype=float)
+        if marker_jump_m.shape != (3,) or not np.isfinite(marker_jump_m).all():
+            raise InputError(f"{NAME}: marker_jump_m needs 3 finite coordinates, got {p['marker_jump_m']}")
+        return cls(
+            nan_burst_period_s=p["nan_burst_period_s"],
+            nan_burst_s=p["nan_burst_s"],
+            stall_at_s=p["stall_at_s"],
+            die_at_s=p["die_at_s"],
+            clock_jump_at_s=p["clock_jump_at_s"],
+            clock_jump_s=p["clock_jump_s"],
+            marker_jump_at_s=p["marker_jump_at_s"],
+            marker_jump_name=p["marker_jump_name"],
+            marker_jump_m=marker_jump_m,
+        )
+
+
+def cell_spec_from_parameters(p: dict[str, Any], cell: CellDescription, start_ns: int) -> sim.CellSpec:
+    """The simulated cell the node's parameter values ``p`` describe, in the frames of ``cell``.
+
+    Parameters
+    ----------
+    p : the node's parameter values (``PARAMETERS``, the cell's defaults applied).
+    cell : the cell description; its sensor frame names the wrench's frame.
+    start_ns : the physics' start on its own clock, ns.
+
+    Returns
+    -------
+    The subject's default cell with the parameters' sensor, markers, passive moments and motion; at least 1 s
+    long (``duration_s`` 0 is an endless session).
+
+    Raises
+    ------
+    InputError
+        If ``sensor_roll_pitch_yaw_deg`` is not 3 angles, ``hand_marker_offset_mm`` not 2 offsets, or
+        ``trajectory_file`` cannot be read.
+    """
+    rpy = p["sensor_roll_pitch_yaw_deg"]
+    if len(rpy) != 3:
+        raise InputError(f"{NAME}: sensor_roll_pitch_yaw_deg needs 3 angles, got {rpy}")
+    base = sim.human_arm_cell() if p["subject"] == "human" else sim.paper_mechanical_arm_cell()
+    hand_offset = p["hand_marker_offset_mm"]
+    if len(hand_offset) != 2:
+        raise InputError(f"{NAME}: hand_marker_offset_mm needs 2 offsets (along, normal), got {hand_offset}")
+    n_markers = base.n_segments + 1
+    skin_offset_m = ((0.0, 0.0),) * (n_markers - 1) + ((hand_offset[0] / 1000.0, hand_offset[1] / 1000.0),)
+    spec = dataclasses.replace(
+        base,
+        seed=p["seed"],
+        start_ns=start_ns,
+        duration_s=max(p["duration_s"], 1.0),
+        sensor=dataclasses.replace(
+            base.sensor,
+            frame_id=cell.sensor_frame,
+            wrench_hz=p["wrench_hz"],
+            roll_pitch_yaw_deg=tuple(rpy),
+            force_bias_n=tuple(p["force_bias_n"]),
+            force_drift_n_per_s=tuple(p["force_drift_n_per_s"]),
+            handle_mass_kg=p["handle_mass_kg"],
+            handle_com_m=tuple(p["handle_com_m"]),
+            spike_fraction=p["spike_fraction"],
+            turns_with_handle=p["sensor_turns"],
+            filter_delay_s=p["wrench_filter_delay_s"],
+            filter_kind=p["wrench_filter"],
+            clock_offset_s=p["wrench_clock_offset_s"],
+        ),
+        markers=dataclasses.replace(
+            base.markers,
+            marker_hz=p["marker_hz"],
+            dropout_fraction=p["dropout_fraction"],
+            skin_offset_bound_m=p["skin_offset_mm"] / 1000.0,
+            skin_offset_m=skin_offset_m if any(hand_offset) else base.markers.skin_offset_m,
+        ),
+        inertia=p["inertia"],
+        passive=dataclasses.replace(
+            base.passive,
+            offset_nm=tuple(p["passive_offset_nm"]) if any(p["passive_offset_nm"]) else (),
+            friction_transition_rad_s=p["friction_transition_rad_s"],
+        ),
+    )
+    if p["trajectory_file"]:
+        from bsp_ros.core.planning import planned_trajectory_from_file
+
+        spec = dataclasses.replace(spec, trajectory=planned_trajectory_from_file(p["trajectory_file"]))
+    return spec
+
+
 class CellSimulatorNode(RosNode):
     """Paces :class:`bsp_ros.core.simulation.CellSimulator` against the clock and publishes its streams.
 
@@ -129,22 +252,9 @@ class CellSimulatorNode(RosNode):
         self.world_frame = cell.world_frame
         self.speed = p["speed"]
         self.duration_s = p["duration_s"]
-        self.nan_burst_period_s = p["nan_burst_period_s"]
-        self.nan_burst_s = p["nan_burst_s"]
-        self.stall_at_s = p["stall_at_s"]
-        self.die_at_s = p["die_at_s"]
-        self.jump_at_s = p["clock_jump_at_s"]
-        self.jump_s = p["clock_jump_s"]
-        self.marker_jump_at_s = p["marker_jump_at_s"]
-        self.marker_jump_name = p["marker_jump_name"]
-        self.marker_jump_m = np.asarray(p["marker_jump_m"], dtype=float)
-        if self.marker_jump_m.shape != (3,) or not np.isfinite(self.marker_jump_m).all():
-            raise InputError(f"{NAME}: marker_jump_m needs 3 finite coordinates, got {p['marker_jump_m']}")
+        self.faults = CellFaults.from_parameters(p)
         self.marker_jumped = False
         wrench_hz, marker_hz = p["wrench_hz"], p["marker_hz"]
-        rpy = p["sensor_roll_pitch_yaw_deg"]
-        if len(rpy) != 3:
-            raise InputError(f"{NAME}: sensor_roll_pitch_yaw_deg needs 3 angles, got {rpy}")
         # The physics runs on its own clock from sim_start_ns; the session starts on the node clock at the first
         # tick (start_wall_ns), once its subscribers are there, and every stamp is shifted by the difference.
         # Building the simulator takes ~0.4 s: starting the clock before it made the first tick publish those
@@ -152,54 +262,11 @@ class CellSimulatorNode(RosNode):
         self.sim_start_ns = self.now_ns()
         self.start_wall_ns: int | None = None
         self.wait_for_subscribers = p["wait_for_subscribers"]
-        base = sim.human_arm_cell() if p["subject"] == "human" else sim.paper_mechanical_arm_cell()
-        hand_offset = p["hand_marker_offset_mm"]
-        if len(hand_offset) != 2:
-            raise InputError(f"{NAME}: hand_marker_offset_mm needs 2 offsets (along, normal), got {hand_offset}")
-        n_markers = base.n_segments + 1
-        skin_offset_m = ((0.0, 0.0),) * (n_markers - 1) + ((hand_offset[0] / 1000.0, hand_offset[1] / 1000.0),)
-        spec = dataclasses.replace(
-            base,
-            seed=p["seed"],
-            start_ns=self.sim_start_ns,
-            duration_s=max(self.duration_s, 1.0),
-            sensor=dataclasses.replace(
-                base.sensor,
-                frame_id=cell.sensor_frame,
-                wrench_hz=wrench_hz,
-                roll_pitch_yaw_deg=tuple(rpy),
-                force_bias_n=tuple(p["force_bias_n"]),
-                force_drift_n_per_s=tuple(p["force_drift_n_per_s"]),
-                handle_mass_kg=p["handle_mass_kg"],
-                handle_com_m=tuple(p["handle_com_m"]),
-                spike_fraction=p["spike_fraction"],
-                turns_with_handle=p["sensor_turns"],
-                filter_delay_s=p["wrench_filter_delay_s"],
-                filter_kind=p["wrench_filter"],
-                clock_offset_s=p["wrench_clock_offset_s"],
-            ),
-            markers=dataclasses.replace(
-                base.markers,
-                marker_hz=marker_hz,
-                dropout_fraction=p["dropout_fraction"],
-                skin_offset_bound_m=p["skin_offset_mm"] / 1000.0,
-                skin_offset_m=skin_offset_m if any(hand_offset) else base.markers.skin_offset_m,
-            ),
-            inertia=p["inertia"],
-            passive=dataclasses.replace(
-                base.passive,
-                offset_nm=tuple(p["passive_offset_nm"]) if any(p["passive_offset_nm"]) else (),
-                friction_transition_rad_s=p["friction_transition_rad_s"],
-            ),
-        )
-        if p["trajectory_file"]:
-            from bsp_ros.core.planning import planned_trajectory_from_file
-
-            spec = dataclasses.replace(spec, trajectory=planned_trajectory_from_file(p["trajectory_file"]))
+        spec = cell_spec_from_parameters(p, cell, self.sim_start_ns)
         self.simulator = sim.CellSimulator(spec)
-        if self.marker_jump_name not in self.simulator.marker_names:
+        if self.faults.marker_jump_name not in self.simulator.marker_names:
             raise InputError(
-                f"{NAME}: marker_jump_name {self.marker_jump_name!r} is not a marker of this arm"
+                f"{NAME}: marker_jump_name {self.faults.marker_jump_name!r} is not a marker of this arm"
                 f" ({', '.join(self.simulator.marker_names)})"
             )
         self.frame_id = spec.sensor.frame_id
@@ -208,6 +275,21 @@ class CellSimulatorNode(RosNode):
         self.wrench_queue = _Queue(self.sim_start_ns)
         self.marker_queue = _Queue(self.sim_start_ns)
         self.types = message_class
+        self._create_stream_publishers(p, cell)
+        self.quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
+        self.turns = spec.sensor.turns_with_handle
+        self._create_transform_publishers(p["transform_topic"])
+        self.truth_pub = self.create_publisher(
+            message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static")
+        )
+        self.create_timer(p["tick_s"], self.tick)
+        self.get_logger().info(
+            f"simulating a {self.simulator.n_segments}-segment arm at {self.speed:.1f}x real time, "
+            f"wrench {wrench_hz:.0f} Hz, markers {marker_hz:.0f} Hz"
+        )
+
+    def _create_stream_publishers(self, p: dict[str, Any], cell: CellDescription) -> None:
+        """The wrench's, the markers' and (with ``robot_handle_pose``) the contact point's publishers."""
         sensor_data = rclpy_qos("sensor_data")
         self.wrench_pub = self.create_publisher(
             message_class("geometry_msgs/msg/WrenchStamped"), p["wrench_topic"], sensor_data
@@ -221,15 +303,17 @@ class CellSimulatorNode(RosNode):
             name: self.create_publisher(pose, p["marker_topic_prefix"] + name, sensor_data)
             for name in self.simulator.marker_names
         }
-        self.quaternion = quaternion_from_matrix(self.simulator.rotation_world_from_sensor)
-        self.turns = spec.sensor.turns_with_handle
+
+    def _create_transform_publishers(self, transform_topic: str) -> None:
+        """The sensor frame's transform publishers (``transform_topic``: TransformStamped, '' for none; /tf or
+        /tf_static where tf2_msgs is installed), and the log line that says where its rotation goes."""
         self.tf_pub = None  # /tf of a turning sensor, one transform per wrench sample
         self.static_pub = None  # /tf_static of a fixed one, sent when the session starts
         self.transform_pub = None  # the same as TransformStamped (a robot publishing its flange pose)
         self.transform_sent_ns = 0  # a fixed sensor's transform goes out once a second (late subscribers)
-        if p["transform_topic"]:
+        if transform_topic:
             transform_type = message_class("geometry_msgs/msg/TransformStamped")
-            self.transform_pub = self.create_publisher(transform_type, p["transform_topic"], 100)
+            self.transform_pub = self.create_publisher(transform_type, transform_topic, 100)
         where = "/tf (per sample)" if self.turns else "/tf_static"
         if has_message(TF_TYPE):
             if self.turns:
@@ -237,20 +321,12 @@ class CellSimulatorNode(RosNode):
             else:
                 self.static_pub = self.create_publisher(message_class(TF_TYPE), "/tf_static", rclpy_qos("tf_static"))
         xyzw = [round(float(v), 9) for v in self.quaternion]
-        on_topic = f"on {p['transform_topic']} (TransformStamped)" if p["transform_topic"] else "on no transform topic"
+        on_topic = f"on {transform_topic} (TransformStamped)" if transform_topic else "on no transform topic"
         self.get_logger().info(
             f"sensor frame {self.frame_id}: rotation {self.world_frame} <- sensor xyzw {xyzw} "
             + ("at the mean handle pitch; " if self.turns else "")
             + on_topic
             + (f" and {where}" if has_message(TF_TYPE) else f" (not on {where}: {TF_TYPE} is not installed)")
-        )
-        self.truth_pub = self.create_publisher(
-            message_class("std_msgs/msg/String"), "sim/truth", rclpy_qos("tf_static")
-        )
-        self.create_timer(p["tick_s"], self.tick)
-        self.get_logger().info(
-            f"simulating a {self.simulator.n_segments}-segment arm at {self.speed:.1f}x real time, "
-            f"wrench {wrench_hz:.0f} Hz, markers {marker_hz:.0f} Hz"
         )
 
     def now_ns(self) -> int:
@@ -276,9 +352,9 @@ class CellSimulatorNode(RosNode):
         """Simulated times (ns) -> stamps on the node clock, with the clock-jump fault (the physics keeps going)."""
         assert self.start_wall_ns is not None
         stamps = t_ns + np.int64(self.start_wall_ns - self.sim_start_ns)
-        if self.jump_at_s > 0:
-            jumped = t_ns - self.sim_start_ns >= self.jump_at_s * 1e9
-            return np.where(jumped, stamps - int(self.jump_s * 1e9), stamps)
+        if self.faults.clock_jump_at_s > 0:
+            jumped = t_ns - self.sim_start_ns >= self.faults.clock_jump_at_s * 1e9
+            return np.where(jumped, stamps - int(self.faults.clock_jump_s * 1e9), stamps)
         return stamps
 
     def tick(self) -> None:
@@ -291,12 +367,12 @@ class CellSimulatorNode(RosNode):
             self.start(wall_ns)
         now = self._sim_now_ns(wall_ns)
         elapsed_s = (now - self.sim_start_ns) / 1e9
-        if self.die_at_s and elapsed_s >= self.die_at_s:
+        if self.faults.die_at_s and elapsed_s >= self.faults.die_at_s:
             self.get_logger().warning("fault: the simulated sensor dies now")
             os._exit(3)
         if self.duration_s and elapsed_s >= self.duration_s:
             now = min(now, self.sim_start_ns + int(self.duration_s * 1e9))
-        stalled = bool(self.stall_at_s and elapsed_s >= self.stall_at_s)
+        stalled = bool(self.faults.stall_at_s and elapsed_s >= self.faults.stall_at_s)
         if wall_ns - self.transform_sent_ns >= 1_000_000_000:
             self._send_fixed_transform(wall_ns)
         wrench_due = self._due(self.wrench_queue, now, self.wrench_period_ns, self._simulate_wrench)
@@ -338,9 +414,9 @@ class CellSimulatorNode(RosNode):
     def _simulate_wrench(self, t_ns: np.ndarray) -> list[tuple[int, Any]]:
         series = self.simulator.sample_wrench(t_ns)
         force, torque = series.force_n.copy(), series.torque_nm.copy()
-        if self.nan_burst_period_s > 0:
-            phase = ((t_ns - self.sim_start_ns) / 1e9) % self.nan_burst_period_s
-            burst = phase > self.nan_burst_period_s - self.nan_burst_s
+        if self.faults.nan_burst_period_s > 0:
+            phase = ((t_ns - self.sim_start_ns) / 1e9) % self.faults.nan_burst_period_s
+            burst = phase > self.faults.nan_burst_period_s - self.faults.nan_burst_s
             force[burst] = np.nan
         stamps = self._stamp(series.t_ns)
         samples = [WrenchSample(int(stamps[k]), self.frame_id, force[k], torque[k]) for k in range(stamps.size)]
@@ -370,19 +446,27 @@ class CellSimulatorNode(RosNode):
         out = []
         for name, series in self.simulator.sample_markers(t_ns).items():
             stamps = self._stamp(series.t_ns)
-            position_m = series.position_m
-            if self.marker_jump_at_s > 0 and not self.marker_jumped and name == self.marker_jump_name:
-                due = np.flatnonzero(series.t_ns - self.sim_start_ns >= self.marker_jump_at_s * 1e9)
-                if due.size:
-                    position_m = position_m.copy()
-                    position_m[due[0]] += self.marker_jump_m  # one frame only: a swapped or misread marker
-                    self.marker_jumped = True
-                    self.get_logger().warning(f"fault: marker {name} jumps by {self.marker_jump_m} m for one frame")
+            position_m = self._with_marker_jump(name, series.t_ns, series.position_m)
             for k in range(stamps.size):
                 pose = PoseSample(int(stamps[k]), self.world_frame, position_m[k], identity)
                 out.append((int(series.t_ns[k]), (name, pose)))
         out.sort(key=lambda item: item[0])  # frames in time order, markers of a frame together
         return out
+
+    def _with_marker_jump(self, name: str, t_ns: np.ndarray, position_m: np.ndarray) -> np.ndarray:
+        """Marker ``name``'s (n, 3) positions (m) at simulated times ``t_ns`` (n,) (ns), with the one-frame jump
+        fault added to its first frame due, once per session (a swapped or misread marker)."""
+        faults = self.faults
+        if not (faults.marker_jump_at_s > 0 and not self.marker_jumped and name == faults.marker_jump_name):
+            return position_m
+        due = np.flatnonzero(t_ns - self.sim_start_ns >= faults.marker_jump_at_s * 1e9)
+        if not due.size:
+            return position_m
+        position_m = position_m.copy()
+        position_m[due[0]] += faults.marker_jump_m  # one frame only
+        self.marker_jumped = True
+        self.get_logger().warning(f"fault: marker {name} jumps by {faults.marker_jump_m} m for one frame")
+        return position_m
 
 
 def main(args: list[str] | None = None) -> int:
