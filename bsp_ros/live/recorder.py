@@ -418,6 +418,55 @@ def record(
     -------
     RecordReport
     """
+    specs, out = _checked_request(topics, out_dir, duration_s, chunk_bytes, flush_interval_s)
+    stop = stop or threading.Event()
+    out.mkdir(parents=True)
+    report = RecordReport(path=str(out))
+    started = time.monotonic()
+    deadline = None if duration_s is None else started + duration_s
+    rec = _Recorder(out, domain_id, chunk_bytes, custom_data)
+    try:
+        pending = {s.topic: s for s in specs}
+        loop = _Loop(stop=stop, deadline=deadline, flush_interval_s=flush_interval_s, on_subscribe=on_subscribe)
+        _receive_until_stopped(rec, pending, report, loop)
+        rec.spin(0.05)  # what arrived meanwhile
+        rec.take_all()
+        _finish_bag(rec, out, pending, report)
+    finally:
+        report.wall_s = time.monotonic() - started
+        rec.close()
+    for topic in report.missing:
+        report.warnings.append(f"{topic}: no publisher with a known type appeared; not recorded")
+    if not any(report.counts.values()):
+        _remove_empty_bag(out, rec.mcap_name)
+        heard = ", ".join(f"{t} [{m}]" for t, m in report.types.items()) or "none"
+        raise DataError(
+            f"nothing was recorded in {report.wall_s:.1f} s: no message arrived (topics subscribed: {heard}; "
+            f"no publisher found: {', '.join(report.missing) or 'none'}); no bag was left at {out}"
+            + "".join(f"; {w}" for w in report.warnings if "cannot subscribe" in w)
+        )
+    return report
+
+
+def _checked_request(
+    topics: Sequence[str | TopicSpec],
+    out_dir: str | Path,
+    duration_s: float | None,
+    chunk_bytes: int,
+    flush_interval_s: float,
+) -> tuple[list[TopicSpec], Path]:
+    """:func:`record`'s arguments checked, before anything is created: the topics to record and the bag directory.
+
+    Raises
+    ------
+    InputError
+        On a bad or repeated topic, a duration (s) that is not positive, ``chunk_bytes`` below 4096, a flush
+        interval (s) that is not positive, or a given type that is not installed.
+    BagWriteError
+        If ``out_dir`` exists.
+    RuntimeBackendError
+        If rclpy is missing.
+    """
     specs = [t if isinstance(t, TopicSpec) else parse_topic_specs([t])[0] for t in topics]
     if len({s.topic for s in specs}) != len(specs):
         raise InputError("a topic is given twice")
@@ -437,56 +486,64 @@ def record(
                 message_class(spec.msgtype)  # a type not installed fails now, naming it and its package
             except RuntimeBackendError as error:
                 raise InputError(f"{spec.topic}:{spec.msgtype}: {error}") from None
-    stop = stop or threading.Event()
-    out.mkdir(parents=True)
-    report = RecordReport(path=str(out))
-    started = time.monotonic()
-    deadline = None if duration_s is None else started + duration_s
-    rec = _Recorder(out, domain_id, chunk_bytes, custom_data)
-    try:
-        pending = {s.topic: s for s in specs}
-        last_flush = time.monotonic()
-        last_discovery = 0.0
-        while not stop.is_set():
-            now = time.monotonic()
-            if deadline is not None and now >= deadline:
-                break
-            if pending and now - last_discovery >= _POLL_S:
-                last_discovery = now
-                _subscribe_pending(rec, pending, report, on_subscribe)
-            if rec.subs:
-                rec.spin(min(_POLL_S, flush_interval_s))
-            else:
-                stop.wait(_POLL_S / 2)
-            rec.take_all()
-            if time.monotonic() - last_flush >= flush_interval_s:
-                rec.flush()
-                last_flush = time.monotonic()
-        rec.spin(0.05)  # what arrived meanwhile
+    return specs, out
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Loop:
+    """When :func:`_receive_until_stopped` ends and how often it flushes.
+
+    Attributes
+    ----------
+    stop : set to end the recording.
+    deadline : ``time.monotonic()`` at which it ends, s (None: when ``stop`` is set).
+    flush_interval_s : longest time a received message stays in memory, s.
+    on_subscribe : called with ``(topic, type)`` when a topic is subscribed.
+    """
+
+    stop: threading.Event
+    deadline: float | None
+    flush_interval_s: float
+    on_subscribe: Callable[[str, str], None] | None
+
+
+def _receive_until_stopped(rec: _Recorder, pending: dict[str, TopicSpec], report: RecordReport, loop: _Loop) -> None:
+    """Subscribe the ``pending`` topics as their publishers appear, and write what arrives until ``loop`` ends.
+
+    The graph is searched every ``_POLL_S`` seconds while a topic is pending (subscribed topics leave
+    ``pending``); what was written is flushed every ``loop.flush_interval_s`` seconds.
+    """
+    last_flush = time.monotonic()
+    last_discovery = 0.0
+    while not loop.stop.is_set():
+        now = time.monotonic()
+        if loop.deadline is not None and now >= loop.deadline:
+            break
+        if pending and now - last_discovery >= _POLL_S:
+            last_discovery = now
+            _subscribe_pending(rec, pending, report, loop.on_subscribe)
+        if rec.subs:
+            rec.spin(min(_POLL_S, loop.flush_interval_s))
+        else:
+            loop.stop.wait(_POLL_S / 2)
         rec.take_all()
-        records = rec.finish()
-        report.counts = {r.name: r.message_count for r in records}
-        report.types = {r.name: r.msgtype for r in records}
-        report.missing = sorted(pending)
-        report.start_ns, report.end_ns = rec.start_ns, rec.end_ns
-        meta = build_metadata(rec.mcap_name, records, rec.start_ns, rec.end_ns, rec._custom())
-        tmp = out / (METADATA_FILE + ".tmp")
-        tmp.write_text(dump_metadata(meta), "utf-8")
-        os.replace(tmp, out / METADATA_FILE)
-    finally:
-        report.wall_s = time.monotonic() - started
-        rec.close()
-    for topic in report.missing:
-        report.warnings.append(f"{topic}: no publisher with a known type appeared; not recorded")
-    if not any(report.counts.values()):
-        _remove_empty_bag(out, rec.mcap_name)
-        heard = ", ".join(f"{t} [{m}]" for t, m in report.types.items()) or "none"
-        raise DataError(
-            f"nothing was recorded in {report.wall_s:.1f} s: no message arrived (topics subscribed: {heard}; "
-            f"no publisher found: {', '.join(report.missing) or 'none'}); no bag was left at {out}"
-            + "".join(f"; {w}" for w in report.warnings if "cannot subscribe" in w)
-        )
-    return report
+        if time.monotonic() - last_flush >= loop.flush_interval_s:
+            rec.flush()
+            last_flush = time.monotonic()
+
+
+def _finish_bag(rec: _Recorder, out: Path, pending: Mapping[str, TopicSpec], report: RecordReport) -> None:
+    """Close the MCAP file, write ``metadata.yaml`` (atomically) and fill ``report``'s counts, types, missing
+    topics and time span (ns)."""
+    records = rec.finish()
+    report.counts = {r.name: r.message_count for r in records}
+    report.types = {r.name: r.msgtype for r in records}
+    report.missing = sorted(pending)
+    report.start_ns, report.end_ns = rec.start_ns, rec.end_ns
+    meta = build_metadata(rec.mcap_name, records, rec.start_ns, rec.end_ns, rec._custom())
+    tmp = out / (METADATA_FILE + ".tmp")
+    tmp.write_text(dump_metadata(meta), "utf-8")
+    os.replace(tmp, out / METADATA_FILE)
 
 
 def _remove_empty_bag(out: Path, mcap_name: str) -> None:
