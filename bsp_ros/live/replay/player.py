@@ -85,67 +85,131 @@ def play_bag(
     ------
     BagNotFoundError, NotABagError, UnsupportedBagError, InputError, RuntimeBackendError
     """
-    if not np.isfinite(rate):
-        raise InputError(f"rate must be finite, got {rate!r}")
-    if not (np.isfinite(clock_hz) and clock_hz > 0):
-        raise InputError(f"clock rate must be positive, got {clock_hz!r}")
+    _check_rates(rate, clock_hz)
     stop = stop or threading.Event()
     files, meta = bag_files(path)
     report = PlayReport(path=str(path))
-    plans = plan_topics(files, meta, topics, report)
-    if not plans and report.skipped:
-        # Exiting 0 after publishing nothing would read as a successful replay.
-        reasons = "; ".join(f"{topic}: {why}" for topic, why in sorted(report.skipped.items()))
-        raise UnsupportedBagError(f"{path}: nothing to play, every topic is skipped ({reasons})")
+    plans = _playable_plans(path, files, meta, topics, report)
 
-    from bsp_ros.live.runtime.ros import Client, has_message, message_class
+    from bsp_ros.live.runtime.ros import Client
 
     client = Client("rosbag2_player", domain_id)
     started = time.monotonic()
     try:
-        writers: dict[str, Callable[[bytes], None]] = {}
-        publishers: dict[str, Any] = {}
-        plan_of: dict[str, TopicPlan] = {}
-        bridge: _Bridge | None = None
-        bridged = cell is not None and not has_message(TF_TYPE) and cell.transform_topic not in {p.topic for p in plans}
-        for plan in plans:
-            if bridged and plan.msgtype == TF_TYPE:
-                assert cell is not None
-                bridge = bridge or _Bridge.start(client, cell)
-                writers[plan.topic] = bridge.converter.writer(static=plan.latched)
-                report.bridged[plan.topic] = cell.transform_topic
-            else:
-                try:
-                    message_class(plan.msgtype)
-                except BspError:
-                    report.skipped[plan.topic] = f"its type {plan.msgtype or '<none>'} is not installed"
-                    continue
-                publishers[plan.topic] = client.publisher(plan.msgtype, plan.topic, plan.qos)
-                writers[plan.topic] = _raw_writer(publishers[plan.topic])
-            plan_of[plan.topic] = plan
-            report.published[plan.topic] = 0
-            report.expected[plan.topic] = plan.expected
+        outputs = _open_outputs(client, plans, cell, report)
         clock_write = _raw_writer(client.publisher(CLOCK_TYPE, "/clock", CLOCK_QOS)) if clock else None
-
-        waited = {**publishers, **({} if bridge is None else {bridge.topic: bridge.publisher})}
-        _wait_for_subscribers(waited, wait_subscribers_s, settle_s, stop)
-        report.matched = {t: p.get_subscription_count() for t, p in waited.items()}
+        _wait_for_subscribers(outputs.waited(), wait_subscribers_s, settle_s, stop)
+        report.matched = {t: p.get_subscription_count() for t, p in outputs.waited().items()}
         if on_start is not None:
             on_start(report)
-        _play_passes(files, writers, plan_of, report, rate, loop, clock_write, clock_hz, stop)
+        _play_passes(files, outputs.writers, outputs.plan_of, report, rate, loop, clock_write, clock_hz, stop)
         report.interrupted = stop.is_set()
-        report.bridge_sent = 0 if bridge is None else bridge.converter.sent
-        reliable = [p for t, p in publishers.items() if plan_of[t].qos.reliable and report.published[t]]
-        reliable += [bridge.publisher] if bridge is not None and bridge.converter.sent else []
-        if reliable:
-            # Interrupted: do not hang on a subscriber that may be dead (DDS notices only after its lease).
-            deadline = time.monotonic() + (min(ack_timeout_s, 0.5) if report.interrupted else ack_timeout_s)
-            report.acked = all(_wait_for_acks(p, deadline - time.monotonic()) for p in reliable)
+        report.bridge_sent = 0 if outputs.bridge is None else outputs.bridge.converter.sent
+        _await_reliable_acks(outputs, report, ack_timeout_s)
         time.sleep(0.05)  # best-effort samples just written leave the socket
     finally:
         report.wall_s = time.monotonic() - started
         client.close()
     return report
+
+
+def _check_rates(rate: float, clock_hz: float) -> None:
+    """InputError unless ``rate`` (time scale) is finite and ``clock_hz`` (Hz) finite and positive."""
+    if not np.isfinite(rate):
+        raise InputError(f"rate must be finite, got {rate!r}")
+    if not (np.isfinite(clock_hz) and clock_hz > 0):
+        raise InputError(f"clock rate must be positive, got {clock_hz!r}")
+
+
+def _playable_plans(
+    path: str | Path, files: Sequence[Path], meta: Path | None, topics: Sequence[str] | None, report: PlayReport
+) -> list[TopicPlan]:
+    """The bag's topics to play (:func:`plan_topics`); the skipped ones go into ``report``.
+
+    Raises
+    ------
+    UnsupportedBagError
+        If every topic is skipped.
+    """
+    plans = plan_topics(files, meta, topics, report)
+    if not plans and report.skipped:
+        # Exiting 0 after publishing nothing would read as a successful replay.
+        reasons = "; ".join(f"{topic}: {why}" for topic, why in sorted(report.skipped.items()))
+        raise UnsupportedBagError(f"{path}: nothing to play, every topic is skipped ({reasons})")
+    return plans
+
+
+def _await_reliable_acks(outputs: _Outputs, report: PlayReport, ack_timeout_s: float) -> None:
+    """Wait up to ``ack_timeout_s`` seconds (0.5 s when interrupted) for every reliable publisher that published
+    to be acknowledged; ``report.acked`` says whether all were (it stays as it is if none published)."""
+    reliable = outputs.reliable_in_use(report)
+    if reliable:
+        # Interrupted: do not hang on a subscriber that may be dead (DDS notices only after its lease).
+        deadline = time.monotonic() + (min(ack_timeout_s, 0.5) if report.interrupted else ack_timeout_s)
+        report.acked = all(_wait_for_acks(p, deadline - time.monotonic()) for p in reliable)
+
+
+@dataclass(frozen=True)
+class _Outputs:
+    """Where each played topic goes.
+
+    Attributes
+    ----------
+    writers : topic -> function publishing one serialized message (raw, or through the bridge).
+    publishers : topic -> its rclpy publisher, for the topics published as recorded.
+    plan_of : topic -> its plan, for every topic played.
+    bridge : the TransformStamped bridge of /tf_static and /tf, or None.
+    """
+
+    writers: dict[str, Callable[[bytes], None]]
+    publishers: dict[str, Any]
+    plan_of: dict[str, TopicPlan]
+    bridge: _Bridge | None
+
+    def waited(self) -> dict[str, Any]:
+        """The publishers whose subscribers playback waits for: every topic's and the bridge's, by topic."""
+        return {**self.publishers, **({} if self.bridge is None else {self.bridge.topic: self.bridge.publisher})}
+
+    def reliable_in_use(self, report: PlayReport) -> list[Any]:
+        """The reliable publishers that published something (the bridge's if it sent a transform)."""
+        reliable = [p for t, p in self.publishers.items() if self.plan_of[t].qos.reliable and report.published[t]]
+        reliable += [self.bridge.publisher] if self.bridge is not None and self.bridge.converter.sent else []
+        return reliable
+
+
+def _open_outputs(
+    client: Any, plans: Sequence[TopicPlan], cell: CellDescription | None, report: PlayReport
+) -> _Outputs:
+    """A publisher per planned topic whose type is installed, or the bridge for TF topics without tf2_msgs.
+
+    ``report`` gets each played topic with a count of 0 and its expected count, each skipped one with the
+    reason, each bridged one with its transform topic.
+    """
+    from bsp_ros.live.runtime.ros import has_message, message_class
+
+    writers: dict[str, Callable[[bytes], None]] = {}
+    publishers: dict[str, Any] = {}
+    plan_of: dict[str, TopicPlan] = {}
+    bridge: _Bridge | None = None
+    bridged = cell is not None and not has_message(TF_TYPE) and cell.transform_topic not in {p.topic for p in plans}
+    for plan in plans:
+        if bridged and plan.msgtype == TF_TYPE:
+            assert cell is not None
+            bridge = bridge or _Bridge.start(client, cell)
+            writers[plan.topic] = bridge.converter.writer(static=plan.latched)
+            report.bridged[plan.topic] = cell.transform_topic
+        else:
+            try:
+                message_class(plan.msgtype)
+            except BspError:
+                report.skipped[plan.topic] = f"its type {plan.msgtype or '<none>'} is not installed"
+                continue
+            publishers[plan.topic] = client.publisher(plan.msgtype, plan.topic, plan.qos)
+            writers[plan.topic] = _raw_writer(publishers[plan.topic])
+        plan_of[plan.topic] = plan
+        report.published[plan.topic] = 0
+        report.expected[plan.topic] = plan.expected
+    return _Outputs(writers, publishers, plan_of, bridge)
 
 
 @dataclass(frozen=True)
