@@ -48,6 +48,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "given sensor noise. Refuses ranges, speeds or sessions it cannot honour, with the value named."
         ),
     )
+    _add_arm_arguments(parser)
+    _add_limit_arguments(parser)
+    _add_session_arguments(parser)
+    _add_noise_arguments(parser)
+    _add_identify_arguments(parser)
+    _add_output_arguments(parser)
+    return parser
+
+
+def _add_arm_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the arm's group: segment lengths or the table's body data, and where the shoulder is."""
     arm = parser.add_argument_group("the arm (segment lengths: measured, a previous estimate, or the table)")
     arm.add_argument(
         "--lengths",
@@ -79,6 +90,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar=("Y", "Z"),
         help="shoulder position in world, m (y anterior, z up)",
     )
+
+
+def _add_limit_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the therapist's limits: each joint's range and the largest speed."""
     limits = parser.add_argument_group("the therapist's limits (required: never extrapolated)")
     limits.add_argument(
         "--shoulder-range",
@@ -110,6 +125,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="RAD_S",
         help="largest joint speed, rad/s (default 0.03: quasi-static)",
     )
+
+
+def _add_session_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the session's group: its length, postures, passive model, precision target and optimiser."""
     session = parser.add_argument_group("the session")
     session.add_argument(
         "--duration",
@@ -187,6 +206,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="N",
         help="optimiser budget per number of operating points (default 400)",
     )
+
+
+def _add_noise_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the sensor noise and rates the predicted stds assume."""
     noise = parser.add_argument_group("sensor noise for the predicted stds")
     noise.add_argument(
         "--force-noise",
@@ -219,7 +242,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="HZ",
         help="marker frame rate (default 50)",
     )
-    _add_identify_arguments(parser)
+
+
+def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the output group: the plan's files and its publication on ROS 2."""
     out = parser.add_argument_group("output")
     out.add_argument(
         "--json", type=Path, metavar="FILE", help="write the plan (knots, samples, predicted stds) as JSON"
@@ -249,7 +275,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="M",
         help="x of the movement plane (the shoulder's x) for the published path, m (default 0)",
     )
-    return parser
 
 
 def _add_identify_arguments(parser: argparse.ArgumentParser) -> None:
