@@ -24,7 +24,7 @@ from bsp_ros.core.identification.joint.judgement import (
     unidentifiable_problem,
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
-from bsp_ros.core.identification.joint.relaxed import follow_the_hand, leave_out_activity
+from bsp_ros.core.identification.joint.relaxed import add_contact_slip, follow_the_hand, leave_out_activity
 from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.stage import Outcome, Stage, Step
 from bsp_ros.core.identification.joint.steps import (
@@ -75,6 +75,7 @@ STEPS: tuple[Step, ...] = (
     leave_out_activity,
     fit_friction_transitions,
     choose_passive_model,
+    add_contact_slip,
     remove_far_off_samples,
     add_friction_shape,
     widen_dithered_friction,

@@ -16,7 +16,7 @@ from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.stacked import build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
-__all__ = ["ACTIVITY_FLOOR_SHARE", "MIN_SLIP_M", "follow_the_hand", "leave_out_activity"]
+__all__ = ["ACTIVITY_FLOOR_SHARE", "MIN_SLIP_M", "add_contact_slip", "follow_the_hand", "leave_out_activity"]
 
 # Rounds of estimate the travel, take it out, refit: each on shorter windows, which follow a slip's step closer
 # once the first has taken out its trend, s.
@@ -109,27 +109,40 @@ def follow_the_hand(stage: Stage) -> Stage:
     if first.total_m < MIN_SLIP_M or first.trend_share < MIN_TREND_SHARE:
         return stage
     travel = np.zeros(data.t_ns.size)
-    fits = []
     for window_s in SLIP_WINDOWS_S:
         slip = contact_slip(data.t_ns, fit.residual, lever, window_s)
         travel += slip.travel_m
         held = dataclasses.replace(data, tau_nm=data.tau_nm - (travel * lever)[:, None])
         problem = build_problem(held, stage.config.passive, stage.samples.rows, None, stage.samples.extras)
         fit = fit_problem(problem)
-        fits.append(fit)
-    # How the travel is followed is itself uncertain: the coarsest and the finest estimate's difference joins the
-    # covariance (rank one), so that no check reads what the finest leaves over as a property of the arm. So does
-    # where the contact point sat to begin with: the travel is counted from the session's start, but the hand may
-    # have settled before it; its mean over the session is as likely a reference.
-    shift = fits[-1].values - fits[0].values
-    centred = dataclasses.replace(data, tau_nm=data.tau_nm - ((travel - travel.mean()) * lever)[:, None])
-    reference = fit_problem(
-        build_problem(centred, stage.config.passive, stage.samples.rows, None, stage.samples.extras)
-    )
-    settled = reference.values - fit.values
+    # How the travel is followed is itself uncertain: the coarsest estimate of it, and the travel counted from its
+    # mean rather than the session's start (the hand may have settled before it), are the alternatives whose fits'
+    # differences join the covariance once the passive model is chosen (:func:`add_contact_slip`).
+    coarse = data.tau_nm - (first.travel_m * lever)[:, None]
+    centred = data.tau_nm - ((travel - travel.mean()) * lever)[:, None]
     total_m = float(abs(travel[-1] - travel[0])) if travel.size else 0.0
     values = {"slip_mm": 1e3 * max(total_m, first.total_m), "trend_percent": 100.0 * first.trend_share}
-    stage = dataclasses.replace(stage, data=held, samples=dataclasses.replace(stage.samples, problem=problem))
+    stage = dataclasses.replace(
+        stage,
+        data=held,
+        samples=dataclasses.replace(stage.samples, problem=problem),
+        slip_alternatives=(coarse, centred),
+    )
     found = Finding(code=FindingCode.HAND_SLIPPED, values=values)
-    added = ((Term.CONTACT_SLIP, np.outer(shift, shift) + np.outer(settled, settled)),)
-    return stage.apply(Outcome(problem=problem, fit=fit, added=added, notes=(found,)))
+    return stage.apply(Outcome(problem=problem, fit=fit, notes=(found,)))
+
+
+def add_contact_slip(stage: Stage) -> Stage:
+    """What following a slipping hand leaves open (:func:`follow_the_hand`'s alternatives, each fitted with the
+    chosen passive model) joins the covariance as the ``contact_slip`` term: rank one per alternative, so that no
+    check reads what the finest estimate of the travel leaves over as a property of the arm."""
+    if not stage.slip_alternatives:
+        return stage
+    widths = stage.widths_rad_s if stage.widths_rad_s.any() else None
+    term = np.zeros_like(stage.fit.covariance)
+    for tau_nm in stage.slip_alternatives:
+        other = dataclasses.replace(stage.data, tau_nm=tau_nm)
+        problem = build_problem(other, stage.config.passive, stage.samples.rows, widths, stage.samples.extras)
+        shift = fit_problem(problem).values - stage.fit.values
+        term += np.outer(shift, shift)
+    return stage.apply(Outcome(added=((Term.CONTACT_SLIP, term),)))

@@ -81,6 +81,8 @@ class Stage:
     drift_terms : a drift's columns (:func:`drift_columns`), once computed.
     with_springs : the problem with a linear spring's terms beside this one's, where a check needs it.
     placement_check : what the data say of the markers' placement, or None.
+    slip_alternatives : (N, n) torques under other plausible estimates of a slipping hand's travel, whose fits
+        bound what following it leaves open (none without a slip).
     """
 
     data: IdentificationData
@@ -115,6 +117,7 @@ class Stage:
     drift_terms: tuple[np.ndarray, list[ParameterName], DriftSpans] | None = None
     with_springs: Problem | None = None
     placement_check: PlacementScale | None = None
+    slip_alternatives: tuple[np.ndarray, ...] = ()
 
     @property
     def n(self) -> int:

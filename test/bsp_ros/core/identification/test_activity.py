@@ -14,6 +14,8 @@ from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.joint.activity import active_stretches
 from bsp_ros.core.identification.joint.contact_slip import slip_lever_n
 from bsp_ros.core.identification.joint.identify import _start
+from bsp_ros.core.identification.ledger import Term
+from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import contact_lever_sums
 
 # The simulated markers sit on the joint centres: no placement uncertainty to add.
@@ -138,6 +140,12 @@ def test_a_hand_that_slips_in_the_handle_is_followed_and_named(
     z = (beta - np.asarray(session.truth.static_moments_kgm)) / np.sqrt(np.diag(covariance))
     assert np.abs(z).max() < 2.5, z
     assert FindingCode.HAND_SLIPPED not in [f.code for f in identify_joint(data, EXACT).findings]
+    # With the passive model the data choose (other parameters than the fixed model's), the slip's covariance term
+    # is that model's.
+    chosen = identify_joint(slipped, dataclasses.replace(EXACT, passive=PassiveModel.parse("auto")))
+    assert FindingCode.HAND_SLIPPED in [f.code for f in chosen.findings]
+    slip_term = chosen.ledger.get(Term.CONTACT_SLIP)
+    assert slip_term is not None and slip_term.shape == chosen.covariance.shape
 
 
 def test_a_drifting_force_sensor_is_not_taken_for_a_slipping_hand(data: IdentificationData) -> None:
