@@ -12,7 +12,6 @@ at the nearest states at other times; what stands far above that comparison for 
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,7 +39,7 @@ class ActivitySettings:
     max_active_share : more of the session active than this, and too little is left to call the arm relaxed.
     """
 
-    bin_s: float = 0.05
+    bin_s: float = 0.1
     threshold_sd: float = 6.0
     min_duration_s: float = 0.3
     join_s: float = 0.3
@@ -79,13 +78,13 @@ class Activity:
 
 def _binned(values: np.ndarray, bins: np.ndarray, n_bins: int) -> np.ndarray:
     """(n_bins, k) the NaN-aware mean of ``values`` (N, k) in each bin (NaN where a bin holds no finite value)."""
-    finite = np.isfinite(values)
-    sums = np.zeros((n_bins, values.shape[1]))
-    counts = np.zeros((n_bins, values.shape[1]))
-    np.add.at(sums, bins, np.where(finite, values, 0.0))
-    np.add.at(counts, bins, finite)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
+    out = np.full((n_bins, values.shape[1]), np.nan)
+    for column in range(values.shape[1]):
+        finite = np.isfinite(values[:, column])
+        counts = np.bincount(bins[finite], minlength=n_bins)
+        sums = np.bincount(bins[finite], values[finite, column], minlength=n_bins)
+        out[counts > 0, column] = sums[counts > 0] / counts[counts > 0]
+    return out
 
 
 # Queries per block of the brute-force neighbour search: bounds its memory to this times the pool (floats).
@@ -112,25 +111,42 @@ def _nearest(queries: np.ndarray, pool: np.ndarray, k: int) -> np.ndarray:
     return out
 
 
+def _neighbours(state: np.ndarray, valid: np.ndarray, k: int) -> np.ndarray | None:
+    """(B, k) each bin's ``k`` nearest valid bins in ``state`` (B, d; its last column the direction of motion,
+    which neighbours share), nearest first; None where a direction has fewer than ``k`` valid bins. Searched
+    within each direction apart: half the pool each."""
+    index = np.zeros((state.shape[0], k), dtype=np.int64)
+    for direction in np.unique(state[valid, -1]):
+        pool = np.flatnonzero(valid & (state[:, -1] == direction))
+        if pool.size < k:
+            return None
+        queries = np.flatnonzero(state[:, -1] == direction)
+        index[queries] = pool[_nearest(state[queries, :-1], state[pool, :-1], k)]
+    return index
+
+
+def _row_nanmedian(values: np.ndarray) -> np.ndarray:
+    """(R,) the median of each row's finite values (NaN where a row has none): ``np.nanmedian`` without its masked
+    arrays, by sorting (NaN sorts last) and taking the middle of each row's finite count."""
+    ordered = np.sort(values, axis=1)
+    count = np.isfinite(ordered).sum(axis=1)
+    low = np.clip((count - 1) // 2, 0, None)[:, None]
+    high = np.clip(count // 2, 0, values.shape[1] - 1)[:, None]
+    middle = 0.5 * (np.take_along_axis(ordered, low, axis=1) + np.take_along_axis(ordered, high, axis=1))[:, 0]
+    return np.where(count > 0, middle, np.nan)
+
+
 def _state_explained(
-    times_s: np.ndarray, state: np.ndarray, residual: np.ndarray, trusted: np.ndarray, settings: ActivitySettings
+    times_s: np.ndarray, index: np.ndarray, residual: np.ndarray, trusted: np.ndarray, settings: ActivitySettings
 ) -> np.ndarray:
-    """(B,) the median residual of the ``trusted`` bins nearest in ``state`` (B, d) at other times; NaN where too
-    few such bins exist (the motion never came back there)."""
-    out = np.full(times_s.size, np.nan)
-    pool = np.flatnonzero(trusted & np.isfinite(residual))
-    if pool.size < settings.neighbours:
-        return out
-    k = min(pool.size, 4 * settings.neighbours)
-    index = pool[_nearest(state, state[pool], k)]
-    far_in_time = np.abs(times_s[index] - times_s[:, None]) > settings.exclude_s
-    values = np.where(far_in_time, residual[index], np.nan)
-    enough = far_in_time.sum(axis=1) >= settings.neighbours // 3
-    with np.errstate(all="ignore"):
-        # the nearest that are far in time, in order of distance
-        ranked = np.where(np.cumsum(far_in_time, axis=1) <= settings.neighbours, values, np.nan)
-        out[enough] = np.nanmedian(ranked[enough], axis=1)
-    return out
+    """(B,) the median residual of the ``trusted`` bins nearest in state at other times, from each bin's
+    neighbours ``index`` (B, K; nearest first); NaN where too few such bins exist (the motion never came back)."""
+    usable = trusted[index] & np.isfinite(residual[index])
+    usable &= np.abs(times_s[index] - times_s[:, None]) > settings.exclude_s
+    # the nearest usable ones, in order of distance
+    chosen = usable & (np.cumsum(usable, axis=1) <= settings.neighbours)
+    out = _row_nanmedian(np.where(chosen, residual[index], np.nan))
+    return np.where(usable.sum(axis=1) >= settings.neighbours // 3, out, np.nan)
 
 
 def _stretches(flag: np.ndarray, bin_s: float, settings: ActivitySettings) -> list[tuple[int, int]]:
@@ -153,15 +169,14 @@ def _slow(values: np.ndarray, width: int) -> np.ndarray:
     n_blocks = -(-values.size // block)
     padded = np.full(n_blocks * block, np.nan)
     padded[: values.size] = values
-    with np.errstate(all="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN block or window: no drift known there
-        blocks = np.nanmedian(padded.reshape(n_blocks, block), axis=1)
+    with np.errstate(all="ignore"):
+        blocks = _row_nanmedian(padded.reshape(n_blocks, block))
         half = min(5, blocks.size - 1)
         # Odd reflection at both ends: a linear drift runs on through the edge instead of bending there.
         before, after = 2 * blocks[0] - blocks[half:0:-1], 2 * blocks[-1] - blocks[-2 : -half - 2 : -1]
         edged = np.concatenate((before, blocks, after))
         windows = np.lib.stride_tricks.sliding_window_view(edged, 2 * half + 1)
-        drift = np.nan_to_num(np.nanmedian(windows, axis=1))
+        drift = np.nan_to_num(_row_nanmedian(windows))
     return np.repeat(drift, block)[: values.size]
 
 
@@ -184,13 +199,16 @@ def _joint_off(bins: _Bins, j: int, floor_nm: float, settings: ActivitySettings)
     state = np.column_stack((bins.q / span, 10.0 * np.sign(np.nan_to_num(bins.v[:, j]))))
     valid = np.isfinite(state).all(axis=1)
     state = np.where(valid[:, None], state, 1e6)
+    index = _neighbours(state, valid, 6 * settings.neighbours)
+    if index is None:
+        return np.full(valid.size, np.nan), np.zeros(valid.size, dtype=bool)
     drift_bins = round(settings.drift_s / bins.bin_s)
     # A drift first: the same state at another time would otherwise carry another drift into the comparison.
     residual = bins.residual[:, j] - _slow(bins.residual[:, j], drift_bins)
     # Twice: the second comparison leaves out the bins the first found far off (a long burst's own neighbours).
     trusted = valid.copy()
     for _ in range(2):
-        off = residual - _state_explained(bins.times_s, state, residual, trusted, settings)
+        off = residual - _state_explained(bins.times_s, index, residual, trusted, settings)
         off = off - _slow(off, drift_bins)
         scale = float(robust_sd(off[np.isfinite(off)])) if np.isfinite(off).sum() > 10 else np.inf
         far = np.abs(np.nan_to_num(off)) > max(settings.threshold_sd * scale, floor_nm)

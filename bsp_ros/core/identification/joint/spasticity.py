@@ -45,15 +45,16 @@ class SpeedDependence:
 
 def _slope(speed: np.ndarray, resistance: np.ndarray) -> tuple[float, float]:
     """Least-squares slope of ``resistance`` on ``speed`` and its t value (0, 0 with fewer than 8 bins)."""
-    if speed.size < 8 or np.ptp(speed) <= 0:
+    if speed.size < 8:
         return 0.0, 0.0
-    design = np.column_stack((np.ones_like(speed), speed))
-    coefficients, *_ = np.linalg.lstsq(design, resistance, rcond=None)
-    residual = resistance - design @ coefficients
-    sigma2 = float(residual @ residual) / max(speed.size - 2, 1)
-    covariance = sigma2 * np.linalg.pinv(design.T @ design)
-    se = float(np.sqrt(max(covariance[1, 1], 1e-300)))
-    return float(coefficients[1]), float(coefficients[1]) / se
+    dx, dy = speed - speed.mean(), resistance - resistance.mean()
+    sxx = float(dx @ dx)
+    if sxx <= 0:
+        return 0.0, 0.0
+    slope = float(dx @ dy) / sxx
+    residual = dy - slope * dx
+    se = np.sqrt(max(float(residual @ residual) / (speed.size - 2) / sxx, 1e-300))
+    return slope, slope / se
 
 
 def speed_dependence(t_ns: np.ndarray, velocity_rad_s: np.ndarray, residual_nm: np.ndarray) -> SpeedDependence:
@@ -68,18 +69,20 @@ def speed_dependence(t_ns: np.ndarray, velocity_rad_s: np.ndarray, residual_nm: 
     """
     t_s = (t_ns - t_ns[0]) * 1e-9
     index = np.floor(t_s / BIN_S).astype(np.int64)
+    n_bins = int(index[-1]) + 1 if index.size else 0
     finite = np.isfinite(residual_nm) & (velocity_rad_s != 0)
     slopes, t_values, fast = [], [], []
     for sign in (1.0, -1.0):
         rows = finite & (np.sign(velocity_rad_s) == sign)
-        bins, inverse, counts = np.unique(index[rows], return_inverse=True, return_counts=True)
-        keep = counts >= max(3, int(np.median(counts)) // 2) if counts.size else counts.astype(bool)
-        speed = np.bincount(inverse, np.abs(velocity_rad_s[rows]), bins.size)[keep] / counts[keep]
-        resistance = sign * np.bincount(inverse, residual_nm[rows], bins.size)[keep] / counts[keep]
+        counts = np.bincount(index[rows], minlength=n_bins)
+        keep = counts >= max(3, int(np.median(counts[counts > 0])) // 2) if counts.any() else counts > 0
+        speed = np.bincount(index[rows], np.abs(velocity_rad_s[rows]), n_bins)[keep] / counts[keep]
+        resistance = sign * np.bincount(index[rows], residual_nm[rows], n_bins)[keep] / counts[keep]
         slope, t_value = _slope(speed, resistance)
         slopes.append(slope)
         t_values.append(t_value)
-        fast.append((float(np.percentile(speed, 10)), float(np.percentile(speed, 90))) if speed.size else (0.0, 0.0))
+        ends = np.quantile(speed, (0.1, 0.9)) if speed.size else np.zeros(2)
+        fast.append((float(ends[0]), float(ends[1])))
     out = SpeedDependence(direction=0, increase_nm=0.0, fast_rad_s=0.0, t_values=(t_values[0], t_values[1]))
     for d, other in ((0, 1), (1, 0)):
         if t_values[d] > CLEAR_T and t_values[other] < ABSENT_T:
