@@ -10,7 +10,8 @@ import numpy as np
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.joint.activity import Activity, active_stretches
 from bsp_ros.core.identification.joint.contact_slip import MIN_TREND_SHARE, contact_slip, slip_lever_n
-from bsp_ros.core.identification.joint.outliers import MIN_OUTLIER_NM
+from bsp_ros.core.identification.joint.misfit import misfit_against_noise
+from bsp_ros.core.identification.joint.outliers import MIN_OUTLIER_NM, fit_outliers, too_far_off
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
 from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.stacked import build_problem, fit_problem
@@ -70,10 +71,29 @@ def _finding(stage: Stage, activity: Activity) -> Finding:
     return Finding(code=FindingCode.ARM_ACTIVE, where=joints_for(stage.n)[worst], values=values)
 
 
+# Samples far off the fit beyond this share of the usable ones, with a residual above the noise, are the mark of
+# bursts: a burst stands many robust sd off a fit of the relaxed arm, a model's smooth shortfall does not.
+MIN_FAR_SHARE = 0.01
+
+
+def _calls_for_activity(stage: Stage) -> bool:
+    """Whether the fit shows the mark of bursts: too many samples far off it, or some (``MIN_FAR_SHARE``) with a
+    residual above the noise at a joint. A model's own smooth shortfall (an elastic moment it lacks, a
+    musculoskeletal arm's passive muscles on a trajectory that never comes back) leaves none far off, and leaving
+    stretches of it out would hide it from the checks that follow."""
+    n_far = int(fit_outliers(stage.fit, stage.config).sum())
+    usable = stage.samples.usable
+    if too_far_off(n_far, usable):
+        return True
+    _, misfit = misfit_against_noise(stage.fit)
+    return n_far > MIN_FAR_SHARE * usable and bool((misfit > stage.config.max_misfit).any())
+
+
 def leave_out_activity(stage: Stage) -> Stage:
     """Stretches where the arm was active (:func:`active_stretches`) are left out of every joint's rows and the
-    model refitted; too much activity leaves too little of a relaxed arm to identify (invalid)."""
-    if not stage.config.check_activity:
+    model refitted; too much activity leaves too little of a relaxed arm to identify (invalid). Only where the fit
+    shows the mark of bursts (:func:`_calls_for_activity`)."""
+    if not stage.config.check_activity or not _calls_for_activity(stage):
         return stage
     activity = _detect(stage, stage.fit.residual)
     if not activity.spans_s:
