@@ -396,6 +396,8 @@ def _check_quantities(data: Mapping[str, Any]) -> None:
                     raise StoreError(f"{where}.source must be one of {SOURCES}, got {q.get('source')!r}")
                 _finite_or_none(q["std"], f"{where}.std")
                 _finite_or_none(q["value"], f"{where}.value")
+                if q.get("budget") is not None and not isinstance(q["budget"], dict):
+                    raise StoreError(f"{where}.budget must be an object of term: number, got {q['budget']!r:.70}")
 
 
 def _parameters(estimate: Estimate, *, refuse_non_finite: bool) -> dict[ParamKey, Quantity]:
@@ -407,10 +409,25 @@ def _parameters(estimate: Estimate, *, refuse_non_finite: bool) -> dict[ParamKey
         if std is not None and std < 0.0:
             raise StoreError(f"{where}.std must not be negative, got {std}")
         value = _finite_or_none(q.value, f"{where}.value", refuse_non_finite=refuse_non_finite)
-        parameters[(group, part, key)] = Quantity(value=value, std=std, source=q.source)
+        budget = None if q.budget is None else _budget(q.budget, f"{where}.budget")
+        parameters[(group, part, key)] = Quantity(value=value, std=std, source=q.source, budget=budget)
     if not parameters:
         raise StoreError("the estimate holds no parameters")
     return parameters
+
+
+def _budget(budget: Mapping[str, Any], where: str) -> dict[str, float | None]:
+    """A quantity's uncertainty budget as stored: each term a short key, its standard uncertainty a non-negative
+    number (a non-finite one as None, as a std is)."""
+    kept: dict[str, float | None] = {}
+    for term, u in budget.items():
+        if not isinstance(term, str) or _NAME.fullmatch(term) is None:
+            raise StoreError(f"{where} has a malformed term {term!r:.70}")
+        number = _finite_or_none(u, f"{where}.{term}")
+        if number is not None and number < 0.0:
+            raise StoreError(f"{where}.{term} must not be negative, got {number}")
+        kept[term] = number
+    return kept
 
 
 def _check_quality(block: Any) -> None:

@@ -32,7 +32,7 @@ __all__ = [
     "ns_to_datetime",
 ]
 
-# A stored quantity is the estimate's own (value, std, source; no budget once stored).
+# A stored quantity is the estimate's own: value, std, source and, where the estimate has one, its budget.
 ParamKey = tuple[str, str, str]
 """``(group, part, quantity)``, e.g. ``("joints", "elbow", "coulomb_nm")``."""
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 """The schema version this code writes; older stores are migrated up to it, newer ones refused."""
 
 APPLICATION = "bsp_ros.clinic.store"
@@ -72,6 +72,10 @@ MIGRATIONS: list[list[str]] = [
         "ALTER TABLE sessions ADD COLUMN content_sha256 TEXT",
         "ALTER TABLE sessions ADD COLUMN curves_json TEXT NOT NULL DEFAULT '{{}}'",
         "CREATE UNIQUE INDEX sessions_by_content ON sessions (content_sha256)",
+    ],
+    # 5: each quantity's uncertainty budget ({term: standard uncertainty}); NULL where the estimate kept none.
+    [
+        "ALTER TABLE parameters ADD COLUMN budget_json TEXT",
     ],
 ]
 

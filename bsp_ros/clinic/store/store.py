@@ -166,7 +166,8 @@ class Store:
         rows = self._backend.query(_INSERT_SESSION_SQL, row)
         session_id = int(rows[0][0])
         for (group, part, quantity), q in parameters.items():
-            values = (session_id, group, part, quantity, q.value, q.std, str(q.source))
+            budget = None if q.budget is None else _dumps(dict(q.budget))
+            values = (session_id, group, part, quantity, q.value, q.std, str(q.source), budget)
             self._backend.query(_INSERT_PARAMETER_SQL, values)
         return session_id
 
@@ -292,13 +293,16 @@ class Store:
             counters[row[1]] = counters.get(row[1], 0) + 1
             numbers[int(row[0])] = counters[row[1]]
         parameters: dict[int, dict[ParamKey, Quantity]] = {int(row[0]): {} for row in rows}
-        for sid, group, part, quantity, value, std, source in self._backend.query(
-            "SELECT session_id, grp, part, quantity, value, std, source FROM parameters "
+        for sid, group, part, quantity, value, std, source, budget in self._backend.query(
+            "SELECT session_id, grp, part, quantity, value, std, source, budget_json FROM parameters "
             f"WHERE session_id IN ({inner}) ORDER BY session_id, grp, part, quantity",
             params,
         ):
             parameters[int(sid)][(group, part, quantity)] = Quantity(
-                value=_float(value), std=_float(std), source=Source(source)
+                value=_float(value),
+                std=_float(std),
+                source=Source(source),
+                budget=None if budget is None else json.loads(budget),
             )
         return [replace(_record(row, parameters[int(row[0])]), number=numbers[int(row[0])]) for row in rows]
 
@@ -421,7 +425,8 @@ _INSERT_SESSION_SQL = (
     "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id"
 )
 _INSERT_PARAMETER_SQL = (
-    "INSERT INTO parameters (session_id, grp, part, quantity, value, std, source) VALUES (?, ?, ?, ?, ?, ?, ?)"
+    "INSERT INTO parameters (session_id, grp, part, quantity, value, std, source, budget_json) "
+    "VALUES (?, ?, ?, ?, ?, ?, ?, ?)"
 )
 
 

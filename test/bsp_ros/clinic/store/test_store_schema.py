@@ -50,9 +50,10 @@ def _set_version(location: str, version: str) -> None:
 def test_old_schema_is_migrated_with_its_data(store_location: str) -> None:
     _make_version_1_store(store_location)
     with open_store(store_location) as store:
-        assert store.schema_version == SCHEMA_VERSION == 4
+        assert store.schema_version == SCHEMA_VERSION == 5
         (old,) = store.sessions("OLD1")
         assert old.parameters[("joints", "elbow", "coulomb_nm")].value == 0.31
+        assert old.parameters[("joints", "elbow", "coulomb_nm")].budget is None  # none kept then
         assert old.quality.warnings == ("old",) and old.subject_info == {}
         assert old.repeatability == {} and old.quality.tare_applied is False  # not recorded then
         store.add_estimate(sample_estimate(1, subject={"body_mass_kg": 80.0, "sex": "male"}), "OLD1")
