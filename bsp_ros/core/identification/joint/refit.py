@@ -16,6 +16,7 @@ from bsp_ros.core.identification.joint.identify import failed_result
 from bsp_ros.core.identification.joint.judgement import UNIDENTIFIABLE_CONDITION, unidentifiable_problem
 from bsp_ros.core.identification.joint.outliers import far_off_problem, fit_outliers, too_far_off
 from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
+from bsp_ros.core.identification.joint.relaxed import activity_finding, detect_activity
 from bsp_ros.core.identification.joint.samples import Samples, usable_samples
 from bsp_ros.core.identification.joint.steps import prior_share
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
@@ -111,6 +112,9 @@ def _without_far_off(
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
     if too_far_off(n_far, samples.usable):
+        calmed = _without_activity(data, config, samples, widths, fit)
+        if calmed is not None:
+            return calmed
         far_off = far_off_problem(n_far, samples.usable, config)
         return _Kept(problem=samples.problem, fit=fit, problems=(far_off,), notes=(), removed=0)
     if not n_far:
@@ -118,6 +122,24 @@ def _without_far_off(
     problem = build_problem(data, config.passive, samples.rows & ~far[:, None], widths, samples.extras)
     removed = Finding(code=FindingCode.FIT_OUTLIERS_REMOVED, values={"n": n_far, "outlier_sd": config.outlier_sd})
     return _Kept(problem=problem, fit=fit_problem(problem), problems=(), notes=(removed,), removed=n_far)
+
+
+def _without_activity(
+    data: IdentificationData, config: JointConfig, samples: Samples, widths: np.ndarray | None, fit: Fit
+) -> _Kept | None:
+    """Between a live window's checks, too many samples far off the held model's fit: stretches of muscle activity
+    (:func:`detect_activity`) left out as the checks' identification leaves them; None where none explain it."""
+    if not config.check_activity:
+        return None
+    activity = detect_activity(data, config, fit.residual)
+    finding = activity_finding(data, config, activity)
+    if not activity.spans_s or finding.code is not FindingCode.ARM_ACTIVE:
+        return None
+    problem = build_problem(data, config.passive, samples.rows & ~activity.active[:, None], widths, samples.extras)
+    refit = fit_problem(problem)
+    if too_far_off(int(fit_outliers(refit, config).sum()), samples.usable):
+        return None
+    return _Kept(problem=problem, fit=refit, problems=(), notes=(finding,), removed=0)
 
 
 def _held_covariance(

@@ -8,7 +8,9 @@ import dataclasses
 import numpy as np
 
 from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.activity import Activity, active_stretches
+from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.contact_slip import MIN_TREND_SHARE, contact_slip, slip_lever_n
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
 from bsp_ros.core.identification.joint.outliers import MIN_OUTLIER_NM, fit_outliers, too_far_off
@@ -17,7 +19,15 @@ from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.stacked import build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
-__all__ = ["ACTIVITY_FLOOR_SHARE", "MIN_SLIP_M", "add_contact_slip", "follow_the_hand", "leave_out_activity"]
+__all__ = [
+    "ACTIVITY_FLOOR_SHARE",
+    "MIN_SLIP_M",
+    "activity_finding",
+    "add_contact_slip",
+    "detect_activity",
+    "follow_the_hand",
+    "leave_out_activity",
+]
 
 # Rounds of estimate the travel, take it out, refit: each on shorter windows, which follow a slip's step closer
 # once the first has taken out its trend, s.
@@ -34,11 +44,15 @@ ACTIVITY_FLOOR_SHARE = 0.005
 ROUNDS = 3
 
 
-def _detect(stage: Stage, residual: np.ndarray) -> Activity:
-    data = stage.data
+def detect_activity(data: IdentificationData, config: JointConfig, residual: np.ndarray) -> Activity:
+    """:func:`active_stretches` of ``data`` from a fit's ``residual`` (N, n), below the floor nothing."""
     rms = np.sqrt(np.nanmean(data.tau_nm**2, axis=0))
     floor = np.maximum(ACTIVITY_FLOOR_SHARE * rms, MIN_OUTLIER_NM)
-    return active_stretches(data.t_ns, data.q_rad, data.velocity_rad_s, residual, floor, stage.config.activity)
+    return active_stretches(data.t_ns, data.q_rad, data.velocity_rad_s, residual, floor, config.activity)
+
+
+def _detect(stage: Stage, residual: np.ndarray) -> Activity:
+    return detect_activity(stage.data, stage.config, residual)
 
 
 def _merged(first: Activity, second: Activity) -> Activity:
@@ -52,10 +66,14 @@ def _merged(first: Activity, second: Activity) -> Activity:
 
 
 def _finding(stage: Stage, activity: Activity) -> Finding:
+    return activity_finding(stage.data, stage.config, activity)
+
+
+def activity_finding(data: IdentificationData, config: JointConfig, activity: Activity) -> Finding:
     """The note of the stretches left out, or the problem where too little of the session is left."""
-    duration_s = float(stage.data.t_ns[-1] - stage.data.t_ns[0]) * 1e-9
+    duration_s = float(data.t_ns[-1] - data.t_ns[0]) * 1e-9
     worst = int(np.argmax(activity.peak_nm))
-    if activity.share > stage.config.activity.max_active_share:
+    if activity.share > config.activity.max_active_share:
         values = {
             "relaxed_s": duration_s * (1.0 - activity.share),
             "relaxed_percent": 100.0 * (1.0 - activity.share),
@@ -68,7 +86,7 @@ def _finding(stage: Stage, activity: Activity) -> Finding:
         "active_percent": 100.0 * activity.share,
         "peak_nm": float(activity.peak_nm[worst]),
     }
-    return Finding(code=FindingCode.ARM_ACTIVE, where=joints_for(stage.n)[worst], values=values)
+    return Finding(code=FindingCode.ARM_ACTIVE, where=joints_for(data.n_joints)[worst], values=values)
 
 
 # Samples far off the fit beyond this share of the usable ones, with a residual above the noise, are the mark of

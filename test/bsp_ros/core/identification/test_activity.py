@@ -167,3 +167,22 @@ def test_a_smooth_shortfall_with_no_sample_far_off_is_left_to_the_checks(data: I
     bump[inside, 1] = 0.15 * np.sin(np.pi * (t_s[inside] - 25.0) / 8.0)
     result = identify_joint(dataclasses.replace(data, tau_nm=data.tau_nm + bump), EXACT)
     assert FindingCode.ARM_ACTIVE not in [f.code for f in result.findings]
+
+
+def test_a_live_refit_between_checks_leaves_bursts_out_as_the_checks_do(
+    data: IdentificationData, session: sim.SimulatedSession
+) -> None:
+    # A live window refits the model its last check held; bursts arriving in between are left out there too,
+    # instead of the window turning invalid ("the model does not fit") until the next check.
+    from bsp_ros.core.identification.joint.refit import refit_held
+
+    held = identify_joint(data, EXACT).held
+    assert held is not None
+    active = dataclasses.replace(data, tau_nm=data.tau_nm + bursts(data, [5.0, 19.0, 33.0, 47.0], 0.20, seed=2))
+    result = refit_held(active, held, EXACT)
+    assert result.valid and FindingCode.ARM_ACTIVE in [f.code for f in result.findings]
+    _, beta, covariance = result.block("static_moment_kgm")
+    z = (beta - np.asarray(session.truth.static_moments_kgm)) / np.sqrt(np.diag(covariance))
+    assert np.abs(z).max() < 2.5, z
+    plain = refit_held(active, held, dataclasses.replace(EXACT, check_activity=False))
+    assert not plain.valid and FindingCode.FAR_OFF_SAMPLES in [f.code for f in plain.findings]
