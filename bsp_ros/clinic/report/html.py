@@ -20,8 +20,10 @@ from bsp_ros.clinic.report.detail import (
     peer_rows,
 )
 from bsp_ros.clinic.report.labels import plain_name, plain_number, unit
+from bsp_ros.clinic.report.precision import BUDGET_NOTE, BUDGET_TITLE, PRECISION_NOTE, PRECISION_TITLE, precision_rows
 from bsp_ros.clinic.report.summary import (
     arm_title,
+    day,
     error_source,
     first_page_rows,
     flag_rule,
@@ -154,6 +156,49 @@ def _peers_table(analysis: Analysis) -> str:
     return "\n".join(out)
 
 
+def _precision(analysis: Analysis) -> list[str]:
+    """The latest usable session's static and passive moments: their SD, its largest source, what would shrink it;
+    nothing where the store holds no budget."""
+    rows = precision_rows(analysis, clinician=True)
+    if not rows:
+        return []
+    out = [
+        f"<h3>{escape(PRECISION_TITLE)}</h3>",
+        "<table id='precision'><tr><th>Parameter</th><th>Arm</th><th>Session</th><th>Latest ± SD</th>"
+        "<th>Largest source of uncertainty (share)</th><th>What would make it more precise</th></tr>",
+    ]
+    for row in rows:
+        out.append(
+            f"<tr><td>{escape(row.name)}</td><td>{escape((row.arm or '–').capitalize())}</td>"
+            f"<td class='num'>{escape(row.session)}, {day(row.time_ns)}</td><td class='num'>{escape(row.latest)}</td>"
+            f"<td>{escape(row.words)}</td><td>{escape(row.remedy[:1].upper() + row.remedy[1:])}</td></tr>"
+        )
+    out.append("</table>")
+    out.append(f"<p class='note'>{escape(PRECISION_NOTE)}</p>")
+    return out
+
+
+def _budget(analysis: Analysis) -> list[str]:
+    """Every quantity's full uncertainty budget of the latest usable session, for the engineer."""
+    rows = precision_rows(analysis, clinician=False)
+    if not rows:
+        return []
+    out = [
+        f"<h3>{escape(BUDGET_TITLE)}</h3>",
+        "<table id='budget'><tr><th>Parameter</th><th>Arm</th><th>Session</th><th>SD</th><th>Terms</th>"
+        "<th>Largest term's remedy</th></tr>",
+    ]
+    for row in rows:
+        out.append(
+            f"<tr><td>{escape(row.name)}</td><td>{escape((row.arm or '–').capitalize())}</td>"
+            f"<td class='num'>{escape(row.session)}</td><td class='num'>{plain_number(row.std)} {unit(row.key[2])}</td>"
+            f"<td>{escape(row.budget_text)}</td><td>{escape(row.engineer_remedy)}</td></tr>"
+        )
+    out.append("</table>")
+    out.append(f"<p class='note'>{escape(BUDGET_NOTE)}</p>")
+    return out
+
+
 def _lengths_table(analysis: Analysis) -> str:
     out = ["<table id='lengths'><tr><th>Segment length</th><th>Arm</th><th>Latest</th></tr>"]
     for series in analysis.series:
@@ -208,6 +253,7 @@ def _appendix(analysis: Analysis, pngs: Sequence[tuple[str, bytes]]) -> list[str
         "<section id='appendix'><h2>Appendix for the engineer</h2>",
         f"<p class='note'>{escape(APPENDIX_NOTE)}</p>",
         _rows_table(detail_rows(analysis, "appendix"), "appendix-table", error=False),
+        *_budget(analysis),
     ]
     for title, png in pngs:
         parts.append(f"<h3>{escape(title)}</h3><figure>{_png(png, title)}</figure>")
@@ -283,6 +329,7 @@ def render_html(
     parts.append(
         "<h3>Arm weight, masses and centres of mass</h3>" + _rows_table(detail_rows(analysis, "weight"), "weight")
     )
+    parts.extend(_precision(analysis))
     for title, png in detail_pngs:
         parts.append(f"<h3>{escape(title)}</h3><figure>{_png(png, title)}</figure>")
     parts.append("<h3>Segment lengths (from the markers)</h3>" + _lengths_table(analysis))

@@ -32,8 +32,10 @@ from bsp_ros.clinic.report.detail import (
 from bsp_ros.clinic.report.labels import plain_name, plain_number, unit
 from bsp_ros.clinic.report.panels import appendix_groups, arm_names, detail_groups, first_page_panels
 from bsp_ros.clinic.report.plots import Panel, draw_panels
+from bsp_ros.clinic.report.precision import BUDGET_NOTE, BUDGET_TITLE, PRECISION_NOTE, PRECISION_TITLE, precision_rows
 from bsp_ros.clinic.report.summary import (
     arm_title,
+    day,
     error_source,
     first_page_rows,
     flag_rule,
@@ -166,6 +168,37 @@ def _peers(flow: _Flow, analysis: Analysis) -> None:
     flow.paragraph(PEERS_NOTE, 7.5, GREY)
 
 
+def _precision(flow: _Flow, analysis: Analysis) -> None:
+    """The latest usable session's static and passive moments: their SD, its largest source, what would shrink it;
+    nothing where the store holds no budget."""
+    rows = precision_rows(analysis, clinician=True)
+    if not rows:
+        return
+    flow.heading(PRECISION_TITLE)
+    for row in rows:
+        text = (
+            f"{row.name} ({(row.arm or '–').capitalize()}, session {row.session}, {day(row.time_ns)}): "
+            f"{row.latest}. Largest source: {row.words}."
+        )
+        flow.paragraph(text + (f" More precise with: {row.remedy}." if row.remedy else ""), 8.0)
+    flow.paragraph(PRECISION_NOTE, 7.5, GREY)
+
+
+def _budget(flow: _Flow, analysis: Analysis) -> None:
+    """Every quantity's full uncertainty budget of the latest usable session, for the engineer."""
+    rows = precision_rows(analysis, clinician=False)
+    if not rows:
+        return
+    flow.heading(BUDGET_TITLE, 10.0)
+    for row in rows:
+        text = (
+            f"{row.name} ({(row.arm or '–').capitalize()}, session {row.session}): SD {plain_number(row.std)} "
+            f"{unit(row.key[2])}: {row.budget_text}"
+        )
+        flow.paragraph(text + (f"; {row.engineer_remedy}." if row.engineer_remedy else "."), 7.5)
+    flow.paragraph(BUDGET_NOTE, 7.0, GREY)
+
+
 def _curves(flow: _Flow, analysis: Analysis) -> None:
     """The torque-angle panels, three to a row, with their caption."""
     views, colours, titles = curve_panels(analysis)
@@ -219,6 +252,7 @@ def _detail(flow: _Flow, analysis: Analysis) -> None:
     _peers(flow, analysis)
     flow.heading("Arm weight, masses and centres of mass")
     _rows(flow, detail_rows(analysis, "weight"))
+    _precision(flow, analysis)
     names = arm_names(analysis)
     for title, panels in detail_groups(analysis):
         flow.heading(title)
@@ -246,6 +280,7 @@ def _appendix(flow: _Flow, analysis: Analysis) -> None:
     flow.heading("Appendix for the engineer", 13.0)
     flow.paragraph(APPENDIX_NOTE, 8.0, GREY)
     _rows(flow, detail_rows(analysis, "appendix"), error=False)
+    _budget(flow, analysis)
     names = arm_names(analysis)
     for title, panels in appendix_groups(analysis):
         flow.heading(title)
