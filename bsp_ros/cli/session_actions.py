@@ -372,7 +372,7 @@ def record_to_json(record: SessionRecord) -> dict[str, Any]:
     for (group, part, quantity), q in record.parameters.items():
         if group == "joints" and part in record.passive_curves and angle_of(quantity) is not None:
             continue  # sampled from the curve, which is given whole
-        body[group].setdefault(part, {})[quantity] = {"value": q.value, "std": q.std, "source": q.source}
+        body[group].setdefault(part, {})[quantity] = q.to_json()
     for joint, curve in record.passive_curves.items():
         body["joints"].setdefault(joint, {})[CURVE_KEY] = curve
     return body

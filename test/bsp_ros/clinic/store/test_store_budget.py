@@ -95,3 +95,20 @@ def test_a_store_of_the_version_before_the_budget_migrates_without_one(
         (after,) = store.sessions("P105")
     assert all(q.budget is None for q in before.parameters.values())
     assert after.parameters[UPPER_ARM].budget is not None
+
+
+def test_sessions_show_json_carries_the_budget_a_later_add_keeps(
+    document: dict[str, Any], tmp_path: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from bsp_ros.cli import main
+
+    store = str(tmp_path / "clinic.sqlite")
+    (tmp_path / "estimate.json").write_text(json.dumps(_as_another_recording(document, "3")))
+    assert main(["sessions", "add", str(tmp_path / "estimate.json"), "--store", store, "--subject", "P104"]) == 0
+    capsys.readouterr()
+    assert main(["sessions", "show", "P104", "--json", "--store", store]) == 0
+    (shown,) = json.loads(capsys.readouterr().out)
+    budget = shown["segments"]["upper_arm"]["static_moment_kgm"]["budget"]
+    assert budget == pytest.approx(dict(Estimate.from_json(document).segments["upper_arm"]["static_moment_kgm"].budget))
