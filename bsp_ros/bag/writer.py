@@ -12,13 +12,14 @@ from typing import Any, BinaryIO
 
 import numpy as np
 import numpy.typing as npt
-from mcap.writer import CompressionType, Writer
+from mcap.writer import Writer
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from bsp_ros import __version__
 from bsp_ros.bag.cdr import encode_fixed
 from bsp_ros.bag.errors import BagWriteError
+from bsp_ros.bag.mcap_writer import started_mcap_writer
 from bsp_ros.bag.metadata import (
     METADATA_FILE,
     TopicRecord,
@@ -314,14 +315,7 @@ def _write_mcap(
     topic_all = np.concatenate([np.full(p.log_ns.size, i) for i, p in enumerate(payloads)])
     index_all = np.concatenate([np.arange(p.log_ns.size) for p in payloads])
     order = np.lexsort((index_all, topic_all, log_all))
-    writer = Writer(
-        stream,
-        chunk_size=chunk_bytes,
-        compression=CompressionType.NONE,
-        enable_crcs=True,
-        enable_data_crcs=True,
-    )
-    writer.start(profile="ros2", library=f"bsp_ros {__version__} (mcap python)")
+    writer = started_mcap_writer(stream, chunk_bytes)
     records, channel_ids = _register_channels(writer, payloads, typestore)
     for k, i in zip(topic_all[order].tolist(), index_all[order].tolist(), strict=True):
         payload = payloads[k]

@@ -14,6 +14,7 @@ from typing import Any
 
 from bsp_ros import __version__
 from bsp_ros.bag.errors import BagWriteError
+from bsp_ros.bag.mcap_writer import started_mcap_writer
 from bsp_ros.bag.metadata import METADATA_FILE, TopicRecord, build_metadata, channel_metadata, dump_metadata
 from bsp_ros.errors import DataError, InputError, RuntimeBackendError
 from bsp_ros.live.sensor_topics import is_sensor_topic
@@ -215,7 +216,6 @@ class _Recorder:
     def __init__(
         self, out: Path, domain_id: int | None, chunk_bytes: int, custom_data: Mapping[str, str] | None = None
     ) -> None:
-        from mcap.writer import CompressionType, Writer
         from rosbags.typesys import Stores, get_typestore
 
         from bsp_ros.live.runtime.ros import Client
@@ -228,14 +228,7 @@ class _Recorder:
         self.schemas: dict[str, int] = {}
         # Buffered (the mcap writer would wrap a raw file anyway); :meth:`flush` pushes everything to the OS.
         self.stream = (out / self.mcap_name).open("xb")
-        self.writer = Writer(
-            self.stream,
-            chunk_size=chunk_bytes,
-            compression=CompressionType.NONE,
-            enable_crcs=True,
-            enable_data_crcs=True,
-        )
-        self.writer.start(profile="ros2", library=f"bsp_ros {__version__} recorder (mcap python)")
+        self.writer = started_mcap_writer(self.stream, chunk_bytes, "recorder")
         self.start_ns = 0
         self.end_ns = 0
         self.unflushed = 0

@@ -11,6 +11,7 @@ from typing import Any
 
 from bsp_ros import __version__
 from bsp_ros.bag.errors import BagWriteError
+from bsp_ros.bag.mcap_writer import started_mcap_writer
 from bsp_ros.bag.metadata import (
     METADATA_FILE,
     TopicRecord,
@@ -78,7 +79,6 @@ class SessionSpool:
     """
 
     def __init__(self, out_dir: Path, types: dict[str, str], latched: frozenset[str] = frozenset()) -> None:
-        from mcap.writer import CompressionType, Writer
         from rosbags.typesys import Stores, get_typestore
 
         self.path = Path(out_dir)
@@ -93,14 +93,7 @@ class SessionSpool:
         self._types = dict(types)
         self._latched = latched
         self._typestore = get_typestore(Stores.ROS2_JAZZY)
-        self._writer = Writer(
-            self._stream,
-            chunk_size=CHUNK_BYTES,
-            compression=CompressionType.NONE,
-            enable_crcs=True,
-            enable_data_crcs=True,
-        )
-        self._writer.start(profile="ros2", library=f"bsp_ros {__version__} session_recorder (mcap python)")
+        self._writer = started_mcap_writer(self._stream, CHUNK_BYTES, "session_recorder")
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._records: dict[str, TopicRecord] = {}
