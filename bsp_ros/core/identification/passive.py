@@ -81,6 +81,11 @@ class PassiveModel:
         asks for them with every row)."""
         return tuple(term for term in self.terms if term in TERMS)
 
+    def local_column(self, term: str, n_joints: int, joint: int) -> int:
+        """The stacked problem's column of the local ``term`` of joint ``joint`` (0-based) in a chain of
+        ``n_joints``: after the static moments, each joint's local terms in turn (:func:`build_problem`)."""
+        return n_joints + joint * len(self.local) + self.local.index(term)
+
     @property
     def elastic(self) -> tuple[str, ...]:
         """The elastic terms beyond a linear spring (:data:`ELASTIC_TERMS`)."""

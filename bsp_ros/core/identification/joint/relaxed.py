@@ -51,10 +51,6 @@ def detect_activity(data: IdentificationData, config: JointConfig, residual: np.
     return active_stretches(data.t_ns, data.q_rad, data.velocity_rad_s, residual, floor, config.activity)
 
 
-def _detect(stage: Stage, residual: np.ndarray) -> Activity:
-    return detect_activity(stage.data, stage.config, residual)
-
-
 def _merged(first: Activity, second: Activity) -> Activity:
     """Both sets of stretches (the second found after the first's were left out)."""
     spans = tuple(sorted((*first.spans_s, *second.spans_s)))
@@ -63,10 +59,6 @@ def _merged(first: Activity, second: Activity) -> Activity:
         spans_s=spans,
         peak_nm=np.maximum(first.peak_nm, second.peak_nm),
     )
-
-
-def _finding(stage: Stage, activity: Activity) -> Finding:
-    return activity_finding(stage.data, stage.config, activity)
 
 
 def activity_finding(data: IdentificationData, config: JointConfig, activity: Activity) -> Finding:
@@ -113,7 +105,7 @@ def leave_out_activity(stage: Stage) -> Stage:
     shows the mark of bursts (:func:`_calls_for_activity`)."""
     if not stage.config.check_activity or not _calls_for_activity(stage):
         return stage
-    activity = _detect(stage, stage.fit.residual)
+    activity = detect_activity(stage.data, stage.config, stage.fit.residual)
     if not activity.spans_s:
         return stage
     data, config, samples = stage.data, stage.config, stage.samples
@@ -123,11 +115,11 @@ def leave_out_activity(stage: Stage) -> Stage:
         fit = fit_problem(problem)
         if round_ == ROUNDS - 1:
             break
-        more = _detect(stage, fit.residual)
+        more = detect_activity(data, config, fit.residual)
         if not more.spans_s:
             break
         activity = _merged(activity, more)
-    finding = _finding(stage, activity)
+    finding = activity_finding(data, config, activity)
     if finding.code is FindingCode.TOO_LITTLE_RELAXED or (rows.sum(axis=0) < len(problem.names)).any():
         return stage.apply(Outcome(problems=(finding,)))
     kept = dataclasses.replace(samples, rows=rows, problem=problem)

@@ -142,9 +142,8 @@ def add_friction_shape(stage: Stage) -> Stage:
     parameter, judged before the placement uncertainty is added."""
     if stage.spread_nm.any():
         term = np.zeros_like(stage.fit.covariance)
-        k = len(stage.config.passive.local)
         for j in range(stage.n):
-            index = stage.n + j * k + stage.config.passive.local.index("coulomb")
+            index = stage.config.passive.local_column("coulomb", stage.n, j)
             term[index, index] = stage.spread_nm[j] ** 2
         stage = stage.apply(Outcome(added=((Term.FRICTION_SHAPE, term),)))
     return dataclasses.replace(stage, prior_share=prior_share(stage.problem, stage.fit.covariance))

@@ -70,14 +70,14 @@ def stribeck_check(
     static moment by more than its std is a bias no std covers."""
     if "coulomb" not in config.passive.terms:
         return []
-    n, k = data.n_joints, len(config.passive.local)
+    n = data.n_joints
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     design, moment, _ = normal_equations(problem, fit.weights)
     notes = []
     for j, joint in enumerate(joints_for(n)):
         if widths[j] > 0:
             continue
-        column = n + j * k + config.passive.local.index("coulomb")
+        column = config.passive.local_column("coulomb", n, j)
         best_speed = _best_stribeck_speed(data, problem, w[:, j], design, moment, j)
         if best_speed == 0.0:
             continue

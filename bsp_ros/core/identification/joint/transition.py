@@ -38,7 +38,6 @@ def transition_widths(
     widths, spread, span = np.zeros(n), np.zeros(n), np.zeros(n)
     if "coulomb" not in config.passive.terms:
         return widths, spread, span
-    k = len(config.passive.local)
     w = np.where(problem.rows, fit.weights[None, :], 0.0)
     design, moment, total = normal_equations(problem, fit.weights)
 
@@ -51,7 +50,7 @@ def transition_widths(
 
     base, base_x = solve(design, moment)
     for j in range(n):
-        column = n + j * k + config.passive.local.index("coulomb")
+        column = config.passive.local_column("coulomb", n, j)
         used = problem.rows[:, j, None]  # the fit's weights are positive: its weighted rows
         (x_j, y_j), w_j = problem.joint_rows(j), w[:, j]  # 0 off the used rows
         # Every candidate width's column at once (N, widths), 0 off the used rows.

@@ -12,6 +12,7 @@ from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
 from bsp_ros.core.identification.joint.tremor import band_stopped, tremor_in
 from bsp_ros.core.identification.ledger import Term
+from bsp_ros.core.identification.rate import identification_rate_hz
 from bsp_ros.core.streams import joints_for
 
 __all__ = ["MIN_DITHER_SHARE", "MIN_TREMOR_NM", "calm_tremor", "dithered_share", "widen_dithered_friction"]
@@ -23,11 +24,6 @@ MIN_TREMOR_NM = 0.005
 # typical speed (the median of its direction-of-motion speed) has its friction dithered: at each instant the
 # tremor, not the slow motion, decides the direction friction acts in.
 MIN_DITHER_SHARE = 0.5
-
-
-def _rate_hz(t_ns: np.ndarray) -> float:
-    step = np.diff(t_ns)
-    return 1e9 / float(np.median(step)) if step.size else 0.0
 
 
 def _findings(
@@ -57,7 +53,7 @@ def calm_tremor(data: IdentificationData, config: JointConfig) -> tuple[Identifi
     """``data`` with tremor (:func:`tremor_in`) taken out of its joint torques (a band stop), and what was found:
     its frequency and size, and where it shook a joint, that the friction shown is the session's. Before the
     samples are chosen: a tremor's swings would otherwise be taken for wrench spikes."""
-    rate_hz = _rate_hz(data.t_ns)
+    rate_hz = identification_rate_hz(data.t_ns)
     torque = tremor_in(data.tau_nm, rate_hz)
     present = torque.present & (torque.rms > MIN_TREMOR_NM)
     if not present.any():
@@ -99,11 +95,10 @@ def widen_dithered_friction(stage: Stage) -> Stage:
     if not dithered or "coulomb" not in stage.config.passive.terms:
         return stage
     term = np.zeros_like(stage.fit.covariance)
-    k = len(stage.config.passive.local)
     joints = list(joints_for(stage.n))
     for finding in dithered:
         j = joints.index(finding.where)
-        index = stage.n + j * k + stage.config.passive.local.index("coulomb")
+        index = stage.config.passive.local_column("coulomb", stage.n, j)
         dither_rad_s = 2.0 * np.pi * float(finding.values["frequency_hz"]) * np.radians(finding.values["angle_deg"])
         rows = stage.samples.rows[:, j]
         share = max(dithered_share(stage.data.velocity_rad_s[rows, j], dither_rad_s), 0.05)
