@@ -11,8 +11,6 @@ import numpy as np
 from mujoco_cell import (
     FRICTION_SOLIMP,
     FRICTION_SOLREF,
-    JOINTS,
-    MARKERS,
     WELD_SOLIMP,
     WELD_SOLREF,
     ArmParams,
@@ -29,7 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from bsp_ros.bag.writer import write_session_bag
 from bsp_ros.core.simulation import GRAVITY_M_S2, PassiveTruth, SessionTruth, SubjectTruth, rotation_from_rpy_deg
-from bsp_ros.core.streams import SEGMENTS_3, MarkerSeries, Session, WrenchSeries
+from bsp_ros.core.streams import MarkerSeries, Session, WrenchSeries, joints_for, markers_for, segments_for
 from msg_adapters import TransformSample
 
 _CURVE_POINTS = 21
@@ -84,7 +82,7 @@ def record(arm: ArmParams, options: CellOptions, run: EngineRun | None = None) -
         known = wrench_world_from_sensor_angle(run, mount)[rows_w]
         quats = Rotation.from_matrix(known).as_quat()
         quats[quats[:, 3] < 0] *= -1.0
-        handle = run.markers_m[rows_w, 3]
+        handle = run.markers_m[rows_w, -1]  # the contact-point marker
         tf_samples = [
             TransformSample(int(t), "world", options.frame_id, handle[i], quats[i]) for i, t in enumerate(t_w)
         ]
@@ -106,7 +104,7 @@ def record(arm: ArmParams, options: CellOptions, run: EngineRun | None = None) -
             position_m=run.markers_m[rows_m, k]
             + options.marker_noise_m * rng_markers.standard_normal((rows_m.size, 3)),
         )
-        for k, name in enumerate(MARKERS)
+        for k, name in enumerate(markers_for(arm.n_segments))
     }
     session = Session(wrench=wrench, markers=markers, rotation_world_from_sensor=np.array(rotation))
     return CellSession(session, tf_samples, truth_dict(arm, options, run), run)
@@ -121,8 +119,10 @@ def truth_dict(arm: ArmParams, options: CellOptions, run: EngineRun) -> dict[str
     damping, ``stiffness_nm_per_rad`` = k and ``offset_nm`` = -k q_ref with ``neutral_rad`` 0 (the spring's
     generalized force on the arm is -k (q - q_ref), so the driver supplies k q - k q_ref), and ``passive_curve``:
     the elastic part k q - k q_ref over the angles the joint took (friction depends on the direction, not the
-    angle). ``simulation`` names the engine and what the run showed (weld drift, inertial/gravity ratio).
+    angle). ``simulation`` names the engine and what the run showed (weld drift, inertial/gravity ratio). A
+    2-segment arm's truth has its 2 segments and joints (no wrist, no hand).
     """
+    n = arm.n_segments
     stiffness = np.asarray(arm.stiffness_nm_per_rad)
     offset = -stiffness * np.asarray(arm.springref_rad)
     truth = SessionTruth(
@@ -131,14 +131,14 @@ def truth_dict(arm: ArmParams, options: CellOptions, run: EngineRun) -> dict[str
             coulomb_nm=arm.frictionloss_nm,
             viscous_nms=arm.damping_nms,
             stiffness_nm_per_rad=tuple(stiffness),
-            neutral_rad=(0.0, 0.0, 0.0),
+            neutral_rad=(0.0,) * n,
             offset_nm=tuple(offset),
         ),
         options.trajectory,
         _simulation(arm, options, run),
     ).to_dict()
     masses = np.asarray(arm.masses_kg)
-    for j, name in enumerate(SEGMENTS_3):
+    for j, name in enumerate(segments_for(n)):
         m, l_along, d = masses[j], arm.com_along_m[j], arm.com_normal_m[j]
         about_joint = arm.inertia_com_kgm2[j] + m * (l_along**2 + d**2)
         truth["segments"][name].update(
@@ -147,7 +147,7 @@ def truth_dict(arm: ArmParams, options: CellOptions, run: EngineRun) -> dict[str
             grouped_inertia_kgm2=float(about_joint + arm.lengths_m[j] ** 2 * masses[j + 1 :].sum()),
             perpendicular_moment_kgm=float(m * d),
         )
-    for j, name in enumerate(JOINTS):
+    for j, name in enumerate(joints_for(n)):
         angles = np.linspace(run.q_rad[:, j].min(), run.q_rad[:, j].max(), _CURVE_POINTS)
         truth["joints"][name]["passive_curve"] = {
             "angle_deg": np.degrees(angles).tolist(),

@@ -1,4 +1,4 @@
-"""An independent physics cell: a planar 3-segment arm in MuJoCo, strapped to a kinematically driven robot handle.
+"""An independent physics cell: a planar 2- or 3-segment arm in MuJoCo, held by a kinematically driven robot handle.
 
 Test support (not part of the installed package): tests and ``bench/physics_engine.py`` import it. The arm's
 masses, COMs, inertias and joint friction, springs and damping live only in the MJCF text built here; the
@@ -8,10 +8,13 @@ value of ``bsp_ros``'s model. ``mujoco_session`` turns a run into a bag (``bsp_r
 
 Frames (docs/contract.md): world x lateral, y anterior, z up; hinges about world +x; all joint angles zero is the
 arm straight along +y, so MuJoCo's hinge angles are docs/contract.md's q1 (absolute), q2, q3 (relative). Each
-segment body's frame has its axis along local +y and its origin at the proximal joint. The hand carries a
-massless body ``hand_contact`` at the contact point, welded to the mocap body ``robot_handle``; the sensor
-site sits on ``hand_contact``, so MuJoCo's ``cfrc_int`` of that body is the wrench the hand assembly exerts
-on the handle (checked by the statics test to 1e-9 Nm).
+segment body's frame has its axis along local +y and its origin at the proximal joint. The last segment carries a
+massless body ``hand_contact`` at the contact point, held by the mocap body ``robot_handle``; the sensor site sits
+on ``hand_contact``, so MuJoCo's ``cfrc_int`` of that body is the wrench the arm exerts on the handle (checked by
+the statics tests to 1e-9 Nm). A 3-segment arm (upper arm, forearm, hand) is strapped at the hand: a ``weld``,
+which transmits M_x. A 2-segment chain (upper arm, forearm: the method paper's mechanical arm) is coupled through a
+bearing, as the paper's arm was ("a screw attached to a bearing"): a ``connect``, which transmits no moment; it
+has no wrist and no wrist marker (docs/contract.md).
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from bsp_ros.core.simulation import (
     rotation_from_rpy_deg,
 )
 from bsp_ros.core.streams import SEGMENTS_3 as SEGMENTS
+from bsp_ros.core.streams import joints_for, markers_for
 
 JOINTS = ("shoulder", "elbow", "wrist")
 MARKERS = ("shoulder", "elbow", "wrist", "hand")
@@ -52,30 +56,61 @@ WELD_SOLIMP = "0.99 0.999 0.001"
 
 @dataclass(frozen=True)
 class ArmParams:
-    """The simulated subject: per segment (upper arm, forearm, hand) and per joint (shoulder, elbow, wrist).
+    """The simulated subject: per segment (upper arm, forearm[, hand]) and per joint (shoulder, elbow[, wrist]).
+
+    ``n`` = ``len(lengths_m)``, 2 or 3; every tuple has one value per segment (joint). The defaults are a 3-segment
+    arm's: a 2-segment arm gives every field (``mujoco_mechanical.mechanical_arm`` does).
 
     Attributes
     ----------
-    lengths_m : (3,) a_j, m (the hand: wrist -> contact point).
-    masses_kg : (3,) m_j, kg.
-    com_along_m : (3,) l_j, COM distance from the proximal joint along the segment axis, m.
-    com_normal_m : (3,) COM offset normal to the axis, m (+ toward 90 deg counter-clockwise, i.e. local +z).
-    inertia_com_kgm2 : (3,) moment of inertia about the COM for rotation about x, kg m^2.
-    frictionloss_nm : (3,) dry friction c_j, Nm (MuJoCo ``frictionloss``).
-    damping_nms : (3,) viscous b_j, Nm s/rad (MuJoCo ``damping``).
-    stiffness_nm_per_rad : (3,) k_j, Nm/rad (MuJoCo ``stiffness``).
-    springref_rad : (3,) q_ref,j, rad (MuJoCo ``springref``): the spring's generalized force is -k (q - q_ref).
+    lengths_m : (n,) a_j, m (the last segment: its joint -> contact point).
+    masses_kg : (n,) m_j, kg.
+    com_along_m : (n,) l_j, COM distance from the proximal joint along the segment axis, m.
+    com_normal_m : (n,) COM offset normal to the axis, m (+ toward 90 deg counter-clockwise, i.e. local +z).
+    inertia_com_kgm2 : (n,) moment of inertia about the COM for rotation about x, kg m^2.
+    frictionloss_nm : (n,) dry friction c_j, Nm (MuJoCo ``frictionloss``).
+    damping_nms : (n,) viscous b_j, Nm s/rad (MuJoCo ``damping``).
+    stiffness_nm_per_rad : (n,) k_j, Nm/rad (MuJoCo ``stiffness``).
+    springref_rad : (n,) q_ref,j, rad (MuJoCo ``springref``): the spring's generalized force is -k (q - q_ref).
+
+    Raises
+    ------
+    ValueError
+        If ``lengths_m`` has neither 2 nor 3 values, or another field has a different count.
     """
 
-    lengths_m: tuple[float, float, float]
-    masses_kg: tuple[float, float, float]
-    com_along_m: tuple[float, float, float]
-    com_normal_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    inertia_com_kgm2: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    frictionloss_nm: tuple[float, float, float] = PAPER_COULOMB_NM
-    damping_nms: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    stiffness_nm_per_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    springref_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    lengths_m: tuple[float, ...]
+    masses_kg: tuple[float, ...]
+    com_along_m: tuple[float, ...]
+    com_normal_m: tuple[float, ...] = (0.0, 0.0, 0.0)
+    inertia_com_kgm2: tuple[float, ...] = (0.0, 0.0, 0.0)
+    frictionloss_nm: tuple[float, ...] = PAPER_COULOMB_NM
+    damping_nms: tuple[float, ...] = (0.0, 0.0, 0.0)
+    stiffness_nm_per_rad: tuple[float, ...] = (0.0, 0.0, 0.0)
+    springref_rad: tuple[float, ...] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        n = len(self.lengths_m)
+        if n not in (2, 3):
+            raise ValueError(f"lengths_m needs 2 or 3 segments, got {n}")
+        for name in (
+            "masses_kg",
+            "com_along_m",
+            "com_normal_m",
+            "inertia_com_kgm2",
+            "frictionloss_nm",
+            "damping_nms",
+            "stiffness_nm_per_rad",
+            "springref_rad",
+        ):
+            count = len(getattr(self, name))
+            if count != n:
+                raise ValueError(f"{name} has {count} values, lengths_m has {n}: give one per segment")
+
+    @property
+    def n_segments(self) -> int:
+        """2 (upper arm, forearm) or 3 (with the hand)."""
+        return len(self.lengths_m)
 
 
 def draw_arm(
@@ -145,8 +180,9 @@ class CellOptions:
         flange: the handle's pitch then ``mount_rpy_deg``, published per wrench sample on ``/tf``).
     force_noise_n, torque_noise_nm : white Gaussian noise per sensor axis (1 sd).
     marker_noise_m : white Gaussian marker noise per world axis (1 sd).
-    skin_offset_m : 4 ``(along, normal)`` marker offsets from the joint centres (CONTRACT: fixed in the
-        segment starting at that joint, the hand marker in the hand), m; empty: on the centres.
+    skin_offset_m : one ``(along, normal)`` marker offset per marker (4 for a 3-segment arm, 3 for a 2-segment
+        one: shoulder, elbow, hand) from the joint centres (CONTRACT: fixed in the segment starting at that joint,
+        the contact-point marker in the last segment), m; empty: on the centres.
     trunk_tilt_rad : the trunk (the shoulder joint's parent body) turned about world x by this much, rad: the
         shoulder hinge, its spring and ``trajectory`` are relative to the trunk, gravity stays world -z.
     """
@@ -177,8 +213,9 @@ class CellOptions:
             raise ValueError(f"wrench_hz must be at most 1000 Hz, got {self.wrench_hz!r}")
         for name in ("wrench_hz", "marker_hz"):
             _stride(getattr(self, name), self.timestep_s, name)
-        if self.skin_offset_m and len(self.skin_offset_m) != 4:
-            raise ValueError(f"skin_offset_m needs 4 (along, normal) pairs, got {len(self.skin_offset_m)}")
+        if self.skin_offset_m and len(self.skin_offset_m) not in (3, 4):
+            count = len(self.skin_offset_m)
+            raise ValueError(f"skin_offset_m needs 3 or 4 (along, normal) pairs (one per marker), got {count}")
 
 
 def _stride(rate_hz: float, timestep_s: float, name: str) -> int:
@@ -194,33 +231,23 @@ def _quat_wxyz(rotation: np.ndarray) -> str:
 
 
 def mjcf_text(arm: ArmParams, options: CellOptions) -> str:
-    """The MJCF of the cell: the arm (3 hinges about world x), the hand's contact body, the robot's mocap handle."""
+    """The MJCF of the cell: the arm (2 or 3 hinges about world x), its contact body, the robot's mocap handle.
+
+    Raises
+    ------
+    ValueError
+        If ``options.skin_offset_m`` does not give one pair per marker of ``arm``'s chain.
+    """
+    n = arm.n_segments
+    if options.skin_offset_m and len(options.skin_offset_m) != n + 1:
+        count = len(options.skin_offset_m)
+        raise ValueError(f"skin_offset_m has {count} (along, normal) pairs, a {n}-segment arm has {n + 1} markers")
     sy, sz = options.shoulder_m[1], options.shoulder_m[2]
-    mount = _quat_wxyz(rotation_from_rpy_deg(*options.mount_rpy_deg))
     half = options.trunk_tilt_rad / 2.0
     trunk = f"{np.cos(half):.17g} {np.sin(half):.17g} 0 0"  # about world x
-    offsets = options.skin_offset_m or ((0.0, 0.0),) * 4
-    a1, a2, a3 = arm.lengths_m
-
-    def joint(j: int) -> str:
-        return (
-            f'<joint name="{JOINTS[j]}" type="hinge" axis="1 0 0" pos="0 0 0" limited="false" '
-            f'frictionloss="{arm.frictionloss_nm[j]:.17g}" damping="{arm.damping_nms[j]:.17g}" '
-            f'stiffness="{arm.stiffness_nm_per_rad[j]:.17g}" springref="{arm.springref_rad[j]:.17g}" '
-            f'solreffriction="{FRICTION_SOLREF}" solimpfriction="{FRICTION_SOLIMP}"/>'
-        )
-
-    def inertial(j: int) -> str:
-        i_com = arm.inertia_com_kgm2[j]
-        return (
-            f'<inertial pos="0 {arm.com_along_m[j]:.17g} {arm.com_normal_m[j]:.17g}" mass="{arm.masses_kg[j]:.17g}" '
-            f'diaginertia="{i_com:.17g} {0.1 * i_com:.17g} {i_com:.17g}"/>'
-        )
-
-    def marker(k: int, base_along: float = 0.0) -> str:
-        along, normal = offsets[k]
-        return f'<site name="marker_{MARKERS[k]}" pos="0 {base_along + along:.17g} {normal:.17g}"/>'
-
+    handle_y = sy
+    for a in arm.lengths_m:  # in the chain's order, the sum's rounding that of sy + a1 + a2 + a3
+        handle_y += a
     return f"""<mujoco model="planar_arm_cell">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{options.timestep_s:.17g}" gravity="0 0 {-GRAVITY_M_S2:.17g}" integrator="Euler"
@@ -229,31 +256,12 @@ def mjcf_text(arm: ArmParams, options: CellOptions) -> str:
   </option>
   <worldbody>
     <body name="trunk" pos="{options.shoulder_m[0]:.17g} {sy:.17g} {sz:.17g}" quat="{trunk}">
-    <body name="upper_arm" pos="0 0 0">
-      {joint(0)}
-      {inertial(0)}
-      {marker(0)}
-      <body name="forearm" pos="0 {a1:.17g} 0">
-        {joint(1)}
-        {inertial(1)}
-        {marker(1)}
-        <body name="hand" pos="0 {a2:.17g} 0">
-          {joint(2)}
-          {inertial(2)}
-          {marker(2)}
-          {marker(3, a3)}
-          <body name="hand_contact" pos="0 {a3:.17g} 0">
-            <site name="ft_site" pos="0 0 0" quat="{mount}"/>
-          </body>
-        </body>
-      </body>
+{_chain_text(arm, options)}
     </body>
-    </body>
-    <body name="robot_handle" mocap="true" pos="{options.shoulder_m[0]:.17g} {sy + a1 + a2 + a3:.17g} {sz:.17g}"/>
+    <body name="robot_handle" mocap="true" pos="{options.shoulder_m[0]:.17g} {handle_y:.17g} {sz:.17g}"/>
   </worldbody>
   <equality>
-    <weld name="strap" body1="hand_contact" body2="robot_handle" relpose="0 0 0 1 0 0 0"
-          solref="{WELD_SOLREF}" solimp="{WELD_SOLIMP}"/>
+    {_strap_text(n)}
   </equality>
   <sensor>
     <force name="ft_force" site="ft_site"/>
@@ -263,6 +271,60 @@ def mjcf_text(arm: ArmParams, options: CellOptions) -> str:
 """
 
 
+def _chain_text(arm: ArmParams, options: CellOptions) -> str:
+    """The nested segment bodies (each with its hinge, inertial and marker site), the last one carrying the contact."""
+    n = arm.n_segments
+    markers = markers_for(n)
+    offsets = options.skin_offset_m or ((0.0, 0.0),) * (n + 1)
+    mount = _quat_wxyz(rotation_from_rpy_deg(*options.mount_rpy_deg))
+
+    def marker(k: int, base_along: float = 0.0) -> str:
+        along, normal = offsets[k]
+        return f'<site name="marker_{markers[k]}" pos="0 {base_along + along:.17g} {normal:.17g}"/>'
+
+    opening: list[str] = []
+    for j in range(n):
+        outer, inner = " " * (4 + 2 * j), " " * (6 + 2 * j)
+        pos = "0 0 0" if j == 0 else f"0 {arm.lengths_m[j - 1]:.17g} 0"
+        body = [f'{outer}<body name="{SEGMENTS[j]}" pos="{pos}">', *(inner + t for t in _segment_text(arm, j))]
+        body.append(inner + marker(j))
+        opening.extend(body)
+    last, inner = arm.lengths_m[-1], " " * (4 + 2 * n)
+    opening += [
+        inner + marker(n, last),
+        f'{inner}<body name="hand_contact" pos="0 {last:.17g} 0">',
+        f'{inner}  <site name="ft_site" pos="0 0 0" quat="{mount}"/>',
+        f"{inner}</body>",
+    ]
+    closing = [" " * (4 + 2 * j) + "</body>" for j in reversed(range(n))]
+    return "\n".join(opening + closing)
+
+
+def _segment_text(arm: ArmParams, j: int) -> tuple[str, str]:
+    """Segment ``j``'s hinge and inertial elements."""
+    joint = (
+        f'<joint name="{JOINTS[j]}" type="hinge" axis="1 0 0" pos="0 0 0" limited="false" '
+        f'frictionloss="{arm.frictionloss_nm[j]:.17g}" damping="{arm.damping_nms[j]:.17g}" '
+        f'stiffness="{arm.stiffness_nm_per_rad[j]:.17g}" springref="{arm.springref_rad[j]:.17g}" '
+        f'solreffriction="{FRICTION_SOLREF}" solimpfriction="{FRICTION_SOLIMP}"/>'
+    )
+    i_com = arm.inertia_com_kgm2[j]
+    inertial = (
+        f'<inertial pos="0 {arm.com_along_m[j]:.17g} {arm.com_normal_m[j]:.17g}" mass="{arm.masses_kg[j]:.17g}" '
+        f'diaginertia="{i_com:.17g} {0.1 * i_com:.17g} {i_com:.17g}"/>'
+    )
+    return joint, inertial
+
+
+def _strap_text(n_segments: int) -> str:
+    """How the handle holds the contact body: a weld (hand strapped, M_x carried) or, for 2 segments, a bearing."""
+    kind, pose = ("weld", 'relpose="0 0 0 1 0 0 0"') if n_segments == 3 else ("connect", 'anchor="0 0 0"')
+    return (
+        f'<{kind} name="strap" body1="hand_contact" body2="robot_handle" {pose}\n'
+        f'          solref="{WELD_SOLREF}" solimp="{WELD_SOLIMP}"/>'
+    )
+
+
 @dataclass
 class EngineRun:
     """What MuJoCo computed at every recorded step (t >= 0), before any sensor or marker noise.
@@ -270,12 +332,13 @@ class EngineRun:
     Attributes
     ----------
     t_s : (N,) step times since the session start, s.
-    q_rad, qdot_rad_s, qddot_rad_s2 : (N, 3) the arm's joint state in the engine (not the command).
-    q_command_rad : (N, 3) the joint angles the robot imposed through the handle.
+    q_rad, qdot_rad_s, qddot_rad_s2 : (N, n) the arm's joint state in the engine (not the command), n segments.
+    q_command_rad : (N, n) the joint angles the robot imposed through the handle.
     force_site_n, torque_site_nm : (N, 3) the engine's sensors in the sensor site's axes (the mount).
     rotation_world_from_site : (N, 3, 3) the site's orientation in world (engine).
-    markers_m : (N, 4, 3) marker site positions in world (shoulder, elbow, wrist, hand).
-    weld_drift_m, weld_drift_rad : (N,) distance and pitch difference between the hand's contact body and the handle.
+    markers_m : (N, n + 1, 3) marker site positions in world (``markers_for(n)``: shoulder, elbow, [wrist,] hand).
+    weld_drift_m, weld_drift_rad : (N,) distance and pitch difference between the contact body and the handle (a
+        2-segment chain's bearing leaves the pitch free: its difference is the forearm's tracking error).
     """
 
     t_s: np.ndarray
@@ -305,14 +368,15 @@ class EngineRun:
         return float(max(np.abs(force[:, 0]).max(), np.abs(torque[:, 1:]).max()))
 
     def torque_split_nm(self, every: int = 10) -> tuple[np.ndarray, np.ndarray]:
-        """(gravity, inertial) joint torques from MuJoCo's RNE on every ``every``-th step: (K, 3) each, Nm.
+        """(gravity, inertial) joint torques from MuJoCo's RNE on every ``every``-th step: (K, n) each, Nm.
 
         Gravity is ``rne(q, 0, 0)``; inertial is ``rne(q, qdot, qddot) - rne(q, 0, 0)`` (M qddot + Coriolis).
         """
         data = mujoco.MjData(self.model)
         rows = range(0, self.t_s.size, every)
-        gravity, inertial = np.zeros((len(rows), 3)), np.zeros((len(rows), 3))
-        full, static = np.zeros(3), np.zeros(3)
+        nv = self.model.nv
+        gravity, inertial = np.zeros((len(rows), nv)), np.zeros((len(rows), nv))
+        full, static = np.zeros(nv), np.zeros(nv)
         for i, k in enumerate(rows):
             data.qpos[:] = self.q_rad[k]
             data.qvel[:] = 0.0
@@ -329,7 +393,7 @@ class EngineRun:
 
 
 def _handle_poses(q: np.ndarray, lengths: Sequence[float], shoulder: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
-    """Mocap positions (N, 3) and quaternions (N, 4, wxyz) of the handle for joint angles (N, 3)."""
+    """Mocap positions (N, 3) and quaternions (N, 4, wxyz) of the handle for joint angles (N, n), lengths (n,)."""
     phi = np.cumsum(q, axis=1)
     y = shoulder[1] + (np.asarray(lengths) * np.cos(phi)).sum(axis=1)
     z = shoulder[2] + (np.asarray(lengths) * np.sin(phi)).sum(axis=1)
@@ -374,10 +438,11 @@ def run_engine(arm: ArmParams, options: CellOptions, hook: EngineHook | None = N
 
     site = model.site("ft_site").id
     contact = model.body("hand_contact").id
-    marker_ids = [model.site(f"marker_{name}").id for name in MARKERS]
-    q = np.empty((n_rec, 3))
-    qdot, qddot, sensor = np.empty((n_rec, 3)), np.empty((n_rec, 3)), np.empty((n_rec, 6))
-    rot, markers = np.empty((n_rec, 3, 3)), np.empty((n_rec, 4, 3))
+    n = arm.n_segments
+    marker_ids = [model.site(f"marker_{name}").id for name in markers_for(n)]
+    q = np.empty((n_rec, n))
+    qdot, qddot, sensor = np.empty((n_rec, n)), np.empty((n_rec, n)), np.empty((n_rec, 6))
+    rot, markers = np.empty((n_rec, 3, 3)), np.empty((n_rec, n + 1, 3))
     drift_m, contact_quat = np.empty(n_rec), np.empty((n_rec, 4))
     for k in range(n_lead + n_rec):
         data.mocap_pos[0] = pos[k]
@@ -419,15 +484,16 @@ def inertial_ratio(run: EngineRun) -> dict[str, dict[str, float]]:
     gravity, inertial = run.torque_split_nm()
     rms = np.sqrt((inertial**2).mean(axis=0)) / np.sqrt((gravity**2).mean(axis=0))
     peak = np.abs(inertial).max(axis=0) / np.abs(gravity).max(axis=0)
+    joints = joints_for(run.q_rad.shape[1])
     return {
-        "rms": {name: float(r) for name, r in zip(JOINTS, rms, strict=True)},
-        "peak": {name: float(r) for name, r in zip(JOINTS, peak, strict=True)},
+        "rms": {name: float(r) for name, r in zip(joints, rms, strict=True)},
+        "peak": {name: float(r) for name, r in zip(joints, peak, strict=True)},
     }
 
 
-def peak_speed(run: EngineRun) -> tuple[float, float, float]:
-    """(3,) the largest |qdot| each joint reached in the engine, rad/s."""
-    return _triple(np.abs(run.qdot_rad_s).max(axis=0))
+def peak_speed(run: EngineRun) -> tuple[float, ...]:
+    """(n,) the largest |qdot| each joint reached in the engine, rad/s."""
+    return tuple(float(v) for v in np.abs(run.qdot_rad_s).max(axis=0))
 
 
 def degrees_range(run: EngineRun) -> list[tuple[float, float]]:
