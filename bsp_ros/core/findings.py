@@ -99,6 +99,7 @@ class FindingCode(StrEnum):
     PARAMETER_AT_BOUND = "parameter_at_bound"
     FRICTION_SPEED_DEPENDENT = "friction_speed_dependent"
     PLACEMENT_WIDER = "placement_wider"
+    GRIP_COMPLIANT = "grip_compliant"
     ELASTIC_FAMILY_CHOSEN = "elastic_family_chosen"
     HELD_FROM_CHECK = "held_from_check"
     FUSION_FAILED = "fusion_failed"

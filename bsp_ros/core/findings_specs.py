@@ -52,6 +52,17 @@ def _misfit(f: Finding) -> str:
     )
 
 
+def _grip(f: Finding) -> str:
+    v = f.values
+    joints = f"; {v['n_joints']} joints stuck" if v["n_joints"] > 1 else ""
+    return (
+        f"the hand gave in the strap: the {f.where} stood still for {v['stick_s']:.1f} s at a time, "
+        f"{v['dwell_ratio']:.1f} times as long as a turn of the movement takes ({v['stuck_percent']:.0f} % of the "
+        f"session{joints}), until the strap had loaded it past its friction; those stretches were left out of the "
+        "friction fit"
+    )
+
+
 def _family_chosen(f: Finding) -> str:
     v = f.values
     where = "; ".join(
@@ -430,6 +441,13 @@ SPECS: dict[FindingCode, FindingSpec] = {
     C.FRICTION_SPEED_DEPENDENT: FindingSpec(NOTE, _stribeck),
     C.PLACEMENT_WIDER: FindingSpec(
         NOTE, _placement, "the markers sat further off the joints than assumed", "check that the markers sit firmly"
+    ),
+    C.GRIP_COMPLIANT: FindingSpec(
+        NOTE,
+        _grip,
+        "the hand gave in the strap, so a joint stuck where the movement turned",
+        "tighten the strap (a firm pad under the palm) so that the hand follows the handle, and record again if a "
+        "joint keeps sticking",
     ),
     C.ELASTIC_FAMILY_CHOSEN: FindingSpec(NOTE, _family_chosen),
     C.HELD_FROM_CHECK: FindingSpec(

@@ -99,6 +99,7 @@ SAMPLE_VALUES: dict[FindingCode, dict[str, object]] = {
         "coulomb_sd": 0.8,
     },
     FindingCode.PLACEMENT_WIDER: {"assumed_mm": 2.0, "apparent_mm": 6.0, "at_limit": False},
+    FindingCode.GRIP_COMPLIANT: {"stick_s": 3.2, "stuck_percent": 38.0, "dwell_ratio": 4.4, "n_joints": 2},
     FindingCode.ELASTIC_FAMILY_CHOSEN: {
         "model": "coulomb",
         "joints": ["wrist"],

@@ -10,6 +10,14 @@ from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.streams import joints_for
 
 
+def deadband_rad_s(data: IdentificationData, config: JointConfig) -> np.ndarray:
+    """(n,) each joint's direction dead band, rad/s: below it the sign of the direction velocity is not trusted
+    (``deadband_fraction`` of the typical speed, the 95th percentile, or ``deadband_noise_sd`` times its noise)."""
+    typical = np.percentile(np.abs(data.velocity_rad_s), 95, axis=0)
+    noise = np.nan_to_num(data.velocity_noise_rad_s, nan=0.0)
+    return np.asarray(np.maximum(config.deadband_fraction * typical, config.deadband_noise_sd * noise))
+
+
 def motion_rows(data: IdentificationData, config: JointConfig) -> tuple[np.ndarray, list[Finding]]:
     """Rows with a trustworthy direction of motion (all rows when the model has no Coulomb term)."""
     speed = np.abs(data.velocity_rad_s)
@@ -17,7 +25,7 @@ def motion_rows(data: IdentificationData, config: JointConfig) -> tuple[np.ndarr
         return np.ones_like(speed, dtype=bool), []
     typical = np.percentile(speed, 95, axis=0)
     noise = np.nan_to_num(data.velocity_noise_rad_s, nan=0.0)
-    deadband = np.maximum(config.deadband_fraction * typical, config.deadband_noise_sd * noise)
+    deadband = deadband_rad_s(data, config)
     notes = []
     for j, joint in enumerate(joints_for(data.n_joints)):
         if noise[j] > 0 and config.deadband_noise_sd * noise[j] > 0.5 * typical[j]:

@@ -16,6 +16,7 @@ from bsp_ros.core.identification.joint.checks import (
     check_stribeck,
 )
 from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.identification.joint.grip import direction_share, keep_out_sticks
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.joint.judgement import (
     UNIDENTIFIABLE_CONDITION,
@@ -60,7 +61,8 @@ def _direction_rows(stage: Stage) -> Stage:
         return stage
     problems = []
     for j, joint in enumerate(joints_for(stage.n)):
-        share = stage.samples.rows[:, j].sum() / max(stage.samples.usable, 1)
+        stuck = None if stage.stuck is None else stage.stuck[:, j]
+        share = direction_share(stage.samples.rows[:, j], stage.samples.usable, stuck)
         if share < stage.config.min_row_share:
             values = {"share_percent": float(100 * share)}
             problems.append(Finding(code=FindingCode.DIRECTION_UNCLEAR, where=joint, values=values))
@@ -70,6 +72,7 @@ def _direction_rows(stage: Stage) -> Stage:
 # The identification, step by step: fits and the covariance terms they leave open, the verdict on the fit, then
 # the model checks (what the model lacks; a live window runs them on some updates only).
 STEPS: tuple[Step, ...] = (
+    keep_out_sticks,
     _direction_rows,
     follow_the_hand,
     leave_out_activity,

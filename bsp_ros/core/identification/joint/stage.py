@@ -83,6 +83,7 @@ class Stage:
     placement_check : what the data say of the markers' placement, or None.
     slip_alternatives : (N, n) torques under other plausible estimates of a slipping hand's travel, whose fits
         bound what following it leaves open (none without a slip).
+    stuck : (N, n) the samples each joint stuck in a compliant grip, kept out of its rows (``grip.py``), or None.
     """
 
     data: IdentificationData
@@ -118,6 +119,7 @@ class Stage:
     with_springs: Problem | None = None
     placement_check: PlacementScale | None = None
     slip_alternatives: tuple[np.ndarray, ...] = ()
+    stuck: np.ndarray | None = None
 
     @property
     def n(self) -> int:
