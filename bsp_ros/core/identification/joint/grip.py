@@ -97,6 +97,21 @@ def _half_period_s(t_s: np.ndarray, velocity: np.ndarray, moving: np.ndarray) ->
     return float(np.median(np.diff(at)))
 
 
+def _turn_ratio(t_s: np.ndarray, speed: np.ndarray, deadband: float, starts: np.ndarray, ends: np.ndarray) -> float:
+    """Median, over a joint's still stretches, of their duration over a smooth turn's at the acceleration the joint
+    shows beside them: the speed half a stretch's length before and after it, less the dead band, over that time.
+    Near 1 for any smooth motion (a sine, a sum of sines, a plan), well above it where the joint stood still and
+    then caught up."""
+    ratios = []
+    for start, end in zip(starts, ends, strict=True):
+        begin_s, end_s = t_s[start], t_s[end - 1]
+        reach_s = max(0.5 * (end_s - begin_s), 1e-3)
+        beside = np.interp([begin_s - reach_s, end_s + reach_s], t_s, speed)
+        acceleration = max(float(beside.mean()) - deadband, 0.0) / reach_s
+        ratios.append((end_s - begin_s) * acceleration / (2.0 * deadband))
+    return float(np.median(ratios)) if ratios else float("nan")
+
+
 def find_sticks(t_ns: np.ndarray, velocity_rad_s: np.ndarray, deadband_rad_s: np.ndarray) -> Sticks:
     """The joints' sticks from their direction velocities.
 
@@ -111,7 +126,9 @@ def find_sticks(t_ns: np.ndarray, velocity_rad_s: np.ndarray, deadband_rad_s: np
     Sticks; a joint sticks where the median of its complete still stretches (neither at the session's start nor
     end; at least :data:`MIN_STRETCHES`) lasts :data:`MIN_DWELL_RATIO` times a smooth turn's, ``2 d T / (pi V)``
     (dead band ``d``, median half period ``T`` between its turns, typical speed ``V`` the 95th percentile), and its
-    sticks are those of its still stretches that last that long.
+    sticks are those of its still stretches that last that long. None sticks unless some joint's stretches also
+    last that long against the acceleration it shows beside them (:func:`_turn_ratio`): the sine's turn above is
+    too short for a sum of sines (a two-sine plan reads 2.0-2.5 on it, 0.9 on this).
     """
     t_s = (t_ns - t_ns[0]) * 1e-9
     n_samples, n = velocity_rad_s.shape
@@ -120,6 +137,7 @@ def find_sticks(t_ns: np.ndarray, velocity_rad_s: np.ndarray, deadband_rad_s: np
     ratio, stick_s, share = np.full(n, np.nan), np.zeros(n), np.zeros(n)
     margin = round(STICK_MARGIN_S / step_s) if step_s > 0 else 0
     speed = np.abs(velocity_rad_s)
+    turn = np.full(n, np.nan)
     for j in range(n):
         still = speed[:, j] <= deadband_rad_s[j]
         half_s = _half_period_s(t_s, velocity_rad_s[:, j], ~still)
@@ -131,6 +149,7 @@ def find_sticks(t_ns: np.ndarray, velocity_rad_s: np.ndarray, deadband_rad_s: np
         smooth_s = 2.0 * deadband_rad_s[j] * half_s / (np.pi * typical)
         dwell = (ends - starts) * step_s / smooth_s
         ratio[j] = float(np.median(dwell[inside]))
+        turn[j] = _turn_ratio(t_s, speed[:, j], float(deadband_rad_s[j]), starts[inside], ends[inside])
         if ratio[j] < MIN_DWELL_RATIO:
             continue
         sticks = inside & (dwell >= MIN_DWELL_RATIO)
@@ -138,6 +157,8 @@ def find_sticks(t_ns: np.ndarray, velocity_rad_s: np.ndarray, deadband_rad_s: np
         share[j] = float((ends[sticks] - starts[sticks]).sum()) / n_samples
         for start, end in zip(starts[sticks], ends[sticks], strict=True):
             stuck[max(start - margin, 0) : end + margin, j] = True
+    if not (turn >= MIN_DWELL_RATIO).any():
+        stuck[:], stick_s[:], share[:] = False, 0.0, 0.0
     return Sticks(stuck=stuck, dwell_ratio=ratio, stick_s=stick_s, stuck_share=share)
 
 

@@ -121,3 +121,23 @@ def test_too_little_left_beside_the_sticks_is_judged_on_the_whole_session() -> N
     assert direction_share(rows, 100, None) == pytest.approx(0.3)
     rows[20:30] = False  # 20 % of the session: too little, stuck or not
     assert 0.2 < MIN_MOVING_SHARE and direction_share(rows, 100, stuck) == pytest.approx(0.2)
+
+
+def test_smooth_motions_do_not_stick_and_a_stick_slip_does() -> None:
+    t_s = np.arange(0.0, 120.0, 0.01)
+    t_ns = (t_s * 1e9).astype(np.int64)
+    w1, w2 = 2 * np.pi / 20.0, 2 * np.pi / 7.0
+    sine = 0.03 * np.cos(w1 * t_s)
+    two_sines = 0.03 * np.cos(w1 * t_s) + 0.02 * np.cos(w2 * t_s + 0.7)
+    # The sine's motion held still for 2 s after each turn, then caught up at three times the speed.
+    held = sine.copy()
+    for turn_s in np.arange(5.0, 120.0, 10.0):
+        still = (t_s >= turn_s) & (t_s < turn_s + 2.0)
+        catch = (t_s >= turn_s + 2.0) & (t_s < turn_s + 3.0)
+        missed = sine[still].sum()
+        held[still] = 0.0
+        held[catch] += missed / catch.sum()
+    for velocity, sticks in ((sine, False), (two_sines, False), (held, True)):
+        v = velocity[:, None]
+        found = find_sticks(t_ns, v, 0.1 * np.percentile(np.abs(v), 95, axis=0))
+        assert bool(found.sticking[0]) is sticks and bool(found.stuck.any()) is sticks
