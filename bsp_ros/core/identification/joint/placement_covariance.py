@@ -60,8 +60,14 @@ def offset_columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: n
 
 
 def averaged_torques(data: IdentificationData) -> np.ndarray:
-    """(N, n) the measured torques, each the centred mean of the samples within :data:`AVERAGE_S` (fewer at a
-    recording's ends): the noise of one sample weighs 1/k in it."""
+    """(N, n) the measured torques, each the centred mean of the OTHER samples within :data:`AVERAGE_S` (fewer at
+    a recording's ends).
+
+    A sample is left out of its own mean: with it, its noise weighs 1/k in the column and correlates with the same
+    noise in the residual. Along an offset no data can tell from the parameters (every marker moved along the
+    chain scales every torque, as the static moments do) the column's only part the parameters do not explain is
+    that averaged noise, and the fit then reads the chain as twice its length: a 2-segment arm with its markers
+    on the joint centres came out 30 cm off in that direction, the placement 10 times the assumed one."""
     tau = np.asarray(data.tau_nm, dtype=np.float64)
     if tau.shape[0] < 3:
         return tau
@@ -77,7 +83,9 @@ def averaged_torques(data: IdentificationData) -> np.ndarray:
         sums = np.concatenate((np.zeros((1, part.shape[1])), np.cumsum(part, axis=0)))
         k = np.arange(part.shape[0])
         lo, hi = np.maximum(k - half, 0), np.minimum(k + half + 1, part.shape[0])
-        out[start:stop] = (sums[hi] - sums[lo]) / (hi - lo)[:, None]
+        count = (hi - lo - 1)[:, None]
+        others = sums[hi] - sums[lo] - part
+        out[start:stop] = np.where(count > 0, others / np.maximum(count, 1), part)
     return out
 
 

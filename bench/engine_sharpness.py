@@ -1,0 +1,325 @@
+"""Honest and sharp on a physics engine: one MuJoCo arm, markers re-placed every session, a tared sensor.
+
+Usage: ``python bench/engine_sharpness.py [--arms 0 1] [--sessions 8] [--protocols paper fast plan mechanical]
+[--sd-mm 2] [--duration 120] [--wrench-hz 1000] [--json OUT]`` (with the worktree first on PYTHONPATH).
+
+Per protocol and arm, the MuJoCo cell (``test/physics/mujoco_cell.py``) runs once; every session then re-places
+the markers (each marker's (along, normal) offset from its joint centre drawn at ``--sd-mm`` per in-plane axis, the
+same sd the estimator assumes, ``--marker-placement-sd-mm``) and draws its own sensor and marker noise, and goes
+through ``bsp identify BAG --zero-sd-n 0 --zero-sd-nm 0`` (a tared sensor: the engine's sensor has no zero
+offset). The arm's physics does not depend on where the skin markers sit (massless sites), so one engine run per
+arm serves its sessions: the markers are moved by the planar kinematics of the engine's own joint angles.
+
+Protocols: ``paper`` (the paper's sines of ``human_arm_cell()``, shoulder peak 0.03 rad/s), ``fast`` (the same
+sines four times faster), ``plan`` (a ``bsp plan`` trajectory: ``--plan FILE``, else the default request written
+to a temporary file), ``mechanical`` (the paper's 2-segment mechanical arm of ``test/physics/mujoco_mechanical.py``
+on its sines; arm 0 the nominal arm, others a seeded manufacturing spread; scored on the quantities from the data
+alone, as the masses and centres of mass ``bsp identify`` fuses with the human anthropometric table do not describe a
+machine).
+
+Printed per protocol and arm, and pooled per protocol: sessions, valid, valid-and-wrong, invalid-and-right, the
+two-sided calibration of the valid sessions (z RMS, within 1 and 2 std; ``bench/calibration.py``) and the
+sharpness of every static moment and Coulomb amplitude (median std over the RMS error across the sessions; 1
+ideal, an honest std's falls in about 0.7-1.4 over 8 sessions). ``--sd-mm 0`` keeps the markers on the joint
+centres: then the inflation column gives each static moment's and Coulomb amplitude's std over what the assumed
+placement and the sensor noise alone give (the ``marker_placement`` and ``sensor_noise`` terms of its budget; 1
+means no inflation).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import io
+import json
+import math
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import calibration
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
+
+from mujoco_bag import record, write_bag
+from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine, run_engine
+from mujoco_mechanical import mechanical_arm, mechanical_sine
+from scoring import residuals, z_scores
+
+from bsp_ros.cli import main as bsp_main
+from bsp_ros.core.planning import planned_trajectory_from_file
+
+PROTOCOLS = ("paper", "fast", "plan", "mechanical")
+# Quantities whose sharpness the acceptance reads, and the most an honest std's median over the RMS error may be.
+SHARP_KINDS = {"static_moment_kgm": "static moments", "coulomb_nm": "Coulomb amplitudes"}
+SHARPNESS_LIMIT = 1.5
+DEFAULT_PLAN = [
+    "plan", "--shoulder", "0", "1.2", "--shoulder-range", "-70", "-10", "--elbow-range", "10", "100",
+    "--wrist-range", "-20", "20", "--duration", "120",
+]  # fmt: skip
+
+
+@dataclasses.dataclass
+class Row:
+    """The sessions of one protocol and arm."""
+
+    runs: int = 0
+    valid: int = 0
+    valid_wrong: int = 0
+    invalid_right: int = 0
+    worst_z: float = 0.0
+    worst_param: str = ""
+    reasons: dict[str, int] = dataclasses.field(default_factory=lambda: defaultdict(int))
+    inflation: dict[str, list[float]] = dataclasses.field(default_factory=lambda: defaultdict(list))
+    scales: list[float] = dataclasses.field(default_factory=list)
+    tally: calibration.Tally = dataclasses.field(default_factory=calibration.Tally)
+
+
+def identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
+    """``bsp identify BAG --json OUT`` in process, output silenced: (exit code, the estimate document or {})."""
+    sink = io.StringIO()
+    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+        code = bsp_main(["identify", str(bag), "--json", str(out), "--format", "none", *extra])
+    return code, (json.loads(out.read_text()) if out.exists() else {})
+
+
+def markers_replaced(run: EngineRun, offsets_m: np.ndarray) -> np.ndarray:
+    """(N, K, 3) the engine's marker trajectories with marker k moved by ``offsets_m[k]`` = (along, normal), m,
+    in the frame of the segment it sits on (the hand marker, the last, on the last segment)."""
+    n_segments = run.q_rad.shape[1]
+    phi = np.cumsum(run.q_rad, axis=1) + run.trunk_tilt_rad
+    moved = run.markers_m.copy()
+    for k, (along, normal) in enumerate(offsets_m):
+        angle = phi[:, min(k, n_segments - 1)]
+        c, s = np.cos(angle), np.sin(angle)
+        moved[:, k, 1] += along * c - normal * s
+        moved[:, k, 2] += along * s + normal * c
+    return moved
+
+
+def _trajectory(protocol: str, plan: Path) -> Any:
+    if protocol == "paper":
+        return paper_sine(0.03)
+    if protocol == "fast":
+        return paper_sine(0.12)
+    if protocol == "plan":
+        return planned_trajectory_from_file(plan)
+    return mechanical_sine()
+
+
+def _arm(protocol: str, arm_seed: int) -> Any:
+    if protocol == "mechanical":
+        return mechanical_arm(None if arm_seed == 0 else arm_seed)
+    return draw_arm(arm_seed)
+
+
+def _inflation(estimate: dict[str, Any], row: Row) -> None:
+    """Each static moment's and Coulomb amplitude's std over its placement-and-noise-only std."""
+    for group in ("segments", "joints"):
+        for owner, quantities in estimate.get(group, {}).items():
+            for key in SHARP_KINDS:
+                q = quantities.get(key)
+                if not isinstance(q, dict) or not q.get("budget"):
+                    continue
+                budget = q["budget"]
+                alone = math.hypot(budget.get("marker_placement", 0.0), budget.get("sensor_noise", 0.0))
+                if alone > 0:
+                    row.inflation[f"{key}/{owner}"].append(float(q["std"]) / alone)
+
+
+def _fused(quantity: Any) -> bool:
+    return isinstance(quantity, dict) and quantity.get("source") == "data+prior"
+
+
+def data_only(estimate: dict[str, Any]) -> dict[str, Any]:
+    """The estimate with its data+prior quantities left out: on a machine, a human table's prior is not its own."""
+    out = dict(estimate)
+    for group in ("segments", "joints"):
+        out[group] = {
+            owner: {k: q for k, q in quantities.items() if not _fused(q)}
+            for owner, quantities in estimate.get(group, {}).items()
+        }
+    return out
+
+
+def score(row: Row, code: int, estimate: dict[str, Any], truth: dict[str, Any]) -> None:
+    """Add one session's estimate to ``row``."""
+    row.runs += 1
+    if not estimate:
+        row.reasons[f"exit {code}"] += 1
+        return
+    if truth.get("n_segments", len(truth.get("segments", {}))) == 2:
+        estimate = data_only(estimate)
+    valid = bool(estimate["quality"]["valid"])
+    row.scales.append(float(estimate["quality"].get("marker_placement", {}).get("scale_from_data", math.nan)))
+    z = z_scores(estimate, truth)
+    wrong = any(v > 3.0 for v in z.values())
+    row.valid += valid
+    row.valid_wrong += valid and wrong
+    row.invalid_right += (not valid) and not wrong
+    if z:
+        worst = max(z, key=lambda k: z[k])
+        if z[worst] > row.worst_z:
+            row.worst_z, row.worst_param = z[worst], worst
+    if not valid:
+        codes = [f["code"] for f in estimate["quality"].get("findings", []) if f.get("severity") == "invalid"]
+        row.reasons[",".join(codes) or "?"] += 1
+    row.tally.add(residuals(estimate, truth), valid)
+    _inflation(estimate, row)
+
+
+def run_arm(protocol: str, arm_seed: int, args: argparse.Namespace, workdir: Path) -> Row:
+    """Simulate one arm on ``protocol`` once and identify ``args.sessions`` sessions with re-placed markers."""
+    arm = _arm(protocol, arm_seed)
+    options = CellOptions(
+        trajectory=_trajectory(protocol, args.plan), duration_s=args.duration, wrench_hz=args.wrench_hz
+    )
+    run = run_engine(arm, options)
+    n_markers = run.markers_m.shape[1]
+    row = Row()
+    for session in range(args.sessions):
+        rng = np.random.default_rng([arm_seed, session, 50])
+        offsets = rng.normal(0.0, args.sd_mm * 1e-3, (n_markers, 2))
+        moved = dataclasses.replace(run, markers_m=markers_replaced(run, offsets))
+        session_options = dataclasses.replace(
+            options, seed=1000 * arm_seed + session, skin_offset_m=tuple(map(tuple, offsets))
+        )
+        cell = record(arm, session_options, moved)
+        stem = f"{protocol}_{arm_seed}_{session}"
+        bag = write_bag(workdir / stem, cell)
+        extra = ["--zero-sd-n", "0", "--zero-sd-nm", "0", "--marker-placement-sd-mm", str(args.assumed_sd_mm)]
+        code, estimate = identify(bag, workdir / f"{stem}.json", *extra, *args.identify)
+        score(row, code, estimate, cell.truth)
+        if args.verbose:
+            z = z_scores(estimate, cell.truth) if estimate else {}
+            top = sorted(z.items(), key=lambda kv: -kv[1])[:3]
+            valid = estimate.get("quality", {}).get("valid") if estimate else None
+            print(f"  {stem}: valid={valid} " + ", ".join(f"{k} {v:.2f}" for k, v in top), flush=True)
+    return row
+
+
+def _per_parameter(row: Row) -> str:
+    """Each static moment's and Coulomb amplitude's sharpness, ``owner value``."""
+    parts = []
+    for name, pairs in sorted(row.tally.samples.items()):
+        if calibration.quantity(name) not in SHARP_KINDS or len(pairs) < 2:
+            continue
+        errors, stds = zip(*pairs, strict=True)
+        kind = "SM" if name.startswith("static") else "C"
+        parts.append(f"{kind} {name.split('/')[1]} {calibration.sharpness(errors, stds):.2f}")
+    return ", ".join(parts)
+
+
+def print_row(label: str, row: Row) -> None:
+    """One line of counts and calibration, then the per-parameter sharpness (and inflation, if any)."""
+    c = row.tally.calibration()
+    reasons = ", ".join(f"{n}x {r}" for r, n in sorted(row.reasons.items(), key=lambda kv: -kv[1])) or "-"
+    print(
+        f"{label:22} {row.runs:4} {row.valid:5} {row.valid_wrong:7} {row.invalid_right:9} "
+        f"{calibration.calibration_columns(c)} {row.worst_z:7.2f} ({row.worst_param})  invalid: {reasons}"
+    )
+    scales = np.array(row.scales)
+    scale_text = (
+        f"placement scale median {np.nanmedian(scales):.2f}, max {np.nanmax(scales):.2f}" if scales.size else "-"
+    )
+    print(f"{'':22} sharpness: {_per_parameter(row)}; {scale_text}")
+    if row.inflation:
+        values = {k: float(np.median(v)) for k, v in sorted(row.inflation.items())}
+        ratios = ", ".join(f"{k.split('/')[1]} {v:.2f}" for k, v in values.items())
+        print(f"{'':22} std / (placement + noise): {ratios}")
+
+
+def acceptance(rows: dict[str, Row]) -> list[str]:
+    """The acceptance figures over every protocol's arms: share valid, z RMS, the widest sharpness."""
+    total = Row()
+    worst_sharp = (0.0, "")
+    for label, row in rows.items():
+        total.runs += row.runs
+        total.valid += row.valid
+        total.valid_wrong += row.valid_wrong
+        total.tally.z.extend(row.tally.z)
+        for name, pairs in row.tally.samples.items():
+            if calibration.quantity(name) in SHARP_KINDS and len(pairs) >= 2:
+                errors, stds = zip(*pairs, strict=True)
+                value = calibration.sharpness(errors, stds)
+                if math.isfinite(value) and value > worst_sharp[0]:
+                    worst_sharp = (value, f"{label} {name}")
+    c = total.tally.calibration()
+    return [
+        f"valid {total.valid}/{total.runs} ({100 * total.valid / max(total.runs, 1):.0f} %, at least 95 %)",
+        f"valid-and-wrong {total.valid_wrong}",
+        f"z RMS {c.z_rms:.3g} (0.7-1.3), within 1 std {100 * c.within_1:.0f} %, within 2 std {100 * c.within_2:.0f} %",
+        f"widest static-moment / Coulomb sharpness {worst_sharp[0]:.2f} ({worst_sharp[1]}; at most {SHARPNESS_LIMIT})",
+    ]
+
+
+def _default_plan(workdir: Path) -> Path:
+    path = workdir / "plan.json"
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = bsp_main([*DEFAULT_PLAN, "--json", str(path)])
+    if code != 0:
+        raise SystemExit(f"bsp plan failed with exit {code}")
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--arms", type=int, nargs="+", default=[0, 1], help="arm seeds (mechanical: 0 the nominal arm)")
+    parser.add_argument("--sessions", type=int, default=8)
+    parser.add_argument("--protocols", nargs="+", choices=PROTOCOLS, default=list(PROTOCOLS))
+    parser.add_argument("--sd-mm", type=float, default=2.0, help="re-placement sd per in-plane axis, mm (0: exact)")
+    parser.add_argument("--assumed-sd-mm", type=float, default=2.0, help="the placement sd identify assumes, mm")
+    parser.add_argument("--duration", type=float, default=120.0)
+    parser.add_argument("--wrench-hz", type=float, default=1000.0)
+    parser.add_argument("--plan", type=Path, help="a `bsp plan --json` file (default: the default request)")
+    parser.add_argument("--identify", nargs=argparse.REMAINDER, default=[], help="further `bsp identify` options")
+    parser.add_argument("--json", type=Path, help="write the rows' counts and figures here")
+    parser.add_argument("--verbose", action="store_true", help="every session's worst three |z|")
+    args = parser.parse_args(argv)
+    rows: dict[str, Row] = {}
+    start = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="engine_sharpness_") as tmp:
+        workdir = Path(tmp)
+        if "plan" in args.protocols and args.plan is None:
+            args.plan = _default_plan(workdir)
+        print(f"{'protocol / arm':22} runs valid V&WRONG inv&right {calibration.calibration_header()}  worst|z|")
+        for protocol in args.protocols:
+            pooled = Row()
+            for arm_seed in args.arms:
+                row = run_arm(protocol, arm_seed, args, workdir)
+                rows[f"{protocol}/{arm_seed}"] = row
+                print_row(f"{protocol} arm {arm_seed}", row)
+                pooled.runs += row.runs
+                pooled.valid += row.valid
+                pooled.valid_wrong += row.valid_wrong
+                pooled.invalid_right += row.invalid_right
+                pooled.tally.z.extend(row.tally.z)
+            c = pooled.tally.calibration()
+            print(
+                f"{protocol + ' (all arms)':22} {pooled.runs:4} {pooled.valid:5} {pooled.valid_wrong:7} "
+                f"{pooled.invalid_right:9} {calibration.calibration_columns(c)}",
+                flush=True,
+            )
+    print("acceptance: " + "; ".join(acceptance(rows)))
+    print(f"({sum(r.runs for r in rows.values())} sessions in {time.monotonic() - start:.0f} s)")
+    if args.json is not None:
+        summary = {
+            label: {
+                "runs": r.runs, "valid": r.valid, "valid_wrong": r.valid_wrong, "invalid_right": r.invalid_right,
+                "z_rms": r.tally.calibration().z_rms, "samples": r.tally.samples,
+                "inflation": {k: float(np.median(v)) for k, v in r.inflation.items()},
+            }
+            for label, r in rows.items()
+        }  # fmt: skip
+        args.json.write_text(json.dumps(summary, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
