@@ -467,6 +467,7 @@ def format_plan(plan: Any) -> str:
         "inertial / gravity torque (anthropometric inertia): "
         + ", ".join(f"{j} {100 * r:.3f}%" for j, r in zip(joints, plan.inertia_ratio, strict=True)),
         f"predicted condition number {plan.prediction.condition_number:.3g}",
+        *_choice_lines(plan),
         _assumptions_line(plan),
         f"{'parameter':36s} {'nominal':>10s} {'predicted std':>14s} {'largest term':>27s} {'relative':>9s}",
     ]
@@ -480,6 +481,22 @@ def format_plan(plan: Any) -> str:
         lines.append(f"{name:36s} {nominal:>10s} {row['std']:14.3g} {largest:>27s} {relative:>9s}")
     lines += [f"note: {note}" for note in plan.notes]
     return "\n".join(lines)
+
+
+def _choice_lines(plan: Any) -> list[str]:
+    """With ``--passive auto``, which model the predicted std is of and why another arm may differ."""
+    choice = plan.auto_choice
+    if choice is None:
+        return []
+    left = ", ".join(model.label for model in choice.open_models) or "none"
+    valid = "" if choice.check_valid else " (that session's estimate was not valid: see below)"
+    return [
+        f"passive model auto: on the nominal arm (the cell's nonlinear, coupled passive moments, one simulated session)"
+        f" bsp identify chooses {choice.chosen.label}{valid}; the predicted std is that model's, with the spread of "
+        f"the models the data left open ({left}) as bsp identify adds it, on average over sessions",
+        "  another arm (stiffer or more nonlinear passive moments) may choose another model, with another std; one "
+        "session's model-choice term is one draw of that spread and may come out several times smaller or larger",
+    ]
 
 
 def _assumptions_line(plan: Any) -> str:

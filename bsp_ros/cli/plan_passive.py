@@ -12,7 +12,8 @@ def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str |
 
     One simulated session of ``plan`` per trunk posture (the table arm of ``--sex``, ``--body-mass``,
     ``--height``, with nonlinear two-joint passive moments; tared; markers within 3 mm, kept for every posture) is
-    identified with the plan's passive model. Per joint: the passive curve's std (RMS over the planned range) and
+    identified with the plan's passive model; with ``auto`` it is the plan's own check of the nominal arm
+    (``Plan.check``), on which its model was chosen. Per joint: the passive curve's std (RMS over the planned range) and
     the smallest passive moment the plan follows within 10 %, also as a share of the joint's gravity torque.
     """
     from bsp_ros.core.planning.simulated import (
@@ -24,11 +25,14 @@ def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str |
     from bsp_ros.core.simulation import SubjectTruth
 
     n = plan.request.nominal.n_joints
-    subject = SubjectTruth.from_anthropometry(args.sex, args.body_mass, args.height, n)
-    check = simulated_plan_check(plan, subject)
+    # With auto the plan's model was chosen on such a session of the nominal arm: the same session, not a second.
+    check = plan.check or simulated_plan_check(
+        plan, SubjectTruth.from_anthropometry(args.sex, args.body_mass, args.height, n)
+    )
+    arm = "nominal arm" if plan.check is not None else "table arm"
     postures = len(plan.request.trunk_tilts_rad)
     lines = [
-        f"passive curves, one simulated session ({postures} posture{'s' if postures > 1 else ''}; table arm with "
+        f"passive curves, one simulated session ({postures} posture{'s' if postures > 1 else ''}; {arm} with "
         f"nonlinear two-joint passive moments, tared sensor, markers placed within {1e3 * SKIN_BOUND_M:g} mm of the "
         f"joint centres; --passive {check.model}):"
     ]

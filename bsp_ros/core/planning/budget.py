@@ -12,6 +12,7 @@ term is the information matrix's sandwich on those same columns (``information.p
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,7 +23,7 @@ from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint import JointConfig
 from bsp_ros.core.identification.joint.excitation import motion_rows
 from bsp_ros.core.identification.joint.extras import base_extras
-from bsp_ros.core.identification.joint.placement_covariance import placement_covariance
+from bsp_ros.core.identification.joint.placement_covariance import offset_columns, placement_covariance
 from bsp_ros.core.identification.joint.torque_response import TorqueResponse
 from bsp_ros.core.identification.ledger import Ledger, Term
 from bsp_ros.core.identification.passive import PassiveModel
@@ -30,10 +31,11 @@ from bsp_ros.core.identification.priors import base_prior_for_subject
 from bsp_ros.core.identification.recordings import combine_recordings
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.sensitivity import offset_torques_nm, zero_covariance
-from bsp_ros.core.identification.stacked import Fit, Problem, build_problem
+from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, joint_products, problem_names
 from bsp_ros.core.joint_angles import KinematicsConfig
 from bsp_ros.core.model import gravity_regressor
 from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.core.planning.choice import ScoreCovariance, expected_choice_variance
 from bsp_ros.core.planning.information import (
     PREDICTION_GRID_HZ,
     NoiseSpec,
@@ -197,6 +199,7 @@ def predict_budget(
     kinematics: KinematicsConfig | None = None,
     trunk_tilts_rad: Sequence[float] = (0.0,),
     grid_hz: float = PREDICTION_GRID_HZ,
+    open_models: Sequence[PassiveModel] = (),
 ) -> PredictedBudget:
     """Predict the std `bsp identify` will report, term by term, for a session that follows ``trajectory``.
 
@@ -211,19 +214,22 @@ def predict_budget(
     kinematics : the angle filters identify uses.
     trunk_tilts_rad : one recording per trunk posture (rad), identified together.
     grid_hz : evaluation grid, Hz; each grid sample stands for the wrench samples around it.
+    open_models : with ``passive`` the model ``--passive auto`` chooses (:class:`~.choice.AutoChoice`), the other
+        candidates its data cannot reject: the model-choice term is then the expected spread identify adds
+        (:func:`~.choice.expected_choice_variance`), on an arm with the cell's nonlinear, coupled passive moments.
 
     Returns
     -------
     PredictedBudget with the terms ``sensor_noise``, ``marker_placement`` (where a placement sd is assumed),
-    ``model_choice`` (a nonlinear model's shape probe: ``auto`` or a fixed nonlinear model) and ``sensor_zero``.
+    ``model_choice`` (``open_models``, or a nonlinear model's shape probe) and ``sensor_zero``.
     """
     noise = noise or NoiseSpec()
     session = session or SessionSpec()
     kinematics = kinematics or KinematicsConfig()
     model = predicted_model(passive)
-    truth = nominal_passive_truth(
-        trajectory, duration_s, nominal.n_joints, elastic="offset" in model.terms, nonlinear="nonlinear" in model.terms
-    )
+    # With auto's choice the arm is the cell's (nonlinear, coupled passive moments), whatever model was chosen.
+    elastic, nonlinear = "offset" in model.terms or bool(open_models), "nonlinear" in model.terms or bool(open_models)
+    truth = nominal_passive_truth(trajectory, duration_s, nominal.n_joints, elastic=elastic, nonlinear=nonlinear)
     data = nominal_data(trajectory, duration_s, nominal, truth, noise, kinematics, trunk_tilts_rad, grid_hz)
     options = session.identify
     config = JointConfig(passive=model, base_prior=base_prior_for_subject(options.subject, data.lengths_m))
@@ -233,7 +239,7 @@ def predict_budget(
     extras = base_extras(data, config)
     problem = build_problem(data, model, rows, None, extras)
     probe = None
-    if "nonlinear" in model.terms and "higher" not in model.terms:
+    if "nonlinear" in model.terms and "higher" not in model.terms and not open_models:
         # identify probes a nonlinear model's shape (identification.selection.shape_probe): its columns extend
         # the model's, so one pass gives both.
         probe = build_problem(data, model.with_terms(("higher",)), rows, None, extras)
@@ -241,10 +247,20 @@ def predict_budget(
     sd_m = options.placement_sd_m(data)
     if sd_m.any():
         ledger = ledger.plus(Term.MARKER_PLACEMENT, placement_covariance(data, problem, fit, sd_m))
+    zero_cov = zero_covariance(*session.zero_sd(noise))
     response = TorqueResponse(problem, fit.weights, fit.design, np.ones(fit.values.size, dtype=bool))
     offsets = response.columns(offset_torques_nm(data, np.eye(3)))
-    zero = offsets @ zero_covariance(*session.zero_sd(noise)) @ offsets.T
+    zero = offsets @ zero_cov @ offsets.T
     ledger = ledger.plus(Term.SENSOR_ZERO, 0.5 * (zero + zero.T))
+    if open_models:
+        union = build_problem(data, _union_model(model, open_models), rows, None, extras)
+        scores = _score_covariance(data, union, fit, sd_m, zero_cov, noise, kinematics, nominal, grid_hz)
+        others = [(list(problem_names(m, data.n_joints, extras is not None)), False) for m in open_models]
+        if "nonlinear" in model.terms and "higher" not in model.terms:
+            higher = model.with_terms(("higher",))
+            others.append((list(problem_names(higher, data.n_joints, extras is not None)), True))
+        choice = expected_choice_variance(scores, problem.names, others)
+        ledger = ledger.plus(Term.MODEL_CHOICE, np.diag(choice))
     reported = problem.passive_end  # the static moments and passive terms; not the priors' perpendicular moments
     kept = Ledger(tuple((term, c[:reported, :reported]) for term, c in ledger))
     values = np.full(reported, np.nan)
@@ -252,6 +268,48 @@ def predict_budget(
     for i, name in enumerate(problem.names[:reported]):
         values[i] = nominal.passive.get(name, values[i])
     return PredictedBudget(problem.names[:reported], kept, values)
+
+
+def _union_model(model: PassiveModel, open_models: Sequence[PassiveModel]) -> PassiveModel:
+    """The model with every column of ``model``, of ``open_models`` and of ``model``'s shape probe (a nonlinear
+    model's next order): each of them is a subset of its columns."""
+    terms = {term for other in open_models for term in other.terms}
+    if "nonlinear" in model.terms:
+        terms.add("higher")
+    return model.with_terms(tuple(sorted(terms)))
+
+
+def _score_covariance(
+    data: IdentificationData,
+    union: Problem,
+    fit: Fit,
+    sd_m: np.ndarray,
+    zero_cov: np.ndarray,
+    noise: NoiseSpec,
+    kinematics: KinematicsConfig,
+    nominal: NominalArm,
+    grid_hz: float,
+) -> ScoreCovariance:
+    """How the scores ``X^T W dtau`` over ``union``'s columns vary between sessions: the sensor noise (long-run),
+    the priors, the marker placement (``sd_m``, (n + 1,) m, per chain point) and the sensor zero (``zero_cov``,
+    (6, 6) N and Nm), at the predicted weights ``fit.weights`` of the chosen model's ``fit``."""
+    n = data.n_joints
+    x = np.stack([union.joint_rows(j)[0] for j in range(n)], axis=1)
+    sample = sample_noise(data.q_rad, data.lengths_m, np.asarray(nominal.static_moments_kgm), noise, kinematics)
+    design, long_run = information_products(x, union.rows, sample, noise, grid_hz)
+    precision = union.prior_precision
+    noise_part = long_run + np.diag(precision)
+    total = noise_part.copy()
+    values = union.prior_mean.copy()
+    values[:n] = fit.values[:n]
+    if sd_m.any():
+        shifted = dataclasses.replace(fit, values=values)
+        moved = joint_products(union, fit.weights, offset_columns(data, union, shifted, sd_m))
+        total += moved @ moved.T
+    unit = offset_torques_nm(data, np.eye(3))
+    zero = np.stack([joint_products(union, fit.weights, torques) for torques in unit], axis=1)  # (q, 6)
+    total += zero @ zero_cov @ zero.T
+    return ScoreCovariance(names=list(union.names), design=design + np.diag(precision), noise=noise_part, total=total)
 
 
 def nominal_data(
@@ -266,8 +324,9 @@ def nominal_data(
 ) -> IdentificationData:
     """The samples identify will see of a session that follows ``trajectory``, noise-free, one recording per trunk
     tilt (rad) combined as identify combines them: world angles, the motion's velocities, the nominal arm's gravity
-    torques and ``passive`` moments (a :class:`~bsp_ros.core.simulation.PassiveTruth`), and the direction
-    velocities' predicted noise (identify's deadband); no rates (a quasi-static arm).
+    torques and ``passive`` moments (a :class:`~bsp_ros.core.simulation.PassiveTruth`), the motion's rates (the
+    torques quasi-static: the inertial ones are below 1 % of gravity on a plan) and the direction velocities'
+    predicted noise (identify's deadband).
 
     Raises
     ------
@@ -282,6 +341,7 @@ def nominal_data(
     t = np.arange(int(duration_s * grid_hz)) / grid_hz
     q = trajectory.angles_rad(t)
     velocity = trajectory.velocities_rad_s(t)
+    acceleration = acceleration_rad_s2(trajectory, t)
     lengths = np.asarray(nominal.lengths_m)
     beta = np.asarray(nominal.static_moments_kgm)
     moments = passive.elastic_nm(q) + passive.friction_nm(velocity)  # they follow the angles to the trunk
@@ -301,12 +361,24 @@ def nominal_data(
                 lengths_std_m=np.zeros(n),
                 velocity_noise_rad_s=sample_noise(world, lengths, beta, noise, kinematics).velocity_noise_rad_s,
                 n_wrench_samples=round(t.size * noise.wrench_hz / grid_hz),
-                # No rates: the arm as quasi-static. With the motion's noise-free accelerations the estimator's
-                # inertial columns told the static moments from elastic moments (--passive auto, the upper arm's
-                # sensor-noise std 0.07 kg m) where identify, from measured ones, reports 0.41.
+                # The motion's rates, as identify measures them: its inertial columns (with their priors) take part
+                # in every fit. In a model with nonlinear and coupled elastic terms they tell the static moments
+                # from the elastic moments (the richest auto candidate's upper arm: sensor-noise std 0.063 kg m
+                # predicted, 0.09 reported; 0.39 predicted without them).
+                qd_rad_s=velocity,
+                qdd_rad_s2=acceleration,
             )
         )
     return combine_recordings(recordings, [float(tilt) for tilt in trunk_tilts_rad])
+
+
+def acceleration_rad_s2(trajectory: Trajectory, t_s: np.ndarray) -> np.ndarray:
+    """(N, n) the trajectory's joint accelerations at ``t_s`` (N,) s, rad/s^2: central differences of its
+    velocities over 1 ms (exact for the planner's piecewise-cubic motion away from its knots)."""
+    step_s = 1e-3
+    ahead = trajectory.velocities_rad_s(t_s + step_s)
+    behind = trajectory.velocities_rad_s(np.clip(t_s - step_s, 0.0, None))
+    return np.asarray((ahead - behind) / (t_s + step_s - np.clip(t_s - step_s, 0.0, None))[:, None])
 
 
 def _noise_terms(

@@ -43,7 +43,9 @@ def plan_to_dict(plan: Plan, rate_hz: float = SAMPLE_HZ) -> dict[str, Any]:
     trajectory), ``samples`` (``t_s``, ``q_rad``, ``qdot_rad_s``, ``handle_y_m``, ``handle_z_m``,
     ``handle_pitch_rad`` in ``world``), ``predicted`` (one row per parameter: the std `bsp identify` will report,
     its ``budget`` {term: standard uncertainty} and ``largest_term``), ``uncertainty`` (what the std assumes of
-    the session: marker placement, contact point, tare or sensor zero), ``inertia_ratio``, ``notes``.
+    the session: marker placement, contact point, tare or sensor zero), ``inertia_ratio``, ``notes``; with
+    ``--passive auto`` also ``passive_choice`` (``chosen``, ``open_models``, ``check_valid``: the model `bsp
+    identify` chose on the nominal arm, whose std ``predicted`` is, and the models its data left open).
     """
     request = plan.request
     n = request.nominal.n_joints
@@ -90,6 +92,7 @@ def plan_to_dict(plan: Plan, rate_hz: float = SAMPLE_HZ) -> dict[str, Any]:
         "condition_number": plan.prediction.condition_number,
         "inertia_ratio": dict(zip(joints, (float(r) for r in plan.inertia_ratio), strict=True)),
         "notes": list(plan.notes),
+        **({} if plan.auto_choice is None else {"passive_choice": plan.auto_choice.to_dict()}),
     }
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
@@ -29,6 +29,10 @@ from bsp_ros.core.planning.trajectory import PlannedTrajectory
 from bsp_ros.core.streams import joints_for, segments_for
 from bsp_ros.errors import InputError
 from bsp_ros.validation import check_finite_array, check_positive
+
+if TYPE_CHECKING:
+    from bsp_ros.core.planning.choice import AutoChoice
+    from bsp_ros.core.planning.simulated import SimulatedPlanCheck
 
 #: Given amplitudes: the default share of each joint's range, capped in deg. Optimised: the smallest.
 AMPLITUDE_SHARE = 0.25
@@ -157,6 +161,8 @@ class Plan:
     notes : what the planner changed or assumed.
     budget : the std `bsp identify` will report, term by term (sensor noise, marker placement, sensor zero,
         model choice); None until :func:`with_budget`.
+    check : with ``--passive auto``, the simulated session of the nominal arm the budget's model was chosen on
+        (:func:`with_budget`); None otherwise.
     """
 
     request: PlanRequest
@@ -167,6 +173,13 @@ class Plan:
     inertia_ratio: np.ndarray
     notes: list[str]
     budget: PredictedBudget | None = None
+    check: SimulatedPlanCheck | None = None
+
+    @property
+    def auto_choice(self) -> AutoChoice | None:
+        """With ``--passive auto``, the model identify chose on the nominal arm (the budget is its std); None
+        otherwise."""
+        return None if self.check is None else self.check.choice
 
     @property
     def reported(self) -> PredictedBudget:
@@ -347,18 +360,34 @@ def plan_protocol(request: PlanRequest, grid_hz: float = 2.0) -> Plan:
 
 def with_budget(plan: Plan) -> Plan:
     """``plan`` with the std `bsp identify` will report for its sessions, term by term (:func:`predict_budget`
-    for the plan's request: its arm, model, noise, postures and session)."""
+    for the plan's request: its arm, model, noise, postures and session).
+
+    With ``--passive auto`` identify reports the std of the model the data choose, widened by the spread of the
+    models they cannot reject; which model that is depends on the arm. The plan is simulated once on the nominal
+    arm with the cell's nonlinear, coupled passive moments (:func:`~.simulated.simulated_plan_check`) and
+    identified as identify would; the budget is that model's, with the expected spread of the models left open
+    there (``Plan.check`` keeps the session).
+    """
     request = plan.request
+    passive, check = request.passive, None
+    open_models: tuple[PassiveModel, ...] = ()
+    if request.passive.select:
+        from bsp_ros.core.planning.simulated import nominal_subject, simulated_plan_check  # it imports this module
+
+        check = simulated_plan_check(plan, nominal_subject(request.nominal))
+        if check.choice is not None:
+            passive, open_models = check.choice.chosen, check.choice.open_models
     budget = predict_budget(
         plan.trajectory,
         request.duration_s,
         request.nominal,
-        request.passive,
+        passive,
         request.noise,
         request.session,
         trunk_tilts_rad=request.trunk_tilts_rad,
+        open_models=open_models,
     )
-    return dataclasses.replace(plan, budget=budget)
+    return dataclasses.replace(plan, budget=budget, check=check)
 
 
 def _predict(request: PlanRequest, trajectory: PlannedTrajectory, grid_hz: float = PREDICTION_GRID_HZ) -> Prediction:

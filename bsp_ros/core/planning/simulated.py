@@ -9,8 +9,11 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.planning.budget import nominal_passive_truth
+from bsp_ros.core.planning.choice import AutoChoice
+from bsp_ros.core.planning.information import NominalArm
 from bsp_ros.core.planning.planner import Plan
-from bsp_ros.core.streams import joints_for
+from bsp_ros.core.streams import joints_for, segments_for
+from bsp_ros.errors import InputError
 
 #: Markers re-placed within this much of the joint centres per recording (uniform per axis), m: a day's placement.
 SKIN_BOUND_M = 0.003
@@ -36,6 +39,7 @@ class SimulatedPlanCheck:
     curve_rms_std_nm : joint -> RMS over the planned range of the passive curve's std, Nm.
     gravity_rms_nm : joint -> RMS of the gravity torque along the plan (first posture), Nm.
     valid : the simulated estimate's verdict; ``message`` its message.
+    choice : with ``auto``, the model the data chose and those they could not reject; None for a fixed model.
     """
 
     model: str
@@ -44,6 +48,7 @@ class SimulatedPlanCheck:
     gravity_rms_nm: dict[str, float]
     valid: bool
     message: str
+    choice: AutoChoice | None = None
 
     def smallest_followed_nm(self, joint: str) -> float:
         """The smallest passive moment (RMS, Nm) whose curve the plan follows within :data:`CURVE_TARGET`
@@ -146,7 +151,33 @@ def simulated_plan_check(
         gravity_rms_nm=gravity_rms,
         valid=bool(quality["valid"]),
         message=str(quality.get("message", "")),
+        choice=AutoChoice.from_estimate(document, model) if model.select else None,
     )
+
+
+def nominal_subject(nominal: NominalArm) -> Any:
+    """The :class:`~bsp_ros.core.simulation.SubjectTruth` of the nominal arm: its segment lengths and static
+    moments (the de Leva table's centres of mass along each segment, the masses that give those moments), so
+    that a simulated session of it has the gravity torques the prediction assumes.
+
+    Raises
+    ------
+    InputError
+        The static moments need a segment of no or negative mass (a hand heavier than its forearm can carry).
+    """
+    from bsp_ros.core.anthropometry import segment_norm
+    from bsp_ros.core.simulation import SubjectTruth
+
+    lengths = np.asarray(nominal.lengths_m)
+    beta = np.asarray(nominal.static_moments_kgm)
+    com = np.array([segment_norm("male", name).com_fraction for name in segments_for(lengths.size)]) * lengths
+    masses = np.zeros(lengths.size)
+    # beta_j = m_j l_j + a_j (m_{j+1} + ... + m_n): solved from the hand inward.
+    for j in range(lengths.size - 1, -1, -1):
+        masses[j] = (beta[j] - lengths[j] * masses[j + 1 :].sum()) / com[j]
+    if (masses <= 0).any():
+        raise InputError(f"the nominal static moments {beta.round(4).tolist()} kg m imply a segment of no mass")
+    return SubjectTruth(tuple(lengths), tuple(masses), tuple(com))
 
 
 def plan_passive_truth(plan: Plan) -> Any:
