@@ -267,8 +267,15 @@ def test_a_plan_with_elastic_terms_says_which_passive_curves_it_follows(tmp_path
     (curve_warning,) = [line for line in captured.err.splitlines() if "passive curve of the" in line]
     assert "of the shoulder and the elbow within 10 %" in curve_warning
     assert "--trunk-tilt-deg" not in curve_warning  # it has two postures already
-    notes = json.loads(out_json.read_text())["notes"]
-    assert any(note.startswith("smallest passive moment followed within 10 %") for note in notes)
+    written = json.loads(out_json.read_text())
+    assert any(note.startswith("smallest passive moment followed within 10 %") for note in written["notes"])
+    # The std is that of the model identify chose on the plan's own check of the nominal arm, and it says so.
+    choice = written["passive_choice"]
+    (said,) = [line for line in captured.out.splitlines() if line.startswith("passive model auto: ")]
+    assert f"bsp identify chooses {choice['chosen']}" in said and choice["chosen"] != "auto"
+    assert "another arm" in captured.out
+    names = {row["quantity"] for row in written["predicted"]}
+    assert ("coupling_nm_per_rad" in names) == ("coupling" in choice["chosen"])
     # One posture: neither curve, and the warning names the second posture that would help (a target the static
     # moments meet keeps the duration search of the precision warning out of this test).
     assert main([*common, "--target-std", "1000"]) == 0
