@@ -13,8 +13,10 @@ from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import Fit, Problem, augmented, joint_products, reweighted_values
 
-# The measured torques are averaged over this long for the handle force the offset columns move (s).
-AVERAGE_S = 0.5
+# The handle force the offset columns move is the mean of the other measured torques within this long (s): short,
+# so that it follows the force of a fast session (over 0.5 s the columns of the paper's sines at 0.12 rad/s missed
+# 4-5 % of what an offset does, and the free offsets read the rest as 2-3 times the placement).
+AVERAGE_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -40,11 +42,12 @@ def offset_columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: n
     """(N, n, 2 (n + 1)) how an offset of one sd of each marker (``sd_m``, (n + 1,) m) moves the torque equation at
     this fit (``placement_columns``, scaled).
 
-    The handle force the offsets move comes from the measured torques averaged over half a second, not from each
-    sample's: those carry the wrench noise into the columns, where it correlates with the residual's own (errors
-    in variables). On a simulated session with every marker on its joint centre, offsets fitted on the raw
-    torques came out 6-8 sd from zero, the same on every seed (``test_placement_scale.py``). The force changes
-    below 2 Hz; its average keeps it where the model's own torques would not (a model that misfits).
+    The handle force the offsets move comes from the measured torques of the neighbouring samples
+    (:func:`averaged_torques`), not from each sample's own: that carries the wrench noise into the columns, where it
+    correlates with the residual's own (errors in variables). On a simulated session with every marker on its joint
+    centre, offsets fitted on the raw torques came out 6-8 sd from zero, the same on every seed
+    (``test_placement_scale.py``). The measured torques keep the force where the model's own torques would not (a
+    model that misfits).
     """
     n = data.n_joints
     if len(problem.names) >= 3 * n and problem.names[-1][0] == "grouped_inertia_kgm2":
