@@ -1,49 +1,111 @@
 """A hand that slips in the handle: the contact point drifting along the hand during a session.
 
 A hand strapped to a handle is not fixed to it: under the arm's weight it slides by millimetres to a centimetre
-over a session. Moving the point where the force acts by ``s`` along the last segment changes every joint's torque
-by the same ``s * g``, with ``g = sin(phi_n) F_y - cos(phi_n) F_z`` (the force's lever about the hand's
-direction; :func:`contact_torques_nm`). So the residual common to all joints, regressed on ``g`` window by window,
-gives the contact point's travel; a slip accumulates, so the travel follows a trend through the session, where
-bursts of activity or a misfit give windows of either sign.
+over a session, in a few slips of a fraction of a second or creeping. Moving the point where the force acts by
+``s`` along the last segment changes every joint's torque by the same ``s * g``, with
+``g = sin(phi_n) F_y - cos(phi_n) F_z`` (the force's lever about the hand's direction; :func:`slip_lever_n`).
+
+The travel is fitted together with the arm's parameters: ``s(t)`` piecewise linear between knots a few seconds
+apart (0 at the session's start), its columns ``g(t) B_k(t)`` the same at every joint. Fitted from a residual
+instead, the first fit would have taken up part of the slip already, differently at each joint, and the windows
+of a short session would show a bent trend (a staircase looks like no line). A slip accumulates: the travel
+follows one direction (its isotonic fit explains most of its variation), where bursts of activity, tremor,
+sliding skin markers or a compliant strap give travels of either sign. And it moves every joint alike: a drifting
+force sensor moves each joint by its lever, the wrist (the shortest) least.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.identification.stacked import Problem, augmented, reweighted_values
 from bsp_ros.core.model import absolute_angles_rad, contact_lever_sums
 
-__all__ = ["Slip", "contact_slip", "slip_lever_n"]
+__all__ = [
+    "DETECT_KNOT_S",
+    "FOLLOW_KNOT_S",
+    "MIN_KNOTS",
+    "MIN_MONOTONE_SHARE",
+    "MIN_SLIP_M",
+    "MIN_WRIST_SHARE",
+    "Slip",
+    "Travel",
+    "contact_slip",
+    "fit_travel",
+    "joint_shares",
+    "monotone_share",
+    "slip_lever_n",
+    "travel_basis",
+]
 
-# The travel is estimated window by window, s.
-WINDOW_S = 10.0
+# The travel's knots when a slip is looked for, s: a few seconds hold enough of the motion that the travel is
+# not confounded with the arm's own terms (a 60 s session: 12 knots).
+DETECT_KNOT_S = 5.0
 
-# Each joint's own travel trend is at least this share of the largest one's under a slip (a fit takes up part of
-# it differently at each joint: 0.4 and more on the MuJoCo slipping hand; a vertical force drift gives 0.15).
-MIN_JOINT_AGREEMENT = 0.3
+# The knots the travel is followed on once found, s: a slip of half a second moves its knot's neighbours too,
+# and a misfit of a few times the sensor noise is left beside a step on 5 s knots.
+FOLLOW_KNOT_S = 1.25
 
-# A trend explaining less of the windows' travel than this is no slip (bursts, a misfit, skin markers).
-MIN_TREND_SHARE = 0.6
+# A travel is judged on this many knots at least (shorter sessions: a few random values line up by chance).
+MIN_KNOTS = 8
+
+# A contact point moving less than this over the session is not named (a strap's normal play), m.
+MIN_SLIP_M = 0.003
+
+# The share of the travel's variation its monotone fit explains, at least, for a slip (the MuJoCo slipping hand:
+# 0.90-1.00; activity, tremor, sliding skin, a compliant strap and the relaxed controls: 0.05-0.55).
+MIN_MONOTONE_SHARE = 0.8
+
+# The wrist's share of the travel at least this fraction of the largest joint's (a slip: 0.7-1.3 of the
+# shoulder's and elbow's on the MuJoCo slipping hand; a force drift: 0.15-0.3, the wrist's lever the shortest).
+MIN_WRIST_SHARE = 0.5
+
+
+@dataclass(frozen=True, kw_only=True)
+class Travel:
+    """The contact point's travel along the hand fitted with the arm's parameters.
+
+    Attributes
+    ----------
+    knots_s : (K + 1,) the knots, s from the session's start (the first at 0, where the travel is 0).
+    at_knots_m : (K + 1,) the travel at the knots, m.
+    travel_m : (N,) the travel at every sample, m.
+    """
+
+    knots_s: np.ndarray
+    at_knots_m: np.ndarray
+    travel_m: np.ndarray
 
 
 @dataclass(frozen=True, kw_only=True)
 class Slip:
-    """The contact point's travel along the hand.
+    """What the data tell of a slipping hand.
 
     Attributes
     ----------
-    travel_m : (N,) the travel at each sample since the session's start, m (zeros without a slip).
-    total_m : how far the contact point went from the session's start to its end, m.
-    trend_share : the share of the windows' travel variance its linear trend explains.
+    travel : the travel on the detection knots (:data:`DETECT_KNOT_S`), or None where the session is too short
+        or the chain has no hand.
+    total_m : how far the contact point went from the session's start to its end, m (0 without a travel).
+    monotone_share : the share of the travel's variation its monotone fit explains (0 without a travel).
+    joint_share : (n,) how much of the travel each joint shows on its own (1: all of it; empty without a travel).
     """
 
-    travel_m: np.ndarray
+    travel: Travel | None
     total_m: float
-    trend_share: float
+    monotone_share: float
+    joint_share: np.ndarray
+
+    @property
+    def found(self) -> bool:
+        """Whether the hand slipped: the travel is large, follows one direction, and the wrist shows it as the
+        other joints do."""
+        if self.travel is None or self.total_m < MIN_SLIP_M or self.monotone_share < MIN_MONOTONE_SHARE:
+            return False
+        wrist, largest = float(self.joint_share[-1]), float(self.joint_share.max())
+        return wrist > 0.0 and wrist >= MIN_WRIST_SHARE * largest
 
 
 def slip_lever_n(q_rad: np.ndarray, lengths_m: np.ndarray, tau_nm: np.ndarray) -> np.ndarray:
@@ -61,45 +123,84 @@ def slip_lever_n(q_rad: np.ndarray, lengths_m: np.ndarray, tau_nm: np.ndarray) -
     return np.asarray(np.sin(phi) * wrench[:, 0] - np.cos(phi) * wrench[:, 1])
 
 
-def contact_slip(t_ns: np.ndarray, residual_nm: np.ndarray, lever_n: np.ndarray, window_s: float = WINDOW_S) -> Slip:
-    """The contact point's travel along the hand from a fit's residual (N, n; NaN off its rows) and the lever
-    ``lever_n`` (N,) of :func:`slip_lever_n`, window by window of ``window_s``.
+def travel_basis(t_ns: np.ndarray, knot_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Piecewise linear functions of time, 0 at the first sample: the knots (K + 1,), s from the start, evenly
+    spaced about ``knot_s`` apart over the session, and the basis (N, K), column ``k`` rising from 0 at knot
+    ``k`` to 1 at knot ``k + 1`` and falling to 0 at knot ``k + 2`` (the last stays 1 to the end)."""
+    t_s = (t_ns - t_ns[0]) * 1e-9
+    count = max(1, round(float(t_s[-1]) / knot_s))
+    knots = np.linspace(0.0, float(t_s[-1]), count + 1)
+    unit = np.eye(count + 1)
+    basis = np.column_stack([np.interp(t_s, knots, unit[k]) for k in range(1, count + 1)])
+    return knots, basis
+
+
+def _travel_columns(problem: Problem, lever_n: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """(N, n, K): the torque of a unit travel at each knot, the same at every joint."""
+    n = problem.torque.shape[1]
+    columns = lever_n[:, None] * basis
+    return np.repeat(columns[:, None, :], n, axis=1)
+
+
+def fit_travel(problem: Problem, lever_n: np.ndarray, t_ns: np.ndarray, knot_s: float) -> Travel:
+    """The travel on knots about ``knot_s`` apart, fitted with ``problem``'s parameters (its reweighted least
+    squares with the travel's columns beside them)."""
+    knots, basis = travel_basis(t_ns, knot_s)
+    names: list[ParameterName] = [(f"travel_{k + 1}", "hand") for k in range(basis.shape[1])]
+    wide = augmented(problem, _travel_columns(problem, lever_n, basis), names)
+    values = reweighted_values(wide).values[len(problem.names) :]
+    return Travel(knots_s=knots, at_knots_m=np.concatenate(([0.0], values)), travel_m=basis @ values)
+
+
+def _increasing_fit(values: np.ndarray) -> np.ndarray:
+    """The least-squares non-decreasing fit of ``values`` (pool adjacent violators)."""
+    blocks: list[list[float]] = []  # [mean, count]
+    for v in values:
+        blocks.append([float(v), 1.0])
+        while len(blocks) > 1 and blocks[-2][0] > blocks[-1][0]:
+            mean, count = blocks.pop()
+            before = blocks[-1]
+            before[0] = (before[0] * before[1] + mean * count) / (before[1] + count)
+            before[1] += count
+    return np.concatenate([np.full(int(count), mean) for mean, count in blocks])
+
+
+def monotone_share(values: np.ndarray) -> float:
+    """The share of the variance of ``values`` (K,) that their monotone fit explains, in the better of the two
+    directions (1: they never turn back; a few random values: well under a half)."""
+    spread = float(np.var(values))
+    if spread <= 0.0:
+        return 0.0
+    best = max(_increasing_fit(values), -_increasing_fit(-values), key=lambda f: -float(np.mean((values - f) ** 2)))
+    return 1.0 - float(np.mean((values - best) ** 2)) / spread
+
+
+def joint_shares(problem: Problem, lever_n: np.ndarray, travel_m: np.ndarray) -> np.ndarray:
+    """(n,) how much of the torque ``travel_m * lever_n`` each joint shows, fitted with ``problem``'s parameters
+    as a column of its own at each joint (1 where the joint shows all of it)."""
+    n = problem.torque.shape[1]
+    extra = np.zeros((travel_m.size, n, n))
+    for j in range(n):
+        extra[:, j, j] = travel_m * lever_n
+    names: list[ParameterName] = [("travel_share", f"joint_{j}") for j in range(n)]
+    return np.asarray(reweighted_values(augmented(problem, extra, names)).values[-n:])
+
+
+def contact_slip(problem: Problem, t_ns: np.ndarray, lever_n: np.ndarray, knot_s: float = DETECT_KNOT_S) -> Slip:
+    """What the data of ``problem`` (sampled at ``t_ns``, with the slip's lever ``lever_n`` (N,) of
+    :func:`slip_lever_n`) tell of a contact point travelling along the hand.
 
     Returns
     -------
-    Slip; ``total_m`` 0 where the session is shorter than four windows.
+    Slip; without a travel where the session has fewer than :data:`MIN_KNOTS` knots or no lever.
     """
-    none = Slip(travel_m=np.zeros(t_ns.size), total_m=0.0, trend_share=0.0)
-    t_s = (t_ns - t_ns[0]) * 1e-9
-    if t_s[-1] < 4 * window_s or not lever_n.any():
+    none = Slip(travel=None, total_m=0.0, monotone_share=0.0, joint_share=np.zeros(0))
+    if (t_ns[-1] - t_ns[0]) * 1e-9 < MIN_KNOTS * knot_s or not lever_n.any():
         return none
-    finite = np.isfinite(residual_nm)
-    count = finite.sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        common = np.where(count > 0, np.where(finite, residual_nm, 0.0).sum(axis=1) / count, np.nan)
-    usable = np.isfinite(common)
-    centres, travel, per_joint = [], [], []
-    for start in np.arange(0.0, t_s[-1], window_s):
-        rows = usable & (t_s >= start) & (t_s < start + window_s)
-        weight = float(lever_n[rows] @ lever_n[rows])
-        if rows.sum() < 20 or weight <= 0:
-            continue
-        centres.append(float(t_s[rows].mean()))
-        travel.append(float(common[rows] @ lever_n[rows]) / weight)
-        per_joint.append(np.where(finite[rows], residual_nm[rows], 0.0).T @ lever_n[rows] / weight)
-    if len(travel) < 4:
-        return none
-    x, y = np.asarray(centres), np.asarray(travel)
-    slope, intercept = np.polyfit(x, y, 1)
-    # A slip moves every joint's torque alike; a drifting force sensor moves each by its lever (the shoulder's
-    # several times the wrist's), a drifting moment alike but with no tie to the force's lever.
-    slopes = np.polyfit(x, np.asarray(per_joint), 1)[0]
-    if (
-        not (np.sign(slopes) == np.sign(slope)).all()
-        or np.abs(slopes).min() < MIN_JOINT_AGREEMENT * np.abs(slopes).max()
-    ):
-        return dataclasses.replace(none, trend_share=0.0)
-    spread = float(np.var(y))
-    share = 1.0 - float(np.var(y - (slope * x + intercept))) / spread if spread > 0 else 0.0
-    along = np.interp(t_s, x, y)
-    return Slip(travel_m=along - along[0], total_m=float(abs(slope) * (x[-1] - x[0])), trend_share=share)
+    travel = fit_travel(problem, lever_n, t_ns, knot_s)
+    share = monotone_share(travel.at_knots_m)
+    total = float(abs(travel.at_knots_m[-1]))
+    if total < MIN_SLIP_M or share < MIN_MONOTONE_SHARE:
+        return Slip(travel=travel, total_m=total, monotone_share=share, joint_share=np.zeros(0))
+    shares = joint_shares(problem, lever_n, travel.travel_m)
+    return Slip(travel=travel, total_m=total, monotone_share=share, joint_share=shares)

@@ -11,7 +11,13 @@ from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.activity import Activity, active_stretches
 from bsp_ros.core.identification.joint.config import JointConfig
-from bsp_ros.core.identification.joint.contact_slip import MIN_TREND_SHARE, contact_slip, slip_lever_n
+from bsp_ros.core.identification.joint.contact_slip import (
+    FOLLOW_KNOT_S,
+    MIN_SLIP_M,
+    contact_slip,
+    fit_travel,
+    slip_lever_n,
+)
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
 from bsp_ros.core.identification.joint.outliers import MIN_OUTLIER_NM, fit_outliers, too_far_off
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
@@ -28,13 +34,6 @@ __all__ = [
     "follow_the_hand",
     "leave_out_activity",
 ]
-
-# Rounds of estimate the travel, take it out, refit: each on shorter windows, which follow a slip's step closer
-# once the first has taken out its trend, s.
-SLIP_WINDOWS_S = (10.0, 5.0, 2.5)
-
-# A contact point moving less than this over the session is not named (a strap's normal play), m.
-MIN_SLIP_M = 0.003
 
 # Activity below this share of a joint's RMS torque is not looked for: it moves no estimate beyond its std, and a
 # noise-free simulation would otherwise be judged against its rounding errors.
@@ -128,30 +127,26 @@ def leave_out_activity(stage: Stage) -> Stage:
 
 
 def follow_the_hand(stage: Stage) -> Stage:
-    """A contact point that drifted along the hand (:func:`contact_slip`) is taken out of the torques and the model
-    refitted, twice (the first fit takes up part of the drift); the finding says by about how much the hand moved
-    in the handle."""
+    """A contact point that travelled along the hand (:func:`contact_slip`: found on knots 5 s apart) is followed on
+    finer knots, fitted with the arm's parameters, taken out of the torques and the model refitted; the finding
+    says by about how much the hand moved in the handle."""
     if not stage.config.check_activity:
         return stage
-    data, fit = stage.data, stage.fit
+    data = stage.data
     lever = slip_lever_n(data.q_rad, data.lengths_m, data.tau_nm)
-    first = contact_slip(data.t_ns, fit.residual, lever)
-    if first.total_m < MIN_SLIP_M or first.trend_share < MIN_TREND_SHARE:
+    slip = contact_slip(stage.problem, data.t_ns, lever)
+    if not slip.found or slip.travel is None:
         return stage
-    travel = np.zeros(data.t_ns.size)
-    for window_s in SLIP_WINDOWS_S:
-        slip = contact_slip(data.t_ns, fit.residual, lever, window_s)
-        travel += slip.travel_m
-        held = dataclasses.replace(data, tau_nm=data.tau_nm - (travel * lever)[:, None])
-        problem = build_problem(held, stage.config.passive, stage.samples.rows, None, stage.samples.extras)
-        fit = fit_problem(problem)
-    # How the travel is followed is itself uncertain: the coarsest estimate of it, and the travel counted from its
-    # mean rather than the session's start (the hand may have settled before it), are the alternatives whose fits'
-    # differences join the covariance once the passive model is chosen (:func:`add_contact_slip`).
-    coarse = data.tau_nm - (first.travel_m * lever)[:, None]
+    travel = fit_travel(stage.problem, lever, data.t_ns, FOLLOW_KNOT_S).travel_m
+    held = dataclasses.replace(data, tau_nm=data.tau_nm - (travel * lever)[:, None])
+    problem = build_problem(held, stage.config.passive, stage.samples.rows, None, stage.samples.extras)
+    fit = fit_problem(problem)
+    # How the travel is followed is itself uncertain: its estimate on the coarser knots, and the travel counted
+    # from its mean rather than the session's start (the hand may have settled before it), are the alternatives
+    # whose fits' differences join the covariance once the passive model is chosen (:func:`add_contact_slip`).
+    coarse = data.tau_nm - (slip.travel.travel_m * lever)[:, None]
     centred = data.tau_nm - ((travel - travel.mean()) * lever)[:, None]
-    total_m = float(abs(travel[-1] - travel[0])) if travel.size else 0.0
-    values = {"slip_mm": 1e3 * max(total_m, first.total_m), "trend_percent": 100.0 * first.trend_share}
+    values = {"slip_mm": 1e3 * abs(float(travel[-1])), "trend_percent": 100.0 * slip.monotone_share}
     stage = dataclasses.replace(
         stage,
         data=held,
