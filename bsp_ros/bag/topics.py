@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from bsp_ros.bag.emg_cdr import EMG_TYPE
 from bsp_ros.core.streams import MARKERS_3
 
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
@@ -55,6 +56,8 @@ class TopicMap:
     stated : the sensor's mounting a cell file states (`bsp identify --cell`), used where the bag records no
         rotation.
     world_frame : the frame of the markers and of gravity.
+    emg : the muscles' EMG envelopes (``std_msgs/msg/Float32MultiArray``, optional; '' none): where a bag has them,
+        the stretches they show active are left out as the torque's bursts are.
     """
 
     wrench: str = "/ft_sensor/wrench"
@@ -65,6 +68,7 @@ class TopicMap:
     transform: str = "/ft_sensor/transform"
     stated: StatedRotation | None = None
     world_frame: str = WORLD_FRAME
+    emg: str = "/emg/envelope"
 
     def expected_types(self) -> dict[str, str]:
         """Topic -> required message type, for every topic of the map.
@@ -76,5 +80,7 @@ class TopicMap:
         types = {topic: POSE_TYPE for topic in (*self.markers.values(), self.handle_pose)}
         if self.transform:
             types[self.transform] = TRANSFORM_TYPE
+        if self.emg:
+            types[self.emg] = EMG_TYPE
         types.update({self.tf_static: TF_TYPE, self.tf: TF_TYPE, self.wrench: WRENCH_TYPE})
         return types

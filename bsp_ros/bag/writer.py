@@ -18,6 +18,7 @@ from rosbags.typesys.store import Typestore
 
 from bsp_ros import __version__
 from bsp_ros.bag.cdr import encode_fixed
+from bsp_ros.bag.emg_cdr import EMG_TYPE, encode_envelope
 from bsp_ros.bag.errors import BagWriteError
 from bsp_ros.bag.mcap_writer import started_mcap_writer
 from bsp_ros.bag.metadata import (
@@ -61,6 +62,14 @@ def _check_session(session: Session, world_frame: str) -> None:
         m = np.asarray(series.t_ns).size
         if np.shape(series.position_m) != (m, 3):
             raise BagWriteError(f"marker {name} positions must be ({m}, 3), got {np.shape(series.position_m)}")
+    emg = session.emg
+    if emg is not None:
+        shape = (np.asarray(emg.t_ns).size, len(emg.channels))
+        if np.shape(emg.envelope) != shape or any("," in name for name in emg.channels):
+            raise BagWriteError(
+                f"EMG envelopes must be {shape} (samples, channels) under channel names without commas, got "
+                f"{np.shape(emg.envelope)} for {list(emg.channels)}"
+            )
 
 
 def write_session_bag(
@@ -205,7 +214,8 @@ def _stream_payloads(
     jitter_ns: int,
     rng: np.random.Generator,
 ) -> list[_TopicPayload]:
-    """The wrench, then each marker in ``MARKERS_3`` order, then the handle pose, encoded as fixed-size CDR rows.
+    """The wrench, then each marker in ``MARKERS_3`` order, then the handle pose, encoded as fixed-size CDR rows;
+    then the EMG envelopes where the session has them (received at their time: the message has no stamp).
 
     Poses go out in ``world_frame`` with an identity orientation. Receive times are the stamps plus ``delay_ns``
     and a jitter in ``[0, jitter_ns)`` ns drawn from ``rng`` topic after topic in this order, so a seed gives the
@@ -225,6 +235,11 @@ def _stream_payloads(
         rows = encode_fixed(t_m, world_frame, values)
         log_m = _receive_times(t_m, delay_ns, jitter_ns, rng)
         payloads.append(_TopicPayload(topic, POSE_TYPE, [r.tobytes() for r in rows], t_m, log_m))
+    if session.emg is not None and topic_map.emg:
+        # The message carries no stamp: its log time is its time, as a recorder's receive time would be.
+        t_e = np.asarray(session.emg.t_ns, dtype=np.int64)
+        rows_e = [encode_envelope(session.emg.channels, row) for row in np.asarray(session.emg.envelope)]
+        payloads.append(_TopicPayload(topic_map.emg, EMG_TYPE, rows_e, t_e, np.maximum.accumulate(t_e)))
     return payloads
 
 

@@ -52,6 +52,13 @@ def add_identify_arguments(parser: argparse.ArgumentParser | Any) -> None:
         help="the robot's PoseStamped of the contact point in world: where the bag has it, it stands for the hand "
         "marker ('' to use the marker) (default: /robot/handle_pose)",
     )
+    parser.add_argument(
+        "--emg-topic",
+        default="/emg/envelope",
+        metavar="TOPIC",
+        help="the muscles' EMG envelopes (std_msgs/Float32MultiArray): where the bag has them, the stretches they "
+        "show active are left out beside the torque's ('' to ignore them) (default: /emg/envelope)",
+    )
     add_placement_arguments(parser)
     parser.add_argument(
         "--tare",
@@ -184,7 +191,7 @@ def topics_from_args(args: argparse.Namespace) -> Any:
         if topic in (wrench, args.tf_topic, args.tf_static_topic, handle_pose):
             raise InputError(f"--marker-topic {item}: {topic} is already the wrench, a tf or the handle pose topic")
         markers[name] = topic
-    topics = TopicMap(wrench, markers, args.tf_static_topic, args.tf_topic, handle_pose)
+    topics = TopicMap(wrench, markers, args.tf_static_topic, args.tf_topic, handle_pose, emg=args.emg_topic)
     return replace(topics, transform=base.transform, stated=base.stated, world_frame=base.world_frame)
 
 

@@ -90,6 +90,7 @@ class FindingCode(StrEnum):
     FRICTION_TRANSITION_WEAK = "friction_transition_weak"
     FIT_OUTLIERS_REMOVED = "fit_outliers_removed"
     ARM_ACTIVE = "arm_active"
+    EMG_UNUSABLE = "emg_unusable"
     TREMOR = "tremor"
     WRENCH_SPIKES_REMOVED = "wrench_spikes_removed"
     MODEL_CHOICE_SPREAD = "model_choice_spread"

@@ -204,6 +204,47 @@ def _possibly_damaged(f: Finding) -> str:
     )
 
 
+def _arm_active(f: Finding) -> str:
+    """The stretches left out; where an EMG was read, what it showed beside the torque."""
+    v = f.values
+    text = (
+        f"the arm was not relaxed in {v['n_stretches']} stretch(es), {v['active_s']:.1f} s ({v['active_percent']:.0f} "
+        f"% of the session"
+    )
+    torque = f"up to {v['peak_nm']:.2f} N m at the {f.where}" if f.where else "no torque burst"
+    if "emg_share_percent" not in v:
+        return f"{text}; {torque}): muscle activity the relaxed-arm model lacks, left out"
+    channels = v.get("channels") or "none"
+    emg = (
+        f"EMG above its quiet baseline + {v['k_sd']:g} sd in {v['emg_share_percent']:.1f} % (channels: {channels}), "
+        f"torque the relaxed-arm model lacks in {v['torque_share_percent']:.1f} % ({torque})"
+    )
+    if v["torque_share_percent"] > 0:
+        emg += f", {v['confirmed_percent']:.0f} % of it with EMG"
+    if v.get("emg_only_percent", 0.0) > 0:
+        emg += f"; {v['emg_only_percent']:.1f} % active by EMG alone (no net torque: co-contraction)"
+    return f"{text}: {emg}): left out"
+
+
+_EMG_PROBLEMS = {
+    "no_channels": "it carries no channel",
+    "channels_change": "its channels change during the session ({n_other} messages of other channels)",
+    "non_finite": "{bad_percent:.0f} % of its samples are not finite (a lead off?)",
+    "negative": "{bad_percent:.0f} % of its samples are negative: no envelope (raw EMG?)",
+    "too_slow": "{rate_hz:.1f} Hz is too slow for a 100 ms rule (at least {min_hz:g} Hz)",
+    "too_short": "{duration_s:.1f} s are too short for a quiet baseline (at least {min_s:g} s)",
+}
+
+
+def _emg_unusable(f: Finding) -> str:
+    why = _EMG_PROBLEMS.get(str(f.values.get("problem", "")), "it cannot be read")
+    try:
+        why = why.format(**f.values)
+    except (KeyError, ValueError):
+        why = "it cannot be read"
+    return f"the EMG envelopes were not used: {why}; active stretches were found from the torque alone"
+
+
 _DETAIL = "{detail}"
 
 SPECS: dict[FindingCode, FindingSpec] = {
@@ -412,10 +453,15 @@ SPECS: dict[FindingCode, FindingSpec] = {
     ),
     C.ARM_ACTIVE: FindingSpec(
         NOTE,
-        "the arm was not relaxed in {n_stretches} stretch(es), {active_s:.1f} s ({active_percent:.0f} % of the "
-        "session; up to {peak_nm:.2f} N m at the {where}): muscle activity the relaxed-arm model lacks, left out",
+        _arm_active,
         "the patient's arm was active during parts of the session",
         "ask the patient to relax; if it recurs, note it for the therapist",
+    ),
+    C.EMG_UNUSABLE: FindingSpec(
+        NOTE,
+        _emg_unusable,
+        "the muscle (EMG) recording could not be used",
+        "check the EMG electrodes and the amplifier's envelope output before the next session",
     ),
     C.WRENCH_SPIKES_REMOVED: FindingSpec(NOTE, _spikes),
     C.MODEL_CHOICE_SPREAD: FindingSpec(

@@ -83,6 +83,26 @@ class MarkerSeries:
 
 
 @dataclass(frozen=True)
+class EmgSeries:
+    """Surface EMG envelopes of the arm's muscles, one value per channel and sample (optional in a session).
+
+    Attributes
+    ----------
+    t_ns : (N,) int64 sample times, ns (in a bag the log time: the message carries no stamp).
+    envelope : (N, C) float64 envelopes in the cell's own unit (V, uV or % of a maximal contraction: the
+        activity rule compares each channel with its own quiet baseline, so any scale serves).
+    channels : (C,) the channels' names (muscles, e.g. ``biceps``).
+    other_layout : messages whose channel names or count differ from the first message's, left out of the
+        arrays (a stream whose channels change is no usable EMG).
+    """
+
+    t_ns: np.ndarray
+    envelope: np.ndarray
+    channels: tuple[str, ...]
+    other_layout: int = 0
+
+
+@dataclass(frozen=True)
 class Session:
     """All streams of one session.
 
@@ -93,12 +113,14 @@ class Session:
     rotation_world_from_sensor : (3, 3) rotation taking wrench-frame vectors into ``world``.
     handle_pose : the contact point in ``world`` as the robot's kinematics give it (its handle pose), or None
         where the cell publishes none: then the ``hand`` skin marker stands for the contact point.
+    emg : the arm muscles' EMG envelopes, or None where the cell records no EMG.
     """
 
     wrench: WrenchSeries
     markers: dict[str, MarkerSeries]
     rotation_world_from_sensor: np.ndarray = field(default_factory=lambda: np.eye(3))
     handle_pose: MarkerSeries | None = None
+    emg: EmgSeries | None = None
 
     @property
     def n_segments(self) -> int:

@@ -177,6 +177,12 @@ def _count_streams(streams: Streams, topic_map: TopicMap, world_frame: str, coun
         foreign = [f for f in frames_m if f != world_frame]
         if foreign:
             counter.report.warnings.append(f"{rep.topic}: positions stamped in {foreign}, expected {world_frame}")
+    if topic_map.emg and (topic_map.emg in counter.report.present or topic_map.emg in counter.streams):
+        emg = streams.emg
+        rep = counter.count(topic_map.emg, 0 if emg is None else emg.t_ns.size + emg.other_layout)
+        if emg is not None:
+            rep.frame_ids = list(emg.channels)
+            rep.note_stamps(emg.t_ns)
 
 
 def _read_transforms(
@@ -294,6 +300,7 @@ def _session(
         markers=markers,
         rotation_world_from_sensor=rotation,
         handle_pose=handle_pose,
+        emg=streams.emg,
     )
 
 
@@ -303,4 +310,6 @@ def _receive_times(streams: Streams, handle_pose: MarkerSeries | None) -> dict[s
     receive.update({name: data[4] for name, data in streams.markers.items() if data[0].size})
     if handle_pose is not None and streams.pose is not None:
         receive["handle_pose"] = streams.pose[4]
+    if streams.emg is not None:
+        receive["emg"] = streams.emg.t_ns
     return receive

@@ -9,8 +9,11 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.bag.cdr import FIXED_LAYOUT_FLOATS, decode_fixed, decode_tf_message, decode_transform_stamped
+from bsp_ros.bag.emg_cdr import EMG_TYPE, decode_envelope
+from bsp_ros.bag.emg_read import collect_envelopes
 from bsp_ros.bag.mcap_scan import ChannelInfo
 from bsp_ros.bag.topics import TF_TYPE, TRANSFORM_TYPE, TopicMap
+from bsp_ros.core.streams import EmgSeries
 from msg_adapters import (
     TransformSample,
     read_pose_stamped,
@@ -124,6 +127,9 @@ class SessionSink:
     ) -> None:
         for offset, length, log in zip(offsets.tolist(), lengths.tolist(), log_ns.tolist(), strict=True):
             raw = buf[offset : offset + length].tobytes()
+            if stream.msgtype == EMG_TYPE:
+                self._feed_envelope(stream, raw, int(log))
+                continue
             if stream.msgtype == TF_TYPE:
                 transforms = decode_tf_message(raw)
             elif stream.msgtype == TRANSFORM_TYPE:
@@ -143,6 +149,21 @@ class SessionSink:
             except ValueError as error:
                 stream.undecodable += 1
                 stream.first_error = stream.first_error or str(error)
+
+    @staticmethod
+    def _feed_envelope(stream: Stream, raw: bytes, log_ns: int) -> None:
+        """One EMG envelope message: its values as a row, its channel names as the row's frame, its log time as its
+        stamp (the message carries none)."""
+        decoded = decode_envelope(raw)
+        if decoded is None:
+            stream.undecodable += 1
+            stream.first_error = stream.first_error or "not a little-endian CDR Float32MultiArray"
+            return
+        channels, values = decoded
+        stream.t_ns.append(np.array([log_ns], dtype=np.int64))
+        stream.values.append(values)
+        stream.frame_index.append(np.array([stream.frames.setdefault(",".join(channels), len(stream.frames))]))
+        stream.log_ns.append(np.array([log_ns], dtype=np.int64))
 
 
 def collect_stream(stream: Stream | None, n_floats: int) -> Collected:
@@ -170,11 +191,13 @@ class Streams:
     wrench : the wrench topic's (empty if it has no message).
     markers : marker name -> its topic's, for the marker topics the bag has.
     pose : the robot's handle pose, if the bag has its topic and it is not a marker topic.
+    emg : the EMG envelope topic's messages (:func:`bsp_ros.bag.emg_read.collect_envelopes`), if the bag has them.
     """
 
     wrench: Collected
     markers: dict[str, Collected]
     pose: Collected | None
+    emg: EmgSeries | None = None
 
 
 def collect_streams(sink: SessionSink, topic_map: TopicMap, present: Mapping[str, str]) -> Streams:
@@ -199,4 +222,4 @@ def collect_streams(sink: SessionSink, topic_map: TopicMap, present: Mapping[str
     pose = None
     if pose_topic not in topic_map.markers.values() and (pose_topic in present or pose_topic in sink.streams):
         pose = collect_stream(sink.streams.get(pose_topic), 7)
-    return Streams(wrench, markers, pose)
+    return Streams(wrench, markers, pose, collect_envelopes(sink.streams.get(topic_map.emg)) if topic_map.emg else None)

@@ -16,7 +16,7 @@ from bsp_ros.core.joint_angles import (
     resample_with_motion,
 )
 from bsp_ros.core.model import contact_torques_nm
-from bsp_ros.core.streams import Session, WrenchSeries, markers_for
+from bsp_ros.core.streams import EmgSeries, Session, WrenchSeries, markers_for
 from bsp_ros.errors import DataError, InputError
 
 
@@ -50,6 +50,7 @@ class IdentificationData:
         of its gravity torque), None where the markers' lateral coordinates are not known (live).
     markers_moved : the recordings' segment lengths differ beyond their noise: a marker was re-attached between
         them, so each recording has its own placement (``recording_index``), not one shared by all.
+    emg : the muscles' EMG envelopes over the session (on their own stamps), None where none were recorded.
     """
 
     t_ns: np.ndarray
@@ -69,6 +70,7 @@ class IdentificationData:
     recording_index: np.ndarray | None = None
     out_of_plane: np.ndarray | None = None
     markers_moved: bool = False
+    emg: EmgSeries | None = None
 
     @property
     def n_joints(self) -> int:
@@ -105,6 +107,7 @@ class IdentificationData:
             None if self.recording_index is None else self.recording_index[start:stop],
             self.out_of_plane,
             self.markers_moved,
+            self.emg,
         )
 
 
@@ -238,4 +241,5 @@ def identification_data_from_session(
         qdd,
         session.handle_pose is not None,
         out_of_plane=out_of_plane_fraction(chain, markers_for(session.n_segments)),
+        emg=session.emg,
     )

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.emg import combined_emg
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.errors import InputError
 
@@ -75,6 +76,7 @@ def combine_recordings(
         np.concatenate([np.full(r.t_ns.size, k) for k, r in enumerate(ordered)]),
         np.max([r.out_of_plane for r in ordered], axis=0) if all(r.out_of_plane is not None for r in ordered) else None,
         lengths.moved,
+        combined_emg([r.emg for r in ordered]),
     )
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bsp_ros.core.identification.joint.activity import ActivitySettings
+from bsp_ros.core.identification.joint.emg_activity import EmgSettings
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.placement import chain_placement_sd_m
 from bsp_ros.core.identification.priors import BasePrior
@@ -56,7 +57,8 @@ class JointConfig:
         with the elastic terms chosen by the data (``--passive auto``) instead of returning an invalid estimate:
         what `bsp identify` does when no passive model was asked for.
     check_activity : find stretches where the arm was not relaxed (bursts of muscle activity) and leave them out;
-        ``activity`` says how they are told from the relaxed arm.
+        ``activity`` says how they are told from the relaxed arm, ``emg`` how EMG envelopes tell them where the
+        session has them.
     """
 
     passive: PassiveModel = field(default_factory=PassiveModel)
@@ -82,6 +84,7 @@ class JointConfig:
     elastic_fallback: bool = False
     check_activity: bool = True
     activity: ActivitySettings = field(default_factory=ActivitySettings)
+    emg: EmgSettings = field(default_factory=EmgSettings)
 
     def __post_init__(self) -> None:
         check_finite_scalar("deadband_fraction", self.deadband_fraction, 0.0, 0.9)

@@ -4,6 +4,7 @@ hand that slipped in the handle is followed."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -18,6 +19,7 @@ from bsp_ros.core.identification.joint.contact_slip import (
     fit_travel,
     slip_lever_n,
 )
+from bsp_ros.core.identification.joint.emg_activity import emg_evidence, emg_values, with_emg
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
 from bsp_ros.core.identification.joint.outliers import MIN_OUTLIER_NM, fit_outliers, too_far_off
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
@@ -60,8 +62,11 @@ def _merged(first: Activity, second: Activity) -> Activity:
     )
 
 
-def activity_finding(data: IdentificationData, config: JointConfig, activity: Activity) -> Finding:
-    """The note of the stretches left out, or the problem where too little of the session is left."""
+def activity_finding(
+    data: IdentificationData, config: JointConfig, activity: Activity, emg: Mapping[str, float | str] | None = None
+) -> Finding:
+    """The note of the stretches left out, or the problem where too little of the session is left; ``emg``: what
+    the EMG showed beside the torque (:func:`emg_values`), where the session has usable EMG."""
     duration_s = float(data.t_ns[-1] - data.t_ns[0]) * 1e-9
     worst = int(np.argmax(activity.peak_nm))
     if activity.share > config.activity.max_active_share:
@@ -69,6 +74,7 @@ def activity_finding(data: IdentificationData, config: JointConfig, activity: Ac
             "relaxed_s": duration_s * (1.0 - activity.share),
             "relaxed_percent": 100.0 * (1.0 - activity.share),
             "n_stretches": len(activity.spans_s),
+            **(emg or {}),
         }
         return Finding(code=FindingCode.TOO_LITTLE_RELAXED, values=values)
     values = {
@@ -76,8 +82,10 @@ def activity_finding(data: IdentificationData, config: JointConfig, activity: Ac
         "active_s": activity.active_s,
         "active_percent": 100.0 * activity.share,
         "peak_nm": float(activity.peak_nm[worst]),
+        **(emg or {}),
     }
-    return Finding(code=FindingCode.ARM_ACTIVE, where=joints_for(data.n_joints)[worst], values=values)
+    where = joints_for(data.n_joints)[worst] if activity.peak_nm[worst] > 0 else ""
+    return Finding(code=FindingCode.ARM_ACTIVE, where=where, values=values)
 
 
 # Samples far off the fit beyond this share of the usable ones, with a residual above the noise, are the mark of
@@ -101,24 +109,40 @@ def _calls_for_activity(stage: Stage) -> bool:
 def leave_out_activity(stage: Stage) -> Stage:
     """Stretches where the arm was active (:func:`active_stretches`) are left out of every joint's rows and the
     model refitted; too much activity leaves too little of a relaxed arm to identify (invalid). Only where the fit
-    shows the mark of bursts (:func:`_calls_for_activity`)."""
-    if not stage.config.check_activity or not _calls_for_activity(stage):
+    shows the mark of bursts (:func:`_calls_for_activity`). Where the session has EMG, the stretches it shows active
+    (:func:`emg_evidence`) are left out too, bursts of torque or not: the clinician's definition of not relaxed."""
+    if not stage.config.check_activity:
         return stage
-    activity = detect_activity(stage.data, stage.config, stage.fit.residual)
-    if not activity.spans_s:
+    evidence = emg_evidence(stage.data, stage.config.emg)
+    if evidence is not None and evidence.notes:
+        stage = stage.apply(Outcome(notes=evidence.notes))
+    emg_active = np.zeros(stage.data.t_ns.size, dtype=bool) if evidence is None else evidence.active
+    from_torque = _calls_for_activity(stage)
+    if not from_torque and not emg_active.any():
         return stage
     data, config, samples = stage.data, stage.config, stage.samples
+    activity = (
+        detect_activity(data, config, stage.fit.residual)
+        if from_torque
+        else Activity(active=np.zeros(data.t_ns.size, dtype=bool), spans_s=(), peak_nm=np.zeros(data.n_joints))
+    )
+    if not activity.spans_s and not emg_active.any():
+        return stage
     for round_ in range(ROUNDS):
-        rows = samples.rows & ~activity.active[:, None]
+        rows = samples.rows & ~(activity.active | emg_active)[:, None]
         problem = build_problem(data, config.passive, rows, None, samples.extras)
         fit = fit_problem(problem)
-        if round_ == ROUNDS - 1:
+        if round_ == ROUNDS - 1 or not from_torque:
             break
         more = detect_activity(data, config, fit.residual)
         if not more.spans_s:
             break
         activity = _merged(activity, more)
-    finding = activity_finding(data, config, activity)
+    emg = None
+    if evidence is not None and evidence.activity is not None:
+        emg = emg_values(activity.active, emg_active, evidence.activity)
+        activity = with_emg(activity, evidence, data.t_ns)
+    finding = activity_finding(data, config, activity, emg)
     if finding.code is FindingCode.TOO_LITTLE_RELAXED or (rows.sum(axis=0) < len(problem.names)).any():
         return stage.apply(Outcome(problems=(finding,)))
     kept = dataclasses.replace(samples, rows=rows, problem=problem)
