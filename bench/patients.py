@@ -44,6 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics")
 
 from mujoco_bag import write_bag
 from mujoco_cell import CellOptions, draw_arm, paper_sine
+from mujoco_emg import EmgRecording
 from mujoco_patient import (
     CompliantStrap,
     HandSlip,
@@ -70,6 +71,7 @@ CAUSES: dict[str, frozenset[str]] = {
     "activity_5": frozenset({"arm_active", "too_little_relaxed"}),
     "activity_10": frozenset({"arm_active", "too_little_relaxed"}),
     "activity_20": frozenset({"arm_active", "too_little_relaxed"}),
+    "activity_emg": frozenset({"arm_active", "too_little_relaxed"}),
     "spasticity_slow": frozenset({"spasticity", "friction_speed_dependent"}),
     "spasticity_fast": frozenset({"spasticity", "friction_speed_dependent"}),
     "stroke_arm": frozenset(
@@ -115,6 +117,13 @@ def cases() -> list[Case]:
         Case("control_plan", "plan", False, Patient()),
         Case("control_fast", "0.12", False, Patient()),
         *activity,
+        # 7 % activity with the muscles' EMG envelopes and a 4 s co-contraction without net torque (mujoco_emg.py).
+        Case(
+            "activity_emg",
+            "0.03",
+            False,
+            Patient(activity=InvoluntaryActivity(share_of_gravity=0.07), emg=EmgRecording(cocontraction_s=4.0)),
+        ),
         Case("spasticity_slow", "0.03", False, Patient(spasticity=Spasticity())),
         Case("spasticity_fast", "0.12", False, Patient(spasticity=Spasticity())),
         Case("stroke_arm", "0.03", True, typical_stroke_arm()),

@@ -214,16 +214,20 @@ def _arm_active(f: Finding) -> str:
     torque = f"up to {v['peak_nm']:.2f} N m at the {f.where}" if f.where else "no torque burst"
     if "emg_share_percent" not in v:
         return f"{text}; {torque}): muscle activity the relaxed-arm model lacks, left out"
-    channels = v.get("channels") or "none"
-    emg = (
-        f"EMG above its quiet baseline + {v['k_sd']:g} sd in {v['emg_share_percent']:.1f} % (channels: {channels}), "
-        f"torque the relaxed-arm model lacks in {v['torque_share_percent']:.1f} % ({torque})"
+    text += (
+        f"), left out: EMG above its quiet baseline + {v['k_sd']:g} sd in {v['emg_share_percent']:.1f} % of the "
+        f"session ({v.get('channels') or 'no channel'}), torque the relaxed-arm model lacks in "
+        f"{v['torque_share_percent']:.1f} % ({torque}"
     )
     if v["torque_share_percent"] > 0:
-        emg += f", {v['confirmed_percent']:.0f} % of it with EMG"
+        text += f", {v['confirmed_percent']:.0f} % of it with EMG"
+    text += ")"
     if v.get("emg_only_percent", 0.0) > 0:
-        emg += f"; {v['emg_only_percent']:.1f} % active by EMG alone (no net torque: co-contraction)"
-    return f"{text}: {emg}): left out"
+        text += (
+            f"; {v['emg_only_percent']:.1f} % by EMG alone (muscles active without a net torque: co-contraction, or "
+            f"too little torque to show)"
+        )
+    return text
 
 
 _EMG_PROBLEMS = {

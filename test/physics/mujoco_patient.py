@@ -45,6 +45,9 @@ import mujoco
 import numpy as np
 from mujoco_bag import CellSession, record
 from mujoco_cell import ArmParams, CellOptions, EngineRun, mjcf_text, run_engine
+from mujoco_emg import CHANNELS, EmgRecording, EmgTruth, emg_envelopes
+
+from bsp_ros.core.streams import EmgSeries
 
 _MARKER_JOINT = (0, 1, 2, 2)  # the joint whose angle slides each marker (shoulder, elbow, wrist, hand)
 _MARKER_SEGMENT = (0, 1, 2, 2)  # the segment each marker is fixed to
@@ -173,6 +176,7 @@ class Patient:
     skin: SkinSliding | None = None
     slip: HandSlip | None = None
     strap: CompliantStrap | None = None
+    emg: EmgRecording | None = None  # recorded by the cell (mujoco_emg.py), nothing acts in the engine
 
     @property
     def in_engine(self) -> bool:
@@ -203,6 +207,7 @@ class Imposed:
     weld_sag_m, weld_sag_rad : (N,) the strap's deflection (contact body against handle), m and rad.
     tremor_frequency_hz : (N,) the tremor's instantaneous frequency, Hz (NaN without a tremor).
     patient : the description that was run.
+    emg : the EMG envelopes recorded and what made them (``patient.emg``), else None.
     """
 
     t_s: np.ndarray
@@ -219,6 +224,7 @@ class Imposed:
     weld_sag_rad: np.ndarray
     tremor_frequency_hz: np.ndarray
     patient: Patient = field(repr=False)
+    emg: EmgTruth | None = field(default=None, repr=False)
 
     def to_json(self) -> dict[str, Any]:
         """A JSON-ready summary: per kind what was imposed, its size and when (truth.json's ``patient`` key)."""
@@ -252,6 +258,8 @@ class Imposed:
             out["skin"] = {"range_mm": (1e3 * (slide.max(axis=0) - slide.min(axis=0))).tolist()}
         if p.slip is not None:
             out["slip"] = {"final_mm": float(1e3 * self.slip_m[-1]), "max_mm": float(1e3 * np.abs(self.slip_m).max())}
+        if self.emg is not None:
+            out["emg"] = self.emg.to_json()
         if p.strap is not None:
             out["strap"] = {
                 "sag_mean_mm": float(1e3 * self.weld_sag_m.mean()),
@@ -483,12 +491,26 @@ def patient_session(arm: ArmParams, options: CellOptions, patient: Patient) -> P
         tremor_frequency_hz=part("tremor_frequency_hz", (n,)) if patient.tremor is not None else np.full(n, np.nan),
         patient=patient,
     )
+    if patient.emg is not None:
+        imposed = _with_emg(cell, imposed, options, patient.emg)
     cell.truth["patient"] = imposed.to_json()
     return PatientSession(cell, imposed)
 
 
+def _with_emg(cell: CellSession, imposed: Imposed, options: CellOptions, recording: EmgRecording) -> Imposed:
+    """``imposed`` with the EMG of its torques (its own seeded draws), the envelopes put into the cell's session."""
+    rng = np.random.default_rng(np.random.SeedSequence([options.seed, 37]))
+    truth = emg_envelopes(rng, imposed.t_s, imposed.activity_nm, imposed.activity_active, recording)
+    t_ns = np.int64(options.start_ns) + np.round(truth.t_s * 1e9).astype(np.int64)
+    cell.session = dataclasses.replace(
+        cell.session, emg=EmgSeries(t_ns=t_ns, envelope=truth.envelope_uv, channels=CHANNELS)
+    )
+    return dataclasses.replace(imposed, emg=truth)
+
+
 __all__ = [
     "CompliantStrap",
+    "EmgRecording",
     "HandSlip",
     "Imposed",
     "InvoluntaryActivity",
