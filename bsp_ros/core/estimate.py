@@ -19,6 +19,7 @@ from bsp_ros.core.estimate_schema import Estimate, Level, Quality, Quantity, Sou
 from bsp_ros.core.findings import Finding, FindingCode, Severity, note
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.speed_split import speed_dependence_block
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.streams import joints_for, segments_for
 
@@ -99,7 +100,14 @@ def estimate_from_result(
         },
         software={"name": "bsp_ros", "version": __version__},
         session=dict(session) if session else None,
+        extra=_speed_dependence(result),
     )
+
+
+def _speed_dependence(result: IdentificationResult) -> dict[str, Any]:
+    """The ``speed_dependence`` block of a session at two speeds (empty otherwise: no key)."""
+    block = speed_dependence_block(result.findings)
+    return {"speed_dependence": block} if block else {}
 
 
 def estimate_from_fit(

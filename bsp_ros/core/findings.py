@@ -101,6 +101,8 @@ class FindingCode(StrEnum):
     FRICTION_SPEED_DEPENDENT = "friction_speed_dependent"
     PLACEMENT_WIDER = "placement_wider"
     GRIP_COMPLIANT = "grip_compliant"
+    # A session at two speeds: the speed-dependent (neural) resistance measured apart from the passive part.
+    SPEED_DEPENDENT_RESISTANCE = "speed_dependent_resistance"
     ELASTIC_FAMILY_CHOSEN = "elastic_family_chosen"
     HELD_FROM_CHECK = "held_from_check"
     FUSION_FAILED = "fusion_failed"

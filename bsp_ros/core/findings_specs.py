@@ -118,6 +118,21 @@ def _elastic_term(f: Finding) -> str:
     )
 
 
+def _speed_dependent(f: Finding) -> str:
+    v = f.values
+    moving = "the joint angle rising" if v["direction"] > 0 else "the joint angle falling"
+    measured = (
+        f"the {f.where} moved at two speeds ({v['slow_rad_s']:.3g} and {v['fast_rad_s']:.3g} rad/s): moving with "
+        f"{moving}, its resistance was {v['part_nm']:+.3g} +- {v['std_nm']:.2g} Nm higher at the fast speed, "
+        "beyond the passive model"
+    )
+    if not v["exceeds"]:
+        return f"{measured}: within 3 std of none, so its static moments are the whole session's"
+    if not v["static_from_slow"]:
+        return f"{measured}: a speed-dependent part, but too little of the slow part is left to identify it alone"
+    return f"{measured}: a speed-dependent part, left out: its static moments come from the slow part"
+
+
 def _stribeck(f: Finding) -> str:
     v = f.values
     if v["moves"] == "static_moment":
@@ -499,6 +514,8 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "tighten the strap (a firm pad under the palm) so that the hand follows the handle, and record again if a "
         "joint keeps sticking",
     ),
+    # The report renders its own line per joint where the part exceeds (clinic/report/speed_lines.py).
+    C.SPEED_DEPENDENT_RESISTANCE: FindingSpec(NOTE, _speed_dependent),
     C.ELASTIC_FAMILY_CHOSEN: FindingSpec(NOTE, _family_chosen),
     C.HELD_FROM_CHECK: FindingSpec(
         NOTE,

@@ -100,6 +100,11 @@ SAMPLE_VALUES: dict[FindingCode, dict[str, object]] = {
     },
     FindingCode.PLACEMENT_WIDER: {"assumed_mm": 2.0, "apparent_mm": 6.0, "at_limit": False},
     FindingCode.GRIP_COMPLIANT: {"stick_s": 3.2, "stuck_percent": 38.0, "dwell_ratio": 4.4, "n_joints": 2},
+    FindingCode.SPEED_DEPENDENT_RESISTANCE: {
+        **{"part_nm": 0.034, "std_nm": 0.003, "direction": -1, "slow_rad_s": 0.0095, "fast_rad_s": 0.038},
+        **{"exceeds": True, "static_from_slow": True, "positive_nm": 0.0, "positive_std_nm": 0.002},
+        **{"negative_nm": 0.034, "negative_std_nm": 0.003},
+    },
     FindingCode.ELASTIC_FAMILY_CHOSEN: {
         "model": "coulomb",
         "joints": ["wrist"],

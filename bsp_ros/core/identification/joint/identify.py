@@ -27,6 +27,7 @@ from bsp_ros.core.identification.joint.judgement import (
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
 from bsp_ros.core.identification.joint.relaxed import add_contact_slip, follow_the_hand, leave_out_activity
 from bsp_ros.core.identification.joint.samples import usable_samples
+from bsp_ros.core.identification.joint.speed_split import split_speeds
 from bsp_ros.core.identification.joint.stage import Outcome, Stage, Step
 from bsp_ros.core.identification.joint.steps import (
     add_friction_shape,
@@ -77,6 +78,7 @@ STEPS: tuple[Step, ...] = (
     follow_the_hand,
     leave_out_activity,
     fit_friction_transitions,
+    split_speeds,
     choose_passive_model,
     add_contact_slip,
     remove_far_off_samples,

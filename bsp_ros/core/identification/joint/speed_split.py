@@ -1,0 +1,333 @@
+"""Two speeds: the speed-dependent (neural) resistance of a joint apart from its passive, speed-independent part.
+
+A stretch reflex resists a fast stretch and not a slow one (Lance 1980); a relaxed joint's friction and elasticity
+barely change between a robot's slow speeds. Where a session moves a joint over the same angles at two clearly
+separated speeds (a plan's ``--speeds SLOW FAST``, or any session that does so: the groups are found in the data,
+never taken from a flag), the resistance at the fast speed minus that at the slow speed, beyond what the model's
+passive terms (a viscous term, if any) explain, is measured per direction of motion: one column per direction
+that is the Coulomb column's sign on the rows of the fast strokes, fitted with the model, gives the extra
+resistance in Nm with its std. This is the split of NeuroFlexor (Lindberg et al. 2011: a slow and a fast stretch
+separate the neural part from the elastic and viscous ones) on a slow robot's sweeps, with the passive part taken
+out first (McPherson et al. 2019).
+
+Where the fast part shows such resistance (more than 3 std from 0 in a direction), the joint's static moments come
+from the slow part: the fast strokes' rows leave that joint's torque equation (a joint's own muscle torque acts
+between its two segments and enters no other joint's equation) and the model is refitted. Where the two speeds
+agree, the estimate stays as it is. Either way the note ``speed_dependent_resistance`` carries the measurement; a
+part in one direction only is also named as possible spasticity.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.identification.joint.stage import Outcome, Stage
+from bsp_ros.core.identification.result import ParameterName
+from bsp_ros.core.identification.stacked import Problem, augmented, build_problem, fit_problem
+from bsp_ros.core.streams import joints_for
+
+__all__ = [
+    "DIRECTIONS",
+    "EXCEEDS_SD",
+    "DirectionPart",
+    "SpeedGroups",
+    "SpeedSplit",
+    "measure_speed_split",
+    "speed_dependence_block",
+    "speed_groups",
+    "split_speeds",
+]
+
+# Two speeds are clearly separated when the slowest fast stroke is at least this many times as fast as the
+# fastest slow one (sorted stroke speeds: the largest ratio between neighbours).
+SPLIT_RATIO = 2.0
+# A stroke (one run of one direction of motion) shorter than this says nothing of its speed group, s.
+MIN_STROKE_S = 1.0
+# Strokes each speed group needs in each direction (one sweep of the range each way, as a clinical stretch test).
+MIN_STROKES = 1
+# Each speed group holds at least this share of the long strokes' time.
+MIN_GROUP_SHARE = 0.1
+# The two groups' angle ranges overlap over at least this share of the narrower one (the same angles).
+MIN_OVERLAP = 0.5
+# Each direction's fast rows: at least this many in the fit (the extra column's std holds few otherwise).
+MIN_FAST_ROWS = 200
+# Where the slow strokes hold less than this share of a joint's rows, its static moments stay the whole session's.
+MIN_SLOW_SHARE = 0.25
+# A speed-dependent part this many std from 0 is measured; the static moments then come from the slow part.
+EXCEEDS_SD = 3.0
+# Below this a one-direction part is not named as possible spasticity (it moves no estimate a clinic reads), Nm.
+MIN_SPASTIC_NM = 0.02
+# The two directions of motion, in the sign of the joint velocity (docs/contract.md conventions).
+DIRECTIONS = ("positive", "negative")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SpeedGroups:
+    """One joint's two speed groups.
+
+    Attributes
+    ----------
+    fast : (N,) bool, the samples in the fast strokes (every stroke faster than the split, short ones too).
+    slow_rad_s, fast_rad_s : the median stroke speed of each group (each stroke's 90th percentile speed), rad/s.
+    """
+
+    fast: np.ndarray
+    slow_rad_s: float
+    fast_rad_s: float
+
+
+def _strokes(velocity_rad_s: np.ndarray) -> list[tuple[int, int]]:
+    """``[start, end)`` indices of each run of one nonzero sign of ``velocity_rad_s`` (N,)."""
+    sign = np.sign(velocity_rad_s).astype(np.int8)
+    edges = np.flatnonzero(np.diff(sign)) + 1
+    bounds = np.concatenate(([0], edges, [sign.size]))
+    return [(int(a), int(b)) for a, b in itertools.pairwise(bounds) if sign[a] != 0]
+
+
+def _overlap(first: tuple[float, float], second: tuple[float, float]) -> float:
+    """The share of the narrower of two angle ranges that the other covers."""
+    shared = min(first[1], second[1]) - max(first[0], second[0])
+    narrower = min(first[1] - first[0], second[1] - second[0])
+    return max(shared, 0.0) / narrower if narrower > 0 else 0.0
+
+
+def speed_groups(t_ns: np.ndarray, q_rad: np.ndarray, velocity_rad_s: np.ndarray) -> SpeedGroups | None:
+    """One joint's slow and fast strokes over the same angles, or None where the session has no two such speeds.
+
+    Parameters
+    ----------
+    t_ns : (N,) stamps, ns.
+    q_rad : (N,) the joint's angle, rad.
+    velocity_rad_s : (N,) its direction-of-motion velocity, rad/s.
+    """
+    strokes = _strokes(velocity_rad_s)
+    t_s = (t_ns - t_ns[0]) * 1e-9
+    speed = np.array([np.percentile(np.abs(velocity_rad_s[a:b]), 90) for a, b in strokes])
+    long = np.array([t_s[b - 1] - t_s[a] >= MIN_STROKE_S for a, b in strokes], dtype=bool)
+    if long.sum() < 4 * MIN_STROKES:
+        return None
+    duration = np.array([t_s[b - 1] - t_s[a] for a, b in strokes])
+    ordered = np.sort(speed[long])
+    ratios = ordered[1:] / np.maximum(ordered[:-1], 1e-12)
+    gap = int(np.argmax(ratios))
+    if ratios[gap] < SPLIT_RATIO:
+        return None
+    split = float(np.sqrt(ordered[gap] * ordered[gap + 1]))
+    direction = np.array([np.sign(velocity_rad_s[a]) for a, _ in strokes])
+    ranges = []
+    for fast in (False, True):
+        group = long & ((speed > split) == fast)
+        if min(int((group & (direction > 0)).sum()), int((group & (direction < 0)).sum())) < MIN_STROKES:
+            return None
+        if duration[group].sum() < MIN_GROUP_SHARE * duration[long].sum():
+            return None
+        angles = np.concatenate([q_rad[a:b] for (a, b), g in zip(strokes, group, strict=True) if g])
+        ranges.append((float(angles.min()), float(angles.max())))
+    if _overlap(ranges[0], ranges[1]) < MIN_OVERLAP:
+        return None
+    rows = np.zeros(velocity_rad_s.size, dtype=bool)
+    for (a, b), s in zip(strokes, speed, strict=True):
+        rows[a:b] = s > split
+    return SpeedGroups(
+        fast=rows,
+        slow_rad_s=float(np.median(speed[long & (speed <= split)])),
+        fast_rad_s=float(np.median(speed[long & (speed > split)])),
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class DirectionPart:
+    """The resistance to fast motion in one direction beyond that to slow motion.
+
+    Attributes
+    ----------
+    part_nm : fast minus slow, beyond the model's passive terms, Nm (positive: more resistance when fast).
+    std_nm : its std, Nm.
+    """
+
+    part_nm: float
+    std_nm: float
+
+    @property
+    def exceeds(self) -> bool:
+        """Whether the part lies more than :data:`EXCEEDS_SD` std from 0."""
+        return bool(abs(self.part_nm) > EXCEEDS_SD * self.std_nm)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SpeedSplit:
+    """One joint's two-speed measurement.
+
+    Attributes
+    ----------
+    joint : the joint.
+    groups : its speed groups.
+    parts : (positive, negative) direction of motion: each direction's speed-dependent part.
+    """
+
+    joint: str
+    groups: SpeedGroups
+    parts: tuple[DirectionPart, DirectionPart]
+
+    @property
+    def exceeds(self) -> bool:
+        """Whether some direction shows a speed-dependent part (the static moments then come from the slow part)."""
+        return any(part.exceeds for part in self.parts)
+
+    @property
+    def leading(self) -> int:
+        """The index into :attr:`parts` of the direction whose part lies furthest from 0 in std."""
+        z = [abs(p.part_nm) / max(p.std_nm, 1e-300) for p in self.parts]
+        return int(np.argmax(z))
+
+    def finding(self, static_from_slow: bool) -> Finding:
+        """The note ``speed_dependent_resistance``: both directions' parts, the speeds, and where the static moments
+        came from."""
+        lead = self.parts[self.leading]
+        values: dict[str, float | int | bool] = {
+            "part_nm": lead.part_nm,
+            "std_nm": lead.std_nm,
+            "direction": 1 if self.leading == 0 else -1,
+            "slow_rad_s": self.groups.slow_rad_s,
+            "fast_rad_s": self.groups.fast_rad_s,
+            "exceeds": self.exceeds,
+            "static_from_slow": static_from_slow,
+        }
+        for name, part in zip(DIRECTIONS, self.parts, strict=True):
+            values[f"{name}_nm"] = part.part_nm
+            values[f"{name}_std_nm"] = part.std_nm
+        return Finding(code=FindingCode.SPEED_DEPENDENT_RESISTANCE, where=self.joint, values=values)
+
+    def spasticity(self) -> Finding | None:
+        """Possible spasticity: more resistance to fast motion in one direction only, or None."""
+        exceeding = [i for i, part in enumerate(self.parts) if part.exceeds]
+        if len(exceeding) != 1 or self.parts[exceeding[0]].part_nm < MIN_SPASTIC_NM:
+            return None
+        part = self.parts[exceeding[0]]
+        values = {
+            "increase_nm": part.part_nm,
+            "std_nm": part.std_nm,
+            "fast_rad_s": self.groups.fast_rad_s,
+            "slow_rad_s": self.groups.slow_rad_s,
+            "direction": 1 if exceeding[0] == 0 else -1,
+        }
+        return Finding(code=FindingCode.SPASTICITY, where=self.joint, values=values)
+
+
+def _fast_columns(problem: Problem, velocity_rad_s: np.ndarray, groups: dict[int, SpeedGroups]) -> np.ndarray:
+    """(N, n, 2 k) per split joint and direction: the Coulomb column's sign on that direction's fast rows."""
+    n = problem.torque.shape[1]
+    extra = np.zeros((velocity_rad_s.shape[0], n, 2 * len(groups)))
+    for k, (j, found) in enumerate(groups.items()):
+        sign = np.sign(velocity_rad_s[:, j])
+        extra[:, j, 2 * k] = np.where(found.fast & (sign > 0), 1.0, 0.0)
+        extra[:, j, 2 * k + 1] = np.where(found.fast & (sign < 0), -1.0, 0.0)
+    return extra
+
+
+def measure_speed_split(
+    problem: Problem, velocity_rad_s: np.ndarray, groups: dict[int, SpeedGroups]
+) -> list[SpeedSplit]:
+    """Each split joint's speed-dependent parts: ``problem`` fitted with :func:`_fast_columns` beside its own.
+
+    Parameters
+    ----------
+    problem : the stacked problem (its passive model's terms, its rows).
+    velocity_rad_s : (N, n) the direction-of-motion velocities, rad/s.
+    groups : joint index -> its speed groups (joints with too few fast rows in a direction are left out).
+    """
+    usable = {
+        j: found
+        for j, found in groups.items()
+        if min(
+            int((problem.rows[:, j] & found.fast & (velocity_rad_s[:, j] > 0)).sum()),
+            int((problem.rows[:, j] & found.fast & (velocity_rad_s[:, j] < 0)).sum()),
+        )
+        >= MIN_FAST_ROWS
+    }
+    if not usable:
+        return []
+    joints = joints_for(problem.torque.shape[1])
+    names: list[ParameterName] = [
+        ("speed_dependent_nm", f"{joints[j]}/{direction}") for j in usable for direction in DIRECTIONS
+    ]
+    wide = fit_problem(augmented(problem, _fast_columns(problem, velocity_rad_s, usable), names))
+    p = len(problem.names)
+    std = np.sqrt(np.clip(np.diag(wide.covariance)[p:], 0.0, None))
+    out = []
+    for k, (j, found) in enumerate(usable.items()):
+        parts = tuple(
+            DirectionPart(part_nm=float(wide.values[p + i]), std_nm=float(std[i])) for i in (2 * k, 2 * k + 1)
+        )
+        out.append(SpeedSplit(joint=joints[j], groups=found, parts=(parts[0], parts[1])))
+    return out
+
+
+def split_speeds(stage: Stage) -> Stage:
+    """The step: where a joint moved over the same angles at two clearly separated speeds, its speed-dependent
+    resistance is measured (:func:`measure_speed_split`); a joint that shows one has its fast strokes' rows left
+    out and the model is refitted, so that its static moments come from the slow part (left as they are where
+    too few slow rows would remain)."""
+    if stage.problems:
+        return stage
+    data = stage.data
+    groups = {}
+    for j in range(stage.n):
+        found = speed_groups(data.t_ns, data.q_rad[:, j], data.velocity_rad_s[:, j])
+        if found is not None:
+            groups[j] = found
+    if not groups:
+        return stage
+    splits = measure_speed_split(stage.problem, data.velocity_rad_s, groups)
+    if not splits:
+        return stage
+    joints = joints_for(stage.n)
+    rows = stage.samples.rows.copy()
+    for split in splits:
+        if split.exceeds:
+            j = joints.index(split.joint)
+            rows[:, j] &= ~groups[j].fast
+    # The slow part alone must still hold a good share of the joint's rows.
+    kept = rows.sum(axis=0) >= MIN_SLOW_SHARE * stage.samples.rows.sum(axis=0)
+    slow = {s.joint: s.exceeds and bool(kept[joints.index(s.joint)]) for s in splits}
+    for j, joint in enumerate(joints):
+        if not slow.get(joint, False):
+            rows[:, j] = stage.samples.rows[:, j]
+    notes = [s.finding(slow[s.joint]) for s in splits]
+    notes += [f for f in (s.spasticity() for s in splits) if f is not None]
+    if not any(slow.values()):
+        return stage.apply(Outcome(notes=tuple(notes)))
+    widths = stage.widths_rad_s if stage.widths_rad_s.any() else None
+    problem = build_problem(data, stage.config.passive, rows, widths, stage.samples.extras)
+    fit = fit_problem(problem)
+    stage = dataclasses.replace(stage, samples=dataclasses.replace(stage.samples, rows=rows, problem=problem))
+    return stage.apply(Outcome(problem=problem, fit=fit, notes=tuple(notes)))
+
+
+def speed_dependence_block(findings: Iterable[Finding]) -> dict[str, Any]:
+    """The estimate's ``speed_dependence`` block (docs/contract.md) from the ``speed_dependent_resistance`` notes:
+    per joint measured at two speeds, the two speeds, where its static moments came from, and per direction of
+    motion the speed-dependent part with its std and whether it lies beyond 3 std of 0. Empty for one speed."""
+    block: dict[str, Any] = {}
+    for finding in findings:
+        if finding.code is not FindingCode.SPEED_DEPENDENT_RESISTANCE:
+            continue
+        v = finding.values
+        entry: dict[str, Any] = {
+            "slow_rad_s": float(v["slow_rad_s"]),
+            "fast_rad_s": float(v["fast_rad_s"]),
+            "static_moments_from": "slow" if v["static_from_slow"] else "session",
+        }
+        for name in DIRECTIONS:
+            part, std = float(v[f"{name}_nm"]), float(v[f"{name}_std_nm"])
+            exceeds = DirectionPart(part_nm=part, std_nm=std).exceeds
+            entry[name] = {"part_nm": part, "std_nm": std, "exceeds_3_std": exceeds}
+        block[finding.where] = entry
+    return block
