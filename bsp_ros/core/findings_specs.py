@@ -426,7 +426,7 @@ SPECS: dict[FindingCode, FindingSpec] = {
     C.HAND_SLIPPED: FindingSpec(
         WEAK,
         "the hand moved in the handle by about {slip_mm:.0f} mm during the session (the contact point drifted along "
-        "the hand): the torques were corrected for it",
+        "the hand): the torques were corrected for it, and {left_out_s:.0f} s about its slips left out",
         "the hand moved in the handle during the session",
         "tighten the strap so the hand sits against the handle's stop, and record again if it keeps moving",
     ),

@@ -30,7 +30,7 @@ SAMPLE_VALUES: dict[FindingCode, dict[str, object]] = {
     FindingCode.FAR_OFF_SAMPLES: {"n_far": 900, "usable": 4000, "outlier_sd": 8.0},
     FindingCode.HANGS_ON_FEW_SAMPLES: {"n_far": 12, "key": "coulomb_nm", "shift_sd": 2.5},
     FindingCode.TOO_LITTLE_RELAXED: {"relaxed_s": 21.0, "relaxed_percent": 35.0, "n_stretches": 9},
-    FindingCode.HAND_SLIPPED: {"slip_mm": 8.2, "trend_percent": 91.0},
+    FindingCode.HAND_SLIPPED: {"slip_mm": 8.2, "trend_percent": 91.0, "left_out_s": 4.5},
     FindingCode.SPASTICITY: {"increase_nm": 0.08, "fast_rad_s": 0.04, "direction": -1},
     FindingCode.TREMOR: {"frequency_hz": 5.1, "torque_nm": 0.21, "angle_deg": 0.02},
     FindingCode.TREMOR_FRICTION: {"angle_deg": 0.3, "frequency_hz": 5.1, "speed_percent": 80.0},

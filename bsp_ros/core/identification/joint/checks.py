@@ -81,7 +81,7 @@ def check_elastic(stage: Stage) -> Stage | IdentificationResult:
     )
     if elastic and config.elastic_fallback:
         # The data reject the fixed model: the family the data choose from, its spread in the std, replaces it.
-        return family_result(stage.data, config).with_findings(*elastic, first=True)
+        return family_result(stage.given, config).with_findings(*elastic, first=True)
     problems = (Finding(code=FindingCode.ELASTIC_LACKING),) if elastic else ()
     return stage.apply(Outcome(notes=tuple(elastic), problems=problems), from_checks=True)
 

@@ -34,10 +34,14 @@ __all__ = [
     "Slip",
     "Travel",
     "contact_slip",
+    "even_knots",
     "fit_travel",
     "joint_shares",
     "monotone_share",
+    "monotone_travel",
+    "refined_knots",
     "slip_lever_n",
+    "slip_spans",
     "travel_basis",
 ]
 
@@ -48,6 +52,10 @@ DETECT_KNOT_S = 5.0
 # The knots the travel is followed on once found, s: a slip of half a second moves its knot's neighbours too,
 # and a misfit of a few times the sensor noise is left beside a step on 5 s knots.
 FOLLOW_KNOT_S = 1.25
+
+# A knot is fitted only where some used sample lies at least this close to it (in its basis function's value: a
+# fifth of the way from its neighbours).
+MIN_KNOT_WEIGHT = 0.8
 
 # A travel is judged on this many knots at least (shorter sessions: a few random values line up by chance).
 MIN_KNOTS = 8
@@ -123,16 +131,36 @@ def slip_lever_n(q_rad: np.ndarray, lengths_m: np.ndarray, tau_nm: np.ndarray) -
     return np.asarray(np.sin(phi) * wrench[:, 0] - np.cos(phi) * wrench[:, 1])
 
 
-def travel_basis(t_ns: np.ndarray, knot_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Piecewise linear functions of time, 0 at the first sample: the knots (K + 1,), s from the start, evenly
-    spaced about ``knot_s`` apart over the session, and the basis (N, K), column ``k`` rising from 0 at knot
-    ``k`` to 1 at knot ``k + 1`` and falling to 0 at knot ``k + 2`` (the last stays 1 to the end)."""
+def even_knots(t_ns: np.ndarray, knot_s: float) -> np.ndarray:
+    """Knots (K + 1,), s from the first sample, evenly spaced about ``knot_s`` apart over the session."""
+    end_s = float(t_ns[-1] - t_ns[0]) * 1e-9
+    return np.linspace(0.0, end_s, max(1, round(end_s / knot_s)) + 1)
+
+
+def refined_knots(travel: Travel, step_m: float, knot_s: float) -> np.ndarray:
+    """``travel``'s knots with more about ``knot_s`` apart where it steps (a knot interval over which its monotone
+    fit moves at least ``step_m``, and the intervals beside it: a step is placed only to within a knot): a slip
+    is a step of a fraction of a second, the hand still between slips, and finer knots where it stands still would
+    only take up the model's own shortfall."""
+    knots = travel.knots_s
+    steps = np.flatnonzero(np.abs(np.diff(_monotone_values(travel.at_knots_m))) >= step_m)
+    near = np.zeros(knots.size - 1, dtype=bool)
+    for k in steps:
+        near[max(k - 1, 0) : k + 2] = True
+    extra = [
+        np.linspace(knots[k], knots[k + 1], max(1, round(float(knots[k + 1] - knots[k]) / knot_s)) + 1)[1:-1]
+        for k in np.flatnonzero(near)
+    ]
+    return np.sort(np.concatenate([knots, *extra]))
+
+
+def travel_basis(t_ns: np.ndarray, knots_s: np.ndarray) -> np.ndarray:
+    """(N, K) piecewise linear functions of time on ``knots_s`` (K + 1,), s from the first sample (the first at 0,
+    where the travel is 0): column ``k`` rises from 0 at knot ``k`` to 1 at knot ``k + 1`` and falls to 0 at knot
+    ``k + 2`` (the last stays 1 to the end)."""
     t_s = (t_ns - t_ns[0]) * 1e-9
-    count = max(1, round(float(t_s[-1]) / knot_s))
-    knots = np.linspace(0.0, float(t_s[-1]), count + 1)
-    unit = np.eye(count + 1)
-    basis = np.column_stack([np.interp(t_s, knots, unit[k]) for k in range(1, count + 1)])
-    return knots, basis
+    unit = np.eye(knots_s.size)
+    return np.column_stack([np.interp(t_s, knots_s, unit[k]) for k in range(1, knots_s.size)])
 
 
 def _travel_columns(problem: Problem, lever_n: np.ndarray, basis: np.ndarray) -> np.ndarray:
@@ -142,14 +170,21 @@ def _travel_columns(problem: Problem, lever_n: np.ndarray, basis: np.ndarray) ->
     return np.repeat(columns[:, None, :], n, axis=1)
 
 
-def fit_travel(problem: Problem, lever_n: np.ndarray, t_ns: np.ndarray, knot_s: float) -> Travel:
-    """The travel on knots about ``knot_s`` apart, fitted with ``problem``'s parameters (its reweighted least
-    squares with the travel's columns beside them)."""
-    knots, basis = travel_basis(t_ns, knot_s)
-    names: list[ParameterName] = [(f"travel_{k + 1}", "hand") for k in range(basis.shape[1])]
-    wide = augmented(problem, _travel_columns(problem, lever_n, basis), names)
+def fit_travel(problem: Problem, lever_n: np.ndarray, t_ns: np.ndarray, knots_s: np.ndarray) -> Travel:
+    """The travel on ``knots_s`` (s from the first sample, the first 0), fitted with ``problem``'s parameters (its
+    reweighted least squares with the travel's columns beside them)."""
+    knots = knots_s
+    basis = travel_basis(t_ns, knots)
+    # A knot with no used sample beside it (rows left out about it) is not fitted: the travel there is the
+    # line between its neighbours.
+    used = problem.rows.any(axis=1)
+    fitted = np.flatnonzero(np.abs(basis[used]).max(axis=0) > MIN_KNOT_WEIGHT)
+    names: list[ParameterName] = [(f"travel_{k + 1}", "hand") for k in fitted]
+    wide = augmented(problem, _travel_columns(problem, lever_n, basis[:, fitted]), names)
     values = reweighted_values(wide).values[len(problem.names) :]
-    return Travel(knots_s=knots, at_knots_m=np.concatenate(([0.0], values)), travel_m=basis @ values)
+    at_knots = np.interp(knots, np.concatenate(([0.0], knots[fitted + 1])), np.concatenate(([0.0], values)))
+    t_s = (t_ns - t_ns[0]) * 1e-9
+    return Travel(knots_s=knots, at_knots_m=at_knots, travel_m=np.interp(t_s, knots, at_knots))
 
 
 def _increasing_fit(values: np.ndarray) -> np.ndarray:
@@ -163,6 +198,34 @@ def _increasing_fit(values: np.ndarray) -> np.ndarray:
             before[0] = (before[0] * before[1] + mean * count) / (before[1] + count)
             before[1] += count
     return np.concatenate([np.full(int(count), mean) for mean, count in blocks])
+
+
+def _monotone_values(values: np.ndarray) -> np.ndarray:
+    """The least-squares fit of ``values`` that never turns back, in the direction they go, from 0."""
+    fit = _increasing_fit(values) if values[-1] >= values[0] else -_increasing_fit(-values)
+    return np.asarray(fit - fit[0])
+
+
+def monotone_travel(travel: Travel, t_ns: np.ndarray) -> Travel:
+    """``travel`` made monotone (its least-squares fit at the knots that never turns back, in the direction it
+    goes): the knots' scatter around a slip's steps taken out."""
+    fit = _monotone_values(travel.at_knots_m)
+    t_s = (t_ns - t_ns[0]) * 1e-9
+    return Travel(knots_s=travel.knots_s, at_knots_m=fit, travel_m=np.interp(t_s, travel.knots_s, fit))
+
+
+def slip_spans(travel: Travel, min_step_m: float) -> tuple[tuple[float, float], ...]:
+    """Where a monotone ``travel`` moves by at least ``min_step_m`` from one knot to the next: the spans (s from the
+    session's start) of its slips, adjacent ones joined."""
+    steps = np.abs(np.diff(travel.at_knots_m)) >= min_step_m
+    spans: list[tuple[float, float]] = []
+    for k in np.flatnonzero(steps):
+        start, end = float(travel.knots_s[k]), float(travel.knots_s[k + 1])
+        if spans and spans[-1][1] >= start:
+            spans[-1] = (spans[-1][0], end)
+        else:
+            spans.append((start, end))
+    return tuple(spans)
 
 
 def monotone_share(values: np.ndarray) -> float:
@@ -197,7 +260,7 @@ def contact_slip(problem: Problem, t_ns: np.ndarray, lever_n: np.ndarray, knot_s
     none = Slip(travel=None, total_m=0.0, monotone_share=0.0, joint_share=np.zeros(0))
     if (t_ns[-1] - t_ns[0]) * 1e-9 < MIN_KNOTS * knot_s or not lever_n.any():
         return none
-    travel = fit_travel(problem, lever_n, t_ns, knot_s)
+    travel = fit_travel(problem, lever_n, t_ns, even_knots(t_ns, knot_s))
     share = monotone_share(travel.at_knots_m)
     total = float(abs(travel.at_knots_m[-1]))
     if total < MIN_SLIP_M or share < MIN_MONOTONE_SHARE:

@@ -55,7 +55,7 @@ def judge_fit(stage: Stage) -> Stage | IdentificationResult:
         if misfit[j] > config.max_misfit and misfit[j] * noise[j] > MIN_OUTLIER_NM
     )
     if misfits and not stage.problems and config.elastic_fallback and config.check_elastic and stage.selection is None:
-        family = elastic_family_fit(data, config, list(misfits))
+        family = elastic_family_fit(stage.given, config, list(misfits))
         if family is not None:
             return family
     problems, notes = list(misfits), []

@@ -15,9 +15,13 @@ from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.contact_slip import (
     FOLLOW_KNOT_S,
     MIN_SLIP_M,
+    Travel,
     contact_slip,
     fit_travel,
+    monotone_travel,
+    refined_knots,
     slip_lever_n,
+    slip_spans,
 )
 from bsp_ros.core.identification.joint.emg_activity import emg_evidence, emg_values, with_emg
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
@@ -36,6 +40,11 @@ __all__ = [
     "follow_the_hand",
     "leave_out_activity",
 ]
+
+# A step of the travel: at least this far between two of its knots, m. The hand's jerk at a slip turns joints
+# that moved slowly (their dry friction flips for a moment: a Nm at the shoulder on the MuJoCo slipping hand),
+# which no travel holds; the stretches that stand off the fit there are left out of every joint's rows.
+SLIP_STEP_M = 0.001
 
 # Activity below this share of a joint's RMS torque is not looked for: it moves no estimate beyond its std, and a
 # noise-free simulation would otherwise be judged against its rounding errors.
@@ -150,31 +159,61 @@ def leave_out_activity(stage: Stage) -> Stage:
     return stage.apply(Outcome(problem=problem, fit=fit, notes=(finding,)))
 
 
+def _jerks(stage: Stage, rows: np.ndarray, travel: Travel, lever_n: np.ndarray) -> np.ndarray:
+    """(N,) the seconds about a slip where the hand's jerk leaves torque no travel holds: the stretches the activity
+    detector finds on ``rows`` once ``travel`` is taken out, where they lie within a knot of one of its steps
+    (bursts elsewhere are left to :func:`leave_out_activity`)."""
+    data, config = stage.data, stage.config
+    held = dataclasses.replace(data, tau_nm=data.tau_nm - (travel.travel_m * lever_n)[:, None])
+    fit = fit_problem(build_problem(held, config.passive, rows, None, stage.samples.extras))
+    found = detect_activity(held, config, fit.residual)
+    reach_s = float(np.diff(travel.knots_s).max())
+    steps = slip_spans(monotone_travel(travel, data.t_ns), SLIP_STEP_M)
+    t_s = (data.t_ns - data.t_ns[0]) * 1e-9
+    jerked = np.zeros(t_s.size, dtype=bool)
+    for start, end in found.spans_s:
+        if any(start < step_end + reach_s and end > step_start - reach_s for step_start, step_end in steps):
+            jerked |= (t_s >= start) & (t_s <= end)
+    return jerked
+
+
 def follow_the_hand(stage: Stage) -> Stage:
-    """A contact point that travelled along the hand (:func:`contact_slip`: found on knots 5 s apart) is followed on
-    finer knots, fitted with the arm's parameters, taken out of the torques and the model refitted; the finding
-    says by about how much the hand moved in the handle."""
+    """A contact point that travelled along the hand (:func:`contact_slip`: found on knots 5 s apart) is followed:
+    the travel is fitted with the arm's parameters on finer knots about its steps and made monotone, taken out of
+    the torques, the seconds of each slip's jerk left out and the model refitted; the finding says by about how
+    much the hand moved in the handle. A fallback that identifies the session afresh starts from the torques before
+    (``Stage.unslipped``), and follows the hand with its own model."""
     if not stage.config.check_activity:
         return stage
-    data = stage.data
+    data, config = stage.data, stage.config
     lever = slip_lever_n(data.q_rad, data.lengths_m, data.tau_nm)
     slip = contact_slip(stage.problem, data.t_ns, lever)
     if not slip.found or slip.travel is None:
         return stage
-    travel = fit_travel(stage.problem, lever, data.t_ns, FOLLOW_KNOT_S).travel_m
+    knots = refined_knots(slip.travel, SLIP_STEP_M, FOLLOW_KNOT_S)
+    followed = monotone_travel(fit_travel(stage.problem, lever, data.t_ns, knots), data.t_ns)
+    jerked = _jerks(stage, stage.samples.rows, followed, lever)
+    rows = stage.samples.rows & ~jerked[:, None]
+    travel = followed.travel_m
     held = dataclasses.replace(data, tau_nm=data.tau_nm - (travel * lever)[:, None])
-    problem = build_problem(held, stage.config.passive, stage.samples.rows, None, stage.samples.extras)
+    problem = build_problem(held, config.passive, rows, None, stage.samples.extras)
     fit = fit_problem(problem)
     # How the travel is followed is itself uncertain: its estimate on the coarser knots, and the travel counted
     # from its mean rather than the session's start (the hand may have settled before it), are the alternatives
     # whose fits' differences join the covariance once the passive model is chosen (:func:`add_contact_slip`).
     coarse = data.tau_nm - (slip.travel.travel_m * lever)[:, None]
     centred = data.tau_nm - ((travel - travel.mean()) * lever)[:, None]
-    values = {"slip_mm": 1e3 * abs(float(travel[-1])), "trend_percent": 100.0 * slip.monotone_share}
+    duration_s = float(data.t_ns[-1] - data.t_ns[0]) * 1e-9
+    values = {
+        "slip_mm": 1e3 * abs(float(travel[-1])),
+        "trend_percent": 100.0 * slip.monotone_share,
+        "left_out_s": float(jerked.mean()) * duration_s,
+    }
     stage = dataclasses.replace(
         stage,
         data=held,
-        samples=dataclasses.replace(stage.samples, problem=problem),
+        unslipped=data,
+        samples=dataclasses.replace(stage.samples, rows=rows, problem=problem),
         slip_alternatives=(coarse, centred),
     )
     found = Finding(code=FindingCode.HAND_SLIPPED, values=values)

@@ -83,6 +83,8 @@ class Stage:
     placement_check : what the data say of the markers' placement, or None.
     slip_alternatives : (N, n) torques under other plausible estimates of a slipping hand's travel, whose fits
         bound what following it leaves open (none without a slip).
+    unslipped : the data before a slipping hand's travel was taken out of their torques (None without a slip): a
+        fallback that identifies the session afresh starts from them and follows the hand with its own model.
     stuck : (N, n) the samples each joint stuck in a compliant grip, kept out of its rows (``grip.py``), or None.
     """
 
@@ -119,12 +121,18 @@ class Stage:
     with_springs: Problem | None = None
     placement_check: PlacementScale | None = None
     slip_alternatives: tuple[np.ndarray, ...] = ()
+    unslipped: IdentificationData | None = None
     stuck: np.ndarray | None = None
 
     @property
     def n(self) -> int:
         """Joints."""
         return self.data.n_joints
+
+    @property
+    def given(self) -> IdentificationData:
+        """The data as the steps were given them (before a slipping hand was followed), for a fallback."""
+        return self.data if self.unslipped is None else self.unslipped
 
     @property
     def problems(self) -> tuple[Finding, ...]:
