@@ -193,6 +193,16 @@ def _add_session_arguments(parser: argparse.ArgumentParser) -> None:
         "the data; their std is predicted from one simulated session (give --max-speed, e.g. 0.15)",
     )
     session.add_argument(
+        "--speeds",
+        type=positive_at_most(MAX_SPEED_RAD_S),
+        nargs=2,
+        metavar=("SLOW", "FAST"),
+        help="a two-speed session: the motion first at SLOW (below a reflex threshold), then the same angles at FAST "
+        "(at most --max-speed), each the peak joint speed in rad/s and the fast part as long as the slow one; bsp "
+        "identify then reports the speed-dependent (neural) resistance apart from the passive part "
+        "(speed_dependence). FAST must be 2 to 8 times SLOW, e.g. --max-speed 0.12 --speeds 0.03 0.12",
+    )
+    session.add_argument(
         "--max-acceleration",
         type=positive_at_most(MAX_ACCELERATION_RAD_S2),
         default=0.3,
@@ -542,8 +552,14 @@ def run(args: argparse.Namespace) -> int:
     request = _request(args)
     if args.excite_inertia and (args.amplitude or args.operating_points):
         raise InputError("--excite-inertia designs its own motion: leave out --amplitude and --operating-points")
+    if args.excite_inertia and args.speeds:
+        raise InputError("--excite-inertia designs its own motion: leave out --speeds")
 
     def planner(req: Any) -> Any:
+        if args.speeds:
+            from bsp_ros.core.planning.two_speed import plan_two_speed
+
+            return plan_two_speed(req, args.speeds[0], args.speeds[1], plan_protocol)
         return plan_inertia_protocol(req, args.max_acceleration) if args.excite_inertia else plan_protocol(req)
 
     plan = planner(request)
