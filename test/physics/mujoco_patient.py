@@ -274,6 +274,8 @@ def _description(p: Patient) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for f in dataclasses.fields(p):
         value = getattr(p, f.name)
+        if f.name == "emg" and value is None:
+            continue  # recorded, not imposed: a session without it keeps the truth it had
         out[f.name] = None if value is None else {k: _plain(v) for k, v in dataclasses.asdict(value).items()}
     return out
 
