@@ -8,6 +8,7 @@ import numpy as np
 
 from bsp_ros.clinic.report.analysis import RETEST_LETTERS, Analysis, Change, Series
 from bsp_ros.clinic.report.labels import PART_NAMES, plain_name, plain_number, short_label, with_unit
+from bsp_ros.clinic.report.speed_lines import speed_dependence_lines
 from bsp_ros.clinic.store.records import ParamKey, SessionRecord, format_time, ns_to_datetime
 from bsp_ros.core.findings import Severity, plain_cause
 from bsp_ros.core.weight_support import support_wrench
@@ -403,7 +404,8 @@ def _names(labels: list[str], every: int) -> str:
 
 def session_notes(analysis: Analysis) -> list[tuple[str, str]]:
     """The clinic's notes on usable sessions: the plain cause and action of each finding that has one, once per
-    session, identical notes of several sessions together, as ``(sessions, note)``."""
+    session, identical notes of several sessions together, as ``(sessions, note)``; then each joint that resisted
+    a fast stretch more than a slow one (:func:`speed_dependence_lines`)."""
     found: dict[str, list[str]] = {}
     for record in analysis.sessions:
         if not record.quality.valid:
@@ -418,7 +420,7 @@ def session_notes(analysis: Analysis) -> list[tuple[str, str]]:
             if analysis.label_of(record) not in labels:
                 labels.append(analysis.label_of(record))
     every = sum(r.quality.valid for r in analysis.sessions)
-    return [(_names(labels, every), text) for text, labels in found.items()]
+    return [(_names(labels, every), text) for text, labels in found.items()] + speed_dependence_lines(analysis)
 
 
 def technical_notes(analysis: Analysis) -> list[tuple[str, str]]:
