@@ -4,11 +4,13 @@ A stretch reflex resists a fast stretch and not a slow one (Lance 1980); a relax
 barely change between a robot's slow speeds. Where a session moves a joint over the same angles at two clearly
 separated speeds (a plan's ``--speeds SLOW FAST``, or any session that does so: the groups are found in the data,
 never taken from a flag), the resistance at the fast speed minus that at the slow speed, beyond what the model's
-passive terms (a viscous term, if any) explain, is measured per direction of motion: one column per direction
-that is the Coulomb column's sign on the rows of the fast strokes, fitted with the model, gives the extra
-resistance in Nm with its std. This is the split of NeuroFlexor (Lindberg et al. 2011: a slow and a fast stretch
-separate the neural part from the elastic and viscous ones) on a slow robot's sweeps, with the passive part taken
-out first (McPherson et al. 2019).
+passive terms (a viscous term, if any) explain, is measured per direction of motion: the model is fitted on the
+slow part (the joint's fast strokes left out of its own equation), and the fast strokes' mean torque beyond it,
+with the motion's sign, is the extra resistance in Nm, its std the mean's HAC variance plus the slow fit's. A
+model fitted on both speeds would take up part of a reflex that varies along each stroke in its static moments,
+and give some of it to the other direction. This is the split of NeuroFlexor (Lindberg et al. 2011: a slow and a
+fast stretch separate the neural part from the elastic and viscous ones) on a slow robot's sweeps, with the
+passive part taken out first (McPherson et al. 2019).
 
 Where the fast part shows such resistance (more than 3 std from 0 in a direction), the joint's static moments come
 from the slow part: the fast strokes' rows leave that joint's torque equation (a joint's own muscle torque acts
@@ -28,9 +30,9 @@ from typing import Any
 import numpy as np
 
 from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
-from bsp_ros.core.identification.result import ParameterName
-from bsp_ros.core.identification.stacked import Problem, augmented, build_problem, fit_problem
+from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
 __all__ = [
@@ -221,60 +223,73 @@ class SpeedSplit:
         return Finding(code=FindingCode.SPASTICITY, where=self.joint, values=values)
 
 
-def _fast_columns(problem: Problem, velocity_rad_s: np.ndarray, groups: dict[int, SpeedGroups]) -> np.ndarray:
-    """(N, n, 2 k) per split joint and direction: the Coulomb column's sign on that direction's fast rows."""
-    n = problem.torque.shape[1]
-    extra = np.zeros((velocity_rad_s.shape[0], n, 2 * len(groups)))
-    for k, (j, found) in enumerate(groups.items()):
-        sign = np.sign(velocity_rad_s[:, j])
-        extra[:, j, 2 * k] = np.where(found.fast & (sign > 0), 1.0, 0.0)
-        extra[:, j, 2 * k + 1] = np.where(found.fast & (sign < 0), -1.0, 0.0)
-    return extra
+def _part(problem: Problem, slow: Fit, joint: int, rows: np.ndarray, sign: float) -> DirectionPart:
+    """The mean over ``rows`` (N,) of joint ``joint``'s torque beyond the slow part's model ``slow``, with the
+    motion's ``sign``, and its std: the residual mean's HAC variance plus the slow fit's, mapped through the mean
+    regressor of those rows (the two taken as independent)."""
+    x, y = problem.joint_rows(joint)
+    residual = sign * (y[rows] - x[rows] @ slow.values)
+    part = float(residual.mean())
+    mean_regressor = sign * x[rows].mean(axis=0)
+    count = np.array([[float(rows.sum())]])
+    noise, _ = hac_covariance(count, (residual - part)[:, None])
+    variance = float(noise[0, 0]) + float(mean_regressor @ slow.covariance @ mean_regressor)
+    return DirectionPart(part_nm=part, std_nm=float(np.sqrt(max(variance, 0.0))))
+
+
+def _without_fast(stage: Stage, groups: dict[int, SpeedGroups]) -> tuple[np.ndarray, Problem, Fit]:
+    """The rows with each of ``groups``' joints' fast strokes left out of its own torque equation, the problem on
+    them and its fit: the slow part's model."""
+    rows = stage.samples.rows.copy()
+    for j, found in groups.items():
+        rows[:, j] &= ~found.fast
+    widths = stage.widths_rad_s if stage.widths_rad_s.any() else None
+    problem = build_problem(stage.data, stage.config.passive, rows, widths, stage.samples.extras)
+    return rows, problem, fit_problem(problem)
 
 
 def measure_speed_split(
-    problem: Problem, velocity_rad_s: np.ndarray, groups: dict[int, SpeedGroups]
-) -> list[SpeedSplit]:
-    """Each split joint's speed-dependent parts: ``problem`` fitted with :func:`_fast_columns` beside its own.
+    stage: Stage, groups: dict[int, SpeedGroups]
+) -> tuple[list[SpeedSplit], tuple[np.ndarray, Problem, Fit]]:
+    """Each split joint's speed-dependent parts: the model fitted on the slow part (each split joint's fast strokes
+    out of its own equation), and per direction the fast strokes' mean torque beyond it (:func:`_part`).
 
     Parameters
     ----------
-    problem : the stacked problem (its passive model's terms, its rows).
-    velocity_rad_s : (N, n) the direction-of-motion velocities, rad/s.
-    groups : joint index -> its speed groups (joints with too few fast rows in a direction are left out).
+    stage : the identification so far (its data, rows, passive model and friction transitions).
+    groups : joint index -> its speed groups; joints whose slow strokes hold too few of their rows
+        (:data:`MIN_SLOW_SHARE`) or whose fast strokes too few in a direction (:data:`MIN_FAST_ROWS`) are left out.
+
+    Returns
+    -------
+    The splits, and the slow part's rows (N, n), problem and fit.
     """
-    usable = {
-        j: found
-        for j, found in groups.items()
-        if min(
-            int((problem.rows[:, j] & found.fast & (velocity_rad_s[:, j] > 0)).sum()),
-            int((problem.rows[:, j] & found.fast & (velocity_rad_s[:, j] < 0)).sum()),
-        )
-        >= MIN_FAST_ROWS
-    }
+    rows_now = stage.samples.rows
+    velocity = stage.data.velocity_rad_s
+    usable = {}
+    for j, found in groups.items():
+        fast = [rows_now[:, j] & found.fast & (sign * velocity[:, j] > 0) for sign in (1.0, -1.0)]
+        slow_share = (rows_now[:, j] & ~found.fast).sum() / max(int(rows_now[:, j].sum()), 1)
+        if min(int(f.sum()) for f in fast) >= MIN_FAST_ROWS and slow_share >= MIN_SLOW_SHARE:
+            usable[j] = found
     if not usable:
-        return []
-    joints = joints_for(problem.torque.shape[1])
-    names: list[ParameterName] = [
-        ("speed_dependent_nm", f"{joints[j]}/{direction}") for j in usable for direction in DIRECTIONS
-    ]
-    wide = fit_problem(augmented(problem, _fast_columns(problem, velocity_rad_s, usable), names))
-    p = len(problem.names)
-    std = np.sqrt(np.clip(np.diag(wide.covariance)[p:], 0.0, None))
+        return [], (rows_now, stage.problem, stage.fit)
+    rows, problem, slow = _without_fast(stage, usable)
+    joints = joints_for(stage.n)
     out = []
-    for k, (j, found) in enumerate(usable.items()):
-        parts = tuple(
-            DirectionPart(part_nm=float(wide.values[p + i]), std_nm=float(std[i])) for i in (2 * k, 2 * k + 1)
+    for j, found in usable.items():
+        positive, negative = (
+            _part(stage.problem, slow, j, rows_now[:, j] & found.fast & (sign * velocity[:, j] > 0), sign)
+            for sign in (1.0, -1.0)
         )
-        out.append(SpeedSplit(joint=joints[j], groups=found, parts=(parts[0], parts[1])))
-    return out
+        out.append(SpeedSplit(joint=joints[j], groups=found, parts=(positive, negative)))
+    return out, (rows, problem, slow)
 
 
 def split_speeds(stage: Stage) -> Stage:
     """The step: where a joint moved over the same angles at two clearly separated speeds, its speed-dependent
-    resistance is measured (:func:`measure_speed_split`); a joint that shows one has its fast strokes' rows left
-    out and the model is refitted, so that its static moments come from the slow part (left as they are where
-    too few slow rows would remain)."""
+    resistance is measured against the slow part's model (:func:`measure_speed_split`); a joint that shows one
+    keeps its fast strokes out of its equation, so that its static moments come from the slow part."""
     if stage.problems:
         return stage
     data = stage.data
@@ -285,28 +300,18 @@ def split_speeds(stage: Stage) -> Stage:
             groups[j] = found
     if not groups:
         return stage
-    splits = measure_speed_split(stage.problem, data.velocity_rad_s, groups)
+    splits, slow = measure_speed_split(stage, groups)
     if not splits:
         return stage
-    joints = joints_for(stage.n)
-    rows = stage.samples.rows.copy()
-    for split in splits:
-        if split.exceeds:
-            j = joints.index(split.joint)
-            rows[:, j] &= ~groups[j].fast
-    # The slow part alone must still hold a good share of the joint's rows.
-    kept = rows.sum(axis=0) >= MIN_SLOW_SHARE * stage.samples.rows.sum(axis=0)
-    slow = {s.joint: s.exceeds and bool(kept[joints.index(s.joint)]) for s in splits}
-    for j, joint in enumerate(joints):
-        if not slow.get(joint, False):
-            rows[:, j] = stage.samples.rows[:, j]
-    notes = [s.finding(slow[s.joint]) for s in splits]
+    notes = [s.finding(s.exceeds) for s in splits]
     notes += [f for f in (s.spasticity() for s in splits) if f is not None]
-    if not any(slow.values()):
+    joints = joints_for(stage.n)
+    exceeding = {joints.index(s.joint): s.groups for s in splits if s.exceeds}
+    if not exceeding:
         return stage.apply(Outcome(notes=tuple(notes)))
-    widths = stage.widths_rad_s if stage.widths_rad_s.any() else None
-    problem = build_problem(data, stage.config.passive, rows, widths, stage.samples.extras)
-    fit = fit_problem(problem)
+    if len(exceeding) < len(splits):
+        slow = _without_fast(stage, exceeding)
+    rows, problem, fit = slow
     stage = dataclasses.replace(stage, samples=dataclasses.replace(stage.samples, rows=rows, problem=problem))
     return stage.apply(Outcome(problem=problem, fit=fit, notes=tuple(notes)))
 
