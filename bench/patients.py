@@ -7,9 +7,12 @@ Each case is a MuJoCo cell session (``test/physics/mujoco_cell.py``) with a pati
 relaxed controls at the paper's protocol (shoulder peak 0.03 rad/s), on a ``bsp plan`` trajectory and four times
 faster; involuntary activity at 2/5/10/20 % of each joint's gravity torque; elbow spasticity at the paper's speed
 and four times faster; a typical stroke arm (springs, 2 % activity, spasticity, sliding skin); sliding skin
-markers; a tremor in the joints or shaking the handle; a slipping hand; a compliant strap. A seed draws the arm
-(de Leva prior, friction, springs where the case has them), the noise and the patient's signals. Truth is the
-arm's segment parameters and its RELAXED passive moments; what the patient did is truth.json's ``patient`` key.
+markers; a tremor in the joints or shaking the handle; a slipping hand; a compliant strap; a two-speed session
+(the paper's sines, the second half four times faster) of the elbow spasticity and of a control, whose
+speed-dependent part (``speed_dependence``) is scored against the reflex torque imposed in the fast half. A seed
+draws the arm (de Leva prior, friction, springs where the case has them), the noise and the patient's signals.
+Truth is the arm's segment parameters and its RELAXED passive moments; what the patient did is truth.json's
+``patient`` key.
 
 Per case: runs, valid-and-right, VALID-AND-WRONG (some |z| > 3 on a data-sourced parameter), invalid-and-right,
 invalid-and-wrong; two-sided calibration over the valid runs' data-sourced parameters (``calibration.py``: z RMS,
@@ -39,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 import calibration
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
@@ -46,8 +50,10 @@ from mujoco_bag import write_bag
 from mujoco_cell import CellOptions, draw_arm, paper_sine
 from mujoco_emg import EmgRecording
 from mujoco_patient import (
+    ELBOW,
     CompliantStrap,
     HandSlip,
+    Imposed,
     InvoluntaryActivity,
     Patient,
     SkinSliding,
@@ -61,6 +67,7 @@ from scoring import residuals, z_scores
 
 from bsp_ros.cli import main as bsp_main
 from bsp_ros.core.planning import planned_trajectory_from_file
+from bsp_ros.core.planning.two_speed import TwoSpeedPath
 
 # Case -> the finding codes that name its true cause. Patient-cause codes may not exist in the estimator yet.
 CAUSES: dict[str, frozenset[str]] = {
@@ -83,6 +90,8 @@ CAUSES: dict[str, frozenset[str]] = {
     "tremor_handle": frozenset({"handle_shaken", "tremor"}),
     "hand_slip": frozenset({"hand_slipped"}),
     "compliant_strap": frozenset({"grip_compliant"}),
+    "control_two_speed": frozenset(),
+    "spasticity_two_speed": frozenset({"spasticity", "speed_dependent_resistance"}),
 }
 # Every code that names a patient cause (a control naming one is a false alarm).
 PATIENT_CODES = frozenset(
@@ -101,7 +110,7 @@ class Case:
     """One row: the motion, whether the arm has joint springs, the patient."""
 
     name: str
-    motion: str  # "0.03", "0.12" (paper sine, shoulder peak rad/s) or "plan"
+    motion: str  # "0.03", "0.12" (paper sine, shoulder peak rad/s), "0.03/0.12" (slow half, fast half) or "plan"
     springs: bool
     patient: Patient
 
@@ -132,6 +141,8 @@ def cases() -> list[Case]:
         Case("tremor_handle", "0.03", False, Patient(tremor=Tremor(site=TremorSite.HANDLE))),
         Case("hand_slip", "0.03", False, Patient(slip=HandSlip())),
         Case("compliant_strap", "0.03", False, Patient(strap=CompliantStrap())),
+        Case("control_two_speed", "0.03/0.12", False, Patient()),
+        Case("spasticity_two_speed", "0.03/0.12", False, Patient(spasticity=Spasticity())),
     ]
 
 
@@ -247,11 +258,46 @@ def session_bag(case: Case, seed: int, args: argparse.Namespace, workdir: Path, 
     """Simulate ``case`` with ``seed`` and write its bag (and truth.json) to ``out_dir``."""
     if case.motion == "plan":
         trajectory: Any = planned_trajectory_from_file(make_plan(workdir, args.duration))
+    elif "/" in case.motion:
+        slow, fast = (float(x) for x in case.motion.split("/"))
+        trajectory = TwoSpeedPath(paper_sine(slow), (1.0, fast / slow), args.duration / 2, args.duration)
     else:
         trajectory = paper_sine(float(case.motion))
     options = CellOptions(trajectory=trajectory, duration_s=args.duration, wrench_hz=args.wrench_hz, seed=seed)
     session = patient_session(draw_arm(seed, springs=case.springs), options, case.patient)
+    if isinstance(trajectory, TwoSpeedPath):
+        session.cell.truth["speed_dependence"] = speed_part_truth(session.imposed, trajectory)
     return write_bag(out_dir, session.cell)
+
+
+def speed_part_truth(imposed: Imposed, path: TwoSpeedPath) -> dict[str, Any]:
+    """The elbow's imposed speed-dependent part per direction of motion, averaged as the estimator averages it: the
+    reflex torque's mean over the fast half's samples (after the rate's change) moving in that direction faster than
+    the estimator's direction deadband (a tenth of the joint's 95th percentile speed), Nm."""
+    velocity = path.velocities_rad_s(imposed.t_s)[:, ELBOW]
+    fast = imposed.t_s > path.start_s + path.ramp_s
+    moving = np.abs(velocity) > 0.1 * np.percentile(np.abs(velocity), 95)
+    parts = {
+        name: float(imposed.reflex_nm[fast & moving & (sign * velocity > 0), ELBOW].mean())
+        for name, sign in (("positive", 1.0), ("negative", -1.0))
+    }
+    return {"elbow": parts}
+
+
+def speed_part_scores(estimate: dict[str, Any], truth: dict[str, Any]) -> dict[str, Any]:
+    """Per joint and direction of truth.json's ``speed_dependence``: the estimate's part, its std, the truth and
+    z = (estimate - truth) / std; an empty dict where the estimate has no such block or the truth none."""
+    found = estimate.get("speed_dependence") or {}
+    out: dict[str, Any] = {}
+    for joint, parts in (truth.get("speed_dependence") or {}).items():
+        for direction, true_nm in parts.items():
+            part = found.get(joint, {}).get(direction)
+            if part is None:
+                out[f"{joint}/{direction}"] = {"truth_nm": true_nm, "measured": False}
+                continue
+            z = (part["part_nm"] - true_nm) / part["std_nm"] if part["std_nm"] else float("inf")
+            out[f"{joint}/{direction}"] = {**part, "truth_nm": true_nm, "z": z}
+    return out
 
 
 def run_case(case: Case, seeds: list[int], args: argparse.Namespace, workdir: Path) -> tuple[Tally, list[dict]]:
@@ -268,9 +314,18 @@ def run_case(case: Case, seeds: list[int], args: argparse.Namespace, workdir: Pa
             rows.append({"case": case.name, "seed": seed, "exit": code})
             continue
         row = tally.add(estimate, truth, CAUSES[case.name] if cause_imposed(truth) else frozenset())
-        rows.append({"case": case.name, "seed": seed, "exit": code, **row})
+        speed = speed_part_scores(estimate, truth)
+        rows.append({"case": case.name, "seed": seed, "exit": code, **row, **({"speed_part": speed} if speed else {})})
         if args.verbose:
             print(f"  seed {seed}: valid={row['valid']} worst |z| {row['worst_z']:.2f} ({row['worst']}) {row['codes']}")
+        for key, part in speed.items():
+            measured = (
+                f"{part['part_nm']:+.4f} +- {part['std_nm']:.4f} Nm (z vs truth {part['z']:+.2f}, from 0 "
+                f"{part['part_nm'] / part['std_nm']:+.1f} std)"
+                if "part_nm" in part
+                else "not measured"
+            )
+            print(f"  seed {seed}: speed-dependent part {key}: {measured}, truth {part['truth_nm']:.4f} Nm")
     return tally, rows
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from bsp_ros.clinic.report.analysis import Analysis
 from bsp_ros.clinic.report.labels import PART_NAMES
 from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.identification.joint.speed_split import DIRECTIONS, MIN_SPASTIC_NM, DirectionPart
 
 __all__ = ["speed_dependence_line", "speed_dependence_lines"]
 
@@ -18,7 +19,11 @@ def speed_dependence_line(finding: Finding) -> str | None:
     v = finding.values
     part, std = float(v["part_nm"]), float(v["std_nm"])
     more = "more" if part > 0 else "less"
-    both = all(abs(float(v[f"{d}_nm"])) > 3.0 * float(v[f"{d}_std_nm"]) for d in ("positive", "negative"))
+    both = all(
+        DirectionPart(part_nm=float(v[f"{d}_nm"]), std_nm=float(v[f"{d}_std_nm"])).exceeds
+        and abs(float(v[f"{d}_nm"])) >= MIN_SPASTIC_NM
+        for d in DIRECTIONS
+    )
     cause = "speed-dependent in both directions of motion" if both else "possible spasticity"
     joint = PART_NAMES.get(finding.where, finding.where)
     return f"{joint}: resistance to a fast stretch {abs(part):.2g} +- {std:.1g} Nm {more} than to a slow one ({cause})"

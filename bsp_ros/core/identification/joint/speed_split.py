@@ -32,12 +32,14 @@ import numpy as np
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
+from bsp_ros.core.identification.joint.transition import transition_widths
 from bsp_ros.core.identification.stacked import Fit, Problem, build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
 __all__ = [
     "DIRECTIONS",
     "EXCEEDS_SD",
+    "MIN_SPASTIC_NM",
     "DirectionPart",
     "SpeedGroups",
     "SpeedSplit",
@@ -209,8 +211,10 @@ class SpeedSplit:
 
     def spasticity(self) -> Finding | None:
         """Possible spasticity: more resistance to fast motion in one direction only, or None."""
-        exceeding = [i for i, part in enumerate(self.parts) if part.exceeds]
-        if len(exceeding) != 1 or self.parts[exceeding[0]].part_nm < MIN_SPASTIC_NM:
+        # A direction counts where its part exceeds 3 std and the floor: a few mNm beyond 3 std of a very precise
+        # session is no second stretch reflex (MuJoCo's reflex left 0.3-1.1 mNm in the other direction).
+        exceeding = [i for i, part in enumerate(self.parts) if part.exceeds and abs(part.part_nm) >= MIN_SPASTIC_NM]
+        if len(exceeding) != 1 or self.parts[exceeding[0]].part_nm <= 0:
             return None
         part = self.parts[exceeding[0]]
         values = {
@@ -237,20 +241,27 @@ def _part(problem: Problem, slow: Fit, joint: int, rows: np.ndarray, sign: float
     return DirectionPart(part_nm=part, std_nm=float(np.sqrt(max(variance, 0.0))))
 
 
-def _without_fast(stage: Stage, groups: dict[int, SpeedGroups]) -> tuple[np.ndarray, Problem, Fit]:
+def _without_fast(stage: Stage, groups: dict[int, SpeedGroups]) -> tuple[np.ndarray, Problem, Fit, np.ndarray]:
     """The rows with each of ``groups``' joints' fast strokes left out of its own torque equation, the problem on
-    them and its fit: the slow part's model."""
+    them and its fit: the slow part's model, with its own friction transition widths (n,) (rad/s; a reflex in the
+    fast strokes widens the whole session's, which lowers the slow strokes' modelled friction)."""
     rows = stage.samples.rows.copy()
     for j, found in groups.items():
         rows[:, j] &= ~found.fast
-    widths = stage.widths_rad_s if stage.widths_rad_s.any() else None
-    problem = build_problem(stage.data, stage.config.passive, rows, widths, stage.samples.extras)
-    return rows, problem, fit_problem(problem)
+    data, passive, extras = stage.data, stage.config.passive, stage.samples.extras
+    widths = stage.widths_rad_s
+    problem = build_problem(data, passive, rows, widths if widths.any() else None, extras)
+    fit = fit_problem(problem)
+    if widths.any():
+        widths = transition_widths(problem, fit, data, stage.config)[0]
+        problem = build_problem(data, passive, rows, widths if widths.any() else None, extras)
+        fit = fit_problem(problem)
+    return rows, problem, fit, widths
 
 
 def measure_speed_split(
     stage: Stage, groups: dict[int, SpeedGroups]
-) -> tuple[list[SpeedSplit], tuple[np.ndarray, Problem, Fit]]:
+) -> tuple[list[SpeedSplit], tuple[np.ndarray, Problem, Fit, np.ndarray]]:
     """Each split joint's speed-dependent parts: the model fitted on the slow part (each split joint's fast strokes
     out of its own equation), and per direction the fast strokes' mean torque beyond it (:func:`_part`).
 
@@ -262,7 +273,7 @@ def measure_speed_split(
 
     Returns
     -------
-    The splits, and the slow part's rows (N, n), problem and fit.
+    The splits, and the slow part's rows (N, n), problem, fit and friction transition widths (n,).
     """
     rows_now = stage.samples.rows
     velocity = stage.data.velocity_rad_s
@@ -273,8 +284,8 @@ def measure_speed_split(
         if min(int(f.sum()) for f in fast) >= MIN_FAST_ROWS and slow_share >= MIN_SLOW_SHARE:
             usable[j] = found
     if not usable:
-        return [], (rows_now, stage.problem, stage.fit)
-    rows, problem, slow = _without_fast(stage, usable)
+        return [], (rows_now, stage.problem, stage.fit, stage.widths_rad_s)
+    rows, problem, slow, widths = _without_fast(stage, usable)
     joints = joints_for(stage.n)
     out = []
     for j, found in usable.items():
@@ -283,7 +294,7 @@ def measure_speed_split(
             for sign in (1.0, -1.0)
         )
         out.append(SpeedSplit(joint=joints[j], groups=found, parts=(positive, negative)))
-    return out, (rows, problem, slow)
+    return out, (rows, problem, slow, widths)
 
 
 def split_speeds(stage: Stage) -> Stage:
@@ -311,8 +322,9 @@ def split_speeds(stage: Stage) -> Stage:
         return stage.apply(Outcome(notes=tuple(notes)))
     if len(exceeding) < len(splits):
         slow = _without_fast(stage, exceeding)
-    rows, problem, fit = slow
-    stage = dataclasses.replace(stage, samples=dataclasses.replace(stage.samples, rows=rows, problem=problem))
+    rows, problem, fit, widths = slow
+    samples = dataclasses.replace(stage.samples, rows=rows, problem=problem)
+    stage = dataclasses.replace(stage, samples=samples, widths_rad_s=widths)
     return stage.apply(Outcome(problem=problem, fit=fit, notes=tuple(notes)))
 
 
