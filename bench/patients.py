@@ -91,7 +91,7 @@ CAUSES: dict[str, frozenset[str]] = {
     "hand_slip": frozenset({"hand_slipped"}),
     "compliant_strap": frozenset({"grip_compliant"}),
     "control_two_speed": frozenset(),
-    "spasticity_two_speed": frozenset({"spasticity", "speed_dependent_resistance"}),
+    "spasticity_two_speed": frozenset({"spasticity"}),
 }
 # Every code that names a patient cause (a control naming one is a false alarm).
 PATIENT_CODES = frozenset(
