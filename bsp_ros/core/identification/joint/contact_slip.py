@@ -49,6 +49,11 @@ __all__ = [
 # not confounded with the arm's own terms (a 60 s session: 12 knots).
 DETECT_KNOT_S = 5.0
 
+# At most this many knots when a slip is looked for: a longer session spaces them wider (a 10-minute session: 25 s).
+# Each knot is a column of the whole session's fit; at 5 s a 10-minute session's 120 took 0.8 s, a slip's step lies
+# between two knots at any spacing, and a 120 s session keeps its 5 s knots.
+MAX_DETECT_KNOTS = 24
+
 # The knots the travel is followed on once found, s: a slip of half a second moves its knot's neighbours too,
 # and a misfit of a few times the sensor noise is left beside a step on 5 s knots.
 FOLLOW_KNOT_S = 1.25
@@ -258,8 +263,10 @@ def contact_slip(problem: Problem, t_ns: np.ndarray, lever_n: np.ndarray, knot_s
     Slip; without a travel where the session has fewer than :data:`MIN_KNOTS` knots or no lever.
     """
     none = Slip(travel=None, total_m=0.0, monotone_share=0.0, joint_share=np.zeros(0))
-    if (t_ns[-1] - t_ns[0]) * 1e-9 < MIN_KNOTS * knot_s or not lever_n.any():
+    span_s = (t_ns[-1] - t_ns[0]) * 1e-9
+    if span_s < MIN_KNOTS * knot_s or not lever_n.any():
         return none
+    knot_s = max(knot_s, span_s / MAX_DETECT_KNOTS)
     travel = fit_travel(problem, lever_n, t_ns, even_knots(t_ns, knot_s))
     share = monotone_share(travel.at_knots_m)
     total = float(abs(travel.at_knots_m[-1]))
