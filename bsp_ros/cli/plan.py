@@ -165,6 +165,12 @@ def _add_session_arguments(parser: argparse.ArgumentParser) -> None:
         "marker placement, sensor zero, model choice) exceeds this, and say which duration reaches it or which "
         f"term no duration shrinks (default {TARGET_STD_PERCENT:g} %%)",
     )
+    _add_motion_arguments(session)
+
+
+def _add_motion_arguments(session: argparse._ArgumentGroup) -> None:
+    """Add to the session's group how the motion is shaped: operating points, amplitudes, objective, a faster
+    motion for the inertias, two speeds, the optimiser's budget."""
     session.add_argument(
         "--operating-points",
         type=int_within(1, 20),
