@@ -175,11 +175,8 @@ def _segments(
             cov = posterior.covariance
             entry["mass_kg"] = quantity(posterior.mean[j], math.sqrt(cov[j, j]), posterior.source(j))
             entry["com_m"] = quantity(posterior.mean[n + j], math.sqrt(cov[n + j, n + j]), posterior.source(n + j))
-            share = max(posterior.prior_share[j], posterior.prior_share[n + j])
             entry["first_moment_kgm"] = quantity(
-                posterior.first_moments_kgm[j],
-                posterior.first_moments_std_kgm[j],
-                "prior" if share > 0.999 else "data+prior",
+                posterior.first_moments_kgm[j], posterior.first_moments_std_kgm[j], posterior.first_moment_source(j)
             )
         else:
             for key in ("mass_kg", "com_m", "first_moment_kgm"):

@@ -68,6 +68,9 @@ class Posterior:
     prior_share : (2n,) posterior variance / prior variance: near 1 means the prior alone decided.
     first_moments_kgm : (n,) ``m_j l_j``; ``first_moments_std_kgm`` their standard deviations.
     notes : what the prior assumed.
+    first_moments_prior_share : (n,) each first moment's posterior variance over its prior variance (both by the
+        delta method): a first moment can be known from the data where its mass and COM alone are not (the hand's is
+        its static moment), and prior alone where the static moments tell nothing.
     """
 
     mean: np.ndarray
@@ -76,10 +79,16 @@ class Posterior:
     first_moments_kgm: np.ndarray
     first_moments_std_kgm: np.ndarray
     notes: list[str]
+    first_moments_prior_share: np.ndarray | None = None
 
     def source(self, index: int) -> str:
         """``"prior"`` when the data hardly moved parameter ``index``, else ``"data+prior"``."""
         return "prior" if self.prior_share[index] > PRIOR_DOMINATED else "data+prior"
+
+    def first_moment_source(self, index: int) -> str:
+        """``"prior"`` when the data hardly moved first moment ``index``, else ``"data+prior"``."""
+        share = self.first_moments_prior_share
+        return "prior" if share is not None and share[index] > PRIOR_DOMINATED else "data+prior"
 
 
 def anthropometric_prior(subject: SubjectInfo, lengths_m: np.ndarray) -> Prior:
@@ -197,10 +206,13 @@ def fuse_static_moments(
     prior_share = np.diag(covariance) / np.diag(prior.covariance)
     masses, coms = x[:n], x[n:]
     first = masses * coms
-    # Delta method for m l.
+    # Delta method for m l, after the data and before them (at the prior's mean).
     grad = np.hstack((np.diag(coms), np.diag(masses)))
     first_std = np.sqrt(np.diag(grad @ covariance @ grad.T))
-    return Posterior(x, covariance, prior_share, first, first_std, list(prior.notes))
+    prior_grad = np.hstack((np.diag(prior.mean[n:]), np.diag(prior.mean[:n])))
+    prior_first_var = np.diag(prior_grad @ prior.covariance @ prior_grad.T)
+    first_share = first_std**2 / np.maximum(prior_first_var, 1e-300)
+    return Posterior(x, covariance, prior_share, first, first_std, list(prior.notes), first_share)
 
 
 # Static moments outside this factor of the anthropometric prior's are not a human arm (nor an arm with

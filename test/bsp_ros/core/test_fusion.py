@@ -121,3 +121,24 @@ def test_the_posterior_is_scipys_bounded_least_squares_minimum(seed: int) -> Non
     bounds = (np.full(6, 1e-6), np.concatenate((np.full(3, 50.0), 1.5 * lengths)))
     reference = least_squares(residual, prior.mean, jac=jacobian, bounds=bounds, xtol=1e-15, ftol=1e-15, gtol=1e-15)
     np.testing.assert_allclose(posterior.mean, reference.x, rtol=1e-7)
+
+
+def test_a_first_moment_is_labelled_by_its_own_share_of_the_prior() -> None:
+    """Static moments known to 1 % give every first moment from the data, ones the data cannot tell (+-300 %: an
+    elastic model on one posture) leave them to the prior; with only the upper arm's blind, the others' static
+    moments still move its mass through the body mass the segments share."""
+    lengths = np.array([0.288, 0.275, 0.088])
+    prior = anthropometric_prior(SubjectInfo(), lengths)
+    n = lengths.size
+    truth = prior.mean
+    beta = np.array([truth[k] * truth[n + k] for k in range(n)])
+    beta[:2] += lengths[:2] * np.array([truth[1] + truth[2], truth[2]])
+    precise = fuse_static_moments(prior, lengths, beta, np.diag((0.01 * beta) ** 2))
+    assert precise.first_moments_prior_share is not None and precise.first_moments_prior_share.max() < 0.1
+    assert [precise.first_moment_source(j) for j in range(n)] == ["data+prior"] * n
+    blind = fuse_static_moments(prior, lengths, beta, np.diag((3.0 * beta) ** 2))
+    assert [blind.first_moment_source(j) for j in range(n)] == ["prior"] * n
+    # The upper arm's own static moment blind, the others precise: its mass moves with the body mass they tell.
+    sd = np.array([0.8 * beta[0], 0.01 * beta[1], 0.01 * beta[2]])
+    partly = fuse_static_moments(prior, lengths, beta, np.diag(sd**2))
+    assert partly.first_moments_prior_share is not None and 0.3 < partly.first_moments_prior_share[0] < 0.9
