@@ -36,12 +36,13 @@ _TOPIC = re.compile(r"^/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 _PREFIX = re.compile(r"^/?([A-Za-z_][A-Za-z0-9_]*/)*$")
 _FRAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_./-]*$")
 _KEYS: dict[str, frozenset[str]] = {
-    "": frozenset({"schema", "world_frame", "ft_sensor", "markers", "contact_point"}),
+    "": frozenset({"schema", "world_frame", "ft_sensor", "markers", "contact_point", "emg"}),
     "ft_sensor": frozenset(
         {"frame", "wrench_topic", "rotation_xyzw", "roll_pitch_yaw_deg", "transform_topic", "tare_file"}
     ),
     "markers": frozenset({"topic_prefix"}),
     "contact_point": frozenset({"handle_pose_topic"}),
+    "emg": frozenset({"envelope_topic"}),
 }
 
 
@@ -62,6 +63,7 @@ class CellDescription:
     tare_file : a `bsp tare` file of this sensor (resolved against the cell file's folder), or None.
     marker_topic_prefix : PoseStamped topics are this prefix + the marker name.
     handle_pose_topic : the robot's contact point (PoseStamped in world), '' for none.
+    emg_topic : the muscles' EMG envelopes (std_msgs/Float32MultiArray, docs/contract.md), '' for none.
     """
 
     source: str = ""
@@ -73,6 +75,7 @@ class CellDescription:
     tare_file: Path | None = None
     marker_topic_prefix: str = "/mocap/"
     handle_pose_topic: str = "/robot/handle_pose"
+    emg_topic: str = "/emg/envelope"
 
     @property
     def rotation_world_from_sensor(self) -> np.ndarray:
@@ -117,6 +120,7 @@ def _problems(cell: CellDescription) -> list[str]:
         ("ft_sensor.wrench_topic", cell.wrench_topic, False),
         ("ft_sensor.transform_topic", cell.transform_topic, False),
         ("contact_point.handle_pose_topic", cell.handle_pose_topic, True),
+        ("emg.envelope_topic", cell.emg_topic, True),
     )
     for key, value, may_be_empty in topics:
         if not isinstance(value, str) or not (_TOPIC.match(value) or (may_be_empty and value == "")):
@@ -209,6 +213,7 @@ def cell_description_from_mapping(data: Any, source: str = "", folder: Path | No
     sensor = _section(top, "ft_sensor", source)
     markers = _section(top, "markers", source)
     contact = _section(top, "contact_point", source)
+    emg = _section(top, "emg", source)
     defaults = CellDescription()
     tare = sensor.get("tare_file") or None
     tare_path = None if tare is None else (folder or Path.cwd()) / Path(str(tare)).expanduser()
@@ -222,6 +227,7 @@ def cell_description_from_mapping(data: Any, source: str = "", folder: Path | No
         tare_file=tare_path,
         marker_topic_prefix=markers.get("topic_prefix", defaults.marker_topic_prefix),
         handle_pose_topic=contact.get("handle_pose_topic", defaults.handle_pose_topic) or "",
+        emg_topic=emg.get("envelope_topic", defaults.emg_topic) or "",
     )
     return check_cell_description(cell)
 

@@ -75,4 +75,5 @@ def topic_map_from_cell(cell: CellDescription) -> TopicMap:
             cell.world_frame, cell.sensor_frame, cell.rotation_xyzw, "cell", cell.where("ft_sensor.rotation_xyzw")
         ),
         world_frame=cell.world_frame,
+        emg=cell.emg_topic,
     )

@@ -191,7 +191,8 @@ def topics_from_args(args: argparse.Namespace) -> Any:
         if topic in (wrench, args.tf_topic, args.tf_static_topic, handle_pose):
             raise InputError(f"--marker-topic {item}: {topic} is already the wrench, a tf or the handle pose topic")
         markers[name] = topic
-    topics = TopicMap(wrench, markers, args.tf_static_topic, args.tf_topic, handle_pose, emg=args.emg_topic)
+    emg = base.emg if args.emg_topic == default.emg else args.emg_topic
+    topics = TopicMap(wrench, markers, args.tf_static_topic, args.tf_topic, handle_pose, emg=emg)
     return replace(topics, transform=base.transform, stated=base.stated, world_frame=base.world_frame)
 
 

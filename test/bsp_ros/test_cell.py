@@ -24,6 +24,8 @@ markers:
   topic_prefix: /vicon/
 contact_point:
   handle_pose_topic: ""
+emg:
+  envelope_topic: /delsys/envelopes
 """
 
 
@@ -37,6 +39,7 @@ def test_the_shipped_cell_is_the_simulated_cell() -> None:
     np.testing.assert_allclose(cell.roll_pitch_yaw_deg, simulated.sensor.roll_pitch_yaw_deg, atol=1e-6)
     assert (cell.wrench_topic, cell.transform_topic) == ("/ft_sensor/wrench", "/ft_sensor/transform")
     assert cell.marker_topic("elbow") == "/mocap/elbow" and cell.handle_pose_topic == "/robot/handle_pose"
+    assert cell.emg_topic == "/emg/envelope"
     assert cell.tare_file is None
 
 
@@ -55,6 +58,7 @@ def test_a_cell_file_in_roll_pitch_yaw_with_a_relative_tare(tmp_path: Path) -> N
         "/vicon/hand",
         "",
     )
+    assert cell.emg_topic == "/delsys/envelopes"
 
 
 def test_the_angle_between_two_rotations() -> None:
@@ -113,6 +117,8 @@ def test_each_bad_value_is_named_in_one_line(edit: dict[str, str], needles: list
         ("schema: bsp_ros/cell/1\nft_sensor:\n  rotation_xzyw: [0, 0, 0, 1]\n", "unknown key(s) rotation_xzyw"),
         ("schema: bsp_ros/cell/1\nwrld_frame: world\n", "unknown key(s) wrld_frame"),
         ("schema: bsp_ros/cell/1\nft_sensor: [1, 2]\n", "ft_sensor must be a mapping"),
+        ("schema: bsp_ros/cell/1\nemg:\n  topic: /emg\n", "unknown key(s) topic in emg (known: envelope_topic)"),
+        ("schema: bsp_ros/cell/1\nemg:\n  envelope_topic: emg envelope\n", "emg.envelope_topic must be a ROS topic"),
         ("- 1\n", "expected a mapping"),
         ("a: [\n", "not YAML"),
         (

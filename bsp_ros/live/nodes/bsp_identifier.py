@@ -32,6 +32,7 @@ from msg_adapters.diagnostics import (
     DiagnosticStatusData,
     build_diagnostic_array,
 )
+from msg_adapters.emg import EMG_TYPE, read_envelope
 from msg_adapters.joint_state import JointStateSample, build_joint_state, read_joint_state
 from msg_adapters.tf import read_tf_message, read_transform_stamped
 from msg_adapters.wrench import WrenchSample, build_wrench_stamped, read_wrench_stamped
@@ -143,6 +144,10 @@ class BspIdentifierNode(RosNode):
         if self.frame_source.topic:
             transform = message_class("geometry_msgs/msg/TransformStamped")
             self.create_subscription(transform, settings.wrench_frame_topic, self.on_transform, rclpy_qos("tf"))
+        if settings.emg_topic:  # optional: a cell without EMG sends nothing on it
+            self.create_subscription(
+                message_class(EMG_TYPE), settings.emg_topic, self.on_emg, rclpy_qos("sensor_input")
+            )
 
     def now_ns(self) -> int:
         """The node clock (system time unless ``use_sim_time``), ns."""
@@ -200,8 +205,13 @@ class BspIdentifierNode(RosNode):
         """One wrench: into world axes (once its frame's rotation at its stamp is known), then identified."""
         sample = read_wrench_stamped(msg)
         now = self.now_ns()
-        self.identifier.received("wrench", now)
+        self.identifier.wrench_received(sample.t_ns, now)
         self._add_wrenches(self.wrench_queue.push(sample.frame_id, sample.t_ns, sample, now))
+
+    def on_emg(self, msg: Any) -> None:
+        """EMG envelopes (no header): stamped at their receipt, on the wrench stamps' clock, into the window."""
+        channels, values = read_envelope(msg)
+        self.identifier.add_emg(channels, values, self.now_ns())
 
     def _add_wrenches(self, ready: list[tuple[WrenchSample, np.ndarray | None]]) -> None:
         """Wrenches with their rotations (None: waiting for a first transform); the passive moments a mode

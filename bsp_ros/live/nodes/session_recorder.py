@@ -64,6 +64,11 @@ PARAMETERS = (
     Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
     Param("handle_pose_topic", "/robot/handle_pose", "the robot's contact point (PoseStamped; empty: not recorded)"),
     Param(
+        "emg_topic",
+        "/emg/envelope",
+        "the muscles' EMG envelopes (std_msgs/Float32MultiArray; empty: not recorded), recorded where they stream",
+    ),
+    Param(
         "wrench_frame_rotation_xyzw",
         [0.0, 0.0, 0.0, 1.0],
         "rotation world <- wrench frame [x, y, z, w] written into each session's bag metadata where tf2_msgs is "
@@ -77,6 +82,7 @@ RECORDER_FROM_CELL: FromCell = {
     "wrench_topic": lambda c: c.wrench_topic,
     "marker_topic_prefix": lambda c: c.marker_topic_prefix,
     "handle_pose_topic": lambda c: c.handle_pose_topic,
+    "emg_topic": lambda c: c.emg_topic,
     "tare_file": lambda c: "" if c.tare_file is None else str(c.tare_file),
     "wrench_frame_rotation_xyzw": lambda c: [float(v) for v in c.rotation_xyzw],
 }
@@ -92,8 +98,9 @@ def recordings_dir_for(given: str, store_location: str) -> Path:
 
 
 class SessionRecorderNode(RosNode):
-    """Records each session of the named subject whole (its wrench, markers and transforms, into a bag) and, when
-    it ends, identifies it as `bsp sessions add BAG` would, with the subject record's body data, and stores it.
+    """Records each session of the named subject whole (its wrench, markers, transforms and EMG envelopes where they
+    stream, into a bag) and, when it ends, identifies it as `bsp sessions add BAG` would, with the subject record's
+    body data, and stores it.
 
     Sessions start with the service ``bsp/session/start`` (``start_retest``: a same-day retest) or, with
     ``auto_start``, when the wrench stream starts; they end with ``bsp/session/stop``, a message on
@@ -158,7 +165,7 @@ class SessionRecorderNode(RosNode):
     @staticmethod
     def _identify_settings(p: dict[str, Any], cell: CellDescription) -> IdentifySettings:
         markers = {name: p["marker_topic_prefix"] + name for name in TopicMap().markers}
-        topics = TopicMap(p["wrench_topic"], markers, handle_pose=p["handle_pose_topic"])
+        topics = TopicMap(p["wrench_topic"], markers, handle_pose=p["handle_pose_topic"], emg=p["emg_topic"])
         # Without tf2_msgs the cell's TransformStamped topic is recorded: identified with the cell file that names it.
         topics = replace(topics, transform=cell.transform_topic, world_frame=cell.world_frame)
         return IdentifySettings(

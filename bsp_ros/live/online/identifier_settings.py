@@ -43,6 +43,13 @@ PARAMETERS = (
     Param("world_frame", "world", "frame of the markers and of gravity (z up)"),
     Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
     Param(
+        "emg_topic",
+        "/emg/envelope",
+        "EMG envelopes (std_msgs/Float32MultiArray, channel names in layout.dim[0].label; '': not subscribed): the "
+        "stretches they show active are left out of the window as `bsp identify` leaves them out; each message is "
+        "stamped at its receipt, on the wrench stamps' clock",
+    ),
+    Param(
         "wrench_frame_source",
         "auto",
         "where the wrench frame's rotation comes from: tf (/tf_static and /tf), topic (TransformStamped of the "
@@ -177,6 +184,7 @@ class IdentifierSettings:
     options : what each estimate is identified with (method, passive model, subject, tare, sensor zero's sd, the
         wrench delay): the passive model as named (no elastic fallback per update).
     world_frame, wrench_topic, wrench_frame_source, wrench_frame_topic : as the parameters.
+    emg_topic : the EMG envelopes' topic ('' none).
     wrench_frame_rotation_xyzw : the parameter quaternion; ``wrench_frame_rotation`` its (3, 3) matrix.
     tare_file : the tare's path ('' without one; the tare itself is ``options.tare``).
     support_fraction : the weight support's share (0: not published).
@@ -205,6 +213,7 @@ class IdentifierSettings:
     target_std_percent: float = 0.0
     precision_hold_s: float = 5.0
     target_segments: tuple[str, ...] = ("upper_arm", "forearm")
+    emg_topic: str = ""
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> IdentifierSettings:
@@ -256,6 +265,7 @@ class IdentifierSettings:
             target_std_percent=p["target_std_percent"],
             precision_hold_s=p["precision_hold_s"],
             target_segments=_target_segments(p["target_segments"], p["n_segments"]),
+            emg_topic=p["emg_topic"],
         )
 
     @property

@@ -16,6 +16,7 @@ from bsp_ros.core.estimate import add_finding, invalid_document
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.online.identifier_modes import IdentifierMode, ModeEstimate, Orientation, mode_for
 from bsp_ros.live.online.identifier_settings import IdentifierSettings
+from bsp_ros.live.online.receipt_stamps import ReceiptStamps
 from bsp_ros.live.online.wrench_input import WrenchInput
 from msg_adapters.joint_state import JointStateSample
 from msg_adapters.wrench import WrenchSample
@@ -55,6 +56,8 @@ class LiveIdentifier(Generic[Outputs]):
         # The tare's load off and the wrench delay compensated (0 when unset: live cannot estimate it).
         self.wrench_input = WrenchInput(settings.options.tare, settings.live_wrench_delay_s)
         self.orientation: Orientation = None  # the latest wrench's frame and rotation
+        # EMG envelopes carry no stamp: their receipt, on the wrench stamps' clock.
+        self.emg_stamps = ReceiptStamps()
         self.lengths: np.ndarray | None = None
         # Unfiltered angles that came before the first segment lengths (a topic of their own, which can match
         # later or be taken after them); they join the window when the lengths arrive.
@@ -75,6 +78,23 @@ class LiveIdentifier(Generic[Outputs]):
     def received(self, what: str, now_ns: int) -> None:
         """A message of input ``what`` (``wrench``, ``joint_states``) came at ``now_ns`` (staleness)."""
         self.last_receive[what] = now_ns
+
+    def wrench_received(self, stamp_ns: int, now_ns: int) -> None:
+        """A wrench stamped ``stamp_ns`` came at ``now_ns`` (node clock): staleness, and the offset that stamps the EMG
+        envelopes on the wrench's clock."""
+        self.received("wrench", now_ns)
+        self.emg_stamps.wrench(stamp_ns, now_ns)
+
+    def add_emg(self, channels: tuple[str, ...], values: np.ndarray, now_ns: int) -> None:
+        """One EMG envelope message (its channels' names and values (C,)) received at ``now_ns`` (node clock),
+        stamped at its receipt on the wrench's clock (:class:`ReceiptStamps`; before any wrench it is dropped and
+        counted) into the mode's window: the windowed mode's estimate, the recursive mode's window checks, leave
+        the stretches it shows active out as `bsp identify` does."""
+        t_ns = self.emg_stamps.stamp(now_ns)
+        if t_ns is None:
+            self._count("emg_before_wrench")
+            return
+        self._count("emg" if self.mode.window.add_emg(t_ns, channels, values) else "refused")
 
     def add_lengths(self, lengths_m: np.ndarray) -> None:
         """Segment lengths (m); the angles that waited for the first ones join the window."""

@@ -138,6 +138,7 @@ class WindowEstimator:
             qd_rad_s=qd[valid],
             qdd_rad_s2=qdd[valid],
             contact_from_robot=window.contact_from_robot,
+            emg=window.emg,  # its active stretches left out as offline (leave_out_activity, refit_held)
         )
         return data, settings
 

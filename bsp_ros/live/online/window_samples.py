@@ -9,6 +9,7 @@ import numpy as np
 
 from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.core.streams import EmgSeries
 from bsp_ros.validation import check_finite_scalar, check_positive
 
 
@@ -72,6 +73,8 @@ class WindowSamples:
     contact_from_robot : the angles' contact point is the robot's handle pose, not the hand's skin marker.
     epoch : how many times the buffers were cleared (a clock jump, a new transform or contact point) before the
         copy: an estimator restarts its model checks when it changes.
+    emg : the EMG envelopes from shortly before the window on (stamped at receipt on the stamps' clock), None
+        where none came: its active stretches are left out of the window's identification, as offline.
     """
 
     wrench_t_ns: np.ndarray
@@ -85,3 +88,4 @@ class WindowSamples:
     wrench_frame_id: str = ""
     contact_from_robot: bool = False
     epoch: int = 0
+    emg: EmgSeries | None = None

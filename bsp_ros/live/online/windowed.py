@@ -7,15 +7,21 @@ import numpy as np
 from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.online.buffer import TimedBuffer
+from bsp_ros.live.online.emg_buffer import EmgBuffer
 from bsp_ros.live.online.guard import StreamGuard, absurd_wrench_yzx
 from bsp_ros.live.online.window_estimator import WindowEstimator
 from bsp_ros.live.online.window_samples import WindowConfig, WindowEstimate, WindowSamples
 
 __all__ = ["WindowConfig", "WindowEstimate", "WindowEstimator", "WindowSamples", "WindowedIdentifier"]
 
+# A window's EMG starts this long before its first wrench: a burst that ended just before the window reaches into it
+# by the rule's widening after its end (0.3 s) and its mean over 100 ms.
+EMG_LEAD_NS = 1_000_000_000
+
 
 class WindowedIdentifier:
-    """Wrench and unfiltered joint-angle samples in, an estimate of the last ``window_s`` seconds out.
+    """Wrench and unfiltered joint-angle samples (and EMG envelopes, where a cell sends them) in, an estimate of the
+    last ``window_s`` seconds out.
 
     The angles are filtered here with zero phase over the window, exactly as `bsp identify` does offline.
 
@@ -36,6 +42,7 @@ class WindowedIdentifier:
         horizon_ns = int((self.config.window_s + 5.0) * 1e9)
         self.wrench = TimedBuffer(3, horizon_ns)
         self.angles = TimedBuffer(2 * n_segments, horizon_ns)
+        self.emg = EmgBuffer(horizon_ns)
         self.wrench_guard = StreamGuard("wrench", absurd=absurd_wrench_yzx)
         self.angle_guard = StreamGuard("joint_states")
         # Set by the node from `arm/contact_point`: the contact point's placement sd in the estimate follows it.
@@ -65,10 +72,16 @@ class WindowedIdentifier:
         self.angles.append(t_ns, row)
         return True
 
+    def add_emg(self, t_ns: int, channels: tuple[str, ...], values: np.ndarray) -> bool:
+        """Add one message's EMG envelopes ``values`` (C,) of ``channels`` at ``t_ns`` (its receipt on the stamps'
+        clock); False if refused (:class:`EmgBuffer`)."""
+        return self.emg.add(t_ns, channels, values)
+
     def reset(self) -> None:
         """Forget every sample (a new session or a clock jump); the next update runs the model checks."""
         self.wrench.clear()
         self.angles.clear()
+        self.emg.clear()
         self.epoch += 1
 
     def restart_checks(self) -> None:
@@ -126,6 +139,7 @@ class WindowedIdentifier:
             wrench_frame_id=frame_id,
             contact_from_robot=self.contact_from_robot,
             epoch=self.epoch,
+            emg=self.emg.series(start - EMG_LEAD_NS),
         )
 
     def estimate_window(self, window: WindowSamples) -> WindowEstimate:

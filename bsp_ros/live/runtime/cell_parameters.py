@@ -28,7 +28,7 @@ CELL_FILE = Param(
     "cell_file",
     "",
     "the cell description (bsp_ros/cell/1 YAML: world frame, the F/T sensor's frame, topic, mounting rotation, "
-    "transform topic and tare, the marker and handle pose topics): the default of the parameters it names "
+    "transform topic and tare, the marker, handle pose and EMG topics): the default of the parameters it names "
     "('': the shipped bsp_ros/config/cell.yaml, the simulated cell)",
 )
 
@@ -38,6 +38,7 @@ IDENTIFIER_FROM_CELL: FromCell = {
     "wrench_frame_topic": lambda c: c.transform_topic,
     "wrench_frame_rotation_xyzw": lambda c: [float(v) for v in c.rotation_xyzw],
     "tare_file": lambda c: "" if c.tare_file is None else str(c.tare_file),
+    "emg_topic": lambda c: c.emg_topic,
 }
 SIMULATOR_FROM_CELL: FromCell = {
     "wrench_topic": lambda c: c.wrench_topic,

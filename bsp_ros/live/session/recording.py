@@ -17,7 +17,7 @@ import numpy as np
 
 from bsp_ros.bag import TopicMap
 from bsp_ros.bag.cell_metadata import custom_data_from_cell
-from bsp_ros.bag.topics import POSE_TYPE, TF_TYPE, TRANSFORM_TYPE, WRENCH_TYPE
+from bsp_ros.bag.topics import EMG_TYPE, POSE_TYPE, TF_TYPE, TRANSFORM_TYPE, WRENCH_TYPE
 from bsp_ros.cell import CellDescription
 from bsp_ros.live.session.control import EndCause, Reply, SessionControl, SessionEnd, SessionStart
 from bsp_ros.live.session.spool import SessionSpool, SpoolSummary, spool_dir_name
@@ -31,12 +31,15 @@ IDENTITY_XYZW = (0.0, 0.0, 0.0, 1.0)
 
 def topic_types(topics: TopicMap, with_tf: bool = True) -> dict[str, str]:
     """Topic -> message type of every input a session records: the tf topics ``with_tf`` (tf2_msgs installed), else
-    the TransformStamped topic ``topics.transform`` in their place."""
+    the TransformStamped topic ``topics.transform`` in their place; the EMG envelopes where ``topics.emg`` names
+    them (a bag holds the topic only where messages came)."""
     types = {topic: POSE_TYPE for topic in (*topics.markers.values(), topics.handle_pose) if topic}
     if with_tf:
         types.update({topics.tf_static: TF_TYPE, topics.tf: TF_TYPE})
     elif topics.transform:
         types[topics.transform] = TRANSFORM_TYPE
+    if topics.emg:
+        types[topics.emg] = EMG_TYPE
     types[topics.wrench] = WRENCH_TYPE
     return types
 

@@ -9,8 +9,10 @@ import numpy as np
 
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.activity import Activity
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.drift import drift_columns
+from bsp_ros.core.identification.joint.emg_activity import EmgEvidence, emg_evidence, emg_values, with_emg
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.joint.identify import failed_result
 from bsp_ros.core.identification.joint.judgement import UNIDENTIFIABLE_CONDITION, unidentifiable_problem
@@ -25,6 +27,9 @@ from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.stacked import Fit, Problem, augmented, build_problem, fit_problem
 from bsp_ros.core.streams import joints_for
 
+# The findings of the arm's activity: with EMG, a refit's own stand for the held ones.
+_ACTIVITY_CODES = frozenset({FindingCode.ARM_ACTIVE, FindingCode.TOO_LITTLE_RELAXED})
+
 
 def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | None = None) -> IdentificationResult:
     """Refit the model ``held`` chose to ``data``: newer samples of the same arm and session.
@@ -36,6 +41,11 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
     systematic shares of the covariance (the model's choice, the friction shape, the drift's level) and what the
     checks found the model lacks, which also makes this result invalid. Costs one fit (two with a modelled drift,
     one more after removing far-off samples).
+
+    Where ``data`` has EMG envelopes, the stretches they show active in these samples are left out, as the
+    identification with its checks leaves them out (:func:`leave_out_activity`): with the torque's stretches where
+    too many samples lie far off the fit (their union), alone otherwise. The refit's ``arm_active`` and
+    ``emg_unusable`` findings then stand for the held ones of the same code: they describe these samples.
 
     Parameters
     ----------
@@ -57,9 +67,17 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         problems.append(samples.too_few)
     if problems:
         return failed_result(data, samples.problem.names, problems, warnings)
-    kept = _without_far_off(data, config, samples, widths)
+    samples, evidence, emg_alone = _left_out_by_emg(data, config, samples, widths)
+    if evidence is not None:
+        warnings += evidence.notes
+    if emg_alone is not None and _too_little_left(emg_alone, samples):
+        return failed_result(data, samples.problem.names, [emg_alone], warnings)
+    kept = _without_far_off(data, config, samples, widths, evidence, emg_alone)
     problems += kept.problems
     warnings += kept.notes
+    # With EMG the refit finds the stretches of these samples itself: its findings of them stand for the held ones.
+    found = {f.code for f in (*kept.notes, *kept.problems) if f.code in _ACTIVITY_CODES}
+    decided = set() if evidence is None else {FindingCode.EMG_UNUSABLE, *found}
     fit, ledger, own = _held_covariance(data, kept.problem, kept.fit, held)
     if fit.condition > UNIDENTIFIABLE_CONDITION:
         problems.append(unidentifiable_problem(fit.condition))
@@ -82,7 +100,7 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         values=fit.values,
         covariance=fit.covariance,
         ledger=ledger,
-        findings=(*problems, *warnings, *(w for w in held.warnings if w not in warnings)),
+        findings=(*problems, *warnings, *(w for w in held.warnings if w not in warnings and w.code not in decided)),
         summary=f"identified from {data.t_ns.size} samples",
         condition_number=fit.condition,
         residual_rms_nm={joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints)},
@@ -104,35 +122,77 @@ class _Kept:
     removed: int
 
 
-def _without_far_off(
+def _left_out_by_emg(
     data: IdentificationData, config: JointConfig, samples: Samples, widths: np.ndarray | None
+) -> tuple[Samples, EmgEvidence | None, Finding | None]:
+    """``samples`` without the stretches the window's EMG shows active, what the EMG shows (None without EMG or the
+    activity check), and the ``arm_active`` or ``too_little_relaxed`` finding of its stretches alone (None where it
+    shows none)."""
+    evidence = emg_evidence(data, config.emg) if config.check_activity else None
+    if evidence is None or evidence.activity is None or not evidence.active.any():
+        return samples, evidence, None
+    rows = samples.rows & ~evidence.active[:, None]
+    problem = build_problem(data, config.passive, rows, widths, samples.extras)
+    torque = Activity(active=np.zeros(data.t_ns.size, dtype=bool), spans_s=(), peak_nm=np.zeros(data.n_joints))
+    values = emg_values(torque.active, evidence.active, evidence.activity)
+    finding = activity_finding(data, config, with_emg(torque, evidence, data.t_ns), values)
+    return dataclasses.replace(samples, rows=rows, problem=problem), evidence, finding
+
+
+def _too_little_left(finding: Finding, samples: Samples) -> bool:
+    """Whether the stretches of ``finding`` leave too little to fit: too little of a relaxed arm, or a joint with
+    fewer rows than parameters."""
+    too_few = (samples.rows.sum(axis=0) < len(samples.problem.names)).any()
+    return finding.code is FindingCode.TOO_LITTLE_RELAXED or bool(too_few)
+
+
+def _without_far_off(
+    data: IdentificationData,
+    config: JointConfig,
+    samples: Samples,
+    widths: np.ndarray | None,
+    evidence: EmgEvidence | None = None,
+    emg_alone: Finding | None = None,
 ) -> _Kept:
-    """The fit of ``samples``, refitted without the samples far off it (too many: the model does not fit)."""
+    """The fit of ``samples``, refitted without the samples far off it (too many: the model does not fit);
+    ``evidence``: what the window's EMG shows (its stretches already out of ``samples``), where it has EMG;
+    ``emg_alone``: the finding of its stretches alone, the note where the torque's are not looked for."""
     fit = fit_problem(samples.problem)
     far = fit_outliers(fit, config)
     n_far = int(far.sum())
     if too_far_off(n_far, samples.usable):
-        calmed = _without_activity(data, config, samples, widths, fit)
+        calmed = _without_activity(data, config, samples, widths, fit, evidence)
         if calmed is not None:
             return calmed
         far_off = far_off_problem(n_far, samples.usable, config)
         return _Kept(problem=samples.problem, fit=fit, problems=(far_off,), notes=(), removed=0)
+    notes = () if emg_alone is None else (emg_alone,)
     if not n_far:
-        return _Kept(problem=samples.problem, fit=fit, problems=(), notes=(), removed=0)
+        return _Kept(problem=samples.problem, fit=fit, problems=(), notes=notes, removed=0)
     problem = build_problem(data, config.passive, samples.rows & ~far[:, None], widths, samples.extras)
     removed = Finding(code=FindingCode.FIT_OUTLIERS_REMOVED, values={"n": n_far, "outlier_sd": config.outlier_sd})
-    return _Kept(problem=problem, fit=fit_problem(problem), problems=(), notes=(removed,), removed=n_far)
+    return _Kept(problem=problem, fit=fit_problem(problem), problems=(), notes=(*notes, removed), removed=n_far)
 
 
 def _without_activity(
-    data: IdentificationData, config: JointConfig, samples: Samples, widths: np.ndarray | None, fit: Fit
+    data: IdentificationData,
+    config: JointConfig,
+    samples: Samples,
+    widths: np.ndarray | None,
+    fit: Fit,
+    evidence: EmgEvidence | None = None,
 ) -> _Kept | None:
     """Between a live window's checks, too many samples far off the held model's fit: stretches of muscle activity
-    (:func:`detect_activity`) left out as the checks' identification leaves them; None where none explain it."""
+    (:func:`detect_activity`) left out as the checks' identification leaves them; None where none explain it.
+    ``evidence``: the window's EMG, whose stretches (out of ``samples`` already) join the torque's in the finding."""
     if not config.check_activity:
         return None
     activity = detect_activity(data, config, fit.residual)
-    finding = activity_finding(data, config, activity)
+    emg = None
+    if evidence is not None and evidence.activity is not None:
+        emg = emg_values(activity.active, evidence.active, evidence.activity)
+        activity = with_emg(activity, evidence, data.t_ns)
+    finding = activity_finding(data, config, activity, emg)
     if not activity.spans_s or finding.code is not FindingCode.ARM_ACTIVE:
         return None
     problem = build_problem(data, config.passive, samples.rows & ~activity.active[:, None], widths, samples.extras)
