@@ -26,6 +26,7 @@ from bsp_ros.live.session.storing import (
     SessionJob,
     SessionOutcome,
     add_command,
+    add_options_for,
     cell_file_for,
     store_session,
 )
@@ -307,9 +308,10 @@ class SessionRecorderNode(RosNode):
         ended, spool = change.finished
         subject = ended.session.subject
         if not ended.stored:
+            command = add_command(spool.path, subject, ended.session.retest, add_options_for(self.settings, self.cell))
             logger.warning(
                 f"session of {subject} not identified ({ended.cause}); its recording is kept at {spool.path}: add it "
-                f"with `{add_command(spool.path, subject, ended.session.retest)}`"
+                f"with `{command}`"
             )
             return
         logger.info(f"session of {subject} ended ({ended.cause}, {spool.duration_s:.1f} s): identifying it")
@@ -331,9 +333,10 @@ class SessionRecorderNode(RosNode):
         for job, future in self.jobs:
             if future.cancelled():
                 path, session = job.spool.path, job.ended.session
+                command = add_command(path, session.subject, session.retest, add_options_for(job.settings, job.cell))
                 self.get_logger().warning(
                     f"session of {session.subject} not identified (the recorder stopped); its recording is kept at "
-                    f"{path}: add it with `{add_command(path, session.subject, session.retest)}`"
+                    f"{path}: add it with `{command}`"
                 )
             else:
                 self.get_logger().info(future.result().log_line())

@@ -7,6 +7,7 @@ plain Python on files and the store, and returns a :class:`SessionOutcome` for t
 from __future__ import annotations
 
 import argparse
+import shlex
 import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -29,6 +30,7 @@ __all__ = [
     "SessionJob",
     "SessionOutcome",
     "add_command",
+    "add_options_for",
     "cell_file_for",
     "store_session",
 ]
@@ -77,6 +79,11 @@ class IdentifySettings:
         if self.cell_file:
             line += ["--cell", self.cell_file]
         return line
+
+    def add_options(self) -> list[str]:
+        """These settings as `bsp sessions add` options (its ``--cell`` names the cell the session was recorded in,
+        so the cell description is ``--cell-file``)."""
+        return ["--cell-file" if word == "--cell" else word for word in self.command_line()]
 
     def arguments(self) -> argparse.Namespace:
         """The parsed options, as `bsp sessions add` parses its command line (same defaults and checks).
@@ -172,6 +179,7 @@ class SessionOutcome:
     valid: bool | None = None
     cause: str | None = None
     kept: Path | None = None
+    add_options: tuple[str, ...] = ()
 
     def log_line(self) -> str:
         """One line: what was stored where, or why nothing was and where the data are."""
@@ -179,9 +187,10 @@ class SessionOutcome:
             return f"session of {self.subject} ended without a wrench message: nothing to store"
         if self.kind is OutcomeKind.FAILED:
             assert self.kept is not None
+            command = add_command(self.kept, self.subject, self.retest, self.add_options)
             return (
                 f"session of {self.subject} ({self.recorded_s:.1f} s) NOT stored: {self.cause}; its recording is "
-                f"kept at {self.kept}: add it with `{add_command(self.kept, self.subject, self.retest)}`"
+                f"kept at {self.kept}: add it with `{command}`"
             )
         marks = [f"{self.arm} arm" if self.arm else "", "retest" if self.retest else ""]
         what = ", ".join(m for m in (*marks, f"{self.estimate_s or 0.0:.1f} s") if m)
@@ -199,9 +208,16 @@ def cell_file_for(cell: CellDescription, rotation_xyzw: Sequence[float], tare_fi
     return cell.source if same_mounting and tare_file == cell_tare else ""
 
 
-def add_command(path: Path, subject: str, retest: bool) -> str:
-    """The `bsp sessions add` command that stores a kept recording by hand."""
-    return f"bsp sessions add {path} --subject {subject}" + (" --retest" if retest else "")
+def add_command(path: Path, subject: str, retest: bool, options: Sequence[str] = ()) -> str:
+    """The `bsp sessions add` command that stores a kept recording by hand, as the recorder would have: ``options``
+    the session's own (:func:`add_options_for`: its topics, tare, cell file and cell), quoted for a shell."""
+    words = ["bsp", "sessions", "add", str(path), "--subject", subject, *(["--retest"] if retest else []), *options]
+    return shlex.join(words)
+
+
+def add_options_for(settings: IdentifySettings, cell: str | None) -> tuple[str, ...]:
+    """A session's identification ``settings`` and ``cell`` (its name, or None) as `bsp sessions add` options."""
+    return (*settings.add_options(), *(["--cell", cell] if cell else []))
 
 
 def _span_s(estimate: dict[str, Any]) -> float | None:
@@ -286,4 +302,5 @@ def store_session(job: SessionJob, store_name: str) -> SessionOutcome:
             recorded_s=spool.duration_s,
             cause=cause,
             kept=spool.path,
+            add_options=add_options_for(job.settings, job.cell),
         )

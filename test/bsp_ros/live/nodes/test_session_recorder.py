@@ -189,4 +189,7 @@ def test_session_end_ends_a_session_and_one_that_cannot_be_identified_keeps_its_
     log = capfd.readouterr().err
     assert "retest of P007 started (service)" in log
     assert "session of P007 ended (session_end" in log
-    assert f"kept at {outcome.kept}: add it with `bsp sessions add {outcome.kept} --subject P007 --retest`" in log
+    # The command carries the recorder's own settings (topics, cell file), so it stores the bag as the node would.
+    logged = log.split(f"kept at {outcome.kept}: add it with `")[1].split("`")[0]
+    assert logged.startswith(f"bsp sessions add {outcome.kept} --subject P007 --retest --method joint")
+    assert "--cell-file" in logged
