@@ -10,12 +10,12 @@ through ``bsp identify BAG --zero-sd-n 0 --zero-sd-nm 0`` (a tared sensor: the e
 offset). The arm's physics does not depend on where the skin markers sit (massless sites), so one engine run per
 arm serves its sessions: the markers are moved by the planar kinematics of the engine's own joint angles.
 
-Protocols: ``paper`` (the paper's sines of ``human_arm_cell()``, shoulder peak 0.03 rad/s), ``fast`` (the same
-sines four times faster), ``plan`` (a ``bsp plan`` trajectory: ``--plan FILE``, else the default request written
-to a temporary file), ``mechanical`` (the paper's 2-segment mechanical arm of ``test/physics/mujoco_mechanical.py``
-on its sines; arm 0 the nominal arm, others a seeded manufacturing spread; scored on the quantities from the data
-alone, as the masses and centres of mass ``bsp identify`` fuses with the human anthropometric table do not describe a
-machine).
+Protocols: ``paper`` (the paper's sines of ``human_arm_cell()``, shoulder peak 0.03 rad/s), ``fast`` (the same sines
+four times faster), ``plan`` (a ``bsp plan`` trajectory: ``--plan FILE``, else one within the ranges of
+``bench/in_process.py`` as long as the session), ``mechanical`` (the paper's 2-segment mechanical arm of
+``test/physics/mujoco_mechanical.py`` on its sines; arm 0 the nominal arm, others a seeded manufacturing spread;
+scored on the quantities from the data alone, as the masses and centres of mass ``bsp identify`` fuses with the human
+anthropometric table do not describe a machine).
 
 Printed per protocol and arm, and pooled per protocol: sessions, valid, valid-and-wrong, invalid-and-right, the
 two-sided calibration of the valid sessions (z RMS, within 1 and 2 std; ``bench/calibration.py``) and the
@@ -29,9 +29,7 @@ means no inflation).
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
-import io
 import json
 import math
 import sys
@@ -47,22 +45,18 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
+from in_process import identify, planned_in_ranges
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine, run_engine
 from mujoco_mechanical import mechanical_arm, mechanical_sine
-from scoring import residuals, z_scores
+from scoring import residuals, verdict, z_scores
 
-from bsp_ros.cli import main as bsp_main
 from bsp_ros.core.planning import planned_trajectory_from_file
 
 PROTOCOLS = ("paper", "fast", "plan", "mechanical")
 # Quantities whose sharpness the acceptance reads, and the most an honest std's median over the RMS error may be.
 SHARP_KINDS = {"static_moment_kgm": "static moments", "coulomb_nm": "Coulomb amplitudes"}
 SHARPNESS_LIMIT = 1.5
-DEFAULT_PLAN = [
-    "plan", "--shoulder", "0", "1.2", "--shoulder-range", "-70", "-10", "--elbow-range", "10", "100",
-    "--wrist-range", "-20", "20", "--duration", "120",
-]  # fmt: skip
 
 
 @dataclasses.dataclass
@@ -80,13 +74,13 @@ class Row:
     scales: list[float] = dataclasses.field(default_factory=list)
     tally: calibration.Tally = dataclasses.field(default_factory=calibration.Tally)
 
-
-def identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
-    """``bsp identify BAG --json OUT`` in process, output silenced: (exit code, the estimate document or {})."""
-    sink = io.StringIO()
-    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-        code = bsp_main(["identify", str(bag), "--json", str(out), "--format", "none", *extra])
-    return code, (json.loads(out.read_text()) if out.exists() else {})
+    def pool(self, other: Row) -> None:
+        """Add ``other``'s counts and z values (not its per-parameter samples: sharpness is per arm)."""
+        self.runs += other.runs
+        self.valid += other.valid
+        self.valid_wrong += other.valid_wrong
+        self.invalid_right += other.invalid_right
+        self.tally.z.extend(other.tally.z)
 
 
 def markers_replaced(run: EngineRun, offsets_m: np.ndarray) -> np.ndarray:
@@ -154,19 +148,18 @@ def score(row: Row, code: int, estimate: dict[str, Any], truth: dict[str, Any]) 
     if not estimate:
         row.reasons[f"exit {code}"] += 1
         return
-    if truth.get("n_segments", len(truth.get("segments", {}))) == 2:
+    if len(truth["segments"]) == 2:
         estimate = data_only(estimate)
     valid = bool(estimate["quality"]["valid"])
     row.scales.append(float(estimate["quality"].get("marker_placement", {}).get("scale_from_data", math.nan)))
     z = z_scores(estimate, truth)
-    wrong = any(v > 3.0 for v in z.values())
+    worst = max(z, key=lambda k: z[k]) if z else ""
+    outcome = verdict(valid, z[worst] if z else math.nan)
     row.valid += valid
-    row.valid_wrong += valid and wrong
-    row.invalid_right += (not valid) and not wrong
-    if z:
-        worst = max(z, key=lambda k: z[k])
-        if z[worst] > row.worst_z:
-            row.worst_z, row.worst_param = z[worst], worst
+    row.valid_wrong += outcome == "valid-and-wrong"
+    row.invalid_right += outcome == "invalid-and-right"
+    if z and z[worst] > row.worst_z:
+        row.worst_z, row.worst_param = z[worst], worst
     if not valid:
         codes = [f["code"] for f in estimate["quality"].get("findings", []) if f.get("severity") == "invalid"]
         row.reasons[",".join(codes) or "?"] += 1
@@ -204,15 +197,22 @@ def run_arm(protocol: str, arm_seed: int, args: argparse.Namespace, workdir: Pat
     return row
 
 
+def sharpness_of(row: Row) -> dict[str, float]:
+    """Each static moment's and Coulomb amplitude's sharpness over the row's sessions (where it has two or more)."""
+    out = {}
+    for name, pairs in sorted(row.tally.samples.items()):
+        if calibration.quantity(name) in SHARP_KINDS and len(pairs) >= 2:
+            errors, stds = zip(*pairs, strict=True)
+            out[name] = calibration.sharpness(errors, stds)
+    return out
+
+
 def _per_parameter(row: Row) -> str:
     """Each static moment's and Coulomb amplitude's sharpness, ``owner value``."""
     parts = []
-    for name, pairs in sorted(row.tally.samples.items()):
-        if calibration.quantity(name) not in SHARP_KINDS or len(pairs) < 2:
-            continue
-        errors, stds = zip(*pairs, strict=True)
+    for name, value in sharpness_of(row).items():
         kind = "SM" if name.startswith("static") else "C"
-        parts.append(f"{kind} {name.split('/')[1]} {calibration.sharpness(errors, stds):.2f}")
+        parts.append(f"{kind} {name.split('/')[1]} {value:.2f}")
     return ", ".join(parts)
 
 
@@ -225,9 +225,8 @@ def print_row(label: str, row: Row) -> None:
         f"{calibration.calibration_columns(c)} {row.worst_z:7.2f} ({row.worst_param})  invalid: {reasons}"
     )
     scales = np.array(row.scales)
-    scale_text = (
-        f"placement scale median {np.nanmedian(scales):.2f}, max {np.nanmax(scales):.2f}" if scales.size else "-"
-    )
+    scales = scales[np.isfinite(scales)]  # an invalid estimate has no placement scale
+    scale_text = f"placement scale median {np.median(scales):.2f}, max {scales.max():.2f}" if scales.size else "-"
     print(f"{'':22} sharpness: {_per_parameter(row)}; {scale_text}")
     if row.inflation:
         values = {k: float(np.median(v)) for k, v in sorted(row.inflation.items())}
@@ -240,16 +239,10 @@ def acceptance(rows: dict[str, Row]) -> list[str]:
     total = Row()
     worst_sharp = (0.0, "")
     for label, row in rows.items():
-        total.runs += row.runs
-        total.valid += row.valid
-        total.valid_wrong += row.valid_wrong
-        total.tally.z.extend(row.tally.z)
-        for name, pairs in row.tally.samples.items():
-            if calibration.quantity(name) in SHARP_KINDS and len(pairs) >= 2:
-                errors, stds = zip(*pairs, strict=True)
-                value = calibration.sharpness(errors, stds)
-                if math.isfinite(value) and value > worst_sharp[0]:
-                    worst_sharp = (value, f"{label} {name}")
+        total.pool(row)
+        for name, value in sharpness_of(row).items():
+            if math.isfinite(value) and value > worst_sharp[0]:
+                worst_sharp = (value, f"{label} {name}")
     c = total.tally.calibration()
     return [
         f"valid {total.valid}/{total.runs} ({100 * total.valid / max(total.runs, 1):.0f} %, at least 95 %)",
@@ -257,15 +250,6 @@ def acceptance(rows: dict[str, Row]) -> list[str]:
         f"z RMS {c.z_rms:.3g} (0.7-1.3), within 1 std {100 * c.within_1:.0f} %, within 2 std {100 * c.within_2:.0f} %",
         f"widest static-moment / Coulomb sharpness {worst_sharp[0]:.2f} ({worst_sharp[1]}; at most {SHARPNESS_LIMIT})",
     ]
-
-
-def _default_plan(workdir: Path) -> Path:
-    path = workdir / "plan.json"
-    with contextlib.redirect_stdout(io.StringIO()):
-        code = bsp_main([*DEFAULT_PLAN, "--json", str(path)])
-    if code != 0:
-        raise SystemExit(f"bsp plan failed with exit {code}")
-    return path
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -277,7 +261,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--assumed-sd-mm", type=float, default=2.0, help="the placement sd identify assumes, mm")
     parser.add_argument("--duration", type=float, default=120.0)
     parser.add_argument("--wrench-hz", type=float, default=1000.0)
-    parser.add_argument("--plan", type=Path, help="a `bsp plan --json` file (default: the default request)")
+    parser.add_argument("--plan", type=Path, help="a `bsp plan --json` file (default: one within the benches' ranges)")
     parser.add_argument("--identify", nargs=argparse.REMAINDER, default=[], help="further `bsp identify` options")
     parser.add_argument("--json", type=Path, help="write the rows' counts and figures here")
     parser.add_argument("--verbose", action="store_true", help="every session's worst three |z|")
@@ -287,7 +271,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="engine_sharpness_") as tmp:
         workdir = Path(tmp)
         if "plan" in args.protocols and args.plan is None:
-            args.plan = _default_plan(workdir)
+            args.plan = planned_in_ranges(workdir, 120.0)
         print(f"{'protocol / arm':22} runs valid V&WRONG inv&right {calibration.calibration_header()}  worst|z|")
         for protocol in args.protocols:
             pooled = Row()
@@ -295,11 +279,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 row = run_arm(protocol, arm_seed, args, workdir)
                 rows[f"{protocol}/{arm_seed}"] = row
                 print_row(f"{protocol} arm {arm_seed}", row)
-                pooled.runs += row.runs
-                pooled.valid += row.valid
-                pooled.valid_wrong += row.valid_wrong
-                pooled.invalid_right += row.invalid_right
-                pooled.tally.z.extend(row.tally.z)
+                pooled.pool(row)
             c = pooled.tally.calibration()
             print(
                 f"{protocol + ' (all arms)':22} {pooled.runs:4} {pooled.valid:5} {pooled.valid_wrong:7} "

@@ -30,9 +30,7 @@ from __future__ import annotations
 
 import argparse
 import collections
-import contextlib
 import dataclasses
-import io
 import json
 import sys
 import tempfile
@@ -46,6 +44,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
+from in_process import identify, planned_in_ranges
 from mujoco_bag import write_bag
 from mujoco_cell import CellOptions, draw_arm, paper_sine
 from mujoco_emg import EmgRecording
@@ -65,7 +64,6 @@ from mujoco_patient import (
 )
 from scoring import residuals, z_scores
 
-from bsp_ros.cli import main as bsp_main
 from bsp_ros.core.planning import planned_trajectory_from_file
 from bsp_ros.core.planning.two_speed import TwoSpeedPath
 
@@ -233,31 +231,10 @@ def cause_imposed(truth: dict[str, Any]) -> bool:
     return bool(acting) or reflex
 
 
-def identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
-    """``bsp identify BAG --json OUT`` in process (its output swallowed): the exit code and the estimate, or {}."""
-    sink = io.StringIO()
-    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-        code = bsp_main(["identify", str(bag), "--json", str(out), "--format", "none", *extra])
-    return code, (json.loads(out.read_text()) if out.exists() else {})
-
-
-def make_plan(workdir: Path, duration_s: float) -> Path:
-    """A ``bsp plan`` trajectory within the paper-like ranges of ``bench/physics_engine.py``'s planned rows."""
-    out = workdir / "plan.json"
-    if not out.exists():
-        argv = ["plan", "--shoulder", "0", "1.2", "--shoulder-range", "-70", "-10", "--elbow-range", "10", "100"]
-        argv += ["--wrist-range", "-20", "20", "--duration", f"{duration_s:g}", "--json", str(out)]
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            code = bsp_main(argv)
-        if code != 0:
-            raise SystemExit(f"patients: bsp plan failed with exit code {code}")
-    return out
-
-
 def session_bag(case: Case, seed: int, args: argparse.Namespace, workdir: Path, out_dir: Path) -> Path:
     """Simulate ``case`` with ``seed`` and write its bag (and truth.json) to ``out_dir``."""
     if case.motion == "plan":
-        trajectory: Any = planned_trajectory_from_file(make_plan(workdir, args.duration))
+        trajectory: Any = planned_trajectory_from_file(planned_in_ranges(workdir, args.duration))
     elif "/" in case.motion:
         slow, fast = (float(x) for x in case.motion.split("/"))
         trajectory = TwoSpeedPath(paper_sine(slow), (1.0, fast / slow), args.duration / 2, args.duration)

@@ -40,8 +40,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import contextlib
-import io
 import json
 import re
 import sys
@@ -56,11 +54,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
+from in_process import identify
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine
 from scoring import residuals, z_scores
 
-from bsp_ros.cli import main as bsp_main
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import gravity_regressor
 from bsp_ros.core.planning import planned_trajectory_from_file
@@ -99,13 +97,6 @@ class Tally:
     messages: collections.Counter[str] = field(default_factory=collections.Counter)
     failures: collections.Counter[str] = field(default_factory=collections.Counter)
     two_sided: calibration.Tally = field(default_factory=calibration.Tally)
-
-
-def _identify(bag: Path, out: Path, *extra: str) -> tuple[int, dict[str, Any]]:
-    sink = io.StringIO()
-    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-        code = bsp_main(["identify", str(bag), "--json", str(out), "--format", "none", *extra])
-    return code, (json.loads(out.read_text()) if out.exists() else {})
 
 
 def _reason(estimate: dict[str, Any]) -> str:
@@ -163,12 +154,12 @@ def run_scenario(
         ratios["weld_drift_m"].append(cell.truth["simulation"]["weld_drift_max_m"])
         stem = f"{scenario.motion}_{int(scenario.springs)}_{scenario.sensor}_{seed}"
         bag = write_bag(workdir / stem, cell)
-        code, estimate = _identify(bag, workdir / f"{stem}_default.json")
+        code, estimate = identify(bag, workdir / f"{stem}_default.json")
         models = [("default", code, estimate)]
         warnings = estimate.get("quality", {}).get("warnings", [])
         suggested = {m for w in warnings for m in _SUGGESTION.findall(str(w))}
         for model in sorted(suggested | set(args.also_passive)):
-            code_m, estimate_m = _identify(bag, workdir / f"{stem}_{model}.json", "--passive", model)
+            code_m, estimate_m = identify(bag, workdir / f"{stem}_{model}.json", "--passive", model)
             models.append((model, code_m, estimate_m))
         for model, code_m, estimate_m in models:
             tally = tallies.setdefault(f"{scenario.name} {model}", Tally())
