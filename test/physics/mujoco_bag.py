@@ -210,4 +210,16 @@ def write_bag(out_dir: str | Path, cell: CellSession) -> Path:
     )
 
 
-__all__ = ["CellSession", "record", "truth_dict", "write_bag"]
+def result_z(result: Any, truth: dict[str, Any]) -> dict[str, float]:
+    """|z| of an ``IdentificationResult``'s static moments and Coulomb amplitudes against a cell's truth.json
+    (:func:`truth_dict`), keyed ``quantity/owner``."""
+    std = np.sqrt(np.diag(result.covariance))
+    z = {}
+    for i, (key, owner) in enumerate(result.names):
+        group = "segments" if key == "static_moment_kgm" else "joints"
+        if key in ("static_moment_kgm", "coulomb_nm"):
+            z[f"{key}/{owner}"] = abs(result.values[i] - truth[group][owner][key]) / std[i]
+    return z
+
+
+__all__ = ["CellSession", "record", "result_z", "truth_dict", "write_bag"]

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
@@ -18,6 +17,7 @@ pytest.importorskip("mujoco", reason="the physics-engine cell needs MuJoCo (pip 
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "physics"))
 
+from mujoco_bag import result_z
 from mujoco_cell import CellOptions, draw_arm, paper_sine
 from mujoco_patient import HandSlip, Patient, PatientSession, patient_session
 
@@ -53,17 +53,6 @@ def slipping() -> Sessions:
     return _session(SLIPPING, slip=True)
 
 
-def _z(result: IdentificationResult, truth: dict[str, Any]) -> dict[str, float]:
-    """|z| of every static moment and Coulomb amplitude against the engine's arm."""
-    std = np.sqrt(np.diag(result.covariance))
-    z = {}
-    for i, (key, owner) in enumerate(result.names):
-        group = "segments" if key == "static_moment_kgm" else "joints"
-        if key in ("static_moment_kgm", "coulomb_nm"):
-            z[f"{key}/{owner}"] = abs(result.values[i] - truth[group][owner][key]) / std[i]
-    return z
-
-
 def test_the_travel_is_found_where_the_engine_moved_the_contact_point(slipping: Sessions) -> None:
     session, data = slipping
     stage = _start(data, JointConfig())
@@ -94,7 +83,7 @@ def test_a_slipping_hand_is_followed_valid_right_and_named(slipping: Sessions) -
     assert 0.0 < found.values["left_out_s"] < 10.0
     assert FindingCode.ARM_ACTIVE not in [f.code for f in result.findings]
     assert result.ledger is not None and result.ledger.get(Term.CONTACT_SLIP) is not None
-    z = _z(result, session.cell.truth)
+    z = result_z(result, session.cell.truth)
     assert len(z) == 6 and max(z.values()) < 3.0, z
 
 
@@ -102,7 +91,7 @@ def test_the_same_arm_without_a_slip_names_none() -> None:
     session, data = _session(SLIPPING, slip=False)
     result = identify_joint(data)
     assert result.valid and FindingCode.HAND_SLIPPED not in [f.code for f in result.findings]
-    assert max(_z(result, session.cell.truth).values()) < 3.0
+    assert max(result_z(result, session.cell.truth).values()) < 3.0
 
 
 def test_a_fallback_to_the_elastic_family_follows_the_hand_again() -> None:
@@ -114,7 +103,7 @@ def test_a_fallback_to_the_elastic_family_follows_the_hand_again() -> None:
     codes = [f.code for f in result.findings]
     assert FindingCode.ELASTIC_TERM in codes and FindingCode.HAND_SLIPPED in codes
     assert FindingCode.ARM_ACTIVE not in codes
-    assert result.valid and max(_z(result, session.cell.truth).values()) < 3.0
+    assert result.valid and max(result_z(result, session.cell.truth).values()) < 3.0
 
 
 def test_a_staircase_follows_one_direction_and_scatter_does_not() -> None:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
@@ -18,6 +17,7 @@ pytest.importorskip("mujoco", reason="the physics-engine cell needs MuJoCo (pip 
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "physics"))
 
+from mujoco_bag import result_z
 from mujoco_cell import CellOptions, draw_arm, paper_sine
 from mujoco_patient import CompliantStrap, Patient, PatientSession, patient_session
 
@@ -26,7 +26,6 @@ from bsp_ros.core.identification.data import IdentificationData, identification_
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.joint.excitation import deadband_rad_s
 from bsp_ros.core.identification.joint.grip import MIN_MOVING_SHARE, direction_share, find_sticks
-from bsp_ros.core.identification.result import IdentificationResult
 
 OPTIONS = CellOptions(trajectory=paper_sine(0.03), duration_s=60.0, wrench_hz=250.0, seed=0)
 
@@ -58,17 +57,6 @@ def _engine_slow(session: PatientSession, data: IdentificationData) -> np.ndarra
     return np.asarray(speed < 0.1 * np.percentile(speed, 95, axis=0))
 
 
-def _z(result: IdentificationResult, truth: dict[str, Any]) -> dict[str, float]:
-    """|z| of every static moment and Coulomb amplitude against the engine's arm."""
-    std = np.sqrt(np.diag(result.covariance))
-    z = {}
-    for i, (key, owner) in enumerate(result.names):
-        group = "segments" if key == "static_moment_kgm" else "joints"
-        if key in ("static_moment_kgm", "coulomb_nm"):
-            z[f"{key}/{owner}"] = abs(result.values[i] - truth[group][owner][key]) / std[i]
-    return z
-
-
 def test_the_strap_makes_elbow_and_wrist_stick_where_the_engine_stood_still(
     strapped: Sessions, rigid: Sessions
 ) -> None:
@@ -95,12 +83,12 @@ def test_a_strapped_arm_is_valid_right_and_named_and_a_rigid_grip_names_nothing(
     grip = [f for f in result.findings if f.code is FindingCode.GRIP_COMPLIANT]
     assert result.valid and len(grip) == 1 and grip[0].where == "wrist"
     assert grip[0].values["n_joints"] == 2 and "the hand gave in the strap" in grip[0].text
-    z = _z(result, session.cell.truth)
+    z = result_z(result, session.cell.truth)
     assert len(z) == 6 and max(z.values()) < 3.0, z
     firm_session, firm = rigid
     plain = identify_joint(firm)
     assert plain.valid and FindingCode.GRIP_COMPLIANT not in [f.code for f in plain.findings]
-    assert max(_z(plain, firm_session.cell.truth).values()) < 3.0
+    assert max(result_z(plain, firm_session.cell.truth).values()) < 3.0
 
 
 def test_the_direction_rule_judges_the_samples_where_a_joint_did_not_stick(strapped: Sessions) -> None:
