@@ -79,7 +79,7 @@ class Posterior:
     first_moments_kgm: np.ndarray
     first_moments_std_kgm: np.ndarray
     notes: list[str]
-    first_moments_prior_share: np.ndarray | None = None
+    first_moments_prior_share: np.ndarray
 
     def source(self, index: int) -> str:
         """``"prior"`` when the data hardly moved parameter ``index``, else ``"data+prior"``."""
@@ -87,8 +87,7 @@ class Posterior:
 
     def first_moment_source(self, index: int) -> str:
         """``"prior"`` when the data hardly moved first moment ``index``, else ``"data+prior"``."""
-        share = self.first_moments_prior_share
-        return "prior" if share is not None and share[index] > PRIOR_DOMINATED else "data+prior"
+        return "prior" if self.first_moments_prior_share[index] > PRIOR_DOMINATED else "data+prior"
 
 
 def anthropometric_prior(subject: SubjectInfo, lengths_m: np.ndarray) -> Prior:

@@ -134,11 +134,11 @@ def test_a_first_moment_is_labelled_by_its_own_share_of_the_prior() -> None:
     beta = np.array([truth[k] * truth[n + k] for k in range(n)])
     beta[:2] += lengths[:2] * np.array([truth[1] + truth[2], truth[2]])
     precise = fuse_static_moments(prior, lengths, beta, np.diag((0.01 * beta) ** 2))
-    assert precise.first_moments_prior_share is not None and precise.first_moments_prior_share.max() < 0.1
+    assert precise.first_moments_prior_share.max() < 0.1
     assert [precise.first_moment_source(j) for j in range(n)] == ["data+prior"] * n
     blind = fuse_static_moments(prior, lengths, beta, np.diag((3.0 * beta) ** 2))
     assert [blind.first_moment_source(j) for j in range(n)] == ["prior"] * n
     # The upper arm's own static moment blind, the others precise: its mass moves with the body mass they tell.
     sd = np.array([0.8 * beta[0], 0.01 * beta[1], 0.01 * beta[2]])
     partly = fuse_static_moments(prior, lengths, beta, np.diag(sd**2))
-    assert partly.first_moments_prior_share is not None and 0.3 < partly.first_moments_prior_share[0] < 0.9
+    assert 0.3 < partly.first_moments_prior_share[0] < 0.9
