@@ -135,16 +135,11 @@ def placement_scale(
     scaled = np.tile(np.repeat(np.asarray(skin, dtype=bool), 2), m // (2 * len(skin)))
     if not (np.isfinite(offsets).all() and np.isfinite(covariance).all()) or not scaled.any():
         return PlacementScale(1.0, 0.0, np.asarray(sd_m, dtype=np.float64), None, np.ones(m))
-    variance = np.where(scaled[None, :], _GRID[:, None] ** 2, 1.0)  # (grid, m) the offsets' prior variance
-    spread = covariance[None, :, :] + variance[:, :, None] * np.eye(m)[None, :, :]
-    _, log_det = np.linalg.slogdet(spread)
-    solved = np.linalg.solve(spread, np.broadcast_to(offsets[:, None], (_GRID.size, m, 1)))[..., 0]
-    mahalanobis = solved @ offsets
-    minus_log_likelihood = 0.5 * (log_det + mahalanobis)
-    best = int(np.argmin(minus_log_likelihood))
+    judged = scale_from_offsets(offsets, covariance, scaled)
+    if judged is None:
+        return PlacementScale(1.0, 0.0, np.asarray(sd_m, dtype=np.float64), None, np.ones(m))
+    scale, ratio, best = judged
     most_likely = float(_GRID[best])
-    ratio = float(2.0 * (minus_log_likelihood[0] - minus_log_likelihood[best]))
-    scale = averaged_scale(minus_log_likelihood)
     used = np.where(skin, np.asarray(sd_m, dtype=np.float64) * scale, sd_m)
     note = None
     if ratio > NOTE_LIKELIHOOD_RATIO:
@@ -152,6 +147,53 @@ def placement_scale(
         values = {"assumed_mm": assumed_mm, "apparent_mm": most_likely * assumed_mm, "at_limit": best == _GRID.size - 1}
         note = Finding(code=FindingCode.PLACEMENT_WIDER, values=values)
     return PlacementScale(scale, ratio, used, note, np.where(scaled, scale, 1.0), most_likely=most_likely)
+
+
+def seen_directions(covariance: np.ndarray) -> np.ndarray:
+    """(m, k) orthonormal directions of the free offsets (in units of their assumed sd) the data measure better
+    than the assumed placement does: the eigenvectors of their covariance ``covariance`` (m, m) with variance
+    below 1.
+
+    Only these judge the placement. Along the others the fit hardly moves the torques (on a posture where the
+    handle force keeps nearly one direction, the shoulder marker's offset along the upper arm scales its gravity
+    torque as the upper arm's static moment does), so any misfit of the model weighs there 1 / variance times as
+    much: on noise-free simulated sessions of the model's own equations on a planned trajectory that offset came
+    out 100 of the assumed sd from zero (17 of its own sd), and with sensor noise 10-50 of them in some sessions,
+    read as the markers 2 cm off. The placement prior carries those directions in the std as assumed."""
+    variance, vectors = np.linalg.eigh(0.5 * (covariance + covariance.T))
+    return np.asarray(vectors[:, variance < 1.0])
+
+
+def scale_from_offsets(
+    offsets: np.ndarray, covariance: np.ndarray, scaled: np.ndarray
+) -> tuple[float, float, int] | None:
+    """The placement scale the free offsets call for.
+
+    Parameters
+    ----------
+    offsets : (m,) the free offsets, in units of their assumed sd.
+    covariance : (m, m) their covariance, same units.
+    scaled : (m,) bool, which offsets the scale applies to (the others keep variance 1).
+
+    Returns
+    -------
+    The scale the std uses (:func:`averaged_scale`), ``2 log`` of the most likely scale's likelihood over the
+    assumed one's, and the index of the most likely scale in :data:`_GRID`; None where the data see no direction
+    (:func:`seen_directions`).
+    """
+    seen = seen_directions(covariance)
+    if seen.shape[1] == 0:
+        return None
+    variance = np.where(scaled[None, :], _GRID[:, None] ** 2, 1.0)  # (grid, m) the offsets' prior variance
+    prior = np.einsum("mk,gm,ml->gkl", seen, variance, seen)  # (grid, k, k) that prior along the seen directions
+    spread = (seen.T @ covariance @ seen)[None, :, :] + prior
+    seen_offsets = seen.T @ offsets
+    _, log_det = np.linalg.slogdet(spread)
+    solved = np.linalg.solve(spread, np.broadcast_to(seen_offsets[:, None], (_GRID.size, seen.shape[1], 1)))[..., 0]
+    minus_log_likelihood = 0.5 * (log_det + solved @ seen_offsets)
+    best = int(np.argmin(minus_log_likelihood))
+    ratio = float(2.0 * (minus_log_likelihood[0] - minus_log_likelihood[best]))
+    return averaged_scale(minus_log_likelihood), ratio, best
 
 
 def averaged_scale(minus_log_likelihood: np.ndarray) -> float:

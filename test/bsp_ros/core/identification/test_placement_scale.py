@@ -12,6 +12,7 @@ from bsp_ros.core import simulation as sim
 from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData, identification_data_from_session
+from bsp_ros.core.identification.joint import placement_scale as placement_scale_module
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.identify import identify_joint
 from bsp_ros.core.identification.joint.placement_covariance import (
@@ -20,7 +21,7 @@ from bsp_ros.core.identification.joint.placement_covariance import (
     offset_columns,
     placement_effect,
 )
-from bsp_ros.core.identification.joint.placement_scale import placement_scale
+from bsp_ros.core.identification.joint.placement_scale import placement_scale, scale_from_offsets
 from bsp_ros.core.identification.joint.refit import refit_held
 from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.stacked import augmented, fit_problem, reweighted_values
@@ -206,3 +207,40 @@ def test_the_placement_covariance_from_the_wider_statistics_equals_the_pass_over
         rtol=1e-9,
         atol=1e-12 * np.abs(direct).max(),
     )
+
+
+def _drawn_offsets(seed: int, scale: float, weak_sd: float, weak_bias: float) -> tuple[np.ndarray, np.ndarray]:
+    """Eight free offsets (in assumed sd) drawn at ``scale`` times the assumed placement, measured with sd 0.1 in
+    seven directions and ``weak_sd`` in one oblique direction, along which a model error adds ``weak_bias``."""
+    rng = np.random.default_rng([seed, 57])
+    basis, _ = np.linalg.qr(rng.standard_normal((8, 8)))
+    covariance = basis @ np.diag([*np.full(7, 0.1**2), weak_sd**2]) @ basis.T
+    truth = rng.normal(0.0, scale, 8)
+    measured = truth + rng.multivariate_normal(np.zeros(8), covariance) + weak_bias * basis[:, -1]
+    return measured, covariance
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_model_error_along_an_offset_direction_the_data_barely_see_does_not_widen_the_placement(seed: int) -> None:
+    """An offset the data hardly see (sd 6 assumed sd) takes up any small misfit 1 / variance times over: on
+    planned sessions the shoulder marker's offset along the upper arm came out 20-100 assumed sd from zero with
+    the markers on their centres. Judged along every direction, that read as markers 2 cm off."""
+    offsets, covariance = _drawn_offsets(seed, 1.0, weak_sd=6.0, weak_bias=-50.0)
+    judged = scale_from_offsets(offsets, covariance, np.ones(8, dtype=bool))
+    assert judged is not None
+    assert judged[0] < 1.3, judged
+    # Judged along every direction (as the check did), the same offsets call for the widest scale.
+    everything = np.linalg.eigh(covariance)[1]
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(placement_scale_module, "seen_directions", lambda _: everything)
+        wide = scale_from_offsets(offsets, covariance, np.ones(8, dtype=bool))
+    assert wide is not None and wide[0] > 3.0, wide
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_offsets_3_times_the_assumed_placement_are_still_read_along_the_seen_directions(seed: int) -> None:
+    offsets, covariance = _drawn_offsets(seed, 3.0, weak_sd=6.0, weak_bias=-50.0)
+    judged = scale_from_offsets(offsets, covariance, np.ones(8, dtype=bool))
+    assert judged is not None
+    most_likely = float(placement_scale_module._GRID[judged[2]])
+    assert judged[0] > 1.4 and 1.5 < most_likely < 5.0, (judged, most_likely)
