@@ -154,12 +154,11 @@ def seen_directions(covariance: np.ndarray) -> np.ndarray:
     than the assumed placement does: the eigenvectors of their covariance ``covariance`` (m, m) with variance
     below 1.
 
-    Only these judge the placement. Along the others the fit hardly moves the torques (on a posture where the
-    handle force keeps nearly one direction, the shoulder marker's offset along the upper arm scales its gravity
-    torque as the upper arm's static moment does), so any misfit of the model weighs there 1 / variance times as
-    much: on noise-free simulated sessions of the model's own equations on a planned trajectory that offset came
-    out 100 of the assumed sd from zero (17 of its own sd), and with sensor noise 10-50 of them in some sessions,
-    read as the markers 2 cm off. The placement prior carries those directions in the std as assumed."""
+    Only these judge the placement. Along the others the fit hardly moves the torques (where the handle force keeps
+    nearly one direction, the shoulder marker's offset along the upper arm scales its gravity torque as the upper
+    arm's static moment does), so whatever small misfit the model leaves weighs there 1 / variance times over and
+    would read as markers far off; the placement prior carries those directions in the std as assumed.
+    """
     variance, vectors = np.linalg.eigh(0.5 * (covariance + covariance.T))
     return np.asarray(vectors[:, variance < 1.0])
 
