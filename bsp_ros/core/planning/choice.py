@@ -130,8 +130,9 @@ def expected_choice_variance(
     seed: int = 0,
 ) -> np.ndarray:
     """(p,) per parameter of the chosen model, the expected model-choice variance identify adds: the expected
-    largest of ``d_k^2`` over the other models ``k`` (their shared parameters), where ``d_k`` is the difference of
-    their fits on the same perturbed session, plus, for a shape probe, its variance beyond the chosen fit's.
+    largest over the other models ``k`` (their shared parameters) of ``d_k^2``, where ``d_k`` is the difference of
+    their fits on the same perturbed session, or of model ``k``'s variance beyond the chosen fit's where larger
+    (for a shape probe, that variance is added to ``d_k^2``).
 
     Parameters
     ----------
@@ -145,7 +146,9 @@ def expected_choice_variance(
     if not others:
         return np.zeros(p)
     r_chosen = response_matrix(scores.design, scores.names, chosen)
-    differences, excess = [], []
+    differences: list[np.ndarray] = []
+    excess: list[np.ndarray] = []
+    probes: list[bool] = []
     for names, probe in others:
         r_other = response_matrix(scores.design, scores.names, names)
         rows = np.array([list(names).index(name) if name in names else -1 for name in chosen])
@@ -154,13 +157,14 @@ def expected_choice_variance(
         difference[shared] = r_other[rows[shared]] - r_chosen[shared]
         differences.append(difference)
         extra = np.zeros(p)
-        if probe:
-            own = np.einsum("ij,jk,ik->i", r_other, scores.noise, r_other)[rows[shared]]
-            base = np.einsum("ij,jk,ik->i", r_chosen, scores.noise, r_chosen)[shared]
-            extra[shared] = np.clip(own - base, 0.0, None)
+        own = np.einsum("ij,jk,ik->i", r_other, scores.noise, r_other)[rows[shared]]
+        base = np.einsum("ij,jk,ik->i", r_chosen, scores.noise, r_chosen)[shared]
+        extra[shared] = np.clip(own - base, 0.0, None)
         excess.append(extra)
+        probes.append(probe)
     stacked = np.stack(differences)  # (K, p, q)
-    # Per parameter the K differences' covariance, then E[max_k (d_k^2 + c_k)] by draws of that K-variate normal.
+    # Per parameter the K differences' covariance, then the expected largest of identify's squared spreads by draws of
+    # that K-variate normal.
     covariance = np.einsum("kiq,qr,lir->ikl", stacked, scores.total, stacked)
     rng = np.random.default_rng(seed)
     normal = rng.standard_normal((draws, len(others)))
@@ -169,5 +173,8 @@ def expected_choice_variance(
         values, vectors = np.linalg.eigh(0.5 * (covariance[i] + covariance[i].T))
         root = vectors * np.sqrt(np.clip(values, 0.0, None))
         d = normal @ root.T
-        out[i] = float(np.mean(np.max(d**2 + np.array([c[i] for c in excess])[None, :], axis=1)))
+        extra = np.array([c[i] for c in excess])[None, :]
+        # identify's spread: a probe's squared shift plus its excess variance, another model's at least that excess.
+        squared = np.where(np.array(probes)[None, :], d**2 + extra, np.maximum(d**2, extra))
+        out[i] = float(np.mean(np.max(squared, axis=1)))
     return out
