@@ -6,7 +6,6 @@ import json
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -148,8 +147,9 @@ def test_offline_tare_does_not_import_rclpy(bags, tmp_path) -> None:
     assert out.stdout.strip().splitlines()[-1] == "False"
 
 
+# Publishes at 100 Hz until its stdin closes (the test is done), for at most argv[1] seconds.
 _PUBLISHER = """
-import sys, time
+import select, sys, time
 import rclpy
 from geometry_msgs.msg import WrenchStamped
 rclpy.init()
@@ -157,7 +157,7 @@ node = rclpy.create_node("tare_test_sensor")
 pub = node.create_publisher(WrenchStamped, "/ft_sensor/wrench", 10)
 end = time.monotonic() + float(sys.argv[1])
 k = 0
-while time.monotonic() < end:
+while time.monotonic() < end and not select.select([sys.stdin], [], [], 0.01)[0]:
     msg = WrenchStamped()
     msg.header.stamp = node.get_clock().now().to_msg()
     msg.header.frame_id = "ft_sensor"
@@ -165,7 +165,6 @@ while time.monotonic() < end:
     msg.wrench.torque.z = 0.1
     pub.publish(msg)
     k += 1
-    time.sleep(0.01)
 node.destroy_node()
 rclpy.try_shutdown()
 """
@@ -175,11 +174,15 @@ def test_live_tare_collects_the_running_wrench_topic(tmp_path, monkeypatch) -> N
     pytest.importorskip("rclpy")
     domain = str(1 + os.getpid() % 10)  # below the node tests' domains (11 and up)
     monkeypatch.setenv("ROS_DOMAIN_ID", domain)
-    publisher = subprocess.Popen([sys.executable, "-c", _PUBLISHER, "11"], env={**os.environ, "ROS_DOMAIN_ID": domain})
+    publisher = subprocess.Popen(
+        [sys.executable, "-c", _PUBLISHER, "30"], env={**os.environ, "ROS_DOMAIN_ID": domain}, stdin=subprocess.PIPE
+    )
     try:
-        time.sleep(1.5)
+        # The recording lasts --duration from the first message, however long the publisher takes to start.
         assert main(["tare", "--live", "--duration", "6", "--out", str(tmp_path / "live.yaml")]) == 0
-        assert publisher.wait(timeout=20) == 0
+        assert publisher.poll() is None  # it published all along
+        publisher.communicate(timeout=20)  # closes its stdin: it stops
+        assert publisher.returncode == 0
     finally:
         if publisher.poll() is None:
             publisher.kill()

@@ -38,6 +38,14 @@ def _bag(tmp_path: Path, frame_id: str) -> Path:
     return write_session_bag(tmp_path / f"bag_{frame_id}", session)
 
 
+def _subscribe_to_the_played_topics(client: Client) -> None:
+    """Subscribe (and drop what comes) to every topic the bag plays on, so that `bsp play` starts as soon as they
+    have matched, not at the end of its wait for subscribers."""
+    client.subscribe("geometry_msgs/msg/WrenchStamped", "/ft_sensor/wrench", lambda _: None, "sensor_input")
+    for marker in ("shoulder", "elbow", "wrist", "hand"):
+        client.subscribe("geometry_msgs/msg/PoseStamped", f"/mocap/{marker}", lambda _: None, "sensor_input")
+
+
 def _play(bag: Path, domain: int) -> subprocess.Popen[str]:
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     args = ["play", str(bag), "--rate", "0", "--domain", str(domain), "--wait-subscribers", "10"]
@@ -52,6 +60,7 @@ def test_tf_static_goes_out_as_the_sensor_rotation_on_the_transform_topic(tmp_pa
     received: list[Any] = []
     with Client("transform_listener", domain) as client:
         client.subscribe("geometry_msgs/msg/TransformStamped", "/ft_sensor/transform", received.append, "tf")
+        _subscribe_to_the_played_topics(client)
         player = _play(bag, domain)
         client.spin_until(lambda: bool(received) or player.poll() is not None, 30)
         out, err = player.communicate(timeout=30)
@@ -67,8 +76,13 @@ def test_tf_static_goes_out_as_the_sensor_rotation_on_the_transform_topic(tmp_pa
 
 def test_a_bag_whose_tf_misses_the_cell_s_sensor_frame_exits_1_naming_it(tmp_path: Path) -> None:
     bag = _bag(tmp_path, "ati_sensor")  # the cell file says ft_sensor
-    player = _play(bag, next_domain_id())
-    out, err = player.communicate(timeout=60)
+    domain = next_domain_id()
+    with Client("transform_listener", domain) as client:
+        client.subscribe("geometry_msgs/msg/TransformStamped", "/ft_sensor/transform", lambda _: None, "tf")
+        _subscribe_to_the_played_topics(client)
+        player = _play(bag, domain)
+        client.spin_until(lambda: player.poll() is not None, 60)
+        out, err = player.communicate(timeout=60)
     assert player.returncode == 1, out + err
     assert "not played, though the nodes need it: the sensor's rotation" in err
     assert "world -> ft_sensor" in err and "pip install" not in out + err
