@@ -22,34 +22,60 @@ def wrench_frame_parameter(roll_pitch_yaw_deg: tuple[float, float, float] = (180
     return "wrench_frame_rotation_xyzw:=[" + ", ".join(repr(float(v)) for v in xyzw) + "]"
 
 
-class LiveCell:
-    """The cell simulator, joint angle estimator and identifier on one domain, plus an in-process listener."""
+Estimates = list[tuple[float, dict[str, Any]]]
 
-    def __init__(self, domain: int, simulator_params: list[str], identifier_params: list[str] | None = None) -> None:
+
+class LiveCell:
+    """The cell simulator, joint angle estimator and identifier on one domain, plus an in-process listener.
+
+    ``more_identifiers`` (node name -> parameters) starts further bsp_identifier processes on the same simulated
+    session, each under its own node name with its estimate topics under that name
+    (``<name>/estimate_json``); their estimates are collected in ``estimates_of[name]``. A test and its control,
+    which differ in the identifier's settings only, so see one and the same session.
+    """
+
+    def __init__(
+        self,
+        domain: int,
+        simulator_params: list[str],
+        identifier_params: list[str] | None = None,
+        more_identifiers: dict[str, list[str]] | None = None,
+    ) -> None:
         self.domain = domain
         self.env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
         self.client = Client("test_listener", domain)
-        self.estimates: list[tuple[float, dict[str, Any]]] = []
+        self.estimates: Estimates = []
+        self.estimates_of: dict[str, Estimates] = {}
         self.truth: dict[str, Any] = {}
-        self.client.subscribe("std_msgs/msg/String", "bsp/estimate_json", self._on_estimate, "estimates")
+        self.client.subscribe("std_msgs/msg/String", "bsp/estimate_json", self._collector(self.estimates), "estimates")
         self.client.subscribe(
             "std_msgs/msg/String", "sim/truth", lambda m: self.truth.update(json.loads(m.data)), "tf_static_listener"
         )
         self.simulator_params = simulator_params
         self.processes: dict[str, subprocess.Popen[bytes]] = {}
         self.start("joint_angle_estimator", [])
-        identifier_params = list(identifier_params or [])
-        if not any(p.startswith("wrench_frame_rotation_xyzw:=") for p in identifier_params):
-            identifier_params.append(wrench_frame_parameter())
-        self.start("bsp_identifier", identifier_params)
+        self.start("bsp_identifier", _with_rotation(identifier_params))
+        for name, params in (more_identifiers or {}).items():
+            self.estimates_of[name] = []
+            topic = f"{name}/estimate_json"
+            self.client.subscribe("std_msgs/msg/String", topic, self._collector(self.estimates_of[name]), "estimates")
+            remaps = [f"__node:={name}", f"bsp/estimate_json:={topic}", f"bsp/estimate:={name}/estimate"]
+            self.start("bsp_identifier", _with_rotation(params), remaps, key=name)
         self.start("cell_simulator", simulator_params)
 
-    def _on_estimate(self, msg: Any) -> None:
-        self.estimates.append((time.monotonic(), json.loads(msg.data)))
+    @staticmethod
+    def _collector(estimates: Estimates) -> Any:
+        def on_estimate(msg: Any) -> None:
+            estimates.append((time.monotonic(), json.loads(msg.data)))
 
-    def start(self, name: str, params: list[str]) -> None:
-        args = ["--ros-args", *[a for p in params for a in ("-p", p)]] if params else []
-        self.processes[name] = subprocess.Popen(
+        return on_estimate
+
+    def start(self, name: str, params: list[str], remaps: list[str] | None = None, key: str | None = None) -> None:
+        """Start node ``name`` with parameter overrides and remapping rules; ``key`` names the process (default
+        ``name``) for :meth:`kill`."""
+        pairs = [("-p", p) for p in params] + [("-r", r) for r in remaps or []]
+        args = ["--ros-args", *[a for pair in pairs for a in pair]] if pairs else []
+        self.processes[key or name] = subprocess.Popen(
             [sys.executable, "-m", f"bsp_ros.live.nodes.{name}", *args],
             env=self.env,
             stdout=subprocess.DEVNULL,
@@ -72,3 +98,11 @@ class LiveCell:
         for process in self.processes.values():
             process.wait(5)
         self.client.close()
+
+
+def _with_rotation(identifier_params: list[str] | None) -> list[str]:
+    """The identifier's parameters with the default simulated sensor rotation unless they give one."""
+    params = list(identifier_params or [])
+    if not any(p.startswith("wrench_frame_rotation_xyzw:=") for p in params):
+        params.append(wrench_frame_parameter())
+    return params
