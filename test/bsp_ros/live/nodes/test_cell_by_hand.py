@@ -25,13 +25,14 @@ TF_INSTALLED = has_message("tf2_msgs/msg/TFMessage")
 # What the engineer records (docs/cell-guide.md, step 6), /tf_static included whether or not tf2_msgs is there.
 TOPICS = ["/ft_sensor/wrench", "/mocap/shoulder", "/mocap/elbow", "/mocap/wrist", "/mocap/hand", "/tf_static"]
 # Simulated seconds per wall second: the test's only change to the shipped parameters, to keep it short.
-SPEED = 2.0
-RECORD_AFTER_VALID_S = 12.0  # wall seconds recorded once the live estimate is valid (24 s of the session)
+SPEED = 3.0
+RECORD_AFTER_VALID_S = 8.0  # wall seconds recorded once the live estimate is valid (24 s of the session)
 
 
 def _start_by_hand(nodes: NodeProcesses, name: str) -> None:
     """``python -m bsp_ros.live.nodes.<name> --ros-args --params-file bsp_cell.yaml`` (README, "the nodes")."""
-    extra = ["-p", f"speed:={SPEED}"] if name == "cell_simulator" else []
+    # Named for the node: a bare `-p speed:=...` would lose to the params file's value for cell_simulator.
+    extra = ["-p", f"cell_simulator:speed:={SPEED}"] if name == "cell_simulator" else []
     with open(nodes.log_dir / f"{name}.log", "ab") as log:
         nodes.processes[name] = subprocess.Popen(
             [
