@@ -16,7 +16,8 @@ pytestmark = [pytest.mark.dds, pytest.mark.slow]
 
 #: Simulated seconds per wall second where a test judges windows of simulated time only: the estimate of a window
 #: is the same at 2x and 3x (the nodes keep up, every sample of the window is in it), 3x takes a third less time.
-#: The tests that time the nodes' reactions in wall time, or feed the recursive filter per sample, run at 2x.
+#: The others run at 2x: the killed simulator (the nodes' reactions in wall time), the recursive mode (its window
+#: check runs on wall time) and the controls judged at their 61st estimate.
 WINDOW_SPEED = "speed:=3.0"
 
 
@@ -71,6 +72,13 @@ def _window_span_s(document: dict | None) -> float:
     if session.get("start_time_ns") is None or session.get("end_time_ns") is None:
         return 0.0
     return (session["end_time_ns"] - session["start_time_ns"]) / 1e9
+
+
+def _spin_simulated_s(c: LiveCell, simulated_s: float, timeout_s: float = 60.0) -> bool:
+    """Spin until an estimate's window ends ``simulated_s`` later in the session than the latest one's does now."""
+    end_ns = lambda: ((c.latest() or {}).get("session") or {}).get("end_time_ns") or 0  # noqa: E731
+    until_ns = end_ns() + simulated_s * 1e9
+    return c.spin_until(lambda: end_ns() >= until_ns, timeout_s)
 
 
 def _valid_over_a_full_window(c: LiveCell, window_s: float) -> bool:
@@ -283,10 +291,10 @@ def test_recursive_mode_estimate_is_right_within_its_std(cell: MakeCell) -> None
 def test_the_robot_handle_pose_stands_for_a_misplaced_hand_marker_live(cell: MakeCell) -> None:
     # The hand marker on the back of the hand, 25 mm off the bearing's centre (offline this makes the estimate
     # invalid or wrong, test_robot_contact.py); the robot publishes the contact point on /robot/handle_pose.
-    simulator = ["speed:=2.0", "seed:=12", "robot_handle_pose:=true", "hand_marker_offset_mm:=[0.0, 25.0]"]
+    simulator = [WINDOW_SPEED, "seed:=12", "robot_handle_pose:=true", "hand_marker_offset_mm:=[0.0, 25.0]"]
     c = cell(8, simulator)
     assert c.spin_until(lambda: _valid(c), 60), c.latest()
-    c.spin_until(lambda: False, 10)
+    assert _spin_simulated_s(c, 20.0), c.latest()  # 20 s of session more (10 s at 2x)
     document = _latest(c)
     assert document["quality"]["valid"], document["quality"]
     assert document["quality"]["contact_point"] == "robot_handle_pose"
