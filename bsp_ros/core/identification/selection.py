@@ -8,9 +8,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from bsp_ros.core.identification.chi2 import chi2_sf
+from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.passive import PassiveModel
-from bsp_ros.core.identification.stacked import Extras, Fit, Problem, build_problem, fit_problem, problem_names
+from bsp_ros.core.identification.stacked import (
+    Extras,
+    Fit,
+    Problem,
+    build_problem,
+    fit_problem,
+    joint_products,
+    problem_names,
+)
 
 # A candidate is rejected by the data when the terms it leaves out differ from 0 at this level (HAC Wald test on
 # the richest fit); the others are the models the data cannot reject, whose estimates must agree within the std.
@@ -139,12 +148,13 @@ def shape_probe(
     return Candidate(model, problem, fit_problem(problem), 0.0, 0.0, 1.0)
 
 
-def spread_covariance(selection: Selection) -> tuple[np.ndarray, np.ndarray]:
+def spread_covariance(selection: Selection, offset_columns: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """What the model choice leaves uncertain: per parameter of the chosen model, the largest squared difference
-    to the estimate of any candidate the data cannot reject (the richest one included; at least the candidate's
-    variance beyond the chosen fit's) or of the shape probe (plus the probe's variance beyond the chosen fit's),
-    as a diagonal
-    covariance (p, p), and that difference in units of the chosen fit's std (p,), for the warnings.
+    to the estimate of any candidate the data cannot reject (the richest one included), at least the variance that
+    difference has where both models hold, or to the shape probe's (plus the probe's variance beyond the chosen
+    fit's), as a diagonal covariance (p, p), and that difference in units of the chosen fit's std (p,), for the
+    warnings. ``offset_columns`` (N, n, m): the marker offsets' columns at their assumed sd, whose share of that
+    variance joins the sensor noise's; None without placement.
 
     A static moment is trusted only as far as it is stable across the passive models the data leave open:
     a simpler model is more precise only if its restrictions hold, which the data may be unable to test when
@@ -156,6 +166,7 @@ def spread_covariance(selection: Selection) -> tuple[np.ndarray, np.ndarray]:
     p = len(names)
     spread = np.zeros(p)
     std = np.sqrt(np.clip(np.diag(chosen.fit.covariance), 1e-300, None))
+    mine = None if offset_columns is None else placement_response(chosen, offset_columns)
     for candidate in selection.open_models:
         assert candidate.fit is not None and candidate.problem is not None
         theirs = {name: i for i, name in enumerate(candidate.problem.names)}
@@ -171,10 +182,21 @@ def spread_covariance(selection: Selection) -> tuple[np.ndarray, np.ndarray]:
             # The probe's own std too, where larger: with the next order free, the curvature that told the static
             # moments from the passive moments may be gone (one posture), and the std says so.
             spread = np.maximum(spread, d**2 + excess)
-        else:
-            # Where both models hold, the difference of a richer model's fit from the chosen one's has about the
-            # variance of their difference in variance (Hausman): its square is one draw of that, between 0.004 and
-            # 4 times it in 90 % of sessions. The larger of the two is as large on average and follows the data
-            # where the models differ by more, without a std that jumps 5-10 times between sessions of one arm.
-            spread = np.maximum(spread, np.maximum(d**2, excess))
+            continue
+        if mine is not None and offset_columns is not None:
+            moved = placement_response(candidate, offset_columns)[picks] - mine[shared]
+            excess[shared] += np.sum(moved**2, axis=1)
+        # Where both models hold, the difference of a richer model's fit from the chosen one's has about the variance
+        # of their difference in variance (Hausman) plus what the markers' placement moves them apart: its square is
+        # one draw of that, 0.004-4 times it in 90 % of sessions. The larger of the two is as large on average and
+        # follows the data where the models differ by more, without a std that jumps 5-10 times between sessions.
+        spread = np.maximum(spread, np.maximum(d**2, excess))
     return np.diag(spread), np.sqrt(spread) / std
+
+
+def placement_response(candidate: Candidate, offset_columns: np.ndarray) -> np.ndarray:
+    """(p, m) how a candidate's fit moves with marker offsets of one assumed sd along ``offset_columns`` (N, n, m):
+    ``(A + P)^-1 X^T W D`` at its weights."""
+    assert candidate.problem is not None and candidate.fit is not None
+    products = joint_products(candidate.problem, candidate.fit.weights, offset_columns)
+    return np.asarray(design_inverse(candidate.fit.design) @ products)

@@ -299,17 +299,20 @@ def _score_covariance(
     design, long_run = information_products(x, union.rows, sample, noise, grid_hz)
     precision = union.prior_precision
     noise_part = long_run + np.diag(precision)
-    total = noise_part.copy()
+    placement = np.zeros_like(noise_part)
     values = union.prior_mean.copy()
     values[:n] = fit.values[:n]
     if sd_m.any():
         shifted = dataclasses.replace(fit, values=values)
         moved = joint_products(union, fit.weights, offset_columns(data, union, shifted, sd_m))
-        total += moved @ moved.T
+        placement = moved @ moved.T
+    total = noise_part + placement
     unit = offset_torques_nm(data, np.eye(3))
     zero = np.stack([joint_products(union, fit.weights, torques) for torques in unit], axis=1)  # (q, 6)
     total += zero @ zero_cov @ zero.T
-    return ScoreCovariance(names=list(union.names), design=design + np.diag(precision), noise=noise_part, total=total)
+    return ScoreCovariance(
+        names=list(union.names), design=design + np.diag(precision), noise=noise_part, total=total, placement=placement
+    )
 
 
 def nominal_data(

@@ -94,12 +94,14 @@ class ScoreCovariance:
     noise : (q, q) the sensor noise's long-run covariance of the scores plus the priors' ``P`` (what the fit's own
         covariance holds: the sandwich's middle).
     total : (q, q) ``noise`` plus what the marker placement and the sensor zero add to the scores.
+    placement : (q, q) what the marker placement alone adds (0 without placement).
     """
 
     names: list[ParameterName]
     design: np.ndarray
     noise: np.ndarray
     total: np.ndarray
+    placement: np.ndarray | None = None
 
 
 def response_matrix(
@@ -131,8 +133,9 @@ def expected_choice_variance(
 ) -> np.ndarray:
     """(p,) per parameter of the chosen model, the expected model-choice variance identify adds: the expected
     largest over the other models ``k`` (their shared parameters) of ``d_k^2``, where ``d_k`` is the difference of
-    their fits on the same perturbed session, or of model ``k``'s variance beyond the chosen fit's where larger
-    (for a shape probe, that variance is added to ``d_k^2``).
+    their fits on the same perturbed session, or, where larger, of what identify takes as its variance: model
+    ``k``'s variance beyond the chosen fit's plus the marker placement's share of ``d_k``'s (for a shape probe,
+    that variance beyond is added to ``d_k^2``).
 
     Parameters
     ----------
@@ -160,6 +163,8 @@ def expected_choice_variance(
         own = np.einsum("ij,jk,ik->i", r_other, scores.noise, r_other)[rows[shared]]
         base = np.einsum("ij,jk,ik->i", r_chosen, scores.noise, r_chosen)[shared]
         extra[shared] = np.clip(own - base, 0.0, None)
+        if not probe and scores.placement is not None:
+            extra += np.einsum("iq,qr,ir->i", difference, scores.placement, difference)
         excess.append(extra)
         probes.append(probe)
     stacked = np.stack(differences)  # (K, p, q)

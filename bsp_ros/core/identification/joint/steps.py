@@ -180,7 +180,8 @@ def add_model_choice(stage: Stage) -> Stage:
     """What the choice of passive model leaves open joins the std (model-averaged variance)."""
     if stage.probed is None:
         return stage
-    spread, shift = spread_covariance(stage.probed)
+    columns = None if stage.placement is None else stage.placement.columns
+    spread, shift = spread_covariance(stage.probed, columns)
     notes = tuple(
         Finding(
             code=FindingCode.MODEL_CHOICE_SPREAD,
