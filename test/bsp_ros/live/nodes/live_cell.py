@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
 from bsp_ros.live.runtime.ros import Client
@@ -25,13 +26,19 @@ def wrench_frame_parameter(roll_pitch_yaw_deg: tuple[float, float, float] = (180
 Estimates = list[tuple[float, dict[str, Any]]]
 
 
+#: The outputs of a further identifier that would mix with the first one's, moved under its node name.
+IDENTIFIER_OUTPUTS = ("bsp/estimate_json", "bsp/estimate", "bsp/precision_reached", "bsp/weight_support")
+
+
 class LiveCell:
     """The cell simulator, joint angle estimator and identifier on one domain, plus an in-process listener.
 
     ``more_identifiers`` (node name -> parameters) starts further bsp_identifier processes on the same simulated
-    session, each under its own node name with its estimate topics under that name
-    (``<name>/estimate_json``); their estimates are collected in ``estimates_of[name]``. A test and its control,
-    which differ in the identifier's settings only, so see one and the same session.
+    session, each under its own node name, with the outputs of :data:`IDENTIFIER_OUTPUTS` and its ``/diagnostics``
+    under that name (``<name>/estimate_json``, ``<name>/diagnostics``: :meth:`topic_of`); their estimates are
+    collected in ``estimates_of[name]``. Tests that differ in the identifier's settings only (a test and its control,
+    tests of different outputs) so see one and the same session. ``before_start`` is called with the cell before any
+    node starts (to subscribe to what must be heard from the first message on).
     """
 
     def __init__(
@@ -40,6 +47,7 @@ class LiveCell:
         simulator_params: list[str],
         identifier_params: list[str] | None = None,
         more_identifiers: dict[str, list[str]] | None = None,
+        before_start: Callable[[LiveCell], None] | None = None,
     ) -> None:
         self.domain = domain
         self.env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
@@ -51,17 +59,25 @@ class LiveCell:
         self.client.subscribe(
             "std_msgs/msg/String", "sim/truth", lambda m: self.truth.update(json.loads(m.data)), "tf_static_listener"
         )
+        for name in more_identifiers or {}:
+            self.estimates_of[name] = []
+            topic = self.topic_of(name, "bsp/estimate_json")
+            self.client.subscribe("std_msgs/msg/String", topic, self._collector(self.estimates_of[name]), "estimates")
         self.simulator_params = simulator_params
         self.processes: dict[str, subprocess.Popen[bytes]] = {}
+        if before_start is not None:
+            before_start(self)
         self.start("joint_angle_estimator", [])
         self.start("bsp_identifier", _with_rotation(identifier_params))
         for name, params in (more_identifiers or {}).items():
-            self.estimates_of[name] = []
-            topic = f"{name}/estimate_json"
-            self.client.subscribe("std_msgs/msg/String", topic, self._collector(self.estimates_of[name]), "estimates")
-            remaps = [f"__node:={name}", f"bsp/estimate_json:={topic}", f"bsp/estimate:={name}/estimate"]
-            self.start("bsp_identifier", _with_rotation(params), remaps, key=name)
+            remaps = [f"{topic}:={self.topic_of(name, topic)}" for topic in (*IDENTIFIER_OUTPUTS, "/diagnostics")]
+            self.start("bsp_identifier", _with_rotation(params), [f"__node:={name}", *remaps], key=name)
         self.start("cell_simulator", simulator_params)
+
+    @staticmethod
+    def topic_of(identifier: str, topic: str) -> str:
+        """Where a further identifier named ``identifier`` publishes what the first one publishes on ``topic``."""
+        return f"{identifier}/{topic.rsplit('/', 1)[-1]}"
 
     @staticmethod
     def _collector(estimates: Estimates) -> Any:
