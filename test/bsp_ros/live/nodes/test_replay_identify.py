@@ -16,7 +16,9 @@ from bsp_ros.core.simulation import human_arm_cell, simulate_cell
 
 pytestmark = [pytest.mark.dds, pytest.mark.slow]
 
-DURATION_S = 30.0
+# Live and offline agree to 0.013 % on 30 s of this session and to 0.011 % on 20 s (over DDS): the agreement does
+# not hang on the length, and 20 s replay in a third less time.
+DURATION_S = 20.0
 SEED = 4  # a well excited session: offline standard errors are below 0.3 % on every quantity
 TOLERANCE = 0.01  # relative, on every static moment and Coulomb amplitude
 QUANTITIES = (("segments", "static_moment_kgm"), ("joints", "coulomb_nm"))
