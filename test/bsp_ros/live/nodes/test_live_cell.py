@@ -23,8 +23,8 @@ pytestmark = [pytest.mark.dds, pytest.mark.slow]
 
 #: Simulated seconds per wall second where a test judges windows of simulated time only: the estimate of a window
 #: is the same at 2x and 3x (the nodes keep up, every sample of the window is in it), 3x takes a third less time.
-#: The others run at 2x: the killed simulator (the nodes' reactions in wall time), the recursive mode (its window
-#: check runs on wall time) and the controls judged at their 61st estimate.
+#: The others run at 2x: the killed simulator (the nodes' reactions in wall time) and the recursive mode (its window
+#: check runs on wall time).
 WINDOW_SPEED = "speed:=3.0"
 
 
@@ -275,8 +275,27 @@ def _window_end_s(document: dict, start_ns: int) -> float:
 
 
 ROTATED_RPY_DEG = (90.0, -20.0, 135.0)
-#: The control identifier's estimate that is judged: the 61st, a dozen seconds of estimates into the session.
-CONTROL_ESTIMATE = 60
+#: A control is judged by its first estimate whose window ends this far into the session (simulated seconds; its
+#: 61st estimate at 2x, which these tests judged before, ended 24-27 s into it).
+CONTROL_SESSION_S = 24.0
+
+
+def _control_estimate(c: LiveCell, identifier: str) -> dict[str, Any]:
+    """The first estimate of the further identifier ``identifier`` whose window ends ``CONTROL_SESSION_S`` into the
+    session (spinning until it comes)."""
+
+    def judged() -> dict[str, Any] | None:
+        start_ns = c.truth.get("start_time_ns")
+        for _, document in c.estimates_of[identifier]:
+            end_ns = (document.get("session") or {}).get("end_time_ns")
+            if start_ns is not None and end_ns is not None and end_ns - start_ns >= CONTROL_SESSION_S * 1e9:
+                return document
+        return None
+
+    assert c.spin_until(lambda: judged() is not None, 60), c.estimates_of[identifier][-1:]
+    document = judged()
+    assert document is not None
+    return document
 
 
 @pytest.fixture(scope="class")
@@ -284,7 +303,7 @@ def rotated_sensor_cell() -> Iterator[LiveCell]:
     """A rotated sensor, identified without tf from one session twice: with its quaternion as the parameter
     (``bsp_identifier``) and, for the control, with the identity quaternion (``unrotated``). The parameter is
     forced: by default the simulator's TransformStamped would give each identifier the right rotation."""
-    simulator = ["speed:=2.0", "seed:=8", "sensor_roll_pitch_yaw_deg:=[{}, {}, {}]".format(*ROTATED_RPY_DEG)]
+    simulator = [WINDOW_SPEED, "seed:=8", "sensor_roll_pitch_yaw_deg:=[{}, {}, {}]".format(*ROTATED_RPY_DEG)]
     identifier = [wrench_frame_parameter(ROTATED_RPY_DEG), "wrench_frame_source:=parameter"]
     control = [wrench_frame_parameter((0.0, 0.0, 0.0)), "wrench_frame_source:=parameter"]
     c = LiveCell(next_domain_id(), simulator, identifier, {"unrotated": control})
@@ -300,7 +319,7 @@ class TestRotatedSensorWithoutTf:
     ) -> None:
         c = rotated_sensor_cell
         assert c.spin_until(lambda: _valid(c), 60), c.latest()
-        c.spin_until(lambda: False, 10)
+        assert _spin_simulated_s(c, 20.0), c.latest()  # 20 s of session more (10 s at 2x)
         document = c.latest()
         assert document is not None and document["quality"]["valid"], document
         for name, error in _errors(document, c.truth).items():
@@ -311,9 +330,7 @@ class TestRotatedSensorWithoutTf:
     ) -> None:
         # The control of the test above: the same session with the identity quaternion is not estimated right.
         c = rotated_sensor_cell
-        control = c.estimates_of["unrotated"]
-        assert c.spin_until(lambda: len(control) > CONTROL_ESTIMATE, 60), len(control)
-        document = control[CONTROL_ESTIMATE][1]
+        document = _control_estimate(c, "unrotated")
         wrong = not document["quality"]["valid"] or max(_errors(document, c.truth).values()) > 0.05
         assert wrong, document["quality"]
 
@@ -323,7 +340,7 @@ def turning_sensor_cell() -> Iterator[LiveCell]:
     """A sensor on the robot's flange, turning with the handle, its transform published as TransformStamped (the
     PyPI wheels have no tf2_msgs); one session identified twice: rotating each wrench at its own stamp by the topic
     (``bsp_identifier``) and, for the control, with one fixed rotation for every wrench (``fixed``)."""
-    simulator = ["speed:=2.0", "seed:=10", "sensor_turns:=true", "transform_topic:=ft_sensor/transform"]
+    simulator = [WINDOW_SPEED, "seed:=10", "sensor_turns:=true", "transform_topic:=ft_sensor/transform"]
     c = LiveCell(
         next_domain_id(), simulator, ["wrench_frame_source:=topic"], {"fixed": ["wrench_frame_source:=parameter"]}
     )
@@ -339,7 +356,7 @@ class TestTurningSensor:
     ) -> None:
         c = turning_sensor_cell
         assert c.spin_until(lambda: _valid(c), 60), c.latest()
-        c.spin_until(lambda: False, 10)
+        assert _spin_simulated_s(c, 20.0), c.latest()  # 20 s of session more (10 s at 2x)
         document = c.latest()
         assert document is not None and document["quality"]["valid"], document
         for name, z in _z_scores(document, c.truth).items():
@@ -350,9 +367,7 @@ class TestTurningSensor:
     def test_a_turning_sensor_taken_as_fixed_is_not_valid_and_right(self, turning_sensor_cell: LiveCell) -> None:
         # The control of the test above: the same session with one fixed rotation (its mean) for every wrench.
         c = turning_sensor_cell
-        control = c.estimates_of["fixed"]
-        assert c.spin_until(lambda: len(control) > CONTROL_ESTIMATE, 60), len(control)
-        document = control[CONTROL_ESTIMATE][1]
+        document = _control_estimate(c, "fixed")
         right = document["quality"]["valid"] and max(abs(z) for z in _z_scores(document, c.truth).values()) < 3
         assert not right, document["quality"]
 
