@@ -27,7 +27,16 @@ def _taken_after_busy(domain: int, profile: str, count: int) -> int:
             message.position = [float(k)]
             publisher.publish(message)
             time.sleep(0.01)
-        client.spin_until(lambda: len(taken) >= count, 5.0)
+        # Until all came, or none for 1 s: a history that dropped some has nothing more to give.
+        last_count, last_change = 0, time.monotonic()
+
+        def settled() -> bool:
+            nonlocal last_count, last_change
+            if len(taken) != last_count:
+                last_count, last_change = len(taken), time.monotonic()
+            return len(taken) >= count or time.monotonic() - last_change > 1.0
+
+        client.spin_until(settled, 5.0)
         client.spin(0.3)
         return len(taken)
     finally:
