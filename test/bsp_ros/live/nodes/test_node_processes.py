@@ -30,6 +30,19 @@ def _env(domain: int, executor: str | None = None) -> dict[str, str]:
     return env
 
 
+def _holders(path: Path) -> list[int]:
+    """The processes with ``path`` open (Linux /proc), this one left out."""
+    target = str(path.resolve())
+    pids = []
+    for fds in Path("/proc").glob("[0-9]*/fd"):
+        try:
+            if int(fds.parent.name) != os.getpid() and any(os.readlink(fd) == target for fd in fds.iterdir()):
+                pids.append(int(fds.parent.name))
+        except OSError:  # gone meanwhile, or not ours to read
+            continue
+    return pids
+
+
 @pytest.mark.parametrize("name", NODES)
 def test_help_prints_every_parameter_and_starts_nothing(name: str, ros_domain: int) -> None:
     out = subprocess.run(
@@ -145,7 +158,11 @@ def test_a_stopped_identifier_exits_cleanly_without_leaked_semaphores(
         if process.poll() is None:
             process.kill()
             process.wait(10)
-    time.sleep(1.0)  # multiprocessing's resource tracker outlives the node by a moment and would warn then
+    # multiprocessing's resource tracker outlives the node by a moment and would warn then: wait until nothing holds
+    # the log open.
+    deadline = time.monotonic() + 10.0
+    while _holders(log) and time.monotonic() < deadline:
+        time.sleep(0.02)
     text = log.read_text()
     assert "leaked semaphore" not in text and "Traceback" not in text, text
     assert f"spinning on the {executor} executor" in text, text
