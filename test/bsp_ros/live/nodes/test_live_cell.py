@@ -275,8 +275,8 @@ def _window_end_s(document: dict, start_ns: int) -> float:
 
 
 ROTATED_RPY_DEG = (90.0, -20.0, 135.0)
-#: A control is judged by its first estimate whose window ends this far into the session (simulated seconds; its
-#: 61st estimate at 2x, which these tests judged before, ended 24-27 s into it).
+#: A control is judged by its first estimate whose window ends this far into the session (simulated seconds): past
+#: its first checks, the windows long enough for a right rotation to give a valid estimate.
 CONTROL_SESSION_S = 24.0
 
 
@@ -319,7 +319,7 @@ class TestRotatedSensorWithoutTf:
     ) -> None:
         c = rotated_sensor_cell
         assert c.spin_until(lambda: _valid(c), 60), c.latest()
-        assert _spin_simulated_s(c, 20.0), c.latest()  # 20 s of session more (10 s at 2x)
+        assert _spin_simulated_s(c, 20.0), c.latest()  # a settled estimate, 20 s of session later
         document = c.latest()
         assert document is not None and document["quality"]["valid"], document
         for name, error in _errors(document, c.truth).items():
@@ -356,7 +356,7 @@ class TestTurningSensor:
     ) -> None:
         c = turning_sensor_cell
         assert c.spin_until(lambda: _valid(c), 60), c.latest()
-        assert _spin_simulated_s(c, 20.0), c.latest()  # 20 s of session more (10 s at 2x)
+        assert _spin_simulated_s(c, 20.0), c.latest()  # a settled estimate, 20 s of session later
         document = c.latest()
         assert document is not None and document["quality"]["valid"], document
         for name, z in _z_scores(document, c.truth).items():
@@ -455,7 +455,7 @@ def test_the_robot_handle_pose_stands_for_a_misplaced_hand_marker_live(cell: Mak
     simulator = [SPEED, "seed:=12", "robot_handle_pose:=true", "hand_marker_offset_mm:=[0.0, 25.0]"]
     c = cell(8, simulator)
     assert c.spin_until(lambda: _valid(c), 60), c.latest()
-    assert _spin_simulated_s(c, 20.0), c.latest()  # 20 s of session more (10 s at 2x)
+    assert _spin_simulated_s(c, 20.0), c.latest()  # a settled estimate, 20 s of session later
     document = _latest(c)
     assert document["quality"]["valid"], document["quality"]
     assert document["quality"]["contact_point"] == "robot_handle_pose"
