@@ -1,7 +1,7 @@
 """Honest and sharp on a physics engine: one MuJoCo arm, markers re-placed every session, a tared sensor.
 
 Usage: ``python bench/engine_sharpness.py [--arms 0 1] [--sessions 8] [--protocols paper fast plan mechanical]
-[--sd-mm 2] [--duration 120] [--wrench-hz 1000] [--json OUT]`` (with the worktree first on PYTHONPATH).
+[--sd-mm 2] [--duration 120] [--wrench-hz 1000] [--json OUT] [--brute]`` (with the worktree first on PYTHONPATH).
 
 Per protocol and arm, the MuJoCo cell (``test/physics/mujoco_cell.py``) runs once; every session then re-places
 the markers (each marker's (along, normal) offset from its joint centre drawn at ``--sd-mm`` per in-plane axis, the
@@ -23,7 +23,8 @@ sharpness of every static moment and Coulomb amplitude (median std over the RMS 
 ideal, an honest std's falls in about 0.7-1.4 over 8 sessions). ``--sd-mm 0`` keeps the markers on the joint
 centres: then the inflation column gives each static moment's and Coulomb amplitude's std over what the assumed
 placement and the sensor noise alone give (the ``marker_placement`` and ``sensor_noise`` terms of its budget; 1
-means no inflation).
+means no inflation). ``--brute`` instead checks the placement term against brute force per arm (each marker moved
+``--sd-mm`` alone) and says how far the row's ``--sessions`` drawn placements move each parameter against average.
 """
 
 from __future__ import annotations
@@ -167,34 +168,97 @@ def score(row: Row, code: int, estimate: dict[str, Any], truth: dict[str, Any]) 
     _inflation(estimate, row)
 
 
-def run_arm(protocol: str, arm_seed: int, args: argparse.Namespace, workdir: Path) -> Row:
-    """Simulate one arm on ``protocol`` once and identify ``args.sessions`` sessions with re-placed markers."""
+def _engine(protocol: str, arm_seed: int, args: argparse.Namespace) -> tuple[Any, CellOptions, EngineRun]:
+    """The arm of ``protocol`` and ``arm_seed``, its cell options, and its one engine run."""
     arm = _arm(protocol, arm_seed)
     options = CellOptions(
         trajectory=_trajectory(protocol, args.plan), duration_s=args.duration, wrench_hz=args.wrench_hz
     )
-    run = run_engine(arm, options)
-    n_markers = run.markers_m.shape[1]
+    return arm, options, run_engine(arm, options)
+
+
+def drawn_offsets_m(arm_seed: int, session: int, n_markers: int, sd_mm: float) -> np.ndarray:
+    """(K, 2) the (along, normal) offsets session ``session`` of arm ``arm_seed`` re-places its markers by, m."""
+    rng = np.random.default_rng([arm_seed, session, 50])
+    return rng.normal(0.0, sd_mm * 1e-3, (n_markers, 2))
+
+
+def _session(
+    engine: tuple[Any, CellOptions, EngineRun], offsets_m: np.ndarray, seed: int, stem: Path, args: argparse.Namespace
+) -> tuple[int, dict[str, Any], dict[str, Any]]:
+    """Identify one session of the engine run with the markers moved by ``offsets_m`` and noise ``seed``: the exit
+    code, the estimate document and the truth."""
+    arm, options, run = engine
+    moved = dataclasses.replace(run, markers_m=markers_replaced(run, offsets_m))
+    session_options = dataclasses.replace(options, seed=seed, skin_offset_m=tuple(map(tuple, offsets_m)))
+    cell = record(arm, session_options, moved)
+    bag = write_bag(stem, cell)
+    extra = ["--zero-sd-n", "0", "--zero-sd-nm", "0", "--marker-placement-sd-mm", str(args.assumed_sd_mm)]
+    code, estimate = identify(bag, stem.with_suffix(".json"), *extra, *args.identify)
+    return code, estimate, cell.truth
+
+
+def run_arm(protocol: str, arm_seed: int, args: argparse.Namespace, workdir: Path) -> Row:
+    """Simulate one arm on ``protocol`` once and identify ``args.sessions`` sessions with re-placed markers."""
+    engine = _engine(protocol, arm_seed, args)
+    n_markers = engine[2].markers_m.shape[1]
     row = Row()
     for session in range(args.sessions):
-        rng = np.random.default_rng([arm_seed, session, 50])
-        offsets = rng.normal(0.0, args.sd_mm * 1e-3, (n_markers, 2))
-        moved = dataclasses.replace(run, markers_m=markers_replaced(run, offsets))
-        session_options = dataclasses.replace(
-            options, seed=1000 * arm_seed + session, skin_offset_m=tuple(map(tuple, offsets))
-        )
-        cell = record(arm, session_options, moved)
+        offsets = drawn_offsets_m(arm_seed, session, n_markers, args.sd_mm)
         stem = f"{protocol}_{arm_seed}_{session}"
-        bag = write_bag(workdir / stem, cell)
-        extra = ["--zero-sd-n", "0", "--zero-sd-nm", "0", "--marker-placement-sd-mm", str(args.assumed_sd_mm)]
-        code, estimate = identify(bag, workdir / f"{stem}.json", *extra, *args.identify)
-        score(row, code, estimate, cell.truth)
+        code, estimate, truth = _session(engine, offsets, 1000 * arm_seed + session, workdir / stem, args)
+        score(row, code, estimate, truth)
         if args.verbose:
-            z = z_scores(estimate, cell.truth) if estimate else {}
+            z = z_scores(estimate, truth) if estimate else {}
             top = sorted(z.items(), key=lambda kv: -kv[1])[:3]
             valid = estimate.get("quality", {}).get("valid") if estimate else None
             print(f"  {stem}: valid={valid} " + ", ".join(f"{k} {v:.2f}" for k, v in top), flush=True)
     return row
+
+
+def _sharp_values(estimate: dict[str, Any]) -> dict[str, tuple[float, float]]:
+    """Each static moment's and Coulomb amplitude's value and placement term, ``kind/owner``."""
+    out = {}
+    for group in ("segments", "joints"):
+        for owner, quantities in estimate.get(group, {}).items():
+            for key in SHARP_KINDS:
+                q = quantities.get(key)
+                if isinstance(q, dict) and q.get("value") is not None:
+                    out[f"{key}/{owner}"] = (float(q["value"]), float(q.get("budget", {}).get("marker_placement", 0.0)))
+    return out
+
+
+def brute_force(protocol: str, arm_seed: int, args: argparse.Namespace, workdir: Path) -> None:
+    """Print each static moment's and Coulomb amplitude's placement term against brute force: the exact-marker
+    session and one per marker and axis moved by ``args.sd_mm`` alone (the same noise); and how far the row's drawn
+    placements move it (the RMS over ``args.sessions`` of their linear prediction, over brute force's: 1 on
+    average, and an honest std's sharpness over those sessions about its inverse)."""
+    engine = _engine(protocol, arm_seed, args)
+    n_markers = engine[2].markers_m.shape[1]
+    seed = 1000 * arm_seed
+    _, exact, _ = _session(engine, np.zeros((n_markers, 2)), seed, workdir / f"brute_{protocol}_{arm_seed}", args)
+    base = _sharp_values(exact)
+    response = {name: np.zeros(2 * n_markers) for name in base}
+    for k in range(2 * n_markers):
+        offsets = np.zeros(2 * n_markers)
+        offsets[k] = args.sd_mm * 1e-3
+        stem = workdir / f"brute_{protocol}_{arm_seed}_{k}"
+        _, moved, _ = _session(engine, offsets.reshape(n_markers, 2), seed, stem, args)
+        for name, (value, _) in _sharp_values(moved).items():
+            if name in response:
+                response[name][k] = value - base[name][0]
+    draws = np.array([drawn_offsets_m(arm_seed, s, n_markers, args.sd_mm).ravel() for s in range(args.sessions)]) / (
+        args.sd_mm * 1e-3
+    )
+    for name, per_offset in response.items():
+        brute = float(np.linalg.norm(per_offset))
+        drawn = float(np.sqrt(np.mean((draws @ per_offset) ** 2))) / brute if brute > 0 else math.nan
+        term = base[name][1]
+        print(
+            f"  {protocol} arm {arm_seed} {name:32} placement term {term:.5f}  brute force {brute:.5f}  "
+            f"ratio {term / brute:.2f}  drawn placements {drawn:.2f}",
+            flush=True,
+        )
 
 
 def sharpness_of(row: Row) -> dict[str, float]:
@@ -265,6 +329,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--identify", nargs=argparse.REMAINDER, default=[], help="further `bsp identify` options")
     parser.add_argument("--json", type=Path, help="write the rows' counts and figures here")
     parser.add_argument("--verbose", action="store_true", help="every session's worst three |z|")
+    parser.add_argument(
+        "--brute", action="store_true", help="instead: the placement term against each marker moved alone"
+    )
     args = parser.parse_args(argv)
     rows: dict[str, Row] = {}
     start = time.monotonic()
@@ -272,6 +339,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         workdir = Path(tmp)
         if "plan" in args.protocols and args.plan is None:
             args.plan = planned_in_ranges(workdir, 120.0)
+        if args.brute:
+            for protocol in args.protocols:
+                for arm_seed in args.arms:
+                    brute_force(protocol, arm_seed, args, workdir)
+            return 0
         print(f"{'protocol / arm':22} runs valid V&WRONG inv&right {calibration.calibration_header()}  worst|z|")
         for protocol in args.protocols:
             pooled = Row()
