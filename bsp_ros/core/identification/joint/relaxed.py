@@ -26,6 +26,7 @@ from bsp_ros.core.identification.joint.contact_slip import (
 from bsp_ros.core.identification.joint.emg_activity import emg_evidence, emg_values, with_emg
 from bsp_ros.core.identification.joint.misfit import misfit_against_noise
 from bsp_ros.core.identification.joint.outliers import MIN_OUTLIER_NM, fit_outliers, too_far_off
+from bsp_ros.core.identification.joint.placement_covariance import offset_columns
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
 from bsp_ros.core.identification.ledger import Term
 from bsp_ros.core.identification.stacked import build_problem, fit_problem
@@ -177,6 +178,18 @@ def _jerks(stage: Stage, rows: np.ndarray, travel: Travel, lever_n: np.ndarray) 
     return jerked
 
 
+def _offsets_beside_travel(stage: Stage) -> np.ndarray | None:
+    """(N, n, m) the markers' offset columns a slip is looked for beside, or None without placement: every one but
+    the contact point's along the hand, which is the travel itself held constant."""
+    sd_m = stage.placement_sd_m
+    if not sd_m.any():
+        return None
+    columns = offset_columns(stage.data, stage.problem, stage.fit, sd_m)
+    per_recording = 2 * (stage.n + 1)
+    keep = np.arange(columns.shape[2]) % per_recording != 2 * stage.n
+    return columns[:, :, keep]
+
+
 def follow_the_hand(stage: Stage) -> Stage:
     """A contact point that travelled along the hand (:func:`contact_slip`: found on knots 5 s apart) is followed:
     the travel is fitted with the arm's parameters on finer knots about its steps and made monotone, taken out of
@@ -187,7 +200,8 @@ def follow_the_hand(stage: Stage) -> Stage:
         return stage
     data, config = stage.data, stage.config
     lever = slip_lever_n(data.q_rad, data.lengths_m, data.tau_nm)
-    slip = contact_slip(stage.problem, data.t_ns, lever)
+    offsets = _offsets_beside_travel(stage)
+    slip = contact_slip(stage.problem, data.t_ns, lever, offsets=offsets)
     if not slip.found or slip.travel is None:
         return stage
     knots = refined_knots(slip.travel, SLIP_STEP_M, FOLLOW_KNOT_S)
