@@ -168,10 +168,11 @@ class _JointColumns:
     the segments it carries) and its own passive columns (sign steps), as :mod:`identification.joint` stacks them;
     the zero blocks of the stacked (N, n, p) regressor are never built."""
 
-    columns: list[np.ndarray]  # per joint i (N, n - i + k + nuisances)
+    columns: list[np.ndarray]  # per joint i (N, n - i + k [+ spring and shape]): what each candidate changes
     indices: list[np.ndarray]  # per joint, where its columns sit among the p parameters
     n_parameters: int
     nuisances: _Nuisances | None  # None: gravity and friction alone
+    fixed_indices: list[np.ndarray] | None = None  # per joint, where the nuisances' fixed columns sit
 
     @classmethod
     def of(
@@ -197,39 +198,67 @@ class _JointColumns:
             return narrow
         nuisances = nuisances or _Nuisances.of(data, narrow)
         m = nuisances.offsets.shape[2]
-        wide_columns, wide_indices = [], []
+        wide_columns, wide_indices, fixed_indices = [], [], []
         k_shape = len(TRANSITION_WIDTHS_RAD_S)
         for i in range(n):
             spring = np.column_stack((np.ones(data.t_ns.size), data.passive_q_rad[:, i]))
             shape = transition_columns(data.velocity_rad_s[:, i])
-            wide_columns.append(
-                np.hstack((columns[i], nuisances.sin[:, i:], nuisances.offsets[:, i, :], spring, shape))
-            )
+            wide_columns.append(np.hstack((columns[i], spring, shape)))
             wide_indices.append(
                 np.concatenate(
                     (
                         indices[i],
-                        p + np.arange(i, n),
-                        p + n + np.arange(m),
                         p + n + m + 2 * i + np.arange(2),
                         p + n + m + 2 * n + k_shape * i + np.arange(k_shape),
                     )
                 )
             )
-        return cls(wide_columns, wide_indices, p + n + m + (2 + k_shape) * n, nuisances)
+            fixed_indices.append(np.concatenate((p + np.arange(i, n), p + n + np.arange(m))))
+        return cls(wide_columns, wide_indices, p + n + m + (2 + k_shape) * n, nuisances, fixed_indices)
+
+    def _fixed(self, i: int) -> np.ndarray | None:
+        """(N, c) joint ``i``'s nuisance columns that do not depend on the candidate delay, or None."""
+        return None if self.nuisances is None else self.nuisances.fixed[i]
 
     def predicted(self, values: np.ndarray) -> np.ndarray:
         """(N, n) the model's torques at ``values``."""
-        return np.stack([x @ values[index] for x, index in zip(self.columns, self.indices, strict=True)], axis=1)
+        out = []
+        for i, (x, index) in enumerate(zip(self.columns, self.indices, strict=True)):
+            torque = x @ values[index]
+            fixed = self._fixed(i)
+            if fixed is not None and self.fixed_indices is not None:
+                torque = torque + fixed @ values[self.fixed_indices[i]]
+            out.append(torque)
+        return np.stack(out, axis=1)
 
-    def products(self, w: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def fixed_design(self, w: np.ndarray) -> list[np.ndarray] | None:
+        """Per joint ``B^T W B`` of its fixed nuisance columns ``B`` at row weights ``w`` (N, n): the same for every
+        candidate of a profile (its rows and weights are the reference's), so a profile computes it once."""
+        if self.nuisances is None:
+            return None
+        return [(fixed * w[:, i, None]).T @ fixed for i, fixed in enumerate(self.nuisances.fixed)]
+
+    def products(
+        self, w: np.ndarray, y: np.ndarray, fixed_design: list[np.ndarray] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """``X^T W X`` (p, p) and ``X^T W y`` (p,) over the joints' rows: row weights ``w`` (N, n), targets ``y``
-        (N, n)."""
+        (N, n); ``fixed_design``: :meth:`fixed_design` at ``w``, when already computed."""
         design, moment = np.zeros((self.n_parameters, self.n_parameters)), np.zeros(self.n_parameters)
+        if self.nuisances is not None and fixed_design is None:
+            fixed_design = self.fixed_design(w)
         for i, (x, index) in enumerate(zip(self.columns, self.indices, strict=True)):
             weighted = x * w[:, i, None]
             design[np.ix_(index, index)] += weighted.T @ x
             moment[index] += weighted.T @ y[:, i]
+            fixed = self._fixed(i)
+            if fixed is None or self.fixed_indices is None or fixed_design is None:
+                continue
+            other = self.fixed_indices[i]
+            cross = weighted.T @ fixed
+            design[np.ix_(index, other)] += cross
+            design[np.ix_(other, index)] += cross.T
+            design[np.ix_(other, other)] += fixed_design[i]
+            moment[other] += fixed.T @ (w[:, i] * y[:, i])
         return design, moment
 
 
@@ -259,10 +288,12 @@ class _Nuisances:
     ----------
     sin : (N, n) the perpendicular moments' columns, ``-g sin`` of each segment's absolute angle.
     offsets : (N, n, m) the markers' offsets' columns, at the static moments of an unweighted first fit.
+    fixed : per joint i the columns it takes of them, (N, n - i + m): ``sin[:, i:]`` then ``offsets[:, i, :]``.
     """
 
     sin: np.ndarray
     offsets: np.ndarray
+    fixed: tuple[np.ndarray, ...]
 
     @classmethod
     def of(cls, data: IdentificationData, narrow: _JointColumns) -> _Nuisances:
@@ -274,7 +305,9 @@ class _Nuisances:
         zeros = np.zeros_like(data.q_rad)
         base_values = np.concatenate((static, np.zeros(2 * n)))
         offsets = placement_columns(data.q_rad, zeros, zeros, data.lengths_m, averaged_torques(data), base_values)
-        return cls(-GRAVITY_M_S2 * np.sin(absolute_angles_rad(data.q_rad)), offsets)
+        sin = -GRAVITY_M_S2 * np.sin(absolute_angles_rad(data.q_rad))
+        fixed = tuple(np.hstack((sin[:, i:], offsets[:, i, :])) for i in range(n))
+        return cls(sin, offsets, fixed)
 
 
 @dataclass(frozen=True)
@@ -286,6 +319,7 @@ class _LinearFit:
     weights: np.ndarray  # (n,) 1 / sigma^2 per joint
     nuisances: _Nuisances | None = None  # the reference's, shared by every candidate
     wide: bool = True  # the nuisances fitted beside gravity and friction
+    fixed_design: list[np.ndarray] | None = None  # the nuisances' own products at these rows and weights
 
     def solve(self, data: IdentificationData, columns: _JointColumns | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Parameters (p,) and residuals (N, n) (0 off the rows) of one candidate (``columns``: its model's, when
@@ -293,7 +327,8 @@ class _LinearFit:
         columns = columns or _JointColumns.of(data, self.passive, self.nuisances, wide=self.wide)
         # Normal equations: a p x p solve (the columns are few and well scaled); lstsq's SVD of the tall
         # matrix would cost 10 times more for each candidate delay.
-        design, moment = columns.products(np.where(self.rows, self.weights[None, :], 0.0), data.tau_nm)
+        weights = np.where(self.rows, self.weights[None, :], 0.0)
+        design, moment = columns.products(weights, data.tau_nm, self.fixed_design)
         values = np.linalg.lstsq(design, moment, rcond=None)[0]
         residual = np.where(self.rows, data.tau_nm - columns.predicted(values), 0.0)
         return values, residual
@@ -319,7 +354,11 @@ def _linear_fit(
     _, residual = fit.solve(reference, columns)
     sigma = np.sqrt((residual**2).sum(axis=0) / np.maximum(rows.sum(axis=0), 1))
     sigma = np.maximum(sigma, 1e-9 * max(float(np.abs(reference.tau_nm).max()), 1e-9))
-    return dataclasses.replace(fit, weights=1.0 / sigma**2)
+    weights = 1.0 / sigma**2
+    # The nuisances' columns are the reference's at every candidate, and so are the rows and weights: their own
+    # products are computed once for the profile.
+    fixed_design = columns.fixed_design(np.where(rows, weights[None, :], 0.0))
+    return dataclasses.replace(fit, weights=weights, fixed_design=fixed_design)
 
 
 def linear_rss(reference: IdentificationData, passive: PassiveModel | None = None, wide: bool = True) -> FitRss:
@@ -367,7 +406,7 @@ def _autocorrelation_inflation(
     slope = (predicted(plus) - predicted(minus)) / (2.0 * h)  # d(residual)/d(delay), (N, n)
     w = np.where(fit.rows, fit.weights[None, :], 0.0)
     # Partial the parameters out: the part of the slope the model's columns cannot take up.
-    design, cross = columns.products(w, slope)
+    design, cross = columns.products(w, slope, fit.fixed_design)
     slope = slope - columns.predicted(np.linalg.lstsq(design, cross, rcond=None)[0])
     information = float((w * slope**2).sum())
     scores = (w * slope * residual).sum(axis=1)[:, None]

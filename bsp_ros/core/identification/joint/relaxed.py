@@ -200,8 +200,11 @@ def follow_the_hand(stage: Stage) -> Stage:
         return stage
     data, config = stage.data, stage.config
     lever = slip_lever_n(data.q_rad, data.lengths_m, data.tau_nm)
-    offsets = _offsets_beside_travel(stage)
-    slip = contact_slip(stage.problem, data.t_ns, lever, offsets=offsets)
+    slip = contact_slip(stage.problem, data.t_ns, lever)
+    if slip.found:
+        # Confirmed beside the markers' offsets, which a travel on a fast protocol can mimic (looked for beside
+        # them only here: a session without a slip candidate spends nothing on their columns).
+        slip = contact_slip(stage.problem, data.t_ns, lever, offsets=_offsets_beside_travel(stage))
     if not slip.found or slip.travel is None:
         return stage
     knots = refined_knots(slip.travel, SLIP_STEP_M, FOLLOW_KNOT_S)
