@@ -197,7 +197,7 @@ class _JointColumns:
         if not wide:
             return narrow
         nuisances = nuisances or _Nuisances.of(data, narrow)
-        m = nuisances.offsets.shape[2]
+        m = nuisances.n_offsets
         wide_columns, wide_indices, fixed_indices = [], [], []
         k_shape = len(TRANSITION_WIDTHS_RAD_S)
         for i in range(n):
@@ -216,27 +216,25 @@ class _JointColumns:
             fixed_indices.append(np.concatenate((p + np.arange(i, n), p + n + np.arange(m))))
         return cls(wide_columns, wide_indices, p + n + m + (2 + k_shape) * n, nuisances, fixed_indices)
 
-    def _fixed(self, i: int) -> np.ndarray | None:
-        """(N, c) joint ``i``'s nuisance columns that do not depend on the candidate delay, or None."""
-        return None if self.nuisances is None else self.nuisances.fixed[i]
+    def _fixed_blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per joint its nuisance columns that do not depend on the candidate delay (N, c) and where they sit among
+        the parameters; empty without nuisances."""
+        if self.nuisances is None or self.fixed_indices is None:
+            return []
+        return list(zip(self.nuisances.fixed, self.fixed_indices, strict=True))
 
     def predicted(self, values: np.ndarray) -> np.ndarray:
         """(N, n) the model's torques at ``values``."""
-        out = []
-        for i, (x, index) in enumerate(zip(self.columns, self.indices, strict=True)):
-            torque = x @ values[index]
-            fixed = self._fixed(i)
-            if fixed is not None and self.fixed_indices is not None:
-                torque = torque + fixed @ values[self.fixed_indices[i]]
-            out.append(torque)
+        out = [x @ values[index] for x, index in zip(self.columns, self.indices, strict=True)]
+        for i, (fixed, index) in enumerate(self._fixed_blocks()):
+            out[i] = out[i] + fixed @ values[index]
         return np.stack(out, axis=1)
 
-    def fixed_design(self, w: np.ndarray) -> list[np.ndarray] | None:
-        """Per joint ``B^T W B`` of its fixed nuisance columns ``B`` at row weights ``w`` (N, n): the same for every
-        candidate of a profile (its rows and weights are the reference's), so a profile computes it once."""
-        if self.nuisances is None:
-            return None
-        return [(fixed * w[:, i, None]).T @ fixed for i, fixed in enumerate(self.nuisances.fixed)]
+    def fixed_design(self, w: np.ndarray) -> list[np.ndarray]:
+        """Per joint ``B^T W B`` of its fixed nuisance columns ``B`` at row weights ``w`` (N, n) (empty without
+        nuisances): the same for every candidate of a profile (its rows and weights are the reference's), so a
+        profile computes it once."""
+        return [(fixed * w[:, i, None]).T @ fixed for i, (fixed, _) in enumerate(self._fixed_blocks())]
 
     def products(
         self, w: np.ndarray, y: np.ndarray, fixed_design: list[np.ndarray] | None = None
@@ -244,17 +242,17 @@ class _JointColumns:
         """``X^T W X`` (p, p) and ``X^T W y`` (p,) over the joints' rows: row weights ``w`` (N, n), targets ``y``
         (N, n); ``fixed_design``: :meth:`fixed_design` at ``w``, when already computed."""
         design, moment = np.zeros((self.n_parameters, self.n_parameters)), np.zeros(self.n_parameters)
-        if self.nuisances is not None and fixed_design is None:
-            fixed_design = self.fixed_design(w)
+        weighted = [x * w[:, i, None] for i, x in enumerate(self.columns)]
         for i, (x, index) in enumerate(zip(self.columns, self.indices, strict=True)):
-            weighted = x * w[:, i, None]
-            design[np.ix_(index, index)] += weighted.T @ x
-            moment[index] += weighted.T @ y[:, i]
-            fixed = self._fixed(i)
-            if fixed is None or self.fixed_indices is None or fixed_design is None:
-                continue
-            other = self.fixed_indices[i]
-            cross = weighted.T @ fixed
+            design[np.ix_(index, index)] += weighted[i].T @ x
+            moment[index] += weighted[i].T @ y[:, i]
+        blocks = self._fixed_blocks()
+        if blocks and fixed_design is None:
+            fixed_design = self.fixed_design(w)
+        for i, (fixed, other) in enumerate(blocks):
+            assert fixed_design is not None  # computed above where there are blocks
+            index = self.indices[i]
+            cross = weighted[i].T @ fixed
             design[np.ix_(index, other)] += cross
             design[np.ix_(other, index)] += cross.T
             design[np.ix_(other, other)] += fixed_design[i]
@@ -286,14 +284,14 @@ class _Nuisances:
 
     Attributes
     ----------
-    sin : (N, n) the perpendicular moments' columns, ``-g sin`` of each segment's absolute angle.
-    offsets : (N, n, m) the markers' offsets' columns, at the static moments of an unweighted first fit.
-    fixed : per joint i the columns it takes of them, (N, n - i + m): ``sin[:, i:]`` then ``offsets[:, i, :]``.
+    fixed : per joint i the columns it takes, (N, n - i + m): the perpendicular moments' columns ``-g sin`` of the
+        absolute angles of the segments it carries, then the m markers' offsets' columns at the static moments of an
+        unweighted first fit.
+    n_offsets : m.
     """
 
-    sin: np.ndarray
-    offsets: np.ndarray
     fixed: tuple[np.ndarray, ...]
+    n_offsets: int
 
     @classmethod
     def of(cls, data: IdentificationData, narrow: _JointColumns) -> _Nuisances:
@@ -306,8 +304,7 @@ class _Nuisances:
         base_values = np.concatenate((static, np.zeros(2 * n)))
         offsets = placement_columns(data.q_rad, zeros, zeros, data.lengths_m, averaged_torques(data), base_values)
         sin = -GRAVITY_M_S2 * np.sin(absolute_angles_rad(data.q_rad))
-        fixed = tuple(np.hstack((sin[:, i:], offsets[:, i, :])) for i in range(n))
-        return cls(sin, offsets, fixed)
+        return cls(tuple(np.hstack((sin[:, i:], offsets[:, i, :])) for i in range(n)), offsets.shape[2])
 
 
 @dataclass(frozen=True)
