@@ -124,9 +124,9 @@ def _length_lever(
     segment off its joint centre moves, as that joint turns, along the proximal segment (``proximal``, its unit
     axis per sample): the marker distance varies about its median by the offset's projection on that axis, and the
     chain of medians puts the handle that much off along it. Over a narrow range the variation is nearly constant
-    and the median takes it up; over a planned protocol's (the elbow turning 90 deg) it reached a third of the
-    offset's effect on the torques, in a pattern the other columns could not follow (on a noise-free planned session,
-    free offsets 2 times their true value).
+    and the median takes it up; with the elbow turning 80 deg, the columns without it missed 24-90 % of the part of
+    an offset's effect that varies sample by sample (``test_placement.py``), and offsets fitted freely on a
+    noise-free planned session came out at up to twice their true value.
     """
     projection = direction[0] * proximal[0] + direction[1] * proximal[1]
     varying = projection - np.median(projection)

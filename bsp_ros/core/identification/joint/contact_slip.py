@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bsp_ros.core.identification.joint.placement_covariance import offset_names
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import Problem, augmented, reweighted_values
 from bsp_ros.core.model import absolute_angles_rad, contact_lever_sums
@@ -33,7 +34,6 @@ __all__ = [
     "MIN_WRIST_SHARE",
     "Slip",
     "Travel",
-    "beside_offsets",
     "contact_slip",
     "even_knots",
     "fit_travel",
@@ -185,13 +185,13 @@ def _travel_columns(problem: Problem, lever_n: np.ndarray, basis: np.ndarray) ->
 _OFFSET_PRIOR_PRECISION = 1.0
 
 
-def beside_offsets(problem: Problem, offsets: np.ndarray | None) -> Problem:
+def _beside_offsets(problem: Problem, offsets: np.ndarray | None) -> Problem:
     """``problem`` with the markers' offset columns ``offsets`` (N, n, m; one assumed sd each) beside its own, each
     with its prior N(0, 1); ``problem`` itself where None."""
     if offsets is None:
         return problem
     m = offsets.shape[2]
-    names: list[ParameterName] = [(f"marker_offset_{k}_sd", "markers") for k in range(m)]
+    names = offset_names(m)
     return augmented(problem, offsets, names, np.zeros(m), np.full(m, _OFFSET_PRIOR_PRECISION))
 
 
@@ -200,8 +200,8 @@ def fit_travel(
 ) -> Travel:
     """The travel on ``knots_s`` (s from the first sample, the first 0), fitted with ``problem``'s parameters (its
     reweighted least squares with the travel's columns beside them) and the markers' offsets ``offsets`` (see
-    :func:`beside_offsets`)."""
-    problem = beside_offsets(problem, offsets)
+    :func:`_beside_offsets`)."""
+    problem = _beside_offsets(problem, offsets)
     knots = knots_s
     basis = travel_basis(t_ns, knots)
     # A knot with no used sample beside it (rows left out about it) is not fitted: the travel there is the
@@ -271,9 +271,9 @@ def joint_shares(
     problem: Problem, lever_n: np.ndarray, travel_m: np.ndarray, offsets: np.ndarray | None = None
 ) -> np.ndarray:
     """(n,) how much of the torque ``travel_m * lever_n`` each joint shows, fitted with ``problem``'s parameters
-    (and the markers' ``offsets``, :func:`beside_offsets`) as a column of its own at each joint (1 where the joint
+    (and the markers' ``offsets``, :func:`_beside_offsets`) as a column of its own at each joint (1 where the joint
     shows all of it)."""
-    problem = beside_offsets(problem, offsets)
+    problem = _beside_offsets(problem, offsets)
     n = problem.torque.shape[1]
     extra = np.zeros((travel_m.size, n, n))
     for j in range(n):
@@ -291,7 +291,7 @@ def contact_slip(
 ) -> Slip:
     """What the data of ``problem`` (sampled at ``t_ns``, with the slip's lever ``lever_n`` (N,) of
     :func:`slip_lever_n`) tell of a contact point travelling along the hand, beside the markers' ``offsets`` (N, n,
-    m; :func:`beside_offsets`), or None.
+    m; :func:`_beside_offsets`), or None.
 
     Returns
     -------

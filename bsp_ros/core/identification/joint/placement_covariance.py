@@ -92,6 +92,11 @@ def averaged_torques(data: IdentificationData) -> np.ndarray:
     return out
 
 
+def offset_names(m: int) -> list[ParameterName]:
+    """The parameter names of ``m`` marker-offset columns fitted beside a problem's own (each in units of its sd)."""
+    return [(f"marker_offset_{k}_sd", "markers") for k in range(m)]
+
+
 def _per_recording(columns: np.ndarray, recording_index: np.ndarray | None) -> np.ndarray:
     """(N, n, m) offset columns shared by every sample or, for recordings whose markers moved between them,
     (N, n, m R): each recording's own.
@@ -143,7 +148,7 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     # The offsets fitted with the parameters (not on the residual alone: much of their effect resembles a change
     # of the parameters, and only together do they explain it), each with its prior N(0, sd^2).
     m = columns.shape[2]
-    names: list[ParameterName] = [(f"marker_offset_{k}_sd", "markers") for k in range(m)]
+    names = offset_names(m)
     # Offsets in units of their sd (the columns are scaled): each with the prior N(0, 1).
     with_offsets = augmented(problem, columns, names, np.zeros(m), np.ones(m))
     residual = np.where(problem.rows, reweighted_values(with_offsets).residual(with_offsets), np.nan)

@@ -8,6 +8,7 @@ import numpy as np
 
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.covariance import design_inverse, hac_covariance
+from bsp_ros.core.identification.joint.placement_covariance import offset_names
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import (
     Problem,
@@ -123,7 +124,7 @@ def placement_scale(
     PlacementScale
     """
     m = columns.shape[2]
-    names: list[ParameterName] = [(f"marker_offset_{k}_sd", "markers") for k in range(m)]
+    names = offset_names(m)
     base = nuisance or problem
     extra, extra_names, k = columns, names, 0
     if modelled is not None:  # one pass over the samples for both sets of columns
@@ -133,9 +134,8 @@ def placement_scale(
     offsets, covariance = _free_offsets(augmented(base, extra, extra_names, np.zeros(k + m), precision), m)
     # Each chain point has an along and a normal offset (columns 2k, 2k + 1), per recording where markers moved.
     scaled = np.tile(np.repeat(np.asarray(skin, dtype=bool), 2), m // (2 * len(skin)))
-    if not (np.isfinite(offsets).all() and np.isfinite(covariance).all()) or not scaled.any():
-        return PlacementScale(1.0, 0.0, np.asarray(sd_m, dtype=np.float64), None, np.ones(m))
-    judged = scale_from_offsets(offsets, covariance, scaled)
+    finite = np.isfinite(offsets).all() and np.isfinite(covariance).all()
+    judged = scale_from_offsets(offsets, covariance, scaled) if finite and scaled.any() else None
     if judged is None:
         return PlacementScale(1.0, 0.0, np.asarray(sd_m, dtype=np.float64), None, np.ones(m))
     scale, ratio, best = judged
