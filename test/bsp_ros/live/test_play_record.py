@@ -9,7 +9,6 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -92,16 +91,6 @@ def source_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
     simulated = simulate_cell(human_arm_cell(duration_s=10))
     return write_session_bag(tmp_path_factory.mktemp("play") / "session", simulated.session)
-
-
-@pytest.fixture
-def procs() -> Iterator[list[subprocess.Popen[str]]]:
-    started: list[subprocess.Popen[str]] = []
-    yield started
-    for proc in started:
-        if proc.poll() is None:
-            proc.kill()
-        proc.communicate(timeout=10)
 
 
 def test_play_and_record_are_bsp_subcommands() -> None:

@@ -9,7 +9,6 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -64,16 +63,6 @@ def source_bag(tmp_path: Path) -> Path:
     envelope[(t_ns - t_ns[0] >= 4_000_000_000) & (t_ns - t_ns[0] < 5_000_000_000), 0] *= 4.0
     session = dataclasses.replace(simulated.session, emg=EmgSeries(t_ns=t_ns, envelope=envelope, channels=CHANNELS))
     return write_session_bag(tmp_path / "source", session)
-
-
-@pytest.fixture
-def procs() -> Iterator[list[subprocess.Popen[str]]]:
-    started: list[subprocess.Popen[str]] = []
-    yield started
-    for proc in started:
-        if proc.poll() is None:
-            proc.kill()
-        proc.communicate(timeout=10)
 
 
 def test_play_publishes_the_emg_and_record_records_it(
