@@ -386,15 +386,17 @@ def _autocorrelation_inflation(
     h: float,
     passive: PassiveModel,
     wide: bool = True,
+    nuisances: _Nuisances | None = None,
 ) -> float:
     """How much correlated errors widen the delay's std beyond the curvature's (>= 1), from the samples at a delay
-    (``centre``) and at ``h`` s either side of it (``minus``, ``plus``).
+    (``centre``) and at ``h`` s either side of it (``minus``, ``plus``); ``nuisances``: the profile's (those of its
+    reference, as every candidate of the profile takes them), None: ``centre``'s own.
 
     The delay's score per sample (summed over the joints), with the model's parameters partialled out,
     goes through the same Newey-West sandwich as the parameters' (``identify_joint``); its std over the
     curvature's ``1 / sqrt(information)`` is the inflation.
     """
-    columns = _JointColumns.of(centre, passive, wide=wide)
+    columns = _JointColumns.of(centre, passive, nuisances, wide=wide)
     fit = _linear_fit(centre, passive, columns, wide)
     values, residual = fit.solve(centre, columns)
     if plus.t_ns.size != centre.t_ns.size or minus.t_ns.size != centre.t_ns.size:
@@ -576,7 +578,12 @@ class _DelayProfile:
         self.wide: bool = wide
         self.n_fits: int = 0
         self._samples: dict[int, IdentificationData] = {}
-        self.rss: FitRss = fit_rss or linear_rss(self.samples(0.0), passive, wide)
+        # The default misfit's nuisance columns are its reference's; the std's inflation takes the same ones.
+        self.nuisances: _Nuisances | None = None
+        if fit_rss is None:
+            fit = _linear_fit(self.samples(0.0), passive, wide=wide)
+            fit_rss, self.nuisances = fit.rss, fit.nuisances
+        self.rss: FitRss = fit_rss
 
     def samples(self, delay_s: float) -> IdentificationData:
         """The identification samples with the wrench stamps shifted by ``-delay_s`` (s)."""
@@ -622,7 +629,7 @@ def _delay_at_minimum(
         return WrenchDelay(
             0.0, math.nan, "none", n_fits=profile.n_fits, warnings=["the wrench-marker delay is not identifiable"]
         )
-    inflation = _autocorrelation_inflation(minus, centre, plus, h, profile.passive, profile.wide)
+    inflation = _autocorrelation_inflation(minus, centre, plus, h, profile.passive, profile.wide, profile.nuisances)
     std = math.sqrt(2.0 / curvature) * inflation
     n_fits = profile.n_fits + 4
     if abs(vertex) > resolved_sd * std:
