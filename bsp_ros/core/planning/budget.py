@@ -246,7 +246,9 @@ def predict_budget(
     fit, ledger = _noise_terms(data, problem, probe, nominal, noise, kinematics, grid_hz)
     sd_m = options.placement_sd_m(data)
     if sd_m.any():
-        ledger = ledger.plus(Term.MARKER_PLACEMENT, placement_covariance(data, problem, fit, sd_m))
+        # The nominal samples' residual is the noise alone: the weights follow the offsets from there, as identify's.
+        placement = placement_covariance(data, problem, fit, sd_m, fit.sigma**2)
+        ledger = ledger.plus(Term.MARKER_PLACEMENT, placement)
     zero_cov = zero_covariance(*session.zero_sd(noise))
     response = TorqueResponse(problem, fit.weights, fit.design, np.ones(fit.values.size, dtype=bool))
     offsets = response.columns(offset_torques_nm(data, np.eye(3)))

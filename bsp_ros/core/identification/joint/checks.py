@@ -13,7 +13,6 @@ import numpy as np
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.joint.elastic_check import elastic_check
 from bsp_ros.core.identification.joint.fallback import family_result
-from bsp_ros.core.identification.joint.placement_covariance import covariance_from_products
 from bsp_ros.core.identification.joint.placement_scale import placement_scale
 from bsp_ros.core.identification.joint.spasticity import speed_dependence
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
@@ -101,8 +100,6 @@ def check_placement(stage: Stage) -> Stage:
     if placement is None or "offset" in stage.config.passive.terms or stage.problems:
         return stage
     assert stage.with_springs is not None  # built for the same conditions
-    placement_fit = stage.placement_fit
-    assert placement_fit is not None  # set with the placement
     stage = with_drift_terms(stage)
     assert stage.drift_terms is not None
     skin = np.ones(stage.n + 1, dtype=bool)
@@ -113,7 +110,7 @@ def check_placement(stage: Stage) -> Stage:
     stage = dataclasses.replace(stage, placement_check=found)
     if found.scale <= 1.0:
         return stage
-    wider = covariance_from_products(placement_fit, placement.products * found.column_factor)
+    wider = placement.covariance_scaled(found.column_factor)
     notes = (found.note,) if found.note is not None else ()
     return stage.apply(Outcome(replaced=((Term.MARKER_PLACEMENT, wider),), notes=notes), from_checks=True)
 

@@ -33,6 +33,8 @@ class HeldModel:
         few seconds more of the same arm hardly change them.
     noise_scale : (p,) each parameter's sensor-noise std on the residual the marker offsets leave over its std on
         the raw residual (ones without a placement): a refit rescales its own covariance by it.
+    base_variance_share : (n,) each joint's residual variance once the offsets took what they explain, over the
+        fit's own (None without a placement): a refit's placement term follows its per-joint weights from there.
     curves : the passive curves' basis (a model choice), or None.
     data_problems : why the samples could not support the estimate (excitation, misfit, identifiability): a refit
         judges its own samples' instead.
@@ -54,3 +56,4 @@ class HeldModel:
     check_problems: tuple[Finding, ...]
     warnings: tuple[Finding, ...]
     diagnostics: dict[str, object]
+    base_variance_share: np.ndarray | None = None

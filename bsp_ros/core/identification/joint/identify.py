@@ -198,6 +198,9 @@ def _diagnostics(stage: Stage) -> dict[str, object]:
 def _held(stage: Stage, diagnostics: dict[str, object]) -> HeldModel:
     """What the steps chose, for refits of newer samples of the same arm between a live window's checks."""
     check = stage.placement_check
+    share = None
+    if stage.placement is not None and stage.placement_fit is not None:
+        share = stage.placement.statistics.base_variance / np.maximum(stage.placement_fit.sigma**2, 1e-300)
     return HeldModel(
         names=stage.problem.names,
         passive=dataclasses.replace(stage.config.passive, select=False),
@@ -211,6 +214,7 @@ def _held(stage: Stage, diagnostics: dict[str, object]) -> HeldModel:
         check_problems=stage.check_problems,
         warnings=tuple(w for w in stage.notes[stage.data_notes :] if w not in stage.sample_notes),
         diagnostics=diagnostics,
+        base_variance_share=share,
     )
 
 

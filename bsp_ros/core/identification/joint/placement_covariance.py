@@ -9,6 +9,11 @@ import numpy as np
 
 from bsp_ros.core.identification.covariance import design_inverse
 from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.placement_reweighting import (
+    OffsetStatistics,
+    reweighted_placement_covariance,
+    used_variance,
+)
 from bsp_ros.core.identification.placement import placement_columns
 from bsp_ros.core.identification.result import ParameterName
 from bsp_ros.core.identification.stacked import Fit, Problem, augmented, joint_products, reweighted_values
@@ -25,17 +30,24 @@ class PlacementEffect:
 
     Attributes
     ----------
-    covariance : (p, p) of the estimate, from offsets of ``sd_m`` per axis.
+    covariance : (p, p) of the estimate, from offsets of ``sd_m`` per axis, the fit's per-joint weights following
+        them (placement_reweighting.py).
     residual : (N, n) the residual (Nm, NaN where unused) of the fit that also takes marker offsets, each with a
         prior of its ``sd_m``: what is left once offsets of that size explain what they can.
     columns : (N, n, m) the offsets' columns it was computed from (:func:`offset_columns`).
     products : (p, m) ``X^T W D`` of the fit's weights and those columns (:func:`covariance_from_products`).
+    statistics : what the covariance is computed from, for the same offsets scaled (:func:`covariance_scaled`).
     """
 
     covariance: np.ndarray
     residual: np.ndarray
     columns: np.ndarray
     products: np.ndarray
+    statistics: OffsetStatistics
+
+    def covariance_scaled(self, column_factor: np.ndarray) -> np.ndarray:
+        """(p, p) the covariance from the offsets with each column times ``column_factor`` (m,)."""
+        return reweighted_placement_covariance(self.statistics, column_factor)
 
 
 def offset_columns(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
@@ -127,7 +139,9 @@ def covariance_from_products(fit: Fit, products: np.ndarray) -> np.ndarray:
     return np.asarray(response @ response.T)
 
 
-def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> np.ndarray:
+def placement_covariance(
+    data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray, base_variance: np.ndarray | None = None
+) -> np.ndarray:
     """Covariance (p, p) of the estimate from where the skin markers sit relative to the joint centres.
 
     Each marker's offset (along and normal to its segment, ``sd_m[k]`` m each for chain point k, shoulder to
@@ -136,8 +150,19 @@ def placement_covariance(data: IdentificationData, problem: Problem, fit: Fit, s
     Part of this cannot be told from the parameters by any data (offsets along the chain scale every lever
     arm, hence every torque, like the static moments and friction amplitudes themselves), so it is not
     estimated: it is a known uncertainty of every session, different every day, and belongs in the std.
+
+    ``base_variance`` (n,), Nm^2: each joint's residual variance were the markers on their centres; given, the
+    fit's per-joint weights follow the offsets (placement_reweighting.py); None: the linear response at the fit's
+    weights.
     """
-    return covariance_from_columns(problem, fit, offset_columns(data, problem, fit, sd_m))
+    columns = offset_columns(data, problem, fit, sd_m)
+    if base_variance is None:
+        return covariance_from_columns(problem, fit, columns)
+    m = columns.shape[2]
+    with_offsets = augmented(problem, columns, offset_names(m), np.zeros(m), np.ones(m))
+    assert with_offsets.statistics is not None  # augmented() computes them
+    statistics = OffsetStatistics.of(problem, with_offsets.statistics, base_variance, fit.weights * fit.sigma**2)
+    return reweighted_placement_covariance(statistics)
 
 
 def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m: np.ndarray) -> PlacementEffect:
@@ -156,4 +181,8 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     assert with_offsets.statistics is not None  # augmented() computes them
     p = len(problem.names)
     products = np.tensordot(fit.weights, with_offsets.statistics[0][:, :p, p:], axes=1)
-    return PlacementEffect(covariance_from_products(fit, products), residual, columns, products)
+    statistics = OffsetStatistics.of(
+        problem, with_offsets.statistics, used_variance(problem, residual), fit.weights * fit.sigma**2
+    )
+    covariance = reweighted_placement_covariance(statistics)
+    return PlacementEffect(covariance, residual, columns, products, statistics)

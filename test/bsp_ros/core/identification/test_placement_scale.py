@@ -193,13 +193,14 @@ def test_a_drift_is_not_taken_for_misplaced_markers(seed: int) -> None:
 
 def test_the_placement_covariance_from_the_wider_statistics_equals_the_pass_over_every_sample() -> None:
     # placement_effect takes X^T W D from the offsets' augmented statistics (used rows only); covariance_from_columns
-    # computes it over every sample with zero weights off the used rows: the same covariance, two routes.
+    # computes it over every sample with zero weights off the used rows: the same linear covariance, two routes.
     data = identification_data_from_session(_simulated(1, 0.01).session)
     problem, fit = _fit(data)
     effect = placement_effect(data, problem, fit, ASSUMED_SD_M)
     direct = covariance_from_columns(problem, fit, effect.columns)
     assert np.abs(direct).max() > 0
-    np.testing.assert_allclose(effect.covariance, direct, rtol=1e-9, atol=1e-12 * np.abs(direct).max())
+    linear = covariance_from_products(fit, effect.products)
+    np.testing.assert_allclose(linear, direct, rtol=1e-9, atol=1e-12 * np.abs(direct).max())
     factor = np.linspace(1.0, 3.0, effect.columns.shape[2])  # a wider placement: the columns scaled
     np.testing.assert_allclose(
         covariance_from_products(fit, effect.products * factor),
