@@ -35,15 +35,8 @@ import time
 from typing import Any
 
 import numpy as np
-from calibration import (
-    Tally,
-    calibration_columns,
-    calibration_header,
-    sharpness_columns,
-    sharpness_header,
-    summary_line,
-)
-from scoring import rates, residuals, verdict, z_scores
+from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header, summary_line
+from scoring import Counts
 
 from bsp_ros.core import glitches
 from bsp_ros.core import simulation as sim
@@ -137,13 +130,11 @@ def _kind(warning: str) -> str:
 
 
 def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dict[str, Any]:
-    valid = 0
     z_all: list[float] = []
     worst: list[tuple[float, int, str]] = []
     kinds: collections.Counter[str] = collections.Counter()
     messages: collections.Counter[str] = collections.Counter()
-    verdicts: list[str] = []
-    tally = Tally()
+    counts = Counts()
     started = time.perf_counter()
     for seed in range(first_seed, first_seed + sessions):
         spec = _spec(scenario, seed, duration_s)
@@ -164,38 +155,35 @@ def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dic
             document = identify_session(simulated.session)
         for kind in {_kind(w) for w in document["quality"]["warnings"]}:
             kinds[kind] += 1
-        scores = z_scores(document, truth)
-        tally.add(residuals(document, truth), document["quality"]["valid"])
-        verdicts.append(verdict(document["quality"]["valid"], max(scores.values(), default=float("nan"))))
-        if not document["quality"]["valid"]:
+        scored = counts.score(document, truth)
+        if not scored.valid:
             messages[_kind(document["quality"]["message"])] += 1
             continue
-        valid += 1
-        for name, z_value in scores.items():
+        for name, z_value in scored.z.items():
             z_all.append(z_value)
             worst.append((z_value, seed, name))
     z = np.array(z_all)
-    two_sided = tally.calibration()
+    two_sided = counts.two_sided.calibration()
     # Sharpness compares one parameter across sessions: meaningful only while the arm stays the same.
-    sharp = {} if scenario == "random_subject" else tally.sharpness()
+    sharp = {} if scenario == "random_subject" else counts.two_sided.sharpness()
     return {
         "scenario": scenario,
         "sessions": sessions,
         "duration_s": duration_s,
-        "valid": valid,
+        "valid": counts.valid,
         "parameters": int(z.size),
         "within_3_std": float((z < 3).mean()) if z.size else None,
         "z_rms": two_sided.z_rms if two_sided.count else None,
         "within_1_std": two_sided.within_1 if two_sided.count else None,
         "within_2_std": two_sided.within_2 if two_sided.count else None,
         "sharpness": {kind: dataclasses.asdict(spread) for kind, spread in sharp.items()},
-        "valid_and_wrong": rates(verdicts)[1],
-        "invalid_and_right": rates(verdicts)[2],
+        "valid_and_wrong": counts.valid_wrong,
+        "invalid_and_right": counts.invalid_right,
         "worst": sorted(worst, reverse=True)[:5],
         "warning_rate": {k: v / sessions for k, v in kinds.most_common()},
         "invalid_reasons": dict(messages),
         "seconds": round(time.perf_counter() - started, 1),
-        "tally": tally,
+        "counts": counts,
     }
 
 
@@ -210,31 +198,31 @@ def main() -> None:
     args = parser.parse_args()
     if args.scenario != "all":
         result = run(args.scenario, args.sessions, args.duration, args.first_seed)
-        tally = result.pop("tally")
+        counts = result.pop("counts")
         print(json.dumps(result, indent=1))
-        print(summary_line(args.scenario, tally, sharpness=args.scenario != "random_subject"))
+        print(summary_line(args.scenario, counts.two_sided, sharpness=args.scenario != "random_subject"))
         return
     results = [run(scenario, args.sessions, args.duration, args.first_seed) for scenario in SCENARIOS]
     print(
         f"{'scenario':18s} {'valid':>9s} {'parameters':>10s} {'within 3 std':>12s} {'worst |z|':>9s}"
         f" {'v&wrong':>7s} {'inv&right':>9s} {calibration_header()} {sharpness_header()}"
     )
-    pooled = Tally()
+    pooled = Counts()
     for r in results:
         within = "-" if r["within_3_std"] is None else f"{100 * r['within_3_std']:.2f} %"
         worst = f"{r['worst'][0][0]:.2f}" if r["worst"] else "-"
-        tally = r.pop("tally")
-        pooled.extend(tally)
-        sharp = sharpness_columns(tally.sharpness()) if r["sharpness"] else sharpness_columns({})
+        counts = r.pop("counts")
+        pooled.pool(counts)
+        sharp = sharpness_columns(counts.two_sided.sharpness()) if r["sharpness"] else sharpness_columns({})
         print(
-            f"{r['scenario']:18s} {r['valid']:>4d}/{r['sessions']:<4d} {r['parameters']:>10d} {within:>12s}"
-            f" {worst:>9s} {r['valid_and_wrong']:>7d} {r['invalid_and_right']:>9d}"
-            f" {calibration_columns(tally.calibration())} {sharp}"
+            f"{r['scenario']:18s} {counts.valid:>4d}/{counts.runs:<4d} {r['parameters']:>10d} {within:>12s}"
+            f" {worst:>9s} {counts.valid_wrong:>7d} {counts.invalid_right:>9d}"
+            f" {calibration_columns(counts.two_sided.calibration())} {sharp}"
         )
     parameters = sum(r["parameters"] for r in results)
     inside = sum(r["parameters"] * (r["within_3_std"] or 0.0) for r in results)
-    sessions, valid = sum(r["sessions"] for r in results), sum(r["valid"] for r in results)
-    wrong, thrown = sum(r["valid_and_wrong"] for r in results), sum(r["invalid_and_right"] for r in results)
+    sessions, valid = pooled.runs, pooled.valid
+    wrong, thrown = pooled.valid_wrong, pooled.invalid_right
     print(
         f"valid-and-wrong {wrong}/{sessions} sessions ({100 * wrong / sessions:.1f} %), "
         f"invalid-and-right {thrown}/{sessions} ({100 * thrown / sessions:.1f} %)"
@@ -244,7 +232,7 @@ def main() -> None:
         f" {100 * inside / max(parameters, 1):.2f} % within 3 std ({sum(r['seconds'] for r in results):.0f} s)"
     )
     # Sharpness is per scenario only: pooled over scenarios, one parameter's errors would mix nuisances.
-    print(summary_line("pooled", pooled, sharpness=False))
+    print(summary_line("pooled", pooled.two_sided, sharpness=False))
 
 
 if __name__ == "__main__":

@@ -24,7 +24,8 @@ ideal, an honest std's falls in about 0.7-1.4 over 8 sessions). ``--sd-mm 0`` ke
 centres: then the inflation column gives each static moment's and Coulomb amplitude's std over what the assumed
 placement and the sensor noise alone give (the ``marker_placement`` and ``sensor_noise`` terms of its budget; 1
 means no inflation). ``--brute`` instead checks the placement term against brute force per arm (each marker moved
-a tenth of ``--sd-mm`` alone, ``--brute-step``) and says how far the row's ``--sessions`` drawn placements move each parameter against average.
+a tenth of ``--sd-mm`` alone, ``--brute-step``) and says how far the row's ``--sessions`` drawn placements move each
+parameter against average.
 """
 
 from __future__ import annotations
@@ -50,7 +51,7 @@ from in_process import identify, planned_in_ranges
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine, run_engine
 from mujoco_mechanical import mechanical_arm, mechanical_sine
-from scoring import residuals, verdict, z_scores
+from scoring import Counts, z_scores
 
 from bsp_ros.core.planning import planned_trajectory_from_file
 
@@ -60,28 +61,14 @@ SHARP_KINDS = {"static_moment_kgm": "static moments", "coulomb_nm": "Coulomb amp
 SHARPNESS_LIMIT = 1.5
 
 
-@dataclasses.dataclass
-class Row:
-    """The sessions of one protocol and arm."""
+@dataclasses.dataclass(kw_only=True)
+class Row(Counts):
+    """The sessions of one protocol and arm: :class:`scoring.Counts` and why estimates were invalid, each static
+    moment's and Coulomb amplitude's std inflation and the placement scales."""
 
-    runs: int = 0
-    valid: int = 0
-    valid_wrong: int = 0
-    invalid_right: int = 0
-    worst_z: float = 0.0
-    worst_param: str = ""
     reasons: dict[str, int] = dataclasses.field(default_factory=lambda: defaultdict(int))
     inflation: dict[str, list[float]] = dataclasses.field(default_factory=lambda: defaultdict(list))
     scales: list[float] = dataclasses.field(default_factory=list)
-    tally: calibration.Tally = dataclasses.field(default_factory=calibration.Tally)
-
-    def pool(self, other: Row) -> None:
-        """Add ``other``'s counts and z values (not its per-parameter samples: sharpness is per arm)."""
-        self.runs += other.runs
-        self.valid += other.valid
-        self.valid_wrong += other.valid_wrong
-        self.invalid_right += other.invalid_right
-        self.tally.z.extend(other.tally.z)
 
 
 def markers_replaced(run: EngineRun, offsets_m: np.ndarray) -> np.ndarray:
@@ -145,26 +132,16 @@ def data_only(estimate: dict[str, Any]) -> dict[str, Any]:
 
 def score(row: Row, code: int, estimate: dict[str, Any], truth: dict[str, Any]) -> None:
     """Add one session's estimate to ``row``."""
-    row.runs += 1
     if not estimate:
+        row.count_failure()
         row.reasons[f"exit {code}"] += 1
         return
     if len(truth["segments"]) == 2:
         estimate = data_only(estimate)
-    valid = bool(estimate["quality"]["valid"])
     row.scales.append(float(estimate["quality"].get("marker_placement", {}).get("scale_from_data", math.nan)))
-    z = z_scores(estimate, truth)
-    worst = max(z, key=lambda k: z[k]) if z else ""
-    outcome = verdict(valid, z[worst] if z else math.nan)
-    row.valid += valid
-    row.valid_wrong += outcome == "valid-and-wrong"
-    row.invalid_right += outcome == "invalid-and-right"
-    if z and z[worst] > row.worst_z:
-        row.worst_z, row.worst_param = z[worst], worst
-    if not valid:
+    if not row.score(estimate, truth).valid:
         codes = [f["code"] for f in estimate["quality"].get("findings", []) if f.get("severity") == "invalid"]
         row.reasons[",".join(codes) or "?"] += 1
-    row.tally.add(residuals(estimate, truth), valid)
     _inflation(estimate, row)
 
 
@@ -270,7 +247,7 @@ def brute_force(protocol: str, arm_seed: int, args: argparse.Namespace, workdir:
 def sharpness_of(row: Row) -> dict[str, float]:
     """Each static moment's and Coulomb amplitude's sharpness over the row's sessions (where it has two or more)."""
     out = {}
-    for name, pairs in sorted(row.tally.samples.items()):
+    for name, pairs in sorted(row.two_sided.samples.items()):
         if calibration.quantity(name) in SHARP_KINDS and len(pairs) >= 2:
             errors, stds = zip(*pairs, strict=True)
             out[name] = calibration.sharpness(errors, stds)
@@ -288,7 +265,7 @@ def _per_parameter(row: Row) -> str:
 
 def print_row(label: str, row: Row) -> None:
     """One line of counts and calibration, then the per-parameter sharpness (and inflation, if any)."""
-    c = row.tally.calibration()
+    c = row.two_sided.calibration()
     reasons = ", ".join(f"{n}x {r}" for r, n in sorted(row.reasons.items(), key=lambda kv: -kv[1])) or "-"
     print(
         f"{label:22} {row.runs:4} {row.valid:5} {row.valid_wrong:7} {row.invalid_right:9} "
@@ -313,7 +290,7 @@ def acceptance(rows: dict[str, Row]) -> list[str]:
         for name, value in sharpness_of(row).items():
             if math.isfinite(value) and value > worst_sharp[0]:
                 worst_sharp = (value, f"{label} {name}")
-    c = total.tally.calibration()
+    c = total.two_sided.calibration()
     return [
         f"valid {total.valid}/{total.runs} ({100 * total.valid / max(total.runs, 1):.0f} %, at least 95 %)",
         f"valid-and-wrong {total.valid_wrong}",
@@ -361,7 +338,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 rows[f"{protocol}/{arm_seed}"] = row
                 print_row(f"{protocol} arm {arm_seed}", row)
                 pooled.pool(row)
-            c = pooled.tally.calibration()
+            c = pooled.two_sided.calibration()
             print(
                 f"{protocol + ' (all arms)':22} {pooled.runs:4} {pooled.valid:5} {pooled.valid_wrong:7} "
                 f"{pooled.invalid_right:9} {calibration.calibration_columns(c)}",
@@ -372,12 +349,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.json is not None:
         summary = {
             label: {
-                "runs": r.runs, "valid": r.valid, "valid_wrong": r.valid_wrong, "invalid_right": r.invalid_right,
-                "z_rms": r.tally.calibration().z_rms, "samples": r.tally.samples,
+                **r.counts_json(),
+                "z_rms": r.two_sided.calibration().z_rms,
+                "samples": r.two_sided.samples,
                 "inflation": {k: float(np.median(v)) for k, v in r.inflation.items()},
             }
             for label, r in rows.items()
-        }  # fmt: skip
+        }
         args.json.write_text(json.dumps(summary, indent=1))
     return 0
 

@@ -35,18 +35,12 @@ import dataclasses
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from calibration import (
-    Tally,
-    calibration_columns,
-    calibration_header,
-    sharpness_columns,
-    sharpness_header,
-    summary_line,
-)
+from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header, summary_line
 from realism import _NUMBER, NUISANCES
-from scoring import rates, residuals, verdict, z_scores
+from scoring import Counts, Scored, residuals, scored
 
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions
@@ -60,10 +54,10 @@ PERIOD_S = 0.2  # the identifier's default 5 Hz
 
 
 def _updates(
-    inputs, rate_hz: float, window_s: float, span_s: float, tally: Tally
-) -> tuple[list[bool], list[float], list[float], list[str]]:
-    """Feed one session's live inputs and identify every 0.2 s over its last ``span_s`` s: (valid, worst |z|, ms,
-    the invalid updates' messages); the valid updates' residuals go to ``tally``."""
+    inputs: tuple[Any, ...], rate_hz: float, window_s: float, span_s: float, counts: Counts
+) -> tuple[list[Scored], list[float], list[str]]:
+    """Feed one session's live inputs and identify every 0.2 s over its last ``span_s`` s: (each update scored, ms,
+    the invalid updates' messages); each update is counted in ``counts``."""
     simulated, stamps, wrench, _, raw = inputs
     truth = simulated.truth.to_dict()
     frame = orientation(simulated)
@@ -73,7 +67,7 @@ def _updates(
     # As the node, from the stream's start: what the model checks before the scored span found holds into it.
     period_ns = int(PERIOD_S * 1e9)
     tick_ns = first_ns - (first_ns - int(stamps[0])) // period_ns * period_ns  # the first tick on the span's grid
-    valid, worst, ms, messages = [], [], [], []
+    updates, ms, messages = [], [], []
     while tick_ns < first_ns:
         feed.until(tick_ns)
         identifier.estimate(orientation=frame)
@@ -83,30 +77,25 @@ def _updates(
         started = time.perf_counter()
         estimate = identifier.estimate(orientation=frame)  # as the node: the orientation rides with the window
         ms.append(1e3 * (time.perf_counter() - started))
-        valid.append(bool(estimate.valid))
-        worst.append(max(z_scores(estimate.document, truth).values(), default=float("nan")))
-        tally.add(residuals(estimate.document, truth), bool(estimate.valid))
+        updates.append(counts.count(Scored.from_residuals(bool(estimate.valid), residuals(estimate.document, truth))))
         if not estimate.valid:
             messages.append(_NUMBER.sub("#", str(estimate.document["quality"].get("message", "")))[:70])
-    return valid, worst, ms, messages
+    return updates, ms, messages
 
 
 def _recursive_updates(
-    inputs, window_s: float, span_s: float, tally: Tally, checked: bool = True
-) -> tuple[list[bool], list[float], list[float], list[str]]:
+    inputs: tuple[Any, ...], window_s: float, span_s: float, counts: Counts, checked: bool = True
+) -> tuple[list[Scored], list[float], list[str]]:
     """The recursive mode as the node runs it (``live_inputs.recursive_mode``), scored every 0.2 s over the last
     ``span_s`` s as :func:`_updates` scores the windowed one (the time: the estimate's, its window checks included;
-    the valid updates' residuals go to ``tally``)."""
+    each update is counted in ``counts``)."""
     simulated, stamps = inputs[0], inputs[1]
     truth = simulated.truth.to_dict()
     from_ns = int(stamps[-1]) - int(span_s * 1e9)
     documents, seconds = recursive_mode(inputs, _node_options(), window_s, from_ns, checked)
-    valid = [bool(d["quality"]["valid"]) for d in documents]
-    worst = [max(z_scores(d, truth).values(), default=float("nan")) for d in documents]
-    for d in documents:
-        tally.add(residuals(d, truth), bool(d["quality"]["valid"]))
+    updates = [counts.count(scored(d, truth)) for d in documents]
     messages = [_NUMBER.sub("#", str(d["quality"]["message"]))[:70] for d in documents if not d["quality"]["valid"]]
-    return valid, worst, [1e3 * t for t in seconds], messages
+    return updates, [1e3 * t for t in seconds], messages
 
 
 def _node_options() -> IdentifyOptions:
@@ -144,9 +133,8 @@ def main(argv: list[str] | None = None) -> int:
         *(["rec"] if args.recursive else []),
         *(["filt"] if args.recursive_alone else []),
     ]
-    totals: dict[float | str, list[str]] = {mode: [] for mode in modes}
     times: dict[float | str, list[float]] = {mode: [] for mode in modes}
-    pooled: dict[float | str, Tally] = {mode: Tally() for mode in modes}
+    pooled: dict[float | str, Counts] = {mode: Counts() for mode in modes}
     started = time.perf_counter()
     for name in names:
         sessions = []
@@ -159,31 +147,28 @@ def main(argv: list[str] | None = None) -> int:
             )
             sessions.append(live_inputs(spec))
         for mode in modes:
-            valid, worst, ms, messages = [], [], [], []
-            tally = Tally()
+            updates, ms, messages = [], [], []
+            counts = Counts()
             for inputs in sessions:
                 if mode in ("rec", "filt"):
-                    v, z, t, m = _recursive_updates(inputs, args.window, args.span, tally, checked=mode == "rec")
+                    u, t, m = _recursive_updates(inputs, args.window, args.span, counts, checked=mode == "rec")
                 else:
-                    v, z, t, m = _updates(inputs, float(mode), args.window, args.span, tally)
-                valid += v
-                worst += z
+                    u, t, m = _updates(inputs, float(mode), args.window, args.span, counts)
+                updates += u
                 ms += t
                 messages += m
-            verdicts = [verdict(v, z) for v, z in zip(valid, worst, strict=True)]
-            totals[mode] += verdicts
             times[mode] += ms
-            pooled[mode].extend(tally)
-            _, wrong, thrown = rates(verdicts)
-            worst_valid = max((z for v, z in zip(valid, worst, strict=True) if v), default=float("nan"))
+            pooled[mode].pool(counts)
+            worst_valid = max((u.max_z for u in updates if u.valid), default=float("nan"))
             print(
-                f"{name:28s} {mode:>4} {sum(valid):>4d}/{len(valid):<3d} {wrong:>7d} {thrown:>9d} {worst_valid:8.2f}"
-                f" {calibration_columns(tally.calibration())} {sharpness_columns(tally.sharpness())}"
+                f"{name:28s} {mode:>4} {counts.valid:>4d}/{counts.runs:<3d} {counts.valid_wrong:>7d}"
+                f" {counts.invalid_right:>9d} {worst_valid:8.2f} {calibration_columns(counts.two_sided.calibration())}"
+                f" {sharpness_columns(counts.two_sided.sharpness())}"
                 f" {np.mean(ms):5.1f}  {collections.Counter(messages).most_common(1)[0][0] if messages else '-'}",
                 flush=True,
             )
     for mode in modes:
-        total, wrong, thrown = rates(totals[mode])
+        total, wrong, thrown = pooled[mode].runs, pooled[mode].valid_wrong, pooled[mode].invalid_right
         label = {"rec": "recursive", "filt": "recursive filter alone"}.get(str(mode), f"windowed {mode} Hz")
         print(
             f"{label}: valid-and-wrong {wrong}/{total} updates ({100 * wrong / max(total, 1):.1f} %), "
@@ -191,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
             f"compute mean {np.mean(times[mode]):.1f} ms, max {np.max(times[mode]):.1f} ms"
         )
         # No pooled sharpness: over nuisances one parameter's errors would mix them.
-        print(summary_line(f"{label}, pooled over the valid updates", pooled[mode], sharpness=False))
+        print(summary_line(f"{label}, pooled over the valid updates", pooled[mode].two_sided, sharpness=False))
     print(
         f"({len(names) * args.seeds} sessions in {time.perf_counter() - started:.0f} s; seeds {args.first_seed}..."
         f"{args.first_seed + args.seeds - 1}, {args.duration:g} s sessions, {args.window:g} s window, last "

@@ -48,7 +48,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from calibration import Tally, calibration_columns, calibration_header, sharpness_columns, sharpness_header
+from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header
+from scoring import WRONG_Z, Counts, Scored
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "test" / "physics"))
@@ -76,7 +77,6 @@ ALL_SEGMENT_KEYS = (
     "grouped_inertia_kgm2",
 )
 ALL_JOINT_KEYS = ("coulomb_nm",)
-WRONG_Z = 3.0
 _SUGGESTION = re.compile(r"--passive[ =]([a-z]+(?:\+[a-z]+)*)")
 _NUMBER = re.compile(r"[-+]?\d[\d.e+-]*%?")
 
@@ -247,9 +247,10 @@ def _planned(cell: Any, duration_s: float) -> Any:
 
 def _row_text(key: tuple[float, str, str], runs: list[dict[str, Any]]) -> str:
     share, protocol, model = key
+    counts = Counts()
+    for r in runs:
+        counts.count(Scored(valid=r["valid"], z=r["z"], residuals=r["residuals"]))
     valid = [r for r in runs if r["valid"]]
-    wrong = [r for r in valid if r["worst_z"] > WRONG_Z]
-    right_invalid = [r for r in runs if not r["valid"] and r["z"] and r["worst_z"] <= WRONG_Z]
     messages = collections.Counter(r["message"] for r in runs if not r["valid"])
     common = f"{messages.most_common(1)[0][0]} ({messages.most_common(1)[0][1]})" if messages else "-"
 
@@ -266,14 +267,12 @@ def _row_text(key: tuple[float, str, str], runs: list[dict[str, Any]]) -> str:
         values = [r["worst_z"] for r in rows if r["z"]]
         return f"{max(values):.1f}" if values else "-"
 
-    tally = Tally()
-    for r in valid:
-        tally.add(r["residuals"])
-    two_sided = f"{calibration_columns(tally.calibration())} {sharpness_columns(tally.sharpness())}"
+    tally = counts.two_sided
     label = f"{100 * share:.3g}%" if share > 0 else "rigid"
     return (
-        f"{label:>7s} {protocol:10s} {model:34s} {len(runs):4d} {len(valid):5d} {len(wrong):11d} "
-        f"{len(right_invalid):13d} {two_sided} {worst(valid):>9s} {worst(runs):>7s} {median(valid, 'static_pct'):>8s} "
+        f"{label:>7s} {protocol:10s} {model:34s} {counts.runs:4d} {counts.valid:5d} {counts.valid_wrong:11d} "
+        f"{counts.invalid_right:13d} {calibration_columns(tally.calibration())} {sharpness_columns(tally.sharpness())} "
+        f"{worst(valid):>9s} {worst(runs):>7s} {median(valid, 'static_pct'):>8s} "
         f"{median(valid, 'curve_rms_pct'):>8s} {len(accurate):8d}  {common}"
     )
 

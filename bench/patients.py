@@ -62,7 +62,7 @@ from mujoco_patient import (
     patient_session,
     typical_stroke_arm,
 )
-from scoring import residuals, z_scores
+from scoring import Counts
 
 from bsp_ros.core.planning import planned_trajectory_from_file
 from bsp_ros.core.planning.two_speed import TwoSpeedPath
@@ -144,24 +144,20 @@ def cases() -> list[Case]:
     ]
 
 
-@dataclass
-class Tally:
-    """Counts over one case's runs."""
+@dataclass(kw_only=True)
+class Tally(Counts):
+    """One case's runs: :class:`scoring.Counts`, both other outcomes, the cause-naming counts and the codes seen."""
 
-    runs: int = 0
+    # An invalid estimate without a scored parameter counts as invalid-and-right here (every |z| <= 3 holds).
+    UNSCORED_INVALID_RIGHT = True
+
     valid_right: int = 0
-    valid_wrong: int = 0
-    invalid_right: int = 0
     invalid_wrong: int = 0
-    failed: int = 0
     flagged: int = 0
     named: int = 0
     quiet_runs: int = 0
     false_alarms: int = 0
-    worst_z: float = 0.0
-    worst_param: str = ""
     codes: collections.Counter[str] = field(default_factory=collections.Counter)
-    two_sided: calibration.Tally = field(default_factory=calibration.Tally)
 
     def add(self, estimate: dict[str, Any], truth: dict[str, Any], causes: frozenset[str]) -> dict[str, Any]:
         """Score one estimate; return its row (valid, worst |z|, codes, flagged, named).
@@ -169,17 +165,11 @@ class Tally:
         ``causes`` empty: the run had no cause (a control, a reflex that never fired); it counts as quiet, and as
         a false alarm if a patient-cause code shows.
         """
-        self.runs += 1
-        quality = estimate["quality"]
-        valid = bool(quality["valid"])
-        z = z_scores(estimate, truth)
-        wrong = any(v > 3.0 for v in z.values())
+        run = self.score(estimate, truth)
+        valid, wrong = run.valid, run.wrong
         self.valid_right += valid and not wrong
-        self.valid_wrong += valid and wrong
-        self.invalid_right += (not valid) and not wrong
         self.invalid_wrong += (not valid) and wrong
-        self.two_sided.add(residuals(estimate, truth), valid)
-        findings = quality.get("findings", [])
+        findings = estimate["quality"].get("findings", [])
         codes = sorted({str(f["code"]) for f in findings})
         flagged = (not valid) or any(f["severity"] == "weak" or f["code"] not in ROUTINE for f in findings)
         named = bool(causes & set(codes))
@@ -190,10 +180,8 @@ class Tally:
             self.quiet_runs += 1
             self.false_alarms += bool(PATIENT_CODES & set(codes))
         self.codes.update(c for c in codes if c not in ROUTINE)
-        worst = max(z, key=lambda k: z[k]) if z else ""
-        if worst and z[worst] > self.worst_z:
-            self.worst_z, self.worst_param = z[worst], worst
-        return {"valid": valid, "wrong": wrong, "worst_z": z.get(worst, 0.0), "worst": worst, "codes": codes}
+        worst_z = run.max_z if run.z else 0.0
+        return {"valid": valid, "wrong": wrong, "worst_z": worst_z, "worst": run.worst, "codes": codes}
 
     def naming(self) -> str:
         """``named/flagged`` and its share over the runs with a cause; ``false n/m``: of the runs without one, those
@@ -286,8 +274,7 @@ def run_case(case: Case, seeds: list[int], args: argparse.Namespace, workdir: Pa
         truth = json.loads((bag / "truth.json").read_text())
         code, estimate = identify(bag, workdir / f"{case.name}_{seed}.json", *extra)
         if not estimate:
-            tally.runs += 1
-            tally.failed += 1
+            tally.count_failure()
             rows.append({"case": case.name, "seed": seed, "exit": code})
             continue
         row = tally.add(estimate, truth, CAUSES[case.name] if cause_imposed(truth) else frozenset())

@@ -57,7 +57,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics")
 from in_process import identify
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine
-from scoring import residuals, z_scores
+from scoring import Counts
 
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import gravity_regressor
@@ -84,19 +84,16 @@ class Scenario:
         return f"{self.motion:>4} {'springs' if self.springs else 'none':7} {self.sensor:7}"
 
 
-@dataclass
-class Tally:
-    """Counts over the runs of one scenario and passive model."""
+@dataclass(kw_only=True)
+class Tally(Counts):
+    """The runs of one scenario and passive model: :class:`scoring.Counts`, the invalid runs' reasons and the
+    failed runs' exit codes."""
 
-    runs: int = 0
-    valid: int = 0
-    valid_wrong: int = 0
-    invalid_right: int = 0
-    worst_z: float = 0.0
-    worst_param: str = ""
+    # An invalid estimate without a scored parameter counts as invalid-and-right here (every |z| <= 3 holds).
+    UNSCORED_INVALID_RIGHT = True
+
     messages: collections.Counter[str] = field(default_factory=collections.Counter)
     failures: collections.Counter[str] = field(default_factory=collections.Counter)
-    two_sided: calibration.Tally = field(default_factory=calibration.Tally)
 
 
 def _reason(estimate: dict[str, Any]) -> str:
@@ -163,26 +160,16 @@ def run_scenario(
             models.append((model, code_m, estimate_m))
         for model, code_m, estimate_m in models:
             tally = tallies.setdefault(f"{scenario.name} {model}", Tally())
-            tally.runs += 1
             if not estimate_m:
+                tally.count_failure()
                 tally.failures[f"exit {code_m}"] += 1
                 continue
-            z = z_scores(estimate_m, cell.truth)
-            valid = bool(estimate_m["quality"]["valid"])
-            tally.two_sided.add(residuals(estimate_m, cell.truth), valid)
-            wrong = any(v > 3.0 for v in z.values())
-            tally.valid += valid
-            tally.valid_wrong += valid and wrong
-            tally.invalid_right += (not valid) and not wrong
-            if z:
-                param = max(z, key=lambda k: z[k])
-                if z[param] > tally.worst_z:
-                    tally.worst_z, tally.worst_param = z[param], param
-            if not valid:
+            run = tally.score(estimate_m, cell.truth)
+            if not run.valid:
                 tally.messages[_reason(estimate_m)] += 1
             if args.verbose:
-                top = sorted(z.items(), key=lambda kv: -kv[1])[:3]
-                print(f"  seed {seed} {model}: valid={valid} " + ", ".join(f"{k} {v:.1f}" for k, v in top), flush=True)
+                top = ", ".join(f"{k} {v:.1f}" for k, v in sorted(run.z.items(), key=lambda kv: -kv[1])[:3])
+                print(f"  seed {seed} {model}: valid={run.valid} {top}", flush=True)
             if args.explain:
                 shift = inertia_only_shift(cell.run, model)
                 rows = []
@@ -271,7 +258,7 @@ def main(argv: list[str] | None = None) -> int:
                 {
                     "tallies": {
                         k: {
-                            **{f: getattr(t, f) for f in ("runs", "valid", "valid_wrong", "invalid_right")},
+                            **t.counts_json(),
                             "worst_z": t.worst_z,
                             "worst_param": t.worst_param,
                             "calibration": asdict(t.two_sided.calibration()),

@@ -33,15 +33,8 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from calibration import (
-    Tally,
-    calibration_columns,
-    calibration_header,
-    sharpness_columns,
-    sharpness_header,
-    summary_line,
-)
-from scoring import rates, residuals, verdict, z_scores
+from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header, summary_line
+from scoring import Counts, Scored, scored
 
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
@@ -141,15 +134,15 @@ def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
         value = math.nan if q["coulomb_nm"]["value"] is None else q["coulomb_nm"]["value"]
         true_c = truth["joints"][joint]["coulomb_nm"]
         coulomb_err.append(100.0 * abs(value - true_c) / true_c)
-    z = list(z_scores(document, truth).values()) or [math.nan]
+    run = scored(document, truth)
     return {
-        "valid": bool(document["quality"]["valid"]),
+        "valid": run.valid,
         "moment_err_pct": float(np.nanmax(moment_err)) if not np.isnan(moment_err).all() else math.nan,
         "coulomb_err_pct": float(np.nanmax(coulomb_err))
         if coulomb_err and not np.isnan(coulomb_err).all()
         else math.nan,
-        "max_z": float(np.nanmax(z)) if not np.isnan(z).all() else math.nan,
-        "residuals": residuals(document, truth),
+        "max_z": run.max_z,
+        "residuals": run.residuals,
         "warnings": [_kind(w) for w in document["quality"]["warnings"]],
         "message": document["quality"].get("message", ""),
     }
@@ -166,8 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     names = [n for n in NUISANCES if not args.only or any(o.lower() in n.lower() for o in args.only)]
     modes = (False,) if args.no_tare else (False, True)
-    rows, runs = [], []
-    pooled = Tally()
+    runs: list[dict[str, Any]] = []
+    pooled = Counts()
     header = (
         f"{'nuisance':28s} {'tare':4s} {'moment %':>9s} {'Coulomb %':>9s} {'max|z|':>7s} {'valid':>6s}"
         f" {'v&wrong':>7s} {'inv&right':>9s} {calibration_header()} {sharpness_header()}"
@@ -195,32 +188,27 @@ def main(argv: list[str] | None = None) -> int:
                     }
                 results.append(result)
                 runs.append({"nuisance": name, "tare": tare, "seed": seed, "result": result})
-            valid = [r for r in results if r["valid"]]
-            tally = Tally()
-            for r in valid:
-                tally.add(r["residuals"])
-            pooled.extend(tally)
+            counts = Counts()
             for r in results:
-                r["verdict"] = verdict(r["valid"], r["max_z"])
-            _, wrong, thrown = rates(r["verdict"] for r in results)
+                r["verdict"] = counts.count(Scored.from_residuals(r["valid"], r["residuals"])).verdict
+            pooled.pool(counts)
             kinds = collections.Counter(k for r in results for k in set(r["warnings"]) if not k.startswith(_ROUTINE))
             common = "; ".join(f"{k} ({c})" for k, c in kinds.most_common(2)) or "-"
             row = (
                 f"{name:28s} {'yes' if tare else 'no':4s} "
                 f"{max(r['moment_err_pct'] for r in results):9.3g} {max(r['coulomb_err_pct'] for r in results):9.3g} "
-                f"{max(r['max_z'] for r in results):7.3g} {len(valid):>3d}/{len(results):<2d} {wrong:>7d}"
-                f" {thrown:>9d} {calibration_columns(tally.calibration())} {sharpness_columns(tally.sharpness())}"
-                f"  {common}"
+                f"{max(r['max_z'] for r in results):7.3g} {counts.valid:>3d}/{counts.runs:<2d} {counts.valid_wrong:>7d}"
+                f" {counts.invalid_right:>9d} {calibration_columns(counts.two_sided.calibration())}"
+                f" {sharpness_columns(counts.two_sided.sharpness())}  {common}"
             )
-            rows.append(row)
             print(row, flush=True)
-    total, wrong, thrown = rates(run["result"]["verdict"] for run in runs)
+    total, wrong, thrown = pooled.runs, pooled.valid_wrong, pooled.invalid_right
     print(
         f"valid-and-wrong {wrong}/{total} runs ({100 * wrong / max(total, 1):.1f} %), "
         f"invalid-and-right {thrown}/{total} ({100 * thrown / max(total, 1):.1f} %)"
     )
     # No pooled sharpness: over nuisances one parameter's errors would mix them.
-    print(summary_line("pooled over the valid runs", pooled, sharpness=False))
+    print(summary_line("pooled over the valid runs", pooled.two_sided, sharpness=False))
     print(
         f"({len(runs)} runs in {time.perf_counter() - started:.0f} s; seeds {args.first_seed}..."
         f"{args.first_seed + args.seeds - 1}, {args.duration:g} s sessions)"
