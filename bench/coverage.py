@@ -153,7 +153,8 @@ def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dic
                 truth["joints"][joint]["coulomb_nm"] = float(COULOMB_NM[j])
         else:
             document = identify_session(simulated.session)
-        for kind in {_kind(w) for w in document["quality"]["warnings"]}:
+        # Each kind once, in the order the warnings give them (a set's order changes with the hash seed).
+        for kind in dict.fromkeys(_kind(w) for w in document["quality"]["warnings"]):
             kinds[kind] += 1
         scored = counts.score(document, truth)
         if not scored.valid:

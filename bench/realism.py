@@ -192,7 +192,9 @@ def main(argv: list[str] | None = None) -> int:
             for r in results:
                 r["verdict"] = counts.count(Scored.from_residuals(r["valid"], r["residuals"])).verdict
             pooled.pool(counts)
-            kinds = collections.Counter(k for r in results for k in set(r["warnings"]) if not k.startswith(_ROUTINE))
+            # Each run's kinds once, in the order it gave them (a set's order changes with the hash seed).
+            once = (k for r in results for k in dict.fromkeys(r["warnings"]))
+            kinds = collections.Counter(k for k in once if not k.startswith(_ROUTINE))
             common = "; ".join(f"{k} ({c})" for k, c in kinds.most_common(2)) or "-"
             row = (
                 f"{name:28s} {'yes' if tare else 'no':4s} "
