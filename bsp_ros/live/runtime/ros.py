@@ -201,8 +201,11 @@ class Client:
         if self._closed:
             return
         self._closed = True
-        self.executor.shutdown()
+        # The node leaves the executor before it is destroyed, and the executor's own guard conditions go after it:
+        # destroying a node its executor still holds crashed the interpreter once in rclpy's teardown.
+        self.executor.remove_node(self.node)
         self.node.destroy_node()
+        self.executor.shutdown()
         self.context.try_shutdown()
 
     def __enter__(self) -> Client:
