@@ -33,8 +33,9 @@ class HeldModel:
         few seconds more of the same arm hardly change them.
     noise_scale : (p,) each parameter's sensor-noise std on the residual the marker offsets leave over its std on
         the raw residual (ones without a placement): a refit rescales its own covariance by it.
-    base_variance_share : (n,) each joint's residual variance once the offsets took what they explain, over the
-        fit's own (None without a placement): a refit's placement term follows its per-joint weights from there.
+    placement_factor : (p,) each parameter's placement std with the fit's weights following the offsets over the
+        linear response's at the fit's weights (ones without a placement, placement_reweighting.py): a refit
+        rescales its linear placement term by it.
     curves : the passive curves' basis (a model choice), or None.
     data_problems : why the samples could not support the estimate (excitation, misfit, identifiability): a refit
         judges its own samples' instead.
@@ -56,4 +57,4 @@ class HeldModel:
     check_problems: tuple[Finding, ...]
     warnings: tuple[Finding, ...]
     diagnostics: dict[str, object]
-    base_variance_share: np.ndarray | None = None
+    placement_factor: np.ndarray | None = None

@@ -25,6 +25,7 @@ from bsp_ros.core.identification.joint.judgement import (
     unidentifiable_problem,
 )
 from bsp_ros.core.identification.joint.passive_offset import passive_offset_sensitivity
+from bsp_ros.core.identification.joint.placement_covariance import covariance_from_products
 from bsp_ros.core.identification.joint.relaxed import add_contact_slip, follow_the_hand, leave_out_activity
 from bsp_ros.core.identification.joint.samples import usable_samples
 from bsp_ros.core.identification.joint.speed_split import split_speeds
@@ -198,9 +199,13 @@ def _diagnostics(stage: Stage) -> dict[str, object]:
 def _held(stage: Stage, diagnostics: dict[str, object]) -> HeldModel:
     """What the steps chose, for refits of newer samples of the same arm between a live window's checks."""
     check = stage.placement_check
-    share = None
-    if stage.placement is not None and stage.placement_fit is not None:
-        share = stage.placement.statistics.base_variance / np.maximum(stage.placement_fit.sigma**2, 1e-300)
+    factor = None
+    placement, placement_fit = stage.placement, stage.placement_fit
+    used = stage.ledger.get(Term.MARKER_PLACEMENT)
+    if placement is not None and placement_fit is not None and used is not None:
+        columns = check.column_factor if check is not None and check.scale > 1.0 else 1.0
+        linear = np.diag(covariance_from_products(placement_fit, placement.products * columns))
+        factor = np.sqrt(np.divide(np.diag(used), linear, out=np.ones_like(linear), where=linear > 0))
     return HeldModel(
         names=stage.problem.names,
         passive=dataclasses.replace(stage.config.passive, select=False),
@@ -214,7 +219,7 @@ def _held(stage: Stage, diagnostics: dict[str, object]) -> HeldModel:
         check_problems=stage.check_problems,
         warnings=tuple(w for w in stage.notes[stage.data_notes :] if w not in stage.sample_notes),
         diagnostics=diagnostics,
-        base_variance_share=share,
+        placement_factor=factor,
     )
 
 

@@ -181,8 +181,9 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     assert with_offsets.statistics is not None  # augmented() computes them
     p = len(problem.names)
     products = np.tensordot(fit.weights, with_offsets.statistics[0][:, :p, p:], axes=1)
+    # Conditional on the fit's own residual variances: how far its offsets took each joint's weight.
     statistics = OffsetStatistics.of(
-        problem, with_offsets.statistics, used_variance(problem, residual), fit.weights * fit.sigma**2
+        problem, with_offsets.statistics, used_variance(problem, residual), fit.weights * fit.sigma**2, fit.sigma**2
     )
     covariance = reweighted_placement_covariance(statistics)
     return PlacementEffect(covariance, residual, columns, products, statistics)

@@ -4,10 +4,13 @@ The fit weights each joint by its residual variance (:func:`~bsp_ros.core.identi
 Part of what an offset does to the torques no parameter takes up (the handle force's dynamic part on a lever a few
 mm off), and where that part is larger than the sensor noise, it lowers the joint's weight: on the paper's sines
 four times faster, one 2 mm normal offset at the wrist left a residual of 5 times the sensor noise there and the
-wrist's weight fell 30-fold. The estimate then leans less on the joints its own offsets disturb, so the linear
-response at the session's weights over-states what offsets of the assumed size do (the forearm's static moment of
-a MuJoCo arm: the placement term 1.6-1.8 times the error over 16 sessions). The term is instead the mean, over
-offsets drawn from the placement prior, of what the reweighted fit does with each.
+wrist's weight fell 30-fold. The estimate then leans less on the joints its own offsets disturb, and how much
+depends on the offsets: the linear response at the session's weights, applied to offsets of the assumed size in
+every direction, over-states the error of most sessions (the forearm's static moment of a MuJoCo arm: the term
+1.6-1.8 times the error over 16 sessions), and the linear response at the weights of centred markers misses the
+session whose one large offset took a joint's weight away (a perpendicular moment 4 std off). The term is the mean,
+over offsets drawn from the placement prior, of what the reweighted fit does with each; per parameter the mean
+over the draws whose per-joint residual variances match the session's own where that is clearly larger.
 """
 
 from __future__ import annotations
@@ -20,9 +23,16 @@ import numpy as np
 from bsp_ros.core.identification.stacked import Problem, Statistics
 
 # Offsets drawn per placement term, from the normal prior with a fixed seed (the same session gives the same std).
-# Only the part of the term the reweighting changes comes from them (the linear response at the unperturbed weights
-# is exact), so where the weights hardly move the term is the linear one.
-PLACEMENT_DRAWS = 512
+PLACEMENT_DRAWS = 2048
+# A draw's weight: a Gaussian in the log of its per-joint residual variances over the session's, of this width
+# first, widened (doubled) until the weighted draws count at least MIN_DRAWS_CONDITIONAL (their effective number);
+# without a match that wide, every draw weighs the same.
+VARIANCE_MATCH_LOG = (0.25, 0.5, 1.0, 2.0)
+MIN_DRAWS_CONDITIONAL = 64.0
+# A parameter's std takes the matched draws' where it is more than this many times the prior mean's: a session
+# whose residuals show a weight taken away (one 2.6 sd offset at the wrist: a perpendicular moment's 2.2 times),
+# not the ordinary scatter of a few draws about it (which, taken whenever larger, widened the hand's std by 20 %).
+MATCHED_WIDER = 1.5
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -40,6 +50,9 @@ class OffsetStatistics:
     prior_precision : (p,) the problem's Gaussian priors (1 / sd^2; 0 where none).
     weight_scale : (n,) each joint's weight times its residual variance: 1 where a row is a sample, as identify
         weighs them; the number of samples a row stands for on a plan's coarser grid.
+    observed_variance : (n,) the session's own per-joint residual variances (Nm^2), which its offsets raised:
+        where the draws that match them give a clearly larger term, it is theirs; None (a plan's expected session):
+        the prior's mean alone.
     """
 
     gram: np.ndarray
@@ -49,15 +62,21 @@ class OffsetStatistics:
     base_variance: np.ndarray
     prior_precision: np.ndarray
     weight_scale: np.ndarray
+    observed_variance: np.ndarray | None = None
 
     @classmethod
     def of(
-        cls, problem: Problem, with_offsets: Statistics, base_variance: np.ndarray, weight_scale: np.ndarray
+        cls,
+        problem: Problem,
+        with_offsets: Statistics,
+        base_variance: np.ndarray,
+        weight_scale: np.ndarray,
+        observed_variance: np.ndarray | None = None,
     ) -> OffsetStatistics:
         """From ``problem``, the per-joint statistics of the problem augmented with the offsets' columns
         (``with_offsets``: its columns then theirs), each joint's residual variance where the offsets took what
         they explain (``base_variance`` (n,), Nm^2; :func:`used_variance` of that fit's residual) and the fit's
-        ``weight_scale`` (n,) (its weights times its residual variances)."""
+        ``weight_scale`` (n,) (its weights times its residual variances), and its ``observed_variance``."""
         p = len(problem.names)
         grams = with_offsets[0]
         return cls(
@@ -68,6 +87,7 @@ class OffsetStatistics:
             base_variance=np.asarray(base_variance, dtype=np.float64),
             prior_precision=np.asarray(problem.prior_precision, dtype=np.float64),
             weight_scale=np.asarray(weight_scale, dtype=np.float64),
+            observed_variance=None if observed_variance is None else np.asarray(observed_variance, dtype=np.float64),
         )
 
     def scaled(self, column_factor: np.ndarray | None) -> OffsetStatistics:
@@ -90,34 +110,60 @@ def normal_draws(k: int, m: int) -> np.ndarray:
     return np.random.default_rng(0).standard_normal((k, m))
 
 
-def _responses(stats: OffsetStatistics, weights: np.ndarray, draws: np.ndarray) -> np.ndarray:
-    """(k, p) each draw's change of the values at its own per-joint weights ``weights`` (k, n), with the priors."""
-    design = np.einsum("kj,jpq->kpq", weights, stats.gram) + np.diag(stats.prior_precision)
-    moment = np.einsum("kj,jpm,km->kp", weights, stats.cross, draws)
+def _scores(stats: OffsetStatistics, draws: np.ndarray) -> np.ndarray:
+    """(n, k, p) per joint each draw's ``X_j^T D_j o``."""
+    return np.asarray(np.matmul(draws[None, :, :], np.swapaxes(stats.cross, 1, 2)))
+
+
+def _responses(stats: OffsetStatistics, weights: np.ndarray, scores: np.ndarray) -> np.ndarray:
+    """(k, p) each draw's change of the values at its own per-joint weights ``weights`` (k, n), with the priors,
+    from its per-joint scores ``scores`` (n, k, p)."""
+    n, p = stats.gram.shape[:2]
+    design = (weights @ stats.gram.reshape(n, p * p)).reshape(-1, p, p) + np.diag(stats.prior_precision)
+    moment = np.einsum("kj,jkp->kp", weights, scores)
     # Scaled to a unit diagonal: the parameters span decades of units.
     scale = np.sqrt(np.clip(np.einsum("kpp->kp", design), 1e-300, None))
     unit = design / (scale[:, :, None] * scale[:, None, :])
     return np.asarray(np.linalg.solve(unit, (moment / scale)[..., None])[..., 0] / scale)
 
 
-def _reweighted_responses(stats: OffsetStatistics, draws: np.ndarray) -> np.ndarray:
-    """(k, p) each draw's change of the values through the fit's own steps: a solve at unit weights, then twice
-    the weights from each joint's residual variance and a solve at them."""
-    n = stats.counts.size
+def _reweighted_responses(stats: OffsetStatistics, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(k, p) each draw's change of the values through the fit's own steps (a solve at unit weights, then twice
+    the weights from each joint's residual variance and a solve at them), and (k, n) the residual variances of the
+    last weights."""
+    k, n = draws.shape[0], stats.counts.size
     floor = 1e-18 * max(float(stats.base_variance.max()), 1e-300)
-    spread = np.einsum("km,jmn,kn->kj", draws, stats.offsets, draws)  # |D_j o|^2
-    values = _responses(stats, np.ones((draws.shape[0], n)), draws)
+    scores = _scores(stats, draws)
+    spread = np.stack([np.sum((draws @ stats.offsets[j]) * draws, axis=1) for j in range(n)], axis=1)  # |D_j o|^2
+    values = _responses(stats, np.ones((k, n)), scores)
     for _ in range(2):
         # Each joint's residual sum of squares: the base residual's, plus what the offsets leave, |D_j o - X_j d|^2
         # (the cross term with the base residual averages out over the draws).
-        left = (
-            spread
-            - 2.0 * np.einsum("kp,jpm,km->kj", values, stats.cross, draws)
-            + np.einsum("kp,jpq,kq->kj", values, stats.gram, values)
+        left = np.stack(
+            [
+                spread[:, j]
+                - 2.0 * np.sum(values * scores[j], axis=1)
+                + np.sum((values @ stats.gram[j]) * values, axis=1)
+                for j in range(n)
+            ],
+            axis=1,
         )
         variance = stats.base_variance + np.clip(left, 0.0, None) / np.maximum(stats.counts, 1.0)
-        values = _responses(stats, stats.weight_scale / np.maximum(variance, floor), draws)
-    return values
+        values = _responses(stats, stats.weight_scale / np.maximum(variance, floor), scores)
+    return values, variance
+
+
+def match_weights(variance: np.ndarray, observed: np.ndarray) -> np.ndarray:
+    """(k,) each draw's weight (summing to 1) by how its per-joint residual variances ``variance`` (k, n) match
+    the session's ``observed`` (n,), Nm^2: see :data:`VARIANCE_MATCH_LOG`."""
+    distance = np.sum((np.log(np.maximum(variance, 1e-300)) - np.log(np.maximum(observed, 1e-300))) ** 2, axis=1)
+    for width in VARIANCE_MATCH_LOG:
+        log_weight = -0.5 * distance / width**2
+        weight = np.exp(log_weight - log_weight.max())
+        weight /= weight.sum()
+        if 1.0 / float(np.sum(weight**2)) >= MIN_DRAWS_CONDITIONAL:
+            return weight
+    return np.full(variance.shape[0], 1.0 / variance.shape[0])
 
 
 def reweighted_placement_covariance(
@@ -126,19 +172,22 @@ def reweighted_placement_covariance(
     """(p, p) the covariance of the estimate from offsets of unit variance along each column (times
     ``column_factor`` (m,), when given), the fit's per-joint weights following them.
 
-    The linear response ``G`` at the weights of offsets on their centres gives ``G G^T`` exactly; the draws give
-    only the difference the reweighting makes, ``E[d d^T] - E[(G o)(G o)^T]`` over the same offsets ``o``.
+    The prior's mean: the linear response ``G`` at the weights of offsets on their centres gives ``G G^T`` exactly,
+    and the draws give only the difference the reweighting makes, ``E[d d^T] - E[(G o)(G o)^T]`` over the same
+    offsets ``o``. Where ``stats`` holds the session's residual variances, a parameter whose std over the draws
+    that match them (:func:`match_weights`) is more than :data:`MATCHED_WIDER` times that takes it: a session whose
+    residuals show that its offsets took a joint's weight away is not held to what a typical session's offsets do.
     """
     stats = stats.scaled(column_factor)
     m = stats.cross.shape[2]
     if m == 0:
         return np.zeros_like(stats.gram[0])
     draws = normal_draws(n_draws, m)
+    reweighted, variance = _reweighted_responses(stats, draws)
     base_weights = stats.weight_scale / np.maximum(stats.base_variance, 1e-300)
     identity = np.eye(m)
     # G at the unperturbed weights: its columns are the responses to each unit offset.
-    linear = _responses(stats, np.broadcast_to(base_weights, (m, base_weights.size)), identity).T  # (p, m)
-    reweighted = _reweighted_responses(stats, draws)
+    linear = _responses(stats, np.broadcast_to(base_weights, (m, base_weights.size)), _scores(stats, identity)).T
     fixed = draws @ linear.T
     exact = linear @ linear.T
     covariance = exact + (reweighted.T @ reweighted - fixed.T @ fixed) / draws.shape[0]
@@ -147,4 +196,12 @@ def reweighted_placement_covariance(
     scale = np.sqrt(np.clip(np.diag(exact), 0.0, None))
     scale[scale == 0] = 1.0
     eigenvalues, vectors = np.linalg.eigh(0.5 * (covariance + covariance.T) / np.outer(scale, scale))
-    return np.asarray((vectors * np.clip(eigenvalues, 0.0, None)) @ vectors.T * np.outer(scale, scale))
+    covariance = (vectors * np.clip(eigenvalues, 0.0, None)) @ vectors.T * np.outer(scale, scale)
+    if stats.observed_variance is None:
+        return np.asarray(covariance)
+    weight = match_weights(variance, stats.observed_variance)
+    matched = np.einsum("k,kp->p", weight, reweighted**2)
+    prior = np.diag(covariance)
+    widen = np.sqrt(np.divide(matched, prior, out=np.ones_like(prior), where=prior > 0))
+    widen = np.where(widen > MATCHED_WIDER, widen, 1.0)
+    return np.asarray(covariance * np.outer(widen, widen))

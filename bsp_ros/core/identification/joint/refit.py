@@ -210,8 +210,10 @@ def _held_covariance(
     own = fit.covariance
     placement = None
     if held.placement_sd_m.any():
-        base = None if held.base_variance_share is None else held.base_variance_share * fit.sigma**2
-        placement = placement_covariance(data, problem, fit, held.placement_sd_m, base)
+        placement = placement_covariance(data, problem, fit, held.placement_sd_m)
+        if held.placement_factor is not None:
+            # The check's reweighting share of the term (placement_reweighting.py), held as the noise's is.
+            placement = placement * np.outer(held.placement_factor, held.placement_factor)
         # As the full identification, the noise term holds only what the offsets leave (joint/steps.py): its
         # ratio to the raw residual's, from the check, rescales this fit's (a refit costs one fit).
         own = own * np.outer(held.noise_scale, held.noise_scale)

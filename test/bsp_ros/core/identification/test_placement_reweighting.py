@@ -92,3 +92,31 @@ def test_where_the_offsets_leave_no_residual_the_term_is_the_linear_one() -> Non
     term = reweighted_placement_covariance(statistics)
     linear = covariance_from_columns(problem, fit, columns)
     np.testing.assert_allclose(np.diag(term), np.diag(linear), rtol=1e-3)
+
+
+def test_with_each_session_s_residual_variances_the_term_holds_its_error() -> None:
+    # Each drawn session's own per-joint residual variances tell how far its offsets took the weights: the term is
+    # what the draws that match them give where that is clearly more than the prior's mean, against the error the
+    # refitted estimator made in that session.
+    data = _fast_session()
+    config = JointConfig()
+    problem = usable_samples(data, config).problem
+    fit = fit_problem(problem)
+    columns = offset_columns(data, problem, fit, SD_M)
+    statistics = _statistics(problem, columns)
+    prior = np.sqrt(np.diag(reweighted_placement_covariance(statistics)))[:3]
+    base = reweighted_values(problem).values
+    rng = np.random.default_rng(2)
+    z, widened = [], 0
+    for _ in range(60):
+        moved = dataclasses.replace(data, tau_nm=data.tau_nm + columns @ rng.standard_normal(columns.shape[2]))
+        solved = reweighted_values(usable_samples(moved, config).problem)
+        session = dataclasses.replace(statistics, observed_variance=solved.sigma**2)
+        std = np.sqrt(np.diag(reweighted_placement_covariance(session)))[:3]
+        assert np.all(std >= prior * (1.0 - 1e-9))
+        widened += bool(np.any(std > 1.4 * prior))
+        z.append((solved.values[:3] - base[:3]) / std)
+    z_rms = np.sqrt(np.mean(np.square(z), axis=0))
+    assert np.all((z_rms > 0.7) & (z_rms < 1.3)), z_rms  # the acceptance's band; 60 sessions scatter it by 9 %
+    assert np.abs(z).max() < 3.0
+    assert widened > 2  # some sessions' offsets took a joint's weight away, and their std says so

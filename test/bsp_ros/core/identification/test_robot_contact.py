@@ -44,8 +44,15 @@ def test_the_robot_handle_pose_replaces_a_misplaced_hand_marker() -> None:
     marker = _simulated(False)
     assert marker.session.handle_pose is None
     by_marker = identify_session(marker.session)
-    # The check can fail: with the marker for the contact point, the estimate is invalid or off the truth.
-    assert not by_marker["quality"]["valid"] or _worst_z(by_marker, marker.truth.to_dict()) > 3.0
+    # The check can fail: with the marker 25 mm off for the contact point, the estimate is invalid, off the truth,
+    # or says the markers sit further off than assumed, its hand static moment then far wider than the robot's.
+    codes = {f["code"] for f in by_marker["quality"]["findings"]}
+    hand_std = by_marker["segments"]["hand"]["static_moment_kgm"]["std"]
+    assert (
+        not by_marker["quality"]["valid"]
+        or _worst_z(by_marker, marker.truth.to_dict()) > 3.0
+        or "placement_wider" in codes
+    )
     assert by_marker["quality"]["contact_point"] == "hand_marker"
 
     robot = _simulated(True)
@@ -55,6 +62,7 @@ def test_the_robot_handle_pose_replaces_a_misplaced_hand_marker() -> None:
     assert by_robot["quality"]["valid"], by_robot["quality"]["message"]
     assert by_robot["quality"]["contact_point"] == "robot_handle_pose"
     assert _worst_z(by_robot, truth) <= 3.0
+    assert by_robot["segments"]["hand"]["static_moment_kgm"]["std"] < hand_std / 3.0
     # The contact point's placement sd is the robot's registration (0.5 mm), not a skin marker's (2 mm).
     length = by_robot["segments"]["hand"]["length_m"]
     assert np.hypot(0.002, 0.0005) <= length["std"] < 2**0.5 * 0.002

@@ -53,9 +53,10 @@ def test_re_placed_markers_give_a_valid_estimate_that_holds_the_truth(seed: int,
     assert {"length_m/forearm", "static_moment_kgm/forearm", "coulomb_nm/elbow"} <= set(z)
     assert max(z.values()) <= 3.0, sorted(z.items(), key=lambda kv: -kv[1])[:3]
     # The offsets do not read as a wrench delay (the delay profile fits them beside gravity and friction), nor as
-    # low-speed friction or anything else the model lacks: no finding but the prior's.
+    # low-speed friction or anything else the model lacks: no finding but the prior's, a wider placement, or what
+    # the placement's share of the std leaves confounded (the planned seed's hand static moment, 35 %).
     assert document["quality"]["timing"]["wrench_delay_s"] == 0.0
-    assert {f["code"] for f in document["quality"]["findings"]} <= {"prior_note", "placement_wider"}
+    assert {f["code"] for f in document["quality"]["findings"]} <= {"prior_note", "placement_wider", "confounded"}
 
 
 def test_a_segment_length_std_holds_the_placement_of_its_two_markers() -> None:
