@@ -19,6 +19,7 @@ from bsp_ros.core.identification.stacked import (
     fit_problem,
     joint_products,
     problem_names,
+    residual_covariance,
 )
 
 # A candidate is rejected by the data when the terms it leaves out differ from 0 at this level (HAC Wald test on
@@ -148,13 +149,17 @@ def shape_probe(
     return Candidate(model, problem, fit_problem(problem), 0.0, 0.0, 1.0)
 
 
-def spread_covariance(selection: Selection, offset_columns: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def spread_covariance(
+    selection: Selection, offset_columns: np.ndarray | None = None, residual: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """What the model choice leaves uncertain: per parameter of the chosen model, the largest squared difference
     to the estimate of any candidate the data cannot reject (the richest one included), at least the variance that
     difference has where both models hold, or to the shape probe's (plus the probe's variance beyond the chosen
     fit's), as a diagonal covariance (p, p), and that difference in units of the chosen fit's std (p,), for the
     warnings. ``offset_columns`` (N, n, m): the marker offsets' columns at their assumed sd, whose share of that
-    variance joins the sensor noise's; None without placement.
+    variance joins the sensor noise's; None without placement. ``residual`` (N, n): the chosen fit's residual once
+    the offsets took what they explain, on which every model's sensor-noise variance is judged (None: each fit's
+    own).
 
     A static moment is trusted only as far as it is stable across the passive models the data leave open:
     a simpler model is more precise only if its restrictions hold, which the data may be unable to test when
@@ -167,6 +172,7 @@ def spread_covariance(selection: Selection, offset_columns: np.ndarray | None = 
     spread = np.zeros(p)
     std = np.sqrt(np.clip(np.diag(chosen.fit.covariance), 1e-300, None))
     mine = None if offset_columns is None else placement_response(chosen, offset_columns)
+    base = _noise_variance(chosen, residual)
     for candidate in selection.open_models:
         assert candidate.fit is not None and candidate.problem is not None
         theirs = {name: i for i, name in enumerate(candidate.problem.names)}
@@ -175,9 +181,7 @@ def spread_covariance(selection: Selection, offset_columns: np.ndarray | None = 
         picks = [theirs[names[i]] for i in shared]
         d[shared] = candidate.fit.values[picks] - chosen.fit.values[shared]
         excess = np.zeros(p)
-        excess[shared] = np.clip(
-            np.diag(candidate.fit.covariance)[picks] - np.diag(chosen.fit.covariance)[shared], 0, None
-        )
+        excess[shared] = np.clip(_noise_variance(candidate, residual)[picks] - base[shared], 0, None)
         if candidate is selection.probe:
             # The probe's own std too, where larger: with the next order free, the curvature that told the static
             # moments from the passive moments may be gone (one posture), and the std says so.
@@ -192,6 +196,18 @@ def spread_covariance(selection: Selection, offset_columns: np.ndarray | None = 
         # follows the data where the models differ by more, without a std that jumps 5-10 times between sessions.
         spread = np.maximum(spread, np.maximum(d**2, excess))
     return np.diag(spread), np.sqrt(spread) / std
+
+
+def _noise_variance(candidate: Candidate, residual: np.ndarray | None) -> np.ndarray:
+    """(p,) a candidate's sensor-noise variances: its fit's own, or (``residual`` (N, n)) the HAC sandwich of
+    that residual at its weights. A model's own residual holds what the markers' offsets bend the torques by, which
+    the placement share counts already: a nonlinear open model's wrist offset read 0.17 Nm of noise where the
+    markers were re-placed by 2 mm and 0.02 where they sat on the centres."""
+    assert candidate.problem is not None and candidate.fit is not None
+    if residual is None:
+        return np.diag(candidate.fit.covariance)
+    covariance, _ = residual_covariance(candidate.problem, candidate.fit.design, candidate.fit.weights, residual)
+    return np.diag(covariance)
 
 
 def placement_response(candidate: Candidate, offset_columns: np.ndarray) -> np.ndarray:

@@ -181,7 +181,8 @@ def add_model_choice(stage: Stage) -> Stage:
     if stage.probed is None:
         return stage
     columns = None if stage.placement is None else stage.placement.columns
-    spread, shift = spread_covariance(stage.probed, columns)
+    residual = None if stage.placement is None else stage.placement.residual
+    spread, shift = spread_covariance(stage.probed, columns, residual)
     notes = tuple(
         Finding(
             code=FindingCode.MODEL_CHOICE_SPREAD,
