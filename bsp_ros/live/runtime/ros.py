@@ -202,7 +202,7 @@ class Client:
             return
         self._closed = True
         # The node leaves the executor before it is destroyed, and the executor's own guard conditions go after it:
-        # destroying a node its executor still holds crashed the interpreter once in rclpy's teardown.
+        # an executor must not hold a node whose handles are being destroyed.
         self.executor.remove_node(self.node)
         self.node.destroy_node()
         self.executor.shutdown()

@@ -109,6 +109,13 @@ def offset_names(m: int) -> list[ParameterName]:
     return [(f"marker_offset_{k}_sd", "markers") for k in range(m)]
 
 
+def _with_offsets(problem: Problem, columns: np.ndarray) -> Problem:
+    """``problem`` with the offsets' columns (N, n, m) beside its own, each offset in units of its sd (the columns
+    are scaled) with the prior N(0, 1)."""
+    m = columns.shape[2]
+    return augmented(problem, columns, offset_names(m), np.zeros(m), np.ones(m))
+
+
 def _per_recording(columns: np.ndarray, recording_index: np.ndarray | None) -> np.ndarray:
     """(N, n, m) offset columns shared by every sample or, for recordings whose markers moved between them,
     (N, n, m R): each recording's own.
@@ -158,8 +165,7 @@ def placement_covariance(
     columns = offset_columns(data, problem, fit, sd_m)
     if base_variance is None:
         return covariance_from_columns(problem, fit, columns)
-    m = columns.shape[2]
-    with_offsets = augmented(problem, columns, offset_names(m), np.zeros(m), np.ones(m))
+    with_offsets = _with_offsets(problem, columns)
     assert with_offsets.statistics is not None  # augmented() computes them
     statistics = OffsetStatistics.of(problem, with_offsets.statistics, base_variance, fit.weights * fit.sigma**2)
     return reweighted_placement_covariance(statistics)
@@ -172,10 +178,7 @@ def placement_effect(data: IdentificationData, problem: Problem, fit: Fit, sd_m:
     columns = offset_columns(data, problem, fit, sd_m)
     # The offsets fitted with the parameters (not on the residual alone: much of their effect resembles a change
     # of the parameters, and only together do they explain it), each with its prior N(0, sd^2).
-    m = columns.shape[2]
-    names = offset_names(m)
-    # Offsets in units of their sd (the columns are scaled): each with the prior N(0, 1).
-    with_offsets = augmented(problem, columns, names, np.zeros(m), np.ones(m))
+    with_offsets = _with_offsets(problem, columns)
     residual = np.where(problem.rows, reweighted_values(with_offsets).residual(with_offsets), np.nan)
     # X^T W D from the wider problem's per-joint products of the used rows (its statistics): no second pass.
     assert with_offsets.statistics is not None  # augmented() computes them
