@@ -257,11 +257,7 @@ def predict_budget(
     if open_models:
         union = build_problem(data, _union_model(model, open_models), rows, None, extras)
         scores = _score_covariance(data, union, fit, sd_m, zero_cov, noise, kinematics, nominal, grid_hz)
-        others = [(list(problem_names(m, data.n_joints, extras is not None)), False) for m in open_models]
-        if "nonlinear" in model.terms and "higher" not in model.terms:
-            higher = model.with_terms(("higher",))
-            others.append((list(problem_names(higher, data.n_joints, extras is not None)), True))
-        choice = expected_choice_variance(scores, problem.names, others)
+        choice = expected_choice_variance(scores, problem.names, _open_names(model, open_models, data, extras))
         ledger = ledger.plus(Term.MODEL_CHOICE, np.diag(choice))
     reported = problem.passive_end  # the static moments and passive terms; not the priors' perpendicular moments
     kept = Ledger(tuple((term, c[:reported, :reported]) for term, c in ledger))
@@ -270,6 +266,18 @@ def predict_budget(
     for i, name in enumerate(problem.names[:reported]):
         values[i] = nominal.passive.get(name, values[i])
     return PredictedBudget(problem.names[:reported], kept, values)
+
+
+def _open_names(
+    model: PassiveModel, open_models: Sequence[PassiveModel], data: IdentificationData, extras: object
+) -> list[tuple[list[ParameterName], bool]]:
+    """Each open candidate's parameter names, and a nonlinear ``model``'s shape probe's (flagged ``True``)."""
+    with_extras = extras is not None
+    others = [(list(problem_names(m, data.n_joints, with_extras)), False) for m in open_models]
+    if "nonlinear" in model.terms and "higher" not in model.terms:
+        higher = model.with_terms(("higher",))
+        others.append((list(problem_names(higher, data.n_joints, with_extras)), True))
+    return others
 
 
 def _union_model(model: PassiveModel, open_models: Sequence[PassiveModel]) -> PassiveModel:
