@@ -111,43 +111,89 @@ def change_sentence(series: Series, changes: list[Change]) -> str:
 CHANGE, NO_CHANGE, UNKNOWN = "change", "no change", "cannot be judged yet"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Verdict:
-    """What the headline says of one passive parameter of one arm: ``change``, ``no change`` or ``cannot be
-    judged yet`` (then ``reason``: why, and what to record)."""
+    """What the headline says of one passive parameter of one arm.
+
+    Attributes
+    ----------
+    series : the parameter's series.
+    status : ``change``, ``no change`` or ``cannot be judged yet``.
+    reason : for ``cannot be judged yet``, why and what to record.
+    since : for ``no change``, what the latest session was compared with (``the previous or the first (1 June
+        2024)``, ``the previous session``, or one of them only and why not the other).
+    """
 
     series: Series
     status: str
     reason: str = ""
+    since: str = ""
 
 
 def _plural(count: int, word: str) -> str:
     return f"{count} {word}{'s' if count != 1 else ''}"
 
 
-def verdict(series: Series, min_pairs: int) -> Verdict:
-    """Whether the latest session's change of ``series`` is judged, and what was found (see :class:`Verdict`)."""
+NOT_IN_LATEST = "not measured in the latest session. To judge it, record it with the same passive model"
+AT_ZERO = "estimated at 0"
+
+
+def _in_latest(series: Series, latest: SessionRecord | None) -> bool:
+    """Whether ``series``' latest usable point is the latest valid visit ``latest`` (True without one)."""
+    point = series.latest
+    if latest is None:
+        return True
+    return point is not None and point.session_id == latest.id and point.time_ns == latest.session_time_ns
+
+
+def _since(series: Series) -> str:
+    """What a ``no change`` of ``series`` compared the latest session with, naming a comparison not judged."""
+    previous, first = series.since_previous, series.since_first
+    previous_judged = previous is not None and previous.judged
+    first_judged = first is not None and first.judged
+    if first is not None and previous_judged and first_judged:
+        return f"the previous or the first ({long_day(first.before.time_ns)})"
+    if first is not None and first_judged:
+        return f"the first ({long_day(first.before.time_ns)}) only (the previous session's is {AT_ZERO})"
+    if first is not None:
+        return f"the previous session only (the first session's is {AT_ZERO})"
+    return "the previous session"
+
+
+def verdict(series: Series, min_pairs: int, *, latest: SessionRecord | None = None) -> Verdict:
+    """Whether the latest session's change of ``series`` is judged, and what was found (see :class:`Verdict`).
+
+    ``latest`` is the arm's latest valid visit: a parameter that session did not measure (another passive model)
+    cannot be judged in it, whatever its earlier sessions show.
+    """
+    if not _in_latest(series, latest):
+        return Verdict(series=series, status=UNKNOWN, reason=NOT_IN_LATEST)
     if series.flagged_latest:
-        return Verdict(series, CHANGE)
+        return Verdict(series=series, status=CHANGE)
     usable = sum(p.usable for p in series.points)
     if usable < 2:
-        return Verdict(series, UNKNOWN, "one usable session. The next one is compared with it")
+        return Verdict(series=series, status=UNKNOWN, reason="one usable session. The next one is compared with it")
     if not series.error.known:
         return Verdict(
-            series,
-            UNKNOWN,
-            f"{_plural(series.error.n_pairs, 'retest pair')} of the {min_pairs} needed. To judge it, record a "
-            "same-day retest with the same passive model (bsp sessions add … --retest)",
+            series=series,
+            status=UNKNOWN,
+            reason=f"{_plural(series.error.n_pairs, 'retest pair')} of the {min_pairs} needed. To judge it, record "
+            "a same-day retest with the same passive model (bsp sessions add … --retest)",
         )
-    latest = [c for c in (series.since_previous, series.since_first) if c is not None]
-    if all(c.at_bound for c in latest):
+    latest_changes = [c for c in (series.since_previous, series.since_first) if c is not None]
+    if all(c.at_bound for c in latest_changes):
         return Verdict(
-            series,
-            UNKNOWN,
-            "estimated at 0, where the movement did not show it. To judge it, record wider or faster movements "
+            series=series,
+            status=UNKNOWN,
+            reason=f"{AT_ZERO}, where the movement did not show it. To judge it, record wider or faster movements "
             "(bsp plan)",
         )
-    return Verdict(series, NO_CHANGE)
+    return Verdict(series=series, status=NO_CHANGE, since=_since(series))
+
+
+def latest_visit(analysis: Analysis, arm: str | None) -> SessionRecord | None:
+    """The arm's latest valid visit (retests left out), None without one."""
+    return next((r for r in reversed(analysis.visits(arm)) if r.quality.valid), None)
 
 
 def verdicts(analysis: Analysis, arm: str | None) -> list[Verdict]:
@@ -155,19 +201,37 @@ def verdicts(analysis: Analysis, arm: str | None) -> list[Verdict]:
     angle of a passive curve only where it changed: the curve's panel shows the rest)."""
     from bsp_ros.clinic.store.curves import angle_of
 
+    latest = latest_visit(analysis, arm)
     found = []
     for series in analysis.arm_series(arm):
         if not series.judged or not series.has_values:
             continue
         if angle_of(series.key[2]) is not None and not series.flagged_latest:
             continue
-        found.append(verdict(series, analysis.min_pairs))
+        found.append(verdict(series, analysis.min_pairs, latest=latest))
     return found
+
+
+def _no_change_sentences(found: list[Verdict], latest: SessionRecord) -> list[tuple[str, str]]:
+    """One ``no change`` sentence per kind of comparison judged, naming its parameters."""
+    groups: dict[str, list[str]] = {}
+    for v in found:
+        if v.status == NO_CHANGE:
+            groups.setdefault(v.since, []).append(short_name(v.series.key))
+    return [
+        (
+            NO_CHANGE,
+            f"No change beyond measurement error in the latest session ({long_day(latest.session_time_ns)}) since "
+            f"{since}: {', '.join(names)}.",
+        )
+        for since, names in groups.items()
+    ]
 
 
 def headline_parts(analysis: Analysis, arm: str | None) -> list[tuple[str, str]]:
     """The headline of one arm as ``(kind, sentence)``: kind ``change`` (red), ``no change``, ``cannot be judged
-    yet`` or ``note``. A parameter is named under "no change" only where its change was judged."""
+    yet`` or ``note``. A parameter is named under "no change" only where its change was judged in the latest
+    session, with what it was compared with."""
     visits = [r for r in analysis.visits(arm) if r.quality.valid]
     if not visits:
         return [("note", "No session of this arm could be evaluated yet.")]
@@ -182,21 +246,7 @@ def headline_parts(analysis: Analysis, arm: str | None) -> list[tuple[str, str]]
         return [("note", cannot_judge(analysis))]
     found = verdicts(analysis, arm)
     parts = [(CHANGE, change_sentence(v.series, v.series.flagged_latest)) for v in found if v.status == CHANGE]
-    same = [short_name(v.series.key) for v in found if v.status == NO_CHANGE]
-    if same:
-        first, last = visits[0], visits[-1]
-        since = (
-            "the previous session"
-            if len(visits) == 2
-            else f"the previous or the first ({long_day(first.session_time_ns)})"
-        )
-        parts.append(
-            (
-                NO_CHANGE,
-                f"No change beyond measurement error in the latest session ({long_day(last.session_time_ns)}) since "
-                f"{since}: {', '.join(same)}.",
-            )
-        )
+    parts += _no_change_sentences(found, visits[-1])
     unknown: dict[str, list[str]] = {}
     for v in found:
         if v.status == UNKNOWN:

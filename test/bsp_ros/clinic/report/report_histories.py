@@ -79,3 +79,22 @@ def build_untared(path: Path) -> Path:
             retest = session_estimate(patient, 7 * week, 4050 + week, handle_mass_kg=HANDLE_KG, tared=True, retest=True)
             store.add_estimate(retest, UNTARED)
     return path
+
+
+LATEST_WITHOUT = "L1"
+
+
+def build_latest_without(path: Path, quantity: str = "stiffness_nm_per_rad") -> Path:
+    """``L1``: U2's unchanged arm, the latest visit identified without ``quantity`` (another passive model); its
+    retests and every earlier visit hold it."""
+    patient = UNCHANGED["U2"]
+    with open_store(path) as store:
+        store.set_subject(_record(patient, LATEST_WITHOUT))
+        for week in range(VISITS):
+            document = session_estimate(patient, 7 * week, 1000 + week)
+            if week == VISITS - 1:
+                for joint in document["joints"].values():
+                    joint.pop(quantity, None)
+            store.add_estimate(document, LATEST_WITHOUT)
+            store.add_estimate(session_estimate(patient, 7 * week, 1050 + week, retest=True), LATEST_WITHOUT)
+    return path

@@ -12,10 +12,12 @@ from report_histories import (
     DECLINE,
     FEW_PAIRS,
     HANDLE_KG,
+    LATEST_WITHOUT,
     UNCHANGED,
     UNTARED,
     VISITS,
     build_few_pairs,
+    build_latest_without,
     build_peers,
     build_untared,
 )
@@ -59,6 +61,11 @@ def peers(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(scope="module")
 def few_pairs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return build_few_pairs(tmp_path_factory.mktemp("few") / "clinic.sqlite")
+
+
+@pytest.fixture(scope="module")
+def latest_without(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return build_latest_without(tmp_path_factory.mktemp("latest") / "clinic.sqlite")
 
 
 @pytest.fixture(scope="module")
@@ -129,6 +136,62 @@ def test_a_parameter_without_enough_retests_is_never_called_unchanged(few_pairs:
     assert "1 retest pair of the 5 needed" in unknown and "same passive model" in unknown and "--retest" in unknown
 
 
+def test_a_parameter_the_latest_session_did_not_measure_is_never_called_unchanged(latest_without: Path) -> None:
+    analysis = _analyse(latest_without, LATEST_WITHOUT)
+    stiffness_key = ("joints", "elbow", "stiffness_nm_per_rad")
+    found = {v.series.key: v for v in verdicts(analysis, "left")}
+    stiffness = found[stiffness_key]
+    # Its day-to-day error is known and its earlier sessions agree: only the missing latest value stops a verdict.
+    assert stiffness.series.error.known and stiffness.series.latest is not None
+    assert stiffness.series.latest.number == VISITS - 1
+    assert stiffness.status == UNKNOWN and "not measured in the latest session" in stiffness.reason
+    assert found[FRICTION].status == NO_CHANGE
+    parts = headline_parts(analysis, "left")
+    same = " ".join(sentence for kind, sentence in parts if kind == NO_CHANGE)
+    unknown = " ".join(sentence for kind, sentence in parts if kind == UNKNOWN)
+    assert "elbow friction" in same and "elbow stiffness" not in same
+    assert "elbow stiffness" in unknown and "same passive model" in unknown
+
+
+def test_no_change_names_the_comparisons_it_judged() -> None:
+    """Where only one of since-previous and since-first is judged (the other has a value at the bound 0), the
+    headline says which; both judged: "the previous or the first"."""
+    from bsp_ros.clinic.mdc import DayToDayError
+    from bsp_ros.clinic.report.analysis import Series
+    from bsp_ros.clinic.report.summary import verdict
+
+    error = DayToDayError(sem=0.02, mdc95=0.06, n_pairs=6, source="subject", n_subjects=1, icc=0.8)
+    week_ns = 7 * 86_400 * 10**9
+
+    def series(*values: float) -> Series:
+        points = tuple(
+            Point(number=k + 1, session_id=k + 1, time_ns=k * week_ns, value=v, std=0.01, source="data", valid=True)
+            for k, v in enumerate(values)
+        )
+        first = Change(key=FRICTION, before=points[0], after=points[-1], delta=values[-1] - values[0], error=error)
+        previous = Change(key=FRICTION, before=points[-2], after=points[-1], delta=values[-1] - values[-2], error=error)
+        return Series(
+            arm="left",
+            key=FRICTION,
+            label="friction",
+            unit="N·m",
+            points=points,
+            error=error,
+            judged=True,
+            steps=(previous,),
+            since_previous=previous,
+            since_first=first,
+        )
+
+    assert verdict(series(0.5, 0.5, 0.51), 5).since.startswith("the previous or the first (")
+    previous_only = verdict(series(0.0, 0.5, 0.51), 5)
+    assert previous_only.since == "the previous session only (the first session's is estimated at 0)"
+    assert verdict(series(0.5, 0.0, 0.0), 5).status == UNKNOWN  # the latest value itself at 0: nothing judged
+    first_only = verdict(series(0.5, 0.0, 0.5), 5)
+    assert first_only.since.startswith("the first (")
+    assert first_only.since.endswith("only (the previous session's is estimated at 0)")
+
+
 def test_an_untared_session_among_tared_ones_is_left_out_of_the_arm_weight(untared: Path) -> None:
     analysis = _analyse(untared, UNTARED)
     (found,) = analysis.untared
@@ -187,7 +250,7 @@ def test_the_detail_reads_clinically_first(peers: Path) -> None:
 
 def test_no_percent_of_a_value_within_two_sd_of_zero() -> None:
     def point(value: float, std: float) -> Point:
-        return Point(1, 1, 0, value, std, "data", True)
+        return Point(number=1, session_id=1, time_ns=0, value=value, std=std, source="data", valid=True)
 
     near = Change(FRICTION, point(0.001, 0.02), point(-0.08, 0.02), -0.081, NO_ERROR)
     clear = Change(FRICTION, point(0.4, 0.02), point(0.3, 0.02), -0.1, NO_ERROR)
