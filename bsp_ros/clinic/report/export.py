@@ -33,6 +33,8 @@ CSV_COLUMNS = (
     "flag_limit",
     "flagged",
     *JOIN_COLUMNS,
+    # After the join columns, so every column before keeps its position.
+    "session_source",
 )
 
 
@@ -56,7 +58,10 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
     what it is: ``retest pairs``, or ``session uncertainty`` where the two sessions' own uncertainty is the larger;
     ``flag_limit`` is the MDC95 widened for the number of comparisons the report judges (:attr:`Change.limit`) and
     ``flagged`` is 1 for a change from the previous session beyond it. ``session_number`` is the store's number
-    (``bsp sessions show``), ``session_label`` the report's (``3``, ``3a`` for the retest of session 3).
+    (``bsp sessions show``), ``session_label`` the report's (``3``, ``3a`` for the retest of session 3). The join
+    columns (:data:`~bsp_ros.clinic.store.csv_export.JOIN_COLUMNS`) and ``session_source``, the recording's name
+    (a bag's directory or file name: the last part of the ``bag`` column of `bsp identify --each --summary`), lead
+    a row back to its bag and its summary row.
     """
     writer = csv.writer(stream, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
@@ -101,6 +106,7 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
                         _num(step.limit if step is not None and judged else None),
                         int(step is not None and judged and step.flagged),
                         *joined,
+                        record.source,
                     ]
                 )
                 rows += 1

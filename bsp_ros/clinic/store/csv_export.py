@@ -37,6 +37,7 @@ JOIN_COLUMNS = (
     "tare_file",
     "estimate_schema",
     "bsp_ros_version",
+    "passive_model",
 )
 CSV_COLUMNS = (*_SESSION_COLUMNS, *JOIN_COLUMNS)
 
@@ -45,10 +46,11 @@ def join_cells(record: SessionRecord) -> list[str]:
     """The :data:`JOIN_COLUMNS` cells of ``record``: what joins its rows back to the recording and the run.
 
     ``content_sha256`` is the recording's fingerprint (a bag's, or its estimate's for a result JSON without one);
-    ``passive_model_configured`` the passive model the identification was configured with (the store keeps the
-    configuration, not the model ``auto`` chose); ``tare_applied`` 1 or 0; ``estimate_schema`` the estimate's
-    schema tag; ``bsp_ros_version`` the version that made the estimate (empty for a session stored before it was
-    kept).
+    ``passive_model_configured`` the passive model the identification was configured with (``coulomb`` for the
+    default, which falls back to an elastic model where the data reject it); ``tare_applied`` 1 or 0;
+    ``estimate_schema`` the estimate's schema tag; ``bsp_ros_version`` the version that made the estimate;
+    ``passive_model`` the model it used (``auto``'s or the fallback's choice; the ``passive_model`` column of
+    `bsp identify --each --summary`). The last two are empty for a session stored before they were kept.
     """
     passive = record.config.get("passive")
     return [
@@ -58,6 +60,7 @@ def join_cells(record: SessionRecord) -> list[str]:
         record.quality.tare_file or "",
         record.estimate_schema,
         str(record.config.get("bsp_ros_version", "")),
+        record.passive_model or "",
     ]
 
 

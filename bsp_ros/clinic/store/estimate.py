@@ -281,7 +281,14 @@ def _record_of(
         cell=cell,
         content_sha256=_content_sha256(document, session),
         passive_curves=curves,
+        passive_model=_passive_model_used(estimate),
     )
+
+
+def _passive_model_used(estimate: Estimate) -> str | None:
+    # The model used, beside the configured one: with auto or the elastic fallback the data chose it.
+    used = (estimate.diagnostics or {}).get("passive_model")
+    return used if isinstance(used, str) and used else None
 
 
 def _content_sha256(document: Mapping[str, Any], session: Mapping[str, Any]) -> str:

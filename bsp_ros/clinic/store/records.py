@@ -96,6 +96,8 @@ class SessionRecord:
     content_sha256 : hash of the recording's content (or of the estimate's), so one recording is stored once.
     passive_curves : joint -> ``{"angle_deg": [...], "moment_nm": [...], "std_nm": [...]}``, if estimated.
     number : the session's number within its subject (1 = first in time), set when read from the store.
+    passive_model : the passive model the identification used (``diagnostics.passive_model``: ``auto``'s choice,
+        the elastic fallback's), None if the estimate did not say or the session was stored before it was kept.
     """
 
     subject: str
@@ -116,6 +118,7 @@ class SessionRecord:
     content_sha256: str | None = None
     passive_curves: dict[str, Any] = field(default_factory=dict)
     number: int | None = None
+    passive_model: str | None = None
 
     @property
     def session_time(self) -> dt.datetime:

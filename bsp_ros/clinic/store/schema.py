@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 """The schema version this code writes; older stores are migrated up to it, newer ones refused."""
 
 APPLICATION = "bsp_ros.clinic.store"
@@ -76,6 +76,11 @@ MIGRATIONS: list[list[str]] = [
     # 5: each quantity's uncertainty budget ({term: standard uncertainty}); NULL where the estimate kept none.
     [
         "ALTER TABLE parameters ADD COLUMN budget_json TEXT",
+    ],
+    # 6: the passive model the identification used (auto's choice, the elastic fallback's); NULL where the
+    # session was stored before it was kept (its configuration still says what was asked for).
+    [
+        "ALTER TABLE sessions ADD COLUMN passive_model TEXT",
     ],
 ]
 

@@ -34,7 +34,7 @@ _MIGRATION_LOCK = 0x6273_7073  # PostgreSQL advisory lock key ("bsps") serialisi
 _SESSION_COLUMNS = (
     "id, subject, session_time_ns, source, method, config_json, subject_info_json, estimate_schema, "
     "valid, n_samples, condition_number, quality_json, added_ns, repeatability_json, arm, retest, cell, "
-    "content_sha256, curves_json"
+    "content_sha256, curves_json, passive_model"
 )
 _DAY_NS = 86_400 * 10**9
 
@@ -421,8 +421,8 @@ _NUMBERING_SQL = "SELECT id FROM sessions WHERE subject = ? ORDER BY session_tim
 _INSERT_SESSION_SQL = (
     "INSERT INTO sessions (subject, session_time_ns, source, method, config_json, "
     "subject_info_json, estimate_schema, valid, n_samples, condition_number, quality_json, "
-    "added_ns, repeatability_json, arm, retest, cell, content_sha256, curves_json) "
-    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id"
+    "added_ns, repeatability_json, arm, retest, cell, content_sha256, curves_json, passive_model) "
+    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id"
 )
 _INSERT_PARAMETER_SQL = (
     "INSERT INTO parameters (session_id, grp, part, quantity, value, std, source, budget_json) "
@@ -472,12 +472,13 @@ def _session_row(record: SessionRecord, added_ns: int) -> tuple[Any, ...]:
         record.cell,
         record.content_sha256,
         _dumps(record.passive_curves),
+        record.passive_model,
     )
 
 
 def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> SessionRecord:
     sid, subject, time_ns, source, method, config, info, schema, valid, n, cond, quality, added, repeat = row[:14]
-    arm, retest, cell, content, curves = row[14:]
+    arm, retest, cell, content, curves, passive_model = row[14:]
     extra = json.loads(quality)
     tare = extra.get("tare") if isinstance(extra.get("tare"), dict) else {}
     return SessionRecord(
@@ -508,4 +509,5 @@ def _record(row: tuple[Any, ...], parameters: dict[ParamKey, Quantity]) -> Sessi
         cell=cell or "",
         content_sha256=content,
         passive_curves=json.loads(curves),
+        passive_model=passive_model,
     )

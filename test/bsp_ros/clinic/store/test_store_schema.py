@@ -50,7 +50,7 @@ def _set_version(location: str, version: str) -> None:
 def test_old_schema_is_migrated_with_its_data(store_location: str) -> None:
     _make_version_1_store(store_location)
     with open_store(store_location) as store:
-        assert store.schema_version == SCHEMA_VERSION == 5
+        assert store.schema_version == SCHEMA_VERSION == 6
         (old,) = store.sessions("OLD1")
         assert old.parameters[("joints", "elbow", "coulomb_nm")].value == 0.31
         assert old.parameters[("joints", "elbow", "coulomb_nm")].budget is None  # none kept then
