@@ -422,7 +422,13 @@ SPECS: dict[FindingCode, FindingSpec] = {
         "the {where}'s weight is measured only roughly",
         "a longer session or wider movements (bsp plan)",
     ),
-    C.ELASTIC_TERM: FindingSpec(WEAK, _elastic_term, "the relaxed joint behaves like a spring", ""),
+    C.ELASTIC_TERM: FindingSpec(
+        WEAK,
+        _elastic_term,
+        "the relaxed joint behaves like a spring",
+        "record a tare before each session (a sensor offset looks like a spring) and measure every session with the "
+        "stiffness model (--passive auto)",
+    ),
     C.HAND_SLIPPED: FindingSpec(
         WEAK,
         "the hand moved in the handle by about {slip_mm:.0f} mm during the session (the contact point drifted along "

@@ -3,14 +3,20 @@ and every code is asserted by some test of the estimator or its consumers."""
 
 from __future__ import annotations
 
+import datetime
 import json
 import re
+from html import escape
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from bsp_ros.clinic.report.summary import invalid_cause
+from bsp_ros.clinic.report import analyse
+from bsp_ros.clinic.report.html import render_html
+from bsp_ros.clinic.report.labels import PART_NAMES
+from bsp_ros.clinic.report.speed_lines import speed_dependence_lines
+from bsp_ros.clinic.report.summary import invalid_cause, session_notes, technical_notes
 from bsp_ros.clinic.store.records import Quality, SessionRecord
 from bsp_ros.core.estimate import add_finding, invalid_document
 from bsp_ros.core.findings import Finding, FindingCode, Severity, findings_of, note
@@ -208,6 +214,45 @@ def test_every_invalid_code_gives_the_report_a_cause_and_an_action(code: Finding
     cause, action = invalid_cause(_stored(Quality(valid=False, message=finding.text, findings=(finding,))))
     assert cause == SPECS[code].cause.format(where="elbow") and action == SPECS[code].action
     assert cause and action and "{" not in cause
+
+
+CLINIC_CODES = [c for c in FindingCode if SPECS[c].severity is not Severity.INVALID and SPECS[c].cause]
+"""The weak codes and the notes a clinic reads: each reaches the report's session notes with its cause and action."""
+ENGINEER_CODES = [c for c in FindingCode if SPECS[c].severity is Severity.NOTE and not SPECS[c].cause]
+"""The notes for the engineer only: the appendix's technical notes, never page 1 or the session notes."""
+
+
+def _notes_of(*findings: Finding) -> list[str]:
+    analysis = analyse("P001", [_stored(Quality(valid=True, findings=findings))])
+    return [text for _, text in session_notes(analysis)]
+
+
+def test_every_weak_code_is_for_the_clinic() -> None:
+    weak = {c for c in FindingCode if SPECS[c].severity is Severity.WEAK}
+    assert weak and weak <= set(CLINIC_CODES)
+
+
+@pytest.mark.parametrize("code", CLINIC_CODES)
+def test_every_weak_code_and_clinic_note_gives_the_session_notes_a_cause_and_an_action(code: FindingCode) -> None:
+    spec = SPECS[code]
+    assert spec.action, f"{code} has a cause but no action"
+    where = PART_NAMES.get("elbow", "elbow").lower()
+    expected = f"{spec.cause.format(where=where)}: {spec.action}"
+    assert _notes_of(sample(code, "elbow")) == [expected[0].upper() + expected[1:]]
+
+
+def test_engineer_only_notes_reach_the_appendix_and_never_page_1_or_the_session_notes() -> None:
+    assert ENGINEER_CODES and all(not SPECS[c].action for c in ENGINEER_CODES)
+    findings = tuple(sample(c) for c in ENGINEER_CODES)
+    analysis = analyse("P001", [_stored(Quality(valid=True, findings=findings))])
+    # A speed-dependent part beyond its noise reaches the notes as the report's own line, not as the note's text.
+    assert session_notes(analysis) == speed_dependence_lines(analysis)
+    texts = {text for _, text in technical_notes(analysis)}
+    assert {f.text for f in findings} <= texts
+    page = render_html(analysis, None, [], datetime.datetime(2026, 1, 1, tzinfo=datetime.UTC))
+    first, detail = page.split("<section id='detail'>")
+    assert not any(escape(f.text) in first for f in findings)
+    assert all(escape(f.text) in detail for f in findings)
 
 
 def test_a_session_stored_without_findings_gets_a_general_cause() -> None:
