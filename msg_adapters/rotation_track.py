@@ -223,8 +223,8 @@ class TransformBuffer:
 
         links = [self._links[c] for c in from_source + from_target]
         turning = [link for link in links if link.turning()]
-        # A fixed chain is one rotation: composed once and shared by every stamp (a 1 kHz session's 600,000
-        # compositions took 0.17 s).
+        # A fixed chain is one rotation: composed once and shared by every stamp, not once per stamp of a 1 kHz
+        # stream.
         stamps = t if turning or t.size == 0 else t[:1]
 
         def compose(children: list[str]) -> np.ndarray:

@@ -6,9 +6,9 @@ import functools
 
 import numpy as np
 
-# scipy.signal gives the same numbers (tested to 1e-12), but importing it costs `bsp identify` about 0.4 s (it
-# pulls in scipy.stats), and scipy.linalg's banded solver alone 0.17 s: the design and the zero-phase filter are
-# a few lines of numpy each.
+# scipy.signal gives the same numbers (tested to 1e-12), but importing it (and scipy.stats with it) or even
+# scipy.linalg's banded solver would be a large share of `bsp identify`'s start (bench/README.md, `bsp identify`
+# against `AnyReader`): the design and the zero-phase filter are a few lines of numpy each.
 
 # Samples per block of the block recursion: its Toeplitz product costs BLOCK flops per sample, the state hand-over
 # one Python step per block.

@@ -32,7 +32,7 @@ def rotation_range_deg(rotation_world_from_sensor: npt.ArrayLike) -> float:
         raise InputError(f"rotation_world_from_sensor must be (3, 3) or (N, 3, 3), got {rotation.shape}")
     if rotation.shape[0] < 2:
         return 0.0
-    from scipy.spatial.transform import Rotation  # on demand: 0.3 s to import, needed for turning sensors only
+    from scipy.spatial.transform import Rotation  # on demand: a slow import, needed for turning sensors only
 
     rotations = Rotation.from_matrix(rotation)
     vectors = (rotations.mean().inv() * rotations).as_rotvec()  # (N, 3) about the mean, rad

@@ -56,7 +56,7 @@ class SessionSink:
     def typestore(self) -> Any:
         """rosbags' Jazzy type store, loaded only when a message needs it (a non-fixed layout or a damaged one)."""
         if self._typestore is None:
-            from rosbags.typesys import Stores, get_typestore  # 14 ms of imports most bags never need
+            from rosbags.typesys import Stores, get_typestore  # imports most bags never need
 
             self._typestore = get_typestore(Stores.ROS2_JAZZY)
         return self._typestore

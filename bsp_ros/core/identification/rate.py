@@ -10,7 +10,7 @@ import numpy as np
 # cells). The model's torques change below 2 Hz and a block mean keeps a white noise's information about them,
 # so the estimate is the same; the validity checks (noise from first differences, spike windows in samples,
 # residual autocorrelation) were calibrated on 100 Hz sessions and judge every rate alike; and the cost no longer
-# grows with the sensor's rate (`bsp identify` of a 5-minute 1 kHz bag: 9.8 s unaveraged, 1.7 s averaged).
+# grows with the sensor's rate (bench/README.md, `bsp identify` against `AnyReader`).
 # Not 50 Hz, as live: on the realism bench's 1 cm skin markers the checks then let two more wrong runs pass.
 IDENTIFICATION_MAX_RATE_HZ = 100.0
 # Streams up to this much faster than the limit are left alone: a 100 Hz sensor whose clock runs 1 % fast is

@@ -343,7 +343,7 @@ def plan_protocol(request: PlanRequest, grid_hz: float = 2.0) -> Plan:
         result would leave the limits or the workspace (never expected: it is checked, not assumed).
     """
     # The optimiser's covariances are small (p < 40): BLAS threads only add their start-up, which on a loaded
-    # machine cost a 3-5x slower `bsp plan --passive auto` (measured: 22 s -> 5 s, the same plan).
+    # machine made `bsp plan --passive auto` several times slower (bench/README.md, plan against identify).
     with threadpool_limits(limits=1, user_api="blas"):
         if request.n_points is not None:
             return with_budget(_plan_points(request, request.n_points, grid_hz))

@@ -66,11 +66,11 @@ class BspIdentifierNode(RosNode):
         self.wrench_queue = WrenchQueue(self.frames)  # a turning sensor's wrench waits for the /tf after it
         stated = stated_rotation(settings.wrench_frame_rotation_xyzw, self.cell)
         self.frame_notices = FrameNotices(self.frame_source.description, stated)
-        # Every estimate is computed in the timer's callback, on the executor thread: a windowed update refits the
-        # model its last check chose (~8 ms for 30 s at 1 kHz, the checks every elastic_check_every updates ~25
-        # ms: bench/live_window_update.py), while the wrenches wait in their subscription's queue (1 s deep) and
-        # are taken right after it. A worker thread kept the callbacks going, but the two traded the interpreter
-        # lock every 0.2 ms and the update took longer in the node (bench/README.md, live latency).
+        # Every estimate is computed in the timer's callback, on the executor thread: an update (a refit of the
+        # model its last check chose, or the check itself every elastic_check_every updates) is short beside the
+        # timer's period, and the wrenches wait in their subscription's queue (1 s deep) and are taken right after
+        # it. Not on a worker thread: it would trade the interpreter lock with the callbacks and make the update
+        # itself slower (bench/README.md, live window update and live latency).
         target = settings.precision_target
         self.precision = PrecisionTracker(target) if target is not None else None
         self.precision_state: PrecisionState | None = None
@@ -320,7 +320,8 @@ class BspIdentifierNode(RosNode):
 def main(args: list[str] | None = None) -> int:
     """Console entry point (``ros2 run bsp_ros bsp_identifier``); ``args``: a command line like ``sys.argv``."""
     # A callback waiting for the interpreter lock waits up to the switch interval (5 ms by default) while another
-    # Python thread holds it; 0.2 ms keeps the recursive mode's latency lower (bench/README.md, live latency).
+    # Python thread holds it; a short interval bounds the recursive mode's wrench -> estimate latency
+    # (bench/README.md, live latency).
     sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))
     return run_node(NAME, BspIdentifierNode, BspIdentifierNode.__doc__ or "", PARAMETERS, args)
 

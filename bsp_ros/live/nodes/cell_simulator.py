@@ -257,8 +257,8 @@ class CellSimulatorNode(RosNode):
         wrench_hz, marker_hz = p["wrench_hz"], p["marker_hz"]
         # The physics runs on its own clock from sim_start_ns; the session starts on the node clock at the first
         # tick (start_wall_ns), once its subscribers are there, and every stamp is shifted by the difference.
-        # Building the simulator takes ~0.4 s: starting the clock before it made the first tick publish those
-        # 0.4 s of samples in one burst, while the subscribers had not matched yet.
+        # Building the simulator takes a noticeable part of a second: starting the clock before it made the first
+        # tick publish that time's samples in one burst, while the subscribers had not matched yet.
         self.sim_start_ns = self.now_ns()
         self.start_wall_ns: int | None = None
         self.wait_for_subscribers = p["wait_for_subscribers"]

@@ -86,7 +86,8 @@ class CausalJointAngles:
         self._filter_q = StreamingFilter(self._sos_q)
         self._filter_v = StreamingFilter(signal.butter(2, c.direction_cutoff_hz, fs=c.rate_hz, output="sos"))
         # Ring buffer of the newest frames' segment lengths, and their median, recomputed at most every
-        # 1% of the buffer: one frame barely moves a median over thousands (it costs ~50 us per call).
+        # 1% of the buffer: one frame barely moves a median over thousands, so recomputing it every frame is
+        # work for nothing.
         self._length_rows = np.zeros((c.length_frames, n_segments))
         self._length_count = 0
         self._median_m: np.ndarray | None = None

@@ -12,8 +12,8 @@ from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.live.online.windowed import WindowedIdentifier, WindowEstimate
 
 # The windowed estimate of the recursive mode's window is checked this often (updates of the 5 Hz timer: 10 s).
-# Each check refits the window several times (~20 ms in process, 30-40 ms in the node) while the wrenches wait:
-# every 10 s keeps the share of delayed wrenches near 0.3 %, under the recursive mode's latency p99.
+# Each check refits the window several times while the wrenches wait: this rarely, the wrenches it delays stay a
+# share below what the recursive mode's latency p99 counts (bench/README.md, live latency).
 CHECK_EVERY = 50
 
 _GROUP = {"static_moment_kgm": "segments"}  # every other parameter of the filter is a joint's passive term

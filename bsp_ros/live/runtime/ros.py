@@ -90,9 +90,9 @@ def has_message(type_name: str) -> bool:
     return True
 
 
-# Which rclpy executor spins a node: "events" (rclpy.experimental.EventsExecutor, C++ dispatch: 0.14 ms of
-# CPU per WrenchStamped at 1 kHz against 0.33 ms, measured with rclpy 7.1.6 wheels) or "single"
-# (rclpy.executors.SingleThreadedExecutor, the stable one).
+# Which rclpy executor spins a node: "events" (rclpy.experimental.EventsExecutor: its dispatch in C++ takes less
+# than half the CPU per received WrenchStamped, which at 1 kHz is most of a node's load; bench/README.md, live
+# latency) or "single" (rclpy.executors.SingleThreadedExecutor, the stable one).
 EXECUTOR_ENV = "BSP_EXECUTOR"
 EXECUTORS = ("events", "single")
 

@@ -58,7 +58,7 @@ def run_node(
         executor.add_node(node)
         if executor_name == "events":
             # Jazzy's EventsExecutor.spin() busy-waits (100% CPU on an idle node) and ignores SIGINT;
-            # spin_once in a loop does neither (measured with rclpy 7.1.6 wheels).
+            # spin_once in a loop does neither (as of the rclpy 7.1.6 wheels).
             while rclpy.ok():
                 executor.spin_once(timeout_sec=0.1)
         else:

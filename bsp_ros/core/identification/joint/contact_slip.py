@@ -51,8 +51,8 @@ __all__ = [
 DETECT_KNOT_S = 5.0
 
 # At most this many knots when a slip is looked for: a longer session spaces them wider (a 10-minute session: 25 s).
-# Each knot is a column of the whole session's fit; at 5 s a 10-minute session's 120 took 0.8 s, a slip's step lies
-# between two knots at any spacing, and a 120 s session keeps its 5 s knots.
+# Each knot is a column of the whole session's fit, so their count sets its cost (bench/README.md, `bsp identify`
+# against `AnyReader`); a slip's step lies between two knots at any spacing, and a 120 s session keeps its 5 s knots.
 MAX_DETECT_KNOTS = 24
 
 # The knots the travel is followed on once found, s: a slip of half a second moves its knot's neighbours too,
