@@ -5,10 +5,11 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 if TYPE_CHECKING:
     from bsp_ros.clinic.store import Store
@@ -20,37 +21,52 @@ PathLike = str | os.PathLike[str]
 
 
 def identify(
-    bags: PathLike | Sequence[PathLike],
+    bag_or_bags: PathLike | Sequence[PathLike],
     *,
     method: str = "joint",
     passive: str | None = None,
     tare: PathLike | None = None,
     body_mass_kg: float | None = None,
     height_m: float | None = None,
-    sex: str = "male",
+    sex: str | None = None,
     trunk_tilt_deg: Sequence[float] | None = None,
     marker_placement_sd_mm: float = 2.0,
     handle_pose_sd_mm: float = 0.5,
     zero_sd_n: float | None = None,
     zero_sd_nm: float | None = None,
     wrench_delay_s: float | None = None,
+    cell: PathLike | None = None,
+    wrench_topic: str | None = None,
+    marker_topics: Mapping[str, str] | None = None,
+    tf_topic: str | None = None,
+    tf_static_topic: str | None = None,
+    handle_pose_topic: str | None = None,
+    emg_topic: str | None = None,
 ) -> Estimate:
     """Identify one arm from a bag, or from several recordings of it (each with its trunk's tilt), as
-    ``bsp identify`` does with the same options.
+    ``bsp identify`` does with the same options (each keyword is the option of that name: ``cell`` is ``--cell``,
+    ``marker_topics`` the ``--marker-topic NAME=TOPIC`` remaps).
 
     Parameters
     ----------
-    bags : a rosbag2 MCAP bag directory or ``.mcap`` file, or several recordings of one arm.
+    bag_or_bags : a rosbag2 MCAP bag directory or ``.mcap`` file, or several recordings of one arm (for many
+        bags each its own session: ``bsp identify --each``, or call this once per bag).
     method : ``joint`` (stacked, with the model checks) or ``paper`` (the method paper's sequential fit).
     passive : the passive model (``coulomb``, ``coulomb+viscous``, ``auto``, ...); None: Coulomb, with the
         elastic family the data choose where they reject it.
-    tare : a ``bsp tare`` file to subtract (its uncertainty joins the std).
-    body_mass_kg, height_m, sex : the subject's body data, for the anthropometric prior (kg, m).
+    tare : a ``bsp tare`` file to subtract (its uncertainty joins the std); None: the cell file's, if any.
+    body_mass_kg, height_m, sex : the subject's body data, for the anthropometric prior (kg, m; sex None: male).
     trunk_tilt_deg : one tilt per recording (deg), for recordings at several trunk postures.
     marker_placement_sd_mm : how far a skin marker may sit from its joint centre (1 sd per axis, mm).
     handle_pose_sd_mm : the robot's contact point's registration to world (1 sd per axis, mm).
     zero_sd_n, zero_sd_nm : without a tare, the sensor zero's assumed sd (N, N m); None: the CLI's defaults.
     wrench_delay_s : the wrench stamps' delay behind the markers' the cell knows (s); None: estimated.
+    cell : a cell description file (``bsp_ros/cell/1``): its topics for those not given here, its tare without
+        ``tare``, its sensor mounting where the bag records no rotation.
+    wrench_topic, tf_topic, tf_static_topic : the topics' names (None: the cell's, else the contract's defaults).
+    marker_topics : marker name -> topic, for the markers whose topics differ (e.g. ``{"elbow": "/vicon/elbow"}``).
+    handle_pose_topic : the robot's contact point (``""``: use the hand marker); None: the default.
+    emg_topic : the EMG envelopes (``""``: ignore them); None: the cell's, else ``/emg/envelope``.
 
     Returns
     -------
@@ -61,32 +77,71 @@ def identify(
     Raises
     ------
     bsp_ros.errors.BspError
-        The bag cannot be read or gives no estimate at all (its ``exit_code`` is the CLI's); poor excitation is
-        an estimate whose ``valid`` is False, with its findings.
+        A bad option (``InputError``, naming the `bsp identify` option), or the bag cannot be read (a ``BagError``
+        whose ``code`` names why, e.g. ``missing-topic``: `bsp identify` exits 10-16 by it) or gives no estimate at
+        all; poor excitation is an estimate whose ``valid`` is False, with its findings.
     """
-    from bsp_ros.bag.offline import identify_bags
-    from bsp_ros.core.estimate_schema import Estimate
-    from bsp_ros.core.fusion import SubjectInfo
-    from bsp_ros.core.identification.passive import PassiveModel
-    from bsp_ros.core.pipeline import IdentifyOptions
-    from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
-    from bsp_ros.core.tare import read_tare_file
+    from bsp_ros.bag.offline import estimate_bags
+    from bsp_ros.cli.identify_options import options_from_args, topics_from_args, trunk_tilts_rad
 
-    paths = [Path(bags)] if isinstance(bags, str | os.PathLike) else [Path(b) for b in bags]
-    options = IdentifyOptions(
-        method=method,
-        passive=PassiveModel() if passive is None else PassiveModel.parse(passive),
-        elastic_fallback=passive is None,
-        subject=SubjectInfo(body_mass_kg, height_m, sex),
-        tare=None if tare is None else read_tare_file(Path(tare)),
-        marker_placement_sd_m=marker_placement_sd_mm / 1000.0,
-        handle_pose_sd_m=handle_pose_sd_mm / 1000.0,
-        zero_sd_n=ZERO_SD_N if zero_sd_n is None else zero_sd_n,
-        zero_sd_nm=ZERO_SD_NM if zero_sd_nm is None else zero_sd_nm,
-        wrench_delay_s=wrench_delay_s,
-    )
-    tilts = None if trunk_tilt_deg is None else [t * 3.141592653589793 / 180.0 for t in trunk_tilt_deg]
-    return Estimate.from_json(identify_bags(paths, options, trunk_tilts_rad=tilts))
+    paths = [Path(bag_or_bags)] if isinstance(bag_or_bags, str | os.PathLike) else [Path(b) for b in bag_or_bags]
+    given: dict[str, Any] = {
+        "--method": method,
+        "--passive": passive,
+        "--tare": tare,
+        "--body-mass": body_mass_kg,
+        "--height": height_m,
+        "--sex": sex,
+        "--marker-placement-sd-mm": marker_placement_sd_mm,
+        "--handle-pose-sd-mm": handle_pose_sd_mm,
+        "--zero-sd-n": zero_sd_n,
+        "--zero-sd-nm": zero_sd_nm,
+        "--wrench-delay-s": wrench_delay_s,
+        "--cell": cell,
+        "--wrench-topic": wrench_topic,
+        "--tf-topic": tf_topic,
+        "--tf-static-topic": tf_static_topic,
+        "--handle-pose-topic": handle_pose_topic,
+        "--emg-topic": emg_topic,
+    }
+    argv = [f"{option}={_argument(value)}" for option, value in given.items() if value is not None]
+    argv += [f"--marker-topic={name}={topic}" for name, topic in (marker_topics or {}).items()]
+    if trunk_tilt_deg is not None:
+        argv += ["--trunk-tilt-deg", *(_argument(tilt) for tilt in trunk_tilt_deg)]
+    args = identify_arguments(argv)
+    tilts = trunk_tilts_rad(args.trunk_tilt_deg, len(paths))
+    return estimate_bags(paths, options_from_args(args), topics_from_args(args), None, tilts)
+
+
+class _Parser(argparse.ArgumentParser):
+    """`bsp identify`'s options, whose refusal is an InputError (the CLI's line, no exit)."""
+
+    def error(self, message: str) -> NoReturn:
+        from bsp_ros.errors import InputError
+
+        raise InputError(f"bsp_ros.identify: {message} (the option of `bsp identify`)")
+
+
+def identify_arguments(argv: Sequence[str]) -> argparse.Namespace:
+    """``argv`` parsed as `bsp identify`'s options (no bags): the API builds its options as the CLI does, with
+    its checks, defaults and the cell file's topics.
+
+    Raises
+    ------
+    InputError
+        A value the CLI refuses (out of range, not a choice).
+    """
+    from bsp_ros.cli.identify_options import add_identify_arguments, add_trunk_tilt_argument
+
+    parser = _Parser(prog="bsp_ros.identify", add_help=False)
+    add_identify_arguments(parser)
+    add_trunk_tilt_argument(parser)
+    return parser.parse_args(list(argv))
+
+
+def _argument(value: Any) -> str:
+    # A float as repr, so the option parses back to the same number; a path as given.
+    return repr(float(value)) if isinstance(value, int | float) and not isinstance(value, bool) else os.fspath(value)
 
 
 def simulate(
