@@ -20,6 +20,7 @@ from bsp_ros.clinic.report.detail import (
     peer_rows,
 )
 from bsp_ros.clinic.report.labels import plain_name, plain_number, unit
+from bsp_ros.clinic.report.norm_rows import NORMS_NOTE, NORMS_TITLE, norm_rows, sources_text, without_text
 from bsp_ros.clinic.report.precision import BUDGET_NOTE, BUDGET_TITLE, PRECISION_NOTE, PRECISION_TITLE, precision_rows
 from bsp_ros.clinic.report.summary import (
     arm_title,
@@ -154,6 +155,30 @@ def _peers_table(analysis: Analysis) -> str:
     out.append("</table>")
     out.append(f"<p class='note' id='prior-note'>{escape(PEERS_NOTE)}</p>")
     return "\n".join(out)
+
+
+def _norms_table(analysis: Analysis) -> str:
+    """The passive moments with a published healthy range against it, the source named; the others listed."""
+    rows, without = norm_rows(analysis)
+    two = len(analysis.arms) > 1
+    out = []
+    if rows:
+        out.append(
+            "<table id='norms'><tr><th>Parameter</th>"
+            + ("<th>Arm</th>" if two else "")
+            + "<th>Measured (latest)</th><th>Healthy range</th><th>Against it</th><th>Source</th></tr>"
+        )
+        for row in rows:
+            out.append(
+                f"<tr><td>{escape(row.label)}</td>"
+                + (f"<td>{escape(row.arm)}</td>" if two else "")
+                + f"<td class='num'>{escape(row.measured)}</td><td class='num'>{escape(row.range_text)}</td>"
+                + f"<td>{escape(row.words)}</td><td>{escape(row.healthy.citation)}</td></tr>"
+            )
+        out.append("</table>")
+    note = " ".join(text for text in (NORMS_NOTE, sources_text(rows), without_text(without)) if text)
+    out.append(f"<p class='note' id='norms-note'>{escape(note)}</p>")
+    return f"<h3>{escape(NORMS_TITLE)}</h3>" + "\n".join(out)
 
 
 def _precision(analysis: Analysis) -> list[str]:
@@ -326,6 +351,7 @@ def render_html(
         )
     parts.append("<h3>Passive joint moments</h3>" + _rows_table(detail_rows(analysis, "passive"), "changes"))
     parts.append("<h3>Arm weight against its peers</h3>" + _peers_table(analysis))
+    parts.append(_norms_table(analysis))
     parts.append(
         "<h3>Arm weight, masses and centres of mass</h3>" + _rows_table(detail_rows(analysis, "weight"), "weight")
     )

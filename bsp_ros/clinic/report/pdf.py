@@ -30,6 +30,7 @@ from bsp_ros.clinic.report.detail import (
     peer_rows,
 )
 from bsp_ros.clinic.report.labels import plain_name, plain_number, unit
+from bsp_ros.clinic.report.norm_rows import NORMS_NOTE, NORMS_TITLE, norm_rows, sources_text, without_text
 from bsp_ros.clinic.report.panels import appendix_groups, arm_names, detail_groups, first_page_panels
 from bsp_ros.clinic.report.plots import Panel, draw_panels
 from bsp_ros.clinic.report.precision import BUDGET_NOTE, BUDGET_TITLE, PRECISION_NOTE, PRECISION_TITLE, precision_rows
@@ -168,6 +169,20 @@ def _peers(flow: _Flow, analysis: Analysis) -> None:
     flow.paragraph(PEERS_NOTE, 7.5, GREY)
 
 
+def _norms(flow: _Flow, analysis: Analysis) -> None:
+    """The passive moments with a published healthy range against it, the source named; the others listed."""
+    rows, without = norm_rows(analysis)
+    flow.heading(NORMS_TITLE)
+    two = len(analysis.arms) > 1
+    for row in rows:
+        flow.paragraph(
+            f"{row.label}{f' ({row.arm})' if two else ''}: measured {row.measured}; healthy {row.range_text}, "
+            f"{row.healthy.citation}; {row.words}.",
+            8.0,
+        )
+    flow.paragraph(" ".join(t for t in (NORMS_NOTE, sources_text(rows), without_text(without)) if t), 7.5, GREY)
+
+
 def _precision(flow: _Flow, analysis: Analysis) -> None:
     """The latest usable session's static and passive moments: their SD, its largest source, what would shrink it;
     nothing where the store holds no budget."""
@@ -250,6 +265,7 @@ def _detail(flow: _Flow, analysis: Analysis) -> None:
     _rows(flow, detail_rows(analysis, "passive"))
     flow.heading("Arm weight against its peers")
     _peers(flow, analysis)
+    _norms(flow, analysis)
     flow.heading("Arm weight, masses and centres of mass")
     _rows(flow, detail_rows(analysis, "weight"))
     _precision(flow, analysis)
