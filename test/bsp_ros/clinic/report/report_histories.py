@@ -98,3 +98,32 @@ def build_latest_without(path: Path, quantity: str = "stiffness_nm_per_rad") -> 
             store.add_estimate(document, LATEST_WITHOUT)
             store.add_estimate(session_estimate(patient, 7 * week, 1050 + week, retest=True), LATEST_WITHOUT)
     return path
+
+
+CURVES = "C2"
+CURVE_ANGLES_DEG = tuple(20.0 + 1.0 * k for k in range(25))
+
+
+def _with_curves(document: dict, shift_nm: float) -> dict:
+    """``document`` with a passive-moment curve per joint: a linear spring through 0.1 N m at 30°, shifted by
+    ``shift_nm`` (a session's day-to-day error)."""
+    for k, joint in enumerate(("shoulder", "elbow", "wrist")):
+        stiffness = (0.5, 1.5, 0.3)[k]
+        moment = [stiffness * (a - 30.0) * 3.141592653589793 / 180.0 + 0.1 + shift_nm for a in CURVE_ANGLES_DEG]
+        curve = {"angle_deg": list(CURVE_ANGLES_DEG), "moment_nm": moment, "std_nm": [0.01] * len(moment)}
+        document["joints"].setdefault(joint, {})["passive_curve"] = curve
+    return document
+
+
+def build_curves(path: Path, visits: int = 3) -> Path:
+    """``C2``: U2's unchanged arm over ``visits`` weekly visits (no retests) with a passive-moment curve per joint."""
+    import random
+
+    patient = UNCHANGED["U2"]
+    rng = random.Random(5)
+    with open_store(path) as store:
+        store.set_subject(_record(patient, CURVES))
+        for week in range(visits):
+            document = session_estimate(patient, 7 * week, 5000 + week)
+            store.add_estimate(_with_curves(document, rng.gauss(0.0, 0.01)), CURVES)
+    return path

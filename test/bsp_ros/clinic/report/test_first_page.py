@@ -16,9 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from clinic_history import FRICTION, INVALID_VALUE_NM, History
+from report_histories import CURVES, build_curves
 
 from bsp_ros.cli import main
 from bsp_ros.clinic.report import analyse
+from bsp_ros.clinic.report.curve_views import CURVES_TITLE
 from bsp_ros.clinic.report.labels import plain_name
 from bsp_ros.clinic.store import open_store
 
@@ -66,6 +68,19 @@ def _pdf_page_text(pdf: Path, page: int) -> str:
 def _pages(pdf: Path) -> list[tuple[float, float]]:
     info = _run("pdfinfo", "-f", "1", "-l", "99", str(pdf))
     return [(float(w), float(h)) for w, h in re.findall(r"Page\s+\d+ size:\s+([\d.]+) x ([\d.]+) pts", info)]
+
+
+PEERS_HEADING = "Arm weight against its peers"
+
+
+def _peers_page(pdf: Path) -> int:
+    """The page the peers section starts on (its heading and the de Leva tables' source after it on that page or
+    the next)."""
+    pages = [_pdf_page_text(pdf, page) for page in range(1, len(_pages(pdf)) + 1)]
+    (start,) = [k for k, text in enumerate(pages, start=1) if PEERS_HEADING in text]
+    after = pages[start - 1].split(PEERS_HEADING, 1)[1] + " ".join(pages[start : start + 1])
+    assert "de Leva (1996)" in after
+    return start
 
 
 def _names_in(text: str, history: History) -> set[str]:
@@ -134,9 +149,19 @@ def test_pdf_is_a4_with_a_standalone_first_page(written: dict[str, Path], histor
         text = _pdf_page_text(pdf, page)
         assert f"Page {page} of {len(sizes)}" in text and "made 20" in text and FRICTION in text
     assert "docs/clinic.md" in _pdf_page_text(pdf, len(sizes)) and "docs/clinic.md" not in _pdf_page_text(pdf, 1)
+    assert _peers_page(pdf) in (1, 2)
     _run("pdftoppm", "-png", "-r", "60", "-f", "1", "-l", "1", str(pdf), str(tmp_path / "page"))
     (png,) = tmp_path.glob("page*.png")
     assert _red_pixels(png) > 100, "the planted change is not marked in red on the first page"
+
+
+@pytest.mark.skipif(not POPPLER, reason="needs poppler-utils (pdftotext, pdfinfo; .ci/services.sh)")
+def test_the_peers_stand_on_page_1_or_2_after_the_passive_curves(tmp_path: Path) -> None:
+    store = build_curves(tmp_path / "clinic.sqlite")
+    pdf = tmp_path / "report.pdf"
+    assert main(["report", CURVES, "--pdf", str(pdf), "--store", str(store)]) == 0
+    assert CURVES_TITLE in _pdf_page_text(pdf, 2)  # the curves of three joints come first in the detail
+    assert _peers_page(pdf) in (1, 2)
 
 
 def test_an_invalid_session_is_a_marked_gap_not_a_value(history: History) -> None:
