@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import email
 import importlib.metadata
+import json
 import os
 import re
 import shutil
@@ -64,7 +65,7 @@ def _source_modules() -> set[str]:
 
 
 def _third_party_imports() -> set[str]:
-    names = set()
+    names: set[str] = set()
     for package in PACKAGES:
         for path in (ROOT / package).rglob("*.py"):
             for node in ast.walk(ast.parse(path.read_text(), str(path))):
@@ -132,6 +133,22 @@ def test_installed_wheel_imports_every_module(wheel: Path, tmp_path: Path) -> No
         [sys.executable, "-c", script], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300
     )
     assert done.returncode == 0, done.stderr[-2000:]
+    # `python -c "import bsp_ros; bsp_ros.identify(BAG)"` from the installed copy, on a short simulated session.
+    import bsp_ros
+
+    bag = bsp_ros.simulate(tmp_path / "short", duration_s=20, seed=3)
+    line = (
+        f"import bsp_ros; e = bsp_ros.identify({str(bag)!r}); "
+        f"assert bsp_ros.api.__file__.startswith({str(target)!r}), bsp_ros.api.__file__; "
+        "q = e.quantity('static_moment_kgm', 'forearm'); print(e.valid, q.value, q.std)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", line], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    valid, value, std = done.stdout.split()
+    truth = json.loads((bag / "truth.json").read_text())["segments"]["forearm"]["static_moment_kgm"]
+    assert valid == "True" and abs(float(value) - truth) < 3 * float(std)
 
 
 def test_every_import_is_listed() -> None:
