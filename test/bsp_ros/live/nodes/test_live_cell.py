@@ -96,6 +96,8 @@ def _valid_over_a_full_window(c: LiveCell, window_s: float) -> bool:
 
 TARGET_PERCENT = 12.0  # untared, the simulated cell's forearm static moment has ~11 % std, the upper arm's ~4 %
 HOLD_S = 2.0
+#: How long the signal is watched after it came: simulated seconds (20 s of wall time at 3x).
+AFTER_SIGNAL_S = 60.0
 LATCHED = QosSpec(reliable=True, depth=1, transient_local=True)
 
 
@@ -153,35 +155,52 @@ class TestSeed4Session:
         self, seed_4_cell: tuple[LiveCell, PrecisionSignals]
     ) -> None:
         # bsp/precision_reached turns true once, after the hold, latched for a late subscriber, and stays; the
-        # estimates and /diagnostics say the same.
+        # estimates and /diagnostics say the same, and the std it promised holds for the rest of the session.
         c, heard = seed_4_cell
         signals = heard.signals
         assert c.spin_until(lambda: any(reached for _, reached in signals), 90), c.estimates_of["precision"][-1:]
         came_at = next(t for t, reached in signals if reached)
-        # And afterwards, for 8 s: no second message, every estimate still says reached.
-        c.spin_until(lambda: time.monotonic() > came_at + 8.0, 30)
+        # And afterwards, for 60 s of the session (20 s at 3x): no second message, every estimate still says reached.
+        estimates = c.estimates_of["precision"]
+        signal_end_ns = _window_end_ns(next(d for t, d in reversed(estimates) if t <= came_at))
+        stayed = lambda: _window_end_ns(estimates[-1][1]) >= signal_end_ns + AFTER_SIGNAL_S * 1e9  # noqa: E731
+        assert c.spin_until(stayed, 35), (estimates[-1][1].get("session"), signal_end_ns)
         assert [reached for _, reached in signals] == [False, True]
         with Client("late_subscriber", c.domain) as late:  # latched: session logic starting later reads it
             seen: list[bool] = []
             topic = c.topic_of("precision", "bsp/precision_reached")
             late.subscribe("std_msgs/msg/Bool", topic, lambda m: seen.append(m.data), LATCHED)
             assert late.spin_until(lambda: bool(seen), 10) and seen == [True]
-        documents = [(t, d) for t, d in c.estimates_of["precision"] if t <= came_at + 8.0]
+        documents = list(estimates)
         assert documents and all("precision" in d for _, d in documents)
         first = next(i for i, (_, d) in enumerate(documents) if d["precision"]["reached"])
         assert all(d["precision"]["reached"] for _, d in documents[first:])
         # Before it came, the estimates within target held for HOLD_S: valid, each static moment within 12 %.
         within = [(t, d) for t, d in documents[:first] if d["precision"]["within_s"] is not None]
         assert within and documents[first][0] - within[0][0] >= HOLD_S - 0.3
-        for _, document in within:
-            assert document["quality"]["valid"]
+        # Within target while it held and for the rest of the session: every estimate valid, its std as promised.
+        after = [d for _, d in documents[first:]]
+        span_s = (_window_end_ns(after[-1]) - _window_end_ns(after[0])) / 1e9
+        # 5 Hz over 20 s of wall time: 100 estimates, some fewer where the machine is busy.
+        assert len(after) >= 60 and span_s >= AFTER_SIGNAL_S - 1.0, (len(after), span_s)
+        for document in [d for _, d in within] + after:
+            assert document["quality"]["valid"], document["quality"]
             for parameter in document["precision"]["parameters"]:
-                assert parameter["relative_std_percent"] <= TARGET_PERCENT
+                assert parameter["relative_std_percent"] <= TARGET_PERCENT, parameter
                 std = document["segments"][parameter["owner"]]["static_moment_kgm"]
                 assert 100 * std["std"] / abs(std["value"]) == pytest.approx(parameter["relative_std_percent"])
+        print(
+            "largest relative std after the signal, %:",
+            max(p["relative_std_percent"] for d in after for p in d["precision"]["parameters"]),
+        )
         assert abs(documents[first][0] - came_at) < 1.0
         health = heard.health
         assert health[-1]["precision.reached"] == "true" and float(health[-1]["precision.reached_after_s"]) >= HOLD_S
+
+
+def _window_end_ns(document: dict[str, Any]) -> int:
+    """Where an estimate's window ends in the session (its last sample's stamp, ns; 0 before it has samples)."""
+    return int(((document.get("session") or {}).get("end_time_ns")) or 0)
 
 
 def test_killed_simulator_turns_estimates_invalid_within_three_periods_and_restart_recovers(cell: MakeCell) -> None:
