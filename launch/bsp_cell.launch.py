@@ -18,8 +18,10 @@ def _nodes(context: LaunchContext) -> list[Node]:
     params = node_parameters(
         LaunchConfiguration("params_file").perform(context), LaunchConfiguration("cell_file").perform(context)
     )
-    # A string even where the id is all digits (subject:=007 would otherwise be an integer).
-    subject = {"subject": ParameterValue(LaunchConfiguration("subject"), value_type=str)}
+    # Given, the subject follows the params file (so it wins), a string even where the id is all digits (subject:=007
+    # would otherwise be an integer); left empty it is not passed, so a params file's subject stands.
+    subject = LaunchConfiguration("subject")
+    named = [{"subject": ParameterValue(subject, value_type=str)}] if subject.perform(context).strip() else []
     return [
         Node(
             package="bsp_ros",
@@ -32,7 +34,7 @@ def _nodes(context: LaunchContext) -> list[Node]:
         Node(
             package="bsp_ros",
             executable="session_recorder",
-            parameters=[*params, subject],
+            parameters=[*params, *named],
             condition=IfCondition(LaunchConfiguration("record_sessions")),
         ),
         Node(
@@ -63,7 +65,8 @@ def generate_launch_description() -> LaunchDescription:
             DeclareLaunchArgument(
                 "subject",
                 default_value="",
-                description="pseudonymous id of the patient whose sessions session_recorder stores (never a name)",
+                description="pseudonymous id of the patient whose sessions session_recorder stores (never a name); "
+                "empty: the params file's subject, else none",
             ),
             OpaqueFunction(function=_nodes),
         ]

@@ -1,6 +1,6 @@
-"""bsp_cell.launch.py's ``cell_file`` argument: given, every node takes it after the params file (so it wins); left
-empty, it is not passed and the params file's stands. The launch file runs here against stand-ins of the launch
-packages, which have no wheels (ros2 launch runs it on a Jazzy cell)."""
+"""bsp_cell.launch.py's ``cell_file`` and ``subject`` arguments: given, a node takes each after the params file (so it
+wins); left empty, it is not passed and the params file's stands. The launch file runs here against stand-ins of the
+launch packages, which have no wheels (ros2 launch runs it on a Jazzy cell)."""
 
 from __future__ import annotations
 
@@ -109,10 +109,23 @@ def test_left_empty_the_cell_file_argument_leaves_the_params_files(launch_file: 
     for executable, given in parameters.items():
         assert given[0] == "/opt/share/bsp_ros/config/bsp_cell.yaml", executable
         assert not any(isinstance(p, dict) and "cell_file" in p for p in given), executable
-    assert parameters["session_recorder"][-1] == {"subject": ("subject", str)}
+    # No subject argument: none passed, so a subject in the params file is not blanked.
+    assert not any(isinstance(p, dict) and "subject" in p for p in parameters["session_recorder"])
 
 
 def test_a_cell_file_argument_follows_the_params_file_so_it_wins(launch_file: types.ModuleType) -> None:
     parameters = _launch(launch_file, params_file="/cell/my_params.yaml", cell_file="/cell/my_cell.yaml")
     for executable, given in parameters.items():
         assert given[:2] == ["/cell/my_params.yaml", {"cell_file": "/cell/my_cell.yaml"}], executable
+
+
+def test_a_subject_argument_follows_the_params_file_as_a_string_and_only_where_given(
+    launch_file: types.ModuleType,
+) -> None:
+    parameters = _launch(launch_file, params_file="/cell/my_params.yaml", subject="007")
+    assert parameters["session_recorder"] == ["/cell/my_params.yaml", {"subject": ("subject", str)}]
+    for executable, given in parameters.items():  # the other nodes have no subject
+        if executable != "session_recorder":
+            assert given == ["/cell/my_params.yaml"], executable
+    blank = _launch(launch_file, params_file="/cell/my_params.yaml", subject="  ")
+    assert blank["session_recorder"] == ["/cell/my_params.yaml"]
