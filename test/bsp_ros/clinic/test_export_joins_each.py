@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -82,3 +83,19 @@ def test_the_export_says_the_passive_model_used_beside_the_configured_one(
     assert configured == "coulomb" and stiff.startswith("coulomb+") and "stiffness" in stiff
     assert "stiffness_nm_per_rad" in {r["quantity"] for r in export if r["session_source"] == "stiff"}
     assert next(r for r in summary if Path(r["bag"]).name == "stiff")["passive_model"] == stiff
+
+
+def test_the_contract_lists_every_column_in_order() -> None:
+    from bsp_ros.cli.identify_each import HEAD_COLUMNS, TAIL_COLUMNS
+    from bsp_ros.clinic.report.export import CSV_COLUMNS
+
+    text = (Path(__file__).resolve().parents[3] / "docs" / "contract.md").read_text(encoding="utf-8")
+    section = text.split("## 12. Tables", 1)[1]
+    summary, export = section.split("**`bsp sessions export --csv`**", 1)
+    listed = [re.findall(r"`([a-z0-9_<>/]+)`", cell) for cell in re.findall(r"^\| (.+?) \|", summary, flags=re.M)]
+    named = [name for names in listed for name in names if "<" not in name and name != "column"]
+    assert named == [*HEAD_COLUMNS, *TAIL_COLUMNS]
+    prose, table = export.split("then the join columns:", 1)
+    joined = [re.findall(r"`([a-z0-9_]+)`", cell) for cell in re.findall(r"^\| (.+?) \|", table, flags=re.M)]
+    columns = [*re.findall(r"`([a-z0-9_]+)`", prose), *(name for names in joined for name in names)]
+    assert columns == list(CSV_COLUMNS)
