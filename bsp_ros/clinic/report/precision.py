@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from bsp_ros.clinic.report.analysis import Analysis
+from bsp_ros.clinic.report.analysis import WEIGHT_QUANTITIES, Analysis
 from bsp_ros.clinic.report.detail import PASSIVE
 from bsp_ros.clinic.report.labels import plain_name, sort_key, unit, with_unit
 from bsp_ros.clinic.report.summary import percent
@@ -42,6 +42,8 @@ class Precision:
     value, std : the estimate and its standard deviation, in the unit of ``key``.
     terms : ``(term, standard uncertainty)`` of the budget, largest first; the squares sum to ``std`` squared.
     tared : whether the session was recorded with a tare.
+    left_out : why the report leaves this value out of the trend and the weight support (an untared session's arm
+        weight among tared sessions), ``""`` where it is used.
     """
 
     arm: str | None
@@ -52,6 +54,7 @@ class Precision:
     std: float
     terms: tuple[tuple[str, float], ...]
     tared: bool
+    left_out: str = ""
 
     @property
     def largest(self) -> tuple[str, float]:
@@ -71,11 +74,12 @@ class Precision:
 
     @property
     def latest(self) -> str:
-        """``0.61 ± 0.032 kg·m (± 5 %)``; the % only where the value is clear of 2 SD of 0."""
+        """``0.61 ± 0.032 kg·m (± 5 %)``; the % only where the value is clear of 2 SD of 0; a value the report leaves
+        out says so (``…; not used: recorded without a tare …``)."""
         text = f"{with_unit(self.value, '')} ± {with_unit(self.std, unit(self.key[2]))}"
         if self.value is not None and abs(self.value) > 2.0 * self.std:
             text += f" (± {percent(100.0 * self.std / abs(self.value))})"
-        return text
+        return text + (f"; not used: {self.left_out}" if self.left_out else "")
 
     @property
     def words(self) -> str:
@@ -110,9 +114,14 @@ def latest_usable(analysis: Analysis, arm: str | None) -> tuple[SessionRecord, s
     return None if found is None else (found, analysis.label_of(found))
 
 
-def precision_of(record: SessionRecord, name: str, key: ParamKey) -> Precision | None:
+UNTARED_LEFT_OUT = (
+    "recorded without a tare among tared sessions, this arm weight is left out of the trend and the weight support"
+)
+
+
+def precision_of(record: SessionRecord, name: str, key: ParamKey, *, left_out: str = "") -> Precision | None:
     """The budget of ``key`` in ``record``; None where the store holds none (sessions stored before budgets, the
-    paper's method) or the std is not a positive number."""
+    paper's method) or the std is not a positive number. ``left_out``: see :class:`Precision`."""
     q = record.parameters.get(key)
     if q is None or q.budget is None or q.std is None or not q.std > 0.0 or not math.isfinite(q.std):
         return None
@@ -128,11 +137,13 @@ def precision_of(record: SessionRecord, name: str, key: ParamKey) -> Precision |
         std=q.std,
         terms=terms,
         tared=record.quality.tare_applied,
+        left_out=left_out,
     )
 
 
 def precision_rows(analysis: Analysis, *, clinician: bool) -> list[Precision]:
-    """Each arm's latest usable session's quantities with a budget, in display order.
+    """Each arm's latest usable session's quantities with a budget, in display order; the arm weight of an untared
+    session among tared ones labelled as left out (:attr:`Precision.left_out`).
 
     Parameters
     ----------
@@ -140,6 +151,7 @@ def precision_rows(analysis: Analysis, *, clinician: bool) -> list[Precision]:
     clinician : True for the static and passive moments only (:data:`CLINICIAN_QUANTITIES`), False for every
         quantity with a budget (the engineer's appendix).
     """
+    untared = {id(u.record) for u in analysis.untared}
     rows = []
     for arm in analysis.arms:
         latest = latest_usable(analysis, arm)
@@ -149,7 +161,8 @@ def precision_rows(analysis: Analysis, *, clinician: bool) -> list[Precision]:
         for key in sorted(record.parameters, key=sort_key):
             if clinician and key[2] not in CLINICIAN_QUANTITIES:
                 continue
-            row = precision_of(record, name, key)
+            weight = key[0] == "segments" and key[2] in WEIGHT_QUANTITIES
+            row = precision_of(record, name, key, left_out=UNTARED_LEFT_OUT if weight and id(record) in untared else "")
             if row is not None:
                 rows.append(row)
     return rows

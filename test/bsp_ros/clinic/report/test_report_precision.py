@@ -10,6 +10,7 @@ own and the marker placement leads everywhere.
 from __future__ import annotations
 
 import copy
+import datetime
 import re
 import shutil
 import subprocess
@@ -199,3 +200,26 @@ def test_the_pdf_names_the_sensor_zero_and_the_tare_below_an_unchanged_page_one(
         pages.append(re.sub(r"made \S+ \S+ UTC|Page 1 of \d+", "", _pdf_text(pdf, 1, 1)))  # stamp, count
         assert _pdf_text(pdf, 2, 2).startswith("Detail: every parameter")
     assert pages[0] == pages[1] and PRECISION_TITLE not in pages[0]
+
+
+def test_an_untared_latest_session_s_arm_weight_is_labelled_left_out(tmp_path: Path) -> None:
+    """T1 (report_histories): a 0.3 kg handle, the latest visit untared. Its passive moments are used and shown as
+    they are; its static moments, which carry the handle's weight, say that the report leaves them out."""
+    from report_histories import UNTARED as T1
+    from report_histories import VISITS, build_untared
+
+    from bsp_ros.clinic.report.html import render_html
+    from bsp_ros.clinic.report.precision import UNTARED_LEFT_OUT
+
+    store = build_untared(tmp_path / "clinic.sqlite")
+    with open_store(store) as opened:
+        analysis = analyse(T1, opened.sessions(T1), pool=opened.sessions(), subject_record=opened.subject_record(T1))
+    rows = precision_rows(analysis, clinician=True)
+    assert rows and {row.session for row in rows} == {str(VISITS)} and not any(row.tared for row in rows)
+    for row in rows:
+        weight = row.key[2] == "static_moment_kgm"
+        assert bool(row.left_out) == weight, row.key
+        assert row.latest.endswith(f"; not used: {UNTARED_LEFT_OUT}") == weight, row.latest
+    html = render_html(analysis, None, [], datetime.datetime(2026, 1, 1, tzinfo=datetime.UTC))
+    precision = html.split(f"{PRECISION_TITLE}</h3>")[1].split("</table>")[0]
+    assert precision.count("not used: recorded without a tare") == len(STATIC)
