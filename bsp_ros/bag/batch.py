@@ -7,24 +7,40 @@ from pathlib import Path
 
 from bsp_ros.bag.metadata import METADATA_FILE
 
-# What marks a folder as a bag in itself, as `resolve_bag` sees it: its metadata, its MCAP files, or the files
-# of a storage it refuses by name (so a folder of such bags still gives each one its own row and reason).
-_BAG_MARKS = (METADATA_FILE, "*.mcap", "*.db3", "*.mcap.zstd", "*.mcap.lz4", "*.bag")
+# What marks a folder as a bag in itself, as `resolve_bag` sees it: its metadata, or the files of a storage it
+# refuses by name (so a folder of such bags still gives each one its own row and reason). A folder of plain MCAP
+# files without metadata is no bag in itself here: each file is one.
+_BAG_MARKS = (METADATA_FILE, "*.db3", "*.mcap.zstd", "*.mcap.lz4", "*.bag")
 
 
-def looks_like_bag_dir(path: Path) -> bool:
-    """Whether the directory ``path`` holds a bag of its own (``metadata.yaml``, ``.mcap`` files, or another
-    storage's files that the reader names when it refuses them)."""
+def _is_one_bag(path: Path) -> bool:
+    # A rosbag2 directory (its metadata names its files), or a storage the reader refuses with its reason.
     return any(next(iter(path.glob(mark)), None) is not None for mark in _BAG_MARKS)
+
+
+def _mcap_files(path: Path) -> list[Path]:
+    return sorted(child for child in path.glob("*.mcap") if child.is_file())
+
+
+def bags_in_dir(path: Path) -> list[Path]:
+    """The bags the directory ``path`` stands for: itself where it is a rosbag2 directory (``metadata.yaml``) or a
+    refused storage's; else each ``.mcap`` file directly inside and each sub-directory that is a bag (a
+    sub-directory of plain ``.mcap`` files: its files), sorted by name; none if it holds no bag."""
+    if _is_one_bag(path):
+        return [path]
+    found = [*_mcap_files(path)]
+    for child in sorted(p for p in path.iterdir() if p.is_dir()):
+        found.extend([child] if _is_one_bag(child) else _mcap_files(child))
+    return sorted(found, key=lambda p: p.name)
 
 
 def expand_bags(paths: Iterable[Path]) -> list[Path]:
     """The bags meant by ``paths``, in order: a directory that is no bag itself stands for the bags inside it.
 
-    A path that is a file, a bag directory or does not exist is kept as given (the reader says what is wrong
-    with it). A directory that is no bag is replaced by its sub-directories that are bags, sorted by name (a
-    directory with ``.mcap`` files directly inside is one bag); one without any is kept, so its reading says it
-    is not a bag.
+    A path that is a file, a rosbag2 directory (with ``metadata.yaml``) or does not exist is kept as given (the
+    reader says what is wrong with it). Another directory is replaced by :func:`bags_in_dir`: its ``.mcap`` files,
+    each a bag of its own (MCAP files without metadata are one recording each), and its sub-directories that are
+    bags; one without any is kept, so its reading says it is not a bag.
 
     Parameters
     ----------
@@ -38,11 +54,7 @@ def expand_bags(paths: Iterable[Path]) -> list[Path]:
     """
     out: list[Path] = []
     for path in paths:
-        if not path.is_dir() or looks_like_bag_dir(path):
-            out.append(path)
-            continue
-        inside = sorted(child for child in path.iterdir() if child.is_dir() and looks_like_bag_dir(child))
-        out.extend(inside or [path])
+        out.extend((bags_in_dir(path) or [path]) if path.is_dir() else [path])
     return out
 
 
