@@ -22,7 +22,7 @@ from bsp_ros.clinic.store import (
 from bsp_ros.clinic.store.estimate import check_future
 from bsp_ros.clinic.store.records import Quality, describe_body
 from bsp_ros.clinic.store.subject import check_pseudonymous_id
-from bsp_ros.core.findings import invalid_texts, plain_cause
+from bsp_ros.core.findings import Finding, Severity, invalid_texts, plain_cause
 from bsp_ros.errors import InputError, StoreError
 
 
@@ -337,8 +337,19 @@ def _export(store: Store, target: str, subject: str | None) -> int:
     return 0
 
 
+def finding_to_json(finding: Finding) -> dict[str, Any]:
+    """A stored finding as the estimate writes it (``code``, ``severity``, ``where``, ``text``, ``values``), with the
+    clinic's ``cause`` and ``action`` in plain words (both ``""`` for a note only an engineer reads; an invalid
+    finding without its own action: ``repeat the session``, as the report says)."""
+    spec = finding.spec
+    cause = spec.cause.format(where=finding.where.replace("_", " ")) if spec.cause else ""
+    action = spec.action or ("repeat the session" if cause and finding.severity is Severity.INVALID else "")
+    return {**finding.to_json(), "cause": cause, "action": action}
+
+
 def record_to_json(record: SessionRecord) -> dict[str, Any]:
-    """``record`` as a JSON-ready dict (the estimate layout plus the session block)."""
+    """``record`` as a JSON-ready dict (the estimate layout plus the session block); each finding with the clinic's
+    cause and action (:func:`finding_to_json`)."""
     body: dict[str, Any] = {
         "schema": record.estimate_schema,
         "segments": {},
@@ -351,6 +362,7 @@ def record_to_json(record: SessionRecord) -> dict[str, Any]:
             "warnings": list(record.quality.warnings),
             "tare": {"applied": record.quality.tare_applied, "file": record.quality.tare_file},
             "message": record.quality.message,
+            "findings": [finding_to_json(f) for f in record.quality.findings],
         },
         "session": {
             "subject": record.subject,

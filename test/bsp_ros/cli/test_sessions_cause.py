@@ -49,3 +49,30 @@ def test_an_untared_session_among_tared_ones_is_warned_of(tmp_path: Path, capsys
         assert code == 0, err
     assert err.startswith("warning: session 3 of P002 has no tare while 2 of its sessions do")
     assert "bsp tare" in err
+
+
+def test_sessions_show_json_carries_each_finding_with_its_cause_and_action(
+    one_way: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from bsp_ros.core.findings import FindingCode
+    from bsp_ros.core.findings_specs import SPECS
+
+    store = str(tmp_path / "clinic.sqlite")
+    assert bsp(capsys, "sessions", "add", str(one_way), "--store", store, "--subject", "P003")[0] == 0
+    code, out, _ = bsp(capsys, "sessions", "show", "--store", store, "P003", "--json")
+    assert code == 0
+    (shown,) = json.loads(out)
+    findings = shown["quality"]["findings"]
+    first = next(f for f in findings if f["severity"] == "invalid")
+    spec = SPECS[FindingCode.ONE_DIRECTION]
+    assert first["code"] == "one_direction" and first["cause"] == spec.cause and first["action"] == spec.action
+    assert first["text"] and isinstance(first["values"], dict) and "where" in first
+    for finding in findings:
+        assert set(finding) >= {"code", "severity", "where", "text", "values", "cause", "action"}
+        assert bool(finding["cause"]) == bool(SPECS[FindingCode(finding["code"])].cause)
+    # The shown session is an estimate document again: stored back, it keeps its findings.
+    again = tmp_path / "shown.json"
+    again.write_text(json.dumps(shown))
+    assert bsp(capsys, "sessions", "add", str(again), "--store", store, "--subject", "P004")[0] == 0
+    (back,) = json.loads(bsp(capsys, "sessions", "show", "--store", store, "P004", "--json")[1])
+    assert back["quality"]["findings"] == findings
