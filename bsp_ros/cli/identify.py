@@ -238,11 +238,19 @@ def run(args: argparse.Namespace) -> int:
     json_path = None if args.json is None or json_stdout else check_output_file("--json", args.json)
     options = options_from_args(args)
     tilts_rad = trunk_tilts_rad(args.trunk_tilt_deg, len(args.bag))
+    topics = topics_from_args(args)
     try:
-        estimate = estimate_bags(args.bag, options, topics_from_args(args), _progress_bar(), tilts_rad)
+        estimate = estimate_bags(args.bag, options, topics, _progress_bar(), tilts_rad)
     except BagError as error:
         print(f"bsp identify: error: {error}", file=sys.stderr)
         return BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)
+    except InputError as error:
+        if len(args.bag) < 2:
+            raise
+        # Bags given together are one arm's recordings in sequence; where they are not, say how to take them apart.
+        raise InputError(
+            f"{error}; each bag its own session: bsp identify --each BAG... --json-dir DIR --summary FILE"
+        ) from None
     except BspError:
         raise
     unusable = data_problems(estimate)

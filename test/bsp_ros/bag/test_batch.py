@@ -87,3 +87,17 @@ def test_each_identifies_a_folder_of_plain_mcap_files_file_by_file(
             moment = quantities["static_moment_kgm"]
             assert abs(moment["value"] - truth["segments"][segment]["static_moment_kgm"]) < 3 * moment["std"]
     capsys.readouterr()
+
+
+def test_bags_that_are_not_one_arms_recordings_point_to_each(
+    simulated: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    human, paper = simulated / "human", simulated / "paper"
+    for bags, cause in (([human, human], "overlap in time"), ([human, paper], "different numbers of segments")):
+        assert main(["identify", *map(str, bags), "--json", str(tmp_path / "x.json")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("bsp identify: error: ") and cause in err
+        assert "each bag its own session: bsp identify --each BAG... --json-dir DIR --summary FILE" in err
+    # One bag's refusal needs no such hint.
+    assert main(["identify", str(human), "--marker-topic", "knee=/k", "--format", "none"]) == 2
+    assert "--each" not in capsys.readouterr().err
