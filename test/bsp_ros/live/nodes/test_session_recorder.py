@@ -1,6 +1,6 @@
-"""session_recorder on real rclpy and DDS, with the simulated cell: a session started by service for a named subject
-is stored whole under that subject with its record's body data; without a subject nothing is recorded and the log
-says how to name one."""
+"""session_recorder on real rclpy and DDS, with the simulated cell: a retest started by service for a named subject is
+stored whole under that subject, as a retest, with its record's body data; without a subject nothing is recorded and
+the log says how to name one; the stop and reset services end and discard sessions."""
 
 from __future__ import annotations
 
@@ -102,7 +102,20 @@ def cell(tmp_path: Path) -> Iterator[tuple[Callable[[], InProcessRecorder], Node
 Cell = tuple[Callable[[], InProcessRecorder], NodeProcesses, Peer, Path]
 
 
-def test_a_session_started_for_a_named_subject_is_stored_whole_with_its_body_data(
+def _store_first_session_of_today(store: Path) -> int | None:
+    """Store a session of the subject's right arm at the start of today (UTC), as an earlier session of the day;
+    its id."""
+    import time
+
+    from bsp_ros.clinic.store.samples import sample_estimate
+
+    day_ns = 86_400 * 10**9
+    with open_store(store) as opened:
+        stored = opened.add_estimate(sample_estimate(1, start_time_ns=time.time_ns() // day_ns * day_ns), SUBJECT)
+    return stored.id
+
+
+def test_a_retest_started_for_a_named_subject_is_stored_whole_as_a_retest_with_its_body_data(
     cell: Cell, tmp_path: Path, capfd: pytest.CaptureFixture[str]
 ) -> None:
     from rclpy.parameter import Parameter
@@ -122,11 +135,12 @@ def test_a_session_started_for_a_named_subject_is_stored_whole_with_its_body_dat
     assert not (tmp_path / "recordings").exists() or not any((tmp_path / "recordings").iterdir())
 
     # Name the subject (as `ros2 param set` does: the same callback); a name-like id is refused.
+    first_of_day = _store_first_session_of_today(store)  # a retest pairs with it
     (named_badly,) = node.set_parameters([Parameter("subject", value="Maria_Garcia")])
     assert not named_badly.successful and "name" in named_badly.reason
     (named,) = node.set_parameters([Parameter("subject", value=SUBJECT)])
     assert named.successful, named.reason
-    started = _call(peer, "bsp/session/start")
+    started = _call(peer, "bsp/session/start_retest")
     assert started.success, started.message
     assert not _call(peer, "bsp/session/start").success  # one session at a time
     # The simulated session ends; its silence ends the recording, which is identified off the executor thread.
@@ -135,10 +149,12 @@ def test_a_session_started_for_a_named_subject_is_stored_whole_with_its_body_dat
     assert outcome.kind == "stored", outcome.log_line()
 
     with open_store(store) as opened:
-        (record,) = opened.sessions()
+        first, record = opened.sessions()
+    assert first.id == first_of_day and not first.retest
     assert record.subject == SUBJECT
     assert record.subject_info == BODY  # the prior from the subject's record, not the male population's
     assert record.arm == "right"
+    assert record.retest  # started by bsp/session/start_retest: the same day's retest
     # The simulated arm's truth within 3 std (the sensor's mounting written into the bag from the cell description).
     assert outcome.valid, outcome.log_line()
     assert truth, "no sim/truth"
@@ -154,11 +170,12 @@ def test_a_session_started_for_a_named_subject_is_stored_whole_with_its_body_dat
     assert "no subject named: nothing is recorded" in log
     assert "the wrench streams in but no subject is named" in log
     assert f"recording sessions for {SUBJECT} into {store}" in log
-    assert f"stored session 1 of {SUBJECT} (right arm" in log
+    assert f"retest of {SUBJECT} started (service)" in log
+    assert f"stored session 2 of {SUBJECT} (right arm, retest" in log
     assert not any((tmp_path / "recordings").iterdir()) or not outcome.valid  # a valid session's bag is removed
 
 
-def test_session_end_ends_a_session_and_one_that_cannot_be_identified_keeps_its_bag(
+def test_stop_reset_and_session_end_end_sessions_and_one_that_cannot_be_identified_keeps_its_bag(
     cell: Cell, capfd: pytest.CaptureFixture[str]
 ) -> None:
     import numpy as np
@@ -171,24 +188,54 @@ def test_session_end_ends_a_session_and_one_that_cannot_be_identified_keeps_its_
     node = start().node
     (named,) = node.set_parameters([Parameter("subject", value=SUBJECT)])
     assert named.successful
-    assert _call(peer, "bsp/session/start_retest").success
     wrench = peer.client.publisher("geometry_msgs/msg/WrenchStamped", "/ft_sensor/wrench", "sensor_data")
     end = peer.string_publisher("bsp/session_end")
-    t0_ns = node.now_ns()
-    for k in range(50):  # a wrench and no marker: the session cannot be identified
-        sample = WrenchSample(t0_ns + k * 10_000_000, "ft_sensor", np.array([0.0, 1.0, -20.0]), np.zeros(3))
-        wrench.publish(build_wrench_stamped(message_class, sample))
-        peer.spin_until(lambda: False, 0.01)
-    assert peer.spin_until(lambda: bool(node.recording.spool and node.recording.spool.counts), 5)
+
+    def stream() -> Path:
+        """50 wrenches and no marker (a session that cannot be identified) into the running session's bag."""
+        t0_ns = node.now_ns()
+        for k in range(50):
+            sample = WrenchSample(t0_ns + k * 10_000_000, "ft_sensor", np.array([0.0, 1.0, -20.0]), np.zeros(3))
+            wrench.publish(build_wrench_stamped(message_class, sample))
+            peer.spin_until(lambda: False, 0.01)
+        assert peer.spin_until(lambda: bool(node.recording.spool and node.recording.spool.counts), 5)
+        assert node.recording.spool is not None
+        return Path(node.recording.spool.path)
+
+    for service in ("bsp/session/stop", "bsp/session/reset"):  # nothing records yet
+        refused = _call(peer, service)
+        assert not refused.success and "no session" in refused.message, (service, refused.message)
+    # start, reset: the first session's bag is deleted, nothing stored, and a new session records for the subject.
+    assert _call(peer, "bsp/session/start").success
+    discarded = stream()
+    reset = _call(peer, "bsp/session/reset")
+    assert reset.success and f"session of {SUBJECT} discarded" in reset.message, reset.message
+    assert not discarded.exists()
+    # stop: the new session ends and is identified (it cannot be: its bag is kept).
+    kept = stream()
+    assert kept != discarded
+    stopped = _call(peer, "bsp/session/stop")
+    assert stopped.success, stopped.message
+    assert peer.spin_until(lambda: bool(node.outcomes), 20)
+    (by_stop,) = node.outcomes
+    assert by_stop.kind == "failed" and not by_stop.retest and by_stop.kept == kept
+    assert not _call(peer, "bsp/session/stop").success  # it ended
+    # A retest ended by a message on bsp/session_end.
+    assert _call(peer, "bsp/session/start_retest").success
+    stream()
     assert peer.spin_until(lambda: end.publisher.get_subscription_count() > 0, 10)  # type: ignore[attr-defined]
     end("")
-    assert peer.spin_until(lambda: bool(node.outcomes), 20)
-    (outcome,) = node.outcomes
+    assert peer.spin_until(lambda: len(node.outcomes) == 2, 20)
+    outcome = node.outcomes[1]
     assert outcome.kind == "failed" and outcome.retest
     assert outcome.kept is not None and (outcome.kept / "metadata.yaml").is_file()
+    assert (by_stop.kept / "metadata.yaml").is_file()
     with open_store(store) as opened:
         assert opened.sessions() == []
     log = capfd.readouterr().err
+    assert f"session of {SUBJECT} started (service)" in log and f"session of {SUBJECT} started (reset)" in log
+    assert f"session of {SUBJECT} discarded (reset): {discarded} deleted" in log
+    assert f"session of {SUBJECT} ended (stop" in log
     assert "retest of P007 started (service)" in log
     assert "session of P007 ended (session_end" in log
     # The command carries the recorder's own settings (topics, cell file), so it stores the bag as the node would.
