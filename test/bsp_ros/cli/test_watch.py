@@ -1,6 +1,7 @@
 """`bsp watch`: the live table of any running cell. Its view against a real estimate of a simulated session (values,
-stds, budgets, verdict and cause), counters at known rates, the precision block; then `bsp watch` itself in tmux
-against a cell that publishes those messages over DDS, and its exit codes."""
+stds, budgets, verdict and cause), counters at known rates, the precision block; the counters it reads against those
+bsp_identifier counts; then `bsp watch` itself in tmux against a cell that publishes those messages over DDS and
+against the real node suite on the simulated cell, and its exit codes."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from typing import Any
 
 import pytest
 
-from bsp_ros.cli.watch_view import CounterRate, WatchView
+from bsp_ros.cli.watch_view import ANGLES_LOST, IDENTIFIER_LOST, CounterRate, WatchView
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import FindingCode, plain_cause
@@ -24,6 +25,8 @@ from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.live.online.precision import PrecisionTarget, PrecisionTracker
 
 ROOT = Path(__file__).resolve().parents[3]
+#: The live tests' helpers (LiveCell: the node suite on a private domain).
+LIVE_NODES = ROOT / "test" / "bsp_ros" / "live" / "nodes"
 SEGMENTS = ("upper_arm", "forearm", "hand")
 
 
@@ -98,7 +101,11 @@ def test_an_invalid_estimate_says_its_cause_and_what_to_do(short_session: Any) -
     assert view.exit_code() == 1
     view.on_estimate("not json", 0.2)
     view.on_estimate(json.dumps([1, 2]), 0.3)
-    assert view.unreadable == 2 and view.estimates == 1
+    view.on_estimate(json.dumps({**document, "mode": "batch"}), 0.4)  # a mode this version does not know
+    view.on_estimate(json.dumps({**document, "method": "stacked"}), 0.5)
+    assert view.unreadable == 4 and view.estimates == 1
+    view.on_estimate(json.dumps({**document, "mode": "recursive"}), 0.6)
+    assert view.render(0.7, "").splitlines()[1].endswith(" (recursive)")  # the verdict line names the mode
 
 
 def test_the_input_rates_and_losses_come_from_the_nodes_counters() -> None:
@@ -158,6 +165,40 @@ def test_the_precision_line_follows_the_estimates_block_and_the_signal(session: 
     assert _line(view.render(0.0, ""), "precision:").startswith(f"precision: not yet: {worst} static_moment_kgm std ")
     view.on_precision(True)  # the latched topic says it came (an estimate's block may lag by one update)
     assert _line(view.render(0.0, ""), "precision:").startswith("precision: REACHED")
+
+
+def test_the_lost_counters_watch_reads_are_those_bsp_identifier_counts() -> None:
+    # The identifier's counters come from LiveIdentifier (the node publishes them on /diagnostics as they are): a
+    # wrench before its frame's first transform, a wrench of another frame than the tare's; refused from the start.
+    import numpy as np
+
+    from bsp_ros.core.tare import Tare
+    from bsp_ros.live.online.identifier_settings import IdentifierSettings
+    from bsp_ros.live.online.live_identifier import LiveIdentifier
+    from bsp_ros.live.online.wrench_input import WrenchInput
+    from msg_adapters.wrench import WrenchSample
+
+    identifier = LiveIdentifier(IdentifierSettings.from_parameters({}), lambda estimate: estimate, pytest.fail)
+    assert {"wrench", "joint_states", "refused"} <= set(identifier.counters())  # counted from the start
+    sample = WrenchSample(1_000_000_000, "ft_sensor", np.array([0.0, 1.0, -20.0]), np.zeros(3))
+    identifier.add_wrench(sample, None)  # no transform yet
+    tare = Tare(
+        frame_id="another_sensor",
+        load="constant",
+        values=np.zeros(6),
+        covariance=np.zeros((6, 6)),
+        n_samples=100,
+        start_time_ns=0,
+        duration_s=10.0,
+    )
+    identifier.wrench_input = WrenchInput(tare, 0.0)
+    identifier.add_wrench(sample, np.eye(3))
+    counters = identifier.counters()
+    assert counters["waiting_for_tf"] == 1 and counters["tare_frame_mismatch"] == 1
+    assert set(IDENTIFIER_LOST) <= set(counters)
+    view = WatchView()
+    view.on_diagnostics("bsp_identifier", {k: str(v) for k, v in counters.items()}, 1)
+    assert {f"bsp_identifier.{key}" for key in IDENTIFIER_LOST} <= set(view.input_rates().lost)
 
 
 # -- bsp watch itself, over DDS ---------------------------------------------------------------------------------
@@ -224,12 +265,13 @@ class RecordedCell:
 class Tmux:
     """A tmux server of its own (a private socket) running one command in a wide pane."""
 
-    def __init__(self, command: list[str], env: dict[str, str]) -> None:
+    def __init__(self, command: list[str], env: dict[str, str], width: int = 150) -> None:
         self.socket = f"bsp_watch_test_{os.getpid()}"
         exports = " ".join(f"{k}={v}" for k, v in env.items())
         line = f"env {exports} " + " ".join(command)
         subprocess.run(
-            ["tmux", "-L", self.socket, "new-session", "-d", "-s", "watch", "-x", "150", "-y", "45", line], check=True
+            ["tmux", "-L", self.socket, "new-session", "-d", "-s", "watch", "-x", str(width), "-y", "45", line],
+            check=True,
         )
 
     def capture(self) -> str:
@@ -313,3 +355,82 @@ def test_bad_options_exit_2_with_one_line() -> None:
         )
         assert done.returncode == 2, (argv, done.stderr)
         assert "Traceback" not in done.stderr and done.stderr.strip().splitlines()[-1].startswith("bsp watch: error")
+
+
+#: The simulated cell's rates (wrench, marker frames) at 1x, and the speed the real suite runs at.
+SIM_WRENCH_HZ, SIM_FRAMES_HZ, SIM_SPEED = 100.0, 50.0, 3.0
+
+
+def _rate_on(screen: str, label: str) -> float | None:
+    """The rate `bsp watch` shows after ``label`` (``wrench``, ``joint angles``, ``marker frames``), Hz."""
+    line = next((x for x in screen.splitlines() if x.startswith("inputs: ")), "")
+    words = line.split(f"{label} ", 1)
+    if len(words) < 2 or not words[1].split(" ", 1)[0].isdigit():
+        return None
+    return float(words[1].split(" ", 1)[0])
+
+
+@pytest.mark.dds
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("tmux") is None, reason="needs tmux")
+def test_bsp_watch_in_a_terminal_shows_the_real_node_suite(ros_domain: int) -> None:
+    # The simulator, joint angle estimator and identifier as processes. The identifier waits for a transform on a
+    # topic nobody publishes, so it counts the wrenches of its first 2 s as waiting_for_tf (then takes the stated
+    # rotation, the simulated sensor's): a lost counter that is not 0.
+    sys.path.insert(0, str(LIVE_NODES))
+    from live_cell import LiveCell
+
+    from msg_adapters.diagnostics import read_diagnostic_array
+
+    published: dict[str, set[str]] = {}
+
+    def hear(c: Any) -> None:
+        def on_diagnostics(msg: Any) -> None:
+            for status in read_diagnostic_array(msg).status:
+                published.setdefault(status.name, set()).update(dict(status.values))
+
+        c.client.subscribe("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", on_diagnostics, "default")
+
+    identifier = ["wrench_frame_source:=topic", "wrench_frame_topic:=ft_sensor/not_published"]
+    cell = LiveCell(ros_domain, [f"speed:={SIM_SPEED}", "seed:=4"], identifier, before_start=hear)
+    command = [sys.executable, "-m", "bsp_ros.cli", "watch", "--domain", str(ros_domain), "--interval", "0.5"]
+    tmux = Tmux(command, _env(), width=300)  # the lost counters of both nodes on one line
+    try:
+
+        def shown() -> bool:
+            screen = tmux.capture()
+            rates = [_rate_on(screen, label) for label in ("wrench", "joint angles", "marker frames")]
+            return "VALID: " in screen and "INVALID" not in screen and None not in rates
+
+        assert cell.spin_until(shown, 60), tmux.capture()
+        cell.spin_until(lambda: False, 6.0)  # the rates over their full 5 s span
+        screen = tmux.capture()
+        valid = [d for _, d in cell.estimates if d["quality"]["valid"]]
+    finally:
+        tmux.close()
+        cell.close()
+    lines = screen.splitlines()
+    assert lines[0].startswith(f"bsp watch: ROS domain {ros_domain}") and lines[1].startswith("VALID: "), screen
+    # Each static moment with its std as one of the estimates the identifier published.
+    assert valid
+    for segment in SEGMENTS:
+        row = _line(screen, f"{segment} static_moment_kgm")
+        cells = {
+            f"{d['segments'][segment]['static_moment_kgm']['value']:10.4f} "
+            f"{d['segments'][segment]['static_moment_kgm']['std']:9.2g}"
+            for d in valid
+        }
+        assert any(c in row for c in cells), row
+    # The rates the simulator streams at (3x its 100 Hz wrench and 50 Hz marker frames).
+    for label, hz in (("wrench", SIM_WRENCH_HZ), ("joint angles", SIM_FRAMES_HZ), ("marker frames", SIM_FRAMES_HZ)):
+        shown_hz = _rate_on(screen, label)
+        assert shown_hz is not None and abs(shown_hz - SIM_SPEED * hz) < 0.15 * SIM_SPEED * hz, (label, screen)
+    # The lost counters: named as the nodes publish them, the waiting wrenches counted.
+    assert {"wrench", "joint_states", *IDENTIFIER_LOST[:2]} <= published["bsp_identifier"], published
+    assert {"frames", *ANGLES_LOST} <= published["joint_angle_estimator"], published
+    lost = _line(screen, "lost (received, not usable")
+    for key in (*IDENTIFIER_LOST[:2], *ANGLES_LOST):
+        node = "bsp_identifier" if key in IDENTIFIER_LOST[:2] else "joint_angle_estimator"
+        assert f"{node}.{key} " in lost, (key, lost)
+    waiting = int(lost.split("bsp_identifier.waiting_for_tf ", 1)[1].split(",", 1)[0])
+    assert waiting > 0, lost
