@@ -97,7 +97,7 @@ def _plan() -> Any:
 
     nominal = NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
     limits = JointLimits(((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0)))
-    return plan_protocol(PlanRequest(nominal, (0.0, 1.2), limits))
+    return plan_protocol(PlanRequest(nominal=nominal, shoulder_yz_m=(0.0, 1.2), limits=limits))
 
 
 @functools.cache
@@ -107,7 +107,7 @@ def _inertia_plan() -> Any:
 
     nominal = NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
     limits = JointLimits(((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0)), 0.15)
-    return plan_inertia_protocol(PlanRequest(nominal, (0.0, 1.2), limits), 0.3)
+    return plan_inertia_protocol(PlanRequest(nominal=nominal, shoulder_yz_m=(0.0, 1.2), limits=limits), 0.3)
 
 
 def _transition_document(spec: sim.CellSpec, simulated: sim.SimulatedSession, width_rad_s: float) -> dict[str, Any]:

@@ -49,7 +49,11 @@ def case_request(name: str) -> PlanRequest:
     """The plan request of a named case: ``default`` (bsp plan's defaults), ``fast`` (60 s at twice the speed),
     ``auto`` (``--passive auto``), ``tared`` (the default, tared)."""
     subject = sim.human_arm_cell().subject
-    base = PlanRequest(NominalArm.from_anthropometry(subject.lengths_m), SHOULDER_YZ_M, JointLimits(RANGES_DEG))
+    base = PlanRequest(
+        nominal=NominalArm.from_anthropometry(subject.lengths_m),
+        shoulder_yz_m=SHOULDER_YZ_M,
+        limits=JointLimits(RANGES_DEG),
+    )
     if name == "fast":
         return replace(base, duration_s=60.0, limits=JointLimits(RANGES_DEG, 0.06))
     if name == "auto":

@@ -34,7 +34,11 @@ def main() -> int:
     base = sim.human_arm_cell()
     model = PassiveModel.parse("coulomb+offset+stiffness")
     plan = plan_protocol(
-        PlanRequest(NominalArm.from_anthropometry(base.subject.lengths_m), (0.0, 1.2), JointLimits(RANGES_DEG))
+        PlanRequest(
+            nominal=NominalArm.from_anthropometry(base.subject.lengths_m),
+            shoulder_yz_m=(0.0, 1.2),
+            limits=JointLimits(RANGES_DEG),
+        )
     )
     results, truths = [], None
     for seed in range(args.seeds):

@@ -24,7 +24,7 @@ LABELS = {
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ComparisonRow:
     """One identifiable parameter: truth, both estimates and their relative errors (%)."""
 
@@ -56,14 +56,14 @@ def compare_on_mechanical_arm(seed: int = 0, duration_s: float = 120.0) -> tuple
         paper_value, ours_value = paper.value(key, owner), ours.value(key, owner)
         rows.append(
             ComparisonRow(
-                label,
-                true,
-                paper_value,
-                ours_value,
-                ours.std_of(key, owner),
-                100 * abs(paper_value - true) / true,
-                100 * abs(ours_value - true) / true,
-                PAPER_REPORTED_ERROR_PCT[(key, owner)],
+                label=label,
+                truth=true,
+                paper=paper_value,
+                ours=ours_value,
+                ours_std=ours.std_of(key, owner),
+                paper_error_pct=100 * abs(paper_value - true) / true,
+                ours_error_pct=100 * abs(ours_value - true) / true,
+                paper_reported_error_pct=PAPER_REPORTED_ERROR_PCT[(key, owner)],
             )
         )
     return rows, session

@@ -397,7 +397,9 @@ def planned_protocol(arm: Arm26, duration_s: float = 120.0, optimise: bool = Tru
         centres = np.radians([[-40.0, 35.0], [-28.0, 60.0]])
         return trajectory_from_points(centres, np.radians([4.0, 5.0]), duration_s, limits.max_speed_rad_s)
     lengths = [p["length_m"] for p in arm.segment_properties(np.radians([[-34.0, 50.0]]))]
-    request = PlanRequest(NominalArm.from_anthropometry(lengths), (0.0, 1.2), limits, duration_s)
+    request = PlanRequest(
+        nominal=NominalArm.from_anthropometry(lengths), shoulder_yz_m=(0.0, 1.2), limits=limits, duration_s=duration_s
+    )
     return plan_protocol(request).trajectory
 
 

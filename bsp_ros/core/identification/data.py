@@ -20,7 +20,7 @@ from bsp_ros.core.streams import EmgSeries, Session, WrenchSeries, markers_for
 from bsp_ros.errors import DataError, InputError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class IdentificationData:
     """Samples ready for identification, one row per usable wrench sample.
 
@@ -90,24 +90,24 @@ class IdentificationData:
     def window(self, start: int, stop: int) -> IdentificationData:
         """Rows ``start:stop`` (a sliding window for online use)."""
         return IdentificationData(
-            self.t_ns[start:stop],
-            self.q_rad[start:stop],
-            self.velocity_rad_s[start:stop],
-            self.tau_nm[start:stop],
-            self.lengths_m,
-            self.lengths_std_m,
-            self.velocity_noise_rad_s,
-            stop - start,
-            list(self.warnings),
-            dict(self.removed_samples),
-            None if self.qd_rad_s is None else self.qd_rad_s[start:stop],
-            None if self.qdd_rad_s2 is None else self.qdd_rad_s2[start:stop],
-            self.contact_from_robot,
-            None if self.trunk_rad is None else self.trunk_rad[start:stop],
-            None if self.recording_index is None else self.recording_index[start:stop],
-            self.out_of_plane,
-            self.markers_moved,
-            self.emg,
+            t_ns=self.t_ns[start:stop],
+            q_rad=self.q_rad[start:stop],
+            velocity_rad_s=self.velocity_rad_s[start:stop],
+            tau_nm=self.tau_nm[start:stop],
+            lengths_m=self.lengths_m,
+            lengths_std_m=self.lengths_std_m,
+            velocity_noise_rad_s=self.velocity_noise_rad_s,
+            n_wrench_samples=stop - start,
+            warnings=list(self.warnings),
+            removed_samples=dict(self.removed_samples),
+            qd_rad_s=None if self.qd_rad_s is None else self.qd_rad_s[start:stop],
+            qdd_rad_s2=None if self.qdd_rad_s2 is None else self.qdd_rad_s2[start:stop],
+            contact_from_robot=self.contact_from_robot,
+            trunk_rad=None if self.trunk_rad is None else self.trunk_rad[start:stop],
+            recording_index=None if self.recording_index is None else self.recording_index[start:stop],
+            out_of_plane=self.out_of_plane,
+            markers_moved=self.markers_moved,
+            emg=self.emg,
         )
 
 
@@ -227,19 +227,19 @@ def identification_data_from_session(
     tau = contact_torques_nm(q_rad[valid], kinematics.lengths_m, wrench_yzx[valid])
     qd, qdd = qd_all[valid], qdd_all[valid]
     return IdentificationData(
-        t_ns[valid],
-        q_rad[valid],
-        velocity[valid],
-        tau,
-        kinematics.lengths_m,
-        kinematics.lengths_std_m,
-        kinematics.direction_velocity_noise_rad_s,
-        n_wrench,
-        kinematics.warnings + notes,
-        removed,
-        qd,
-        qdd,
-        session.handle_pose is not None,
+        t_ns=t_ns[valid],
+        q_rad=q_rad[valid],
+        velocity_rad_s=velocity[valid],
+        tau_nm=tau,
+        lengths_m=kinematics.lengths_m,
+        lengths_std_m=kinematics.lengths_std_m,
+        velocity_noise_rad_s=kinematics.direction_velocity_noise_rad_s,
+        n_wrench_samples=n_wrench,
+        warnings=kinematics.warnings + notes,
+        removed_samples=removed,
+        qd_rad_s=qd,
+        qdd_rad_s2=qdd,
+        contact_from_robot=session.handle_pose is not None,
         out_of_plane=out_of_plane_fraction(chain, markers_for(session.n_segments)),
         emg=session.emg,
     )

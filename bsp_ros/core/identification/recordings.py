@@ -59,24 +59,26 @@ def combine_recordings(
     qd, qdd = _stacked_rates(ordered)
     trunk = np.concatenate([np.full(r.t_ns.size, tilts[k]) for k, r in zip(order.tolist(), ordered, strict=True)])
     return IdentificationData(
-        np.concatenate([r.t_ns for r in ordered]),
-        np.concatenate([r.q_rad for r in ordered]),
-        np.concatenate([r.velocity_rad_s for r in ordered]),
-        np.concatenate([r.tau_nm for r in ordered]),
-        lengths.mean_m,
-        lengths.std_m,
-        np.max([r.velocity_noise_rad_s for r in ordered], axis=0),
-        sum(r.n_wrench_samples for r in ordered),
-        warnings,
-        _summed_removed(ordered),
-        qd,
-        qdd,
-        robot == {True},
-        trunk if tilts.any() else None,
-        np.concatenate([np.full(r.t_ns.size, k) for k, r in enumerate(ordered)]),
-        np.max([r.out_of_plane for r in ordered], axis=0) if all(r.out_of_plane is not None for r in ordered) else None,
-        lengths.moved,
-        combined_emg([r.emg for r in ordered]),
+        t_ns=np.concatenate([r.t_ns for r in ordered]),
+        q_rad=np.concatenate([r.q_rad for r in ordered]),
+        velocity_rad_s=np.concatenate([r.velocity_rad_s for r in ordered]),
+        tau_nm=np.concatenate([r.tau_nm for r in ordered]),
+        lengths_m=lengths.mean_m,
+        lengths_std_m=lengths.std_m,
+        velocity_noise_rad_s=np.max([r.velocity_noise_rad_s for r in ordered], axis=0),
+        n_wrench_samples=sum(r.n_wrench_samples for r in ordered),
+        warnings=warnings,
+        removed_samples=_summed_removed(ordered),
+        qd_rad_s=qd,
+        qdd_rad_s2=qdd,
+        contact_from_robot=robot == {True},
+        trunk_rad=trunk if tilts.any() else None,
+        recording_index=np.concatenate([np.full(r.t_ns.size, k) for k, r in enumerate(ordered)]),
+        out_of_plane=np.max([r.out_of_plane for r in ordered], axis=0)
+        if all(r.out_of_plane is not None for r in ordered)
+        else None,
+        markers_moved=lengths.moved,
+        emg=combined_emg([r.emg for r in ordered]),
     )
 
 

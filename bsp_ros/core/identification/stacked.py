@@ -46,7 +46,7 @@ class JointRegressors:
         return self._joined[joint]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Problem:
     """The joint model stacked over samples and joints: ``torque[t, i] = sum_k X_i[t, k] theta_k`` on joint ``i``'s
     used rows, with bounds and Gaussian priors on some parameters (``p`` of them, ``n`` joints, ``N`` samples).
@@ -137,7 +137,7 @@ class Extras:
     prior: BasePrior
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Fit:
     """A solved :class:`Problem`: values (p,), HAC covariance (p, p), the residuals and per-joint noise, the
     condition number of the scaled design and the HAC's lags."""
@@ -201,16 +201,16 @@ def build_problem(
         precision = np.concatenate((precision, np.where(sd > 0, 1.0 / np.maximum(sd, 1e-300) ** 2, 0.0)))
         lower += [-np.inf] * dynamics
     return Problem(
-        names,
-        (tuple(columns),),
-        data.tau_nm,
-        rows,
-        np.array(lower),
-        np.full(p + dynamics, np.inf),
-        mean,
-        precision,
-        p,
-        used_torques(data.tau_nm, rows),
+        names=names,
+        blocks=(tuple(columns),),
+        torque=data.tau_nm,
+        rows=rows,
+        lower=np.array(lower),
+        upper=np.full(p + dynamics, np.inf),
+        prior_mean=mean,
+        prior_precision=precision,
+        passive_end=p,
+        joint_torques=used_torques(data.tau_nm, rows),
     )
 
 
@@ -511,7 +511,16 @@ def fit_problem(problem: Problem, solved: Reweighted | None = None) -> Fit:
     singular = np.linalg.svd(r_factor, compute_uv=False)
     condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
     residual_used = np.where(problem.rows, residual, np.nan)
-    return Fit(values, covariance, residual_used, solved.sigma, condition, lags, design, weights)
+    return Fit(
+        values=values,
+        covariance=covariance,
+        residual=residual_used,
+        sigma=solved.sigma,
+        condition=condition,
+        lags=lags,
+        design=design,
+        weights=weights,
+    )
 
 
 def augmented(
@@ -525,15 +534,17 @@ def augmented(
     m = len(names)
     own = tuple(np.where(problem.rows[:, j, None], extra[:, j], 0.0) for j in range(problem.torque.shape[1]))
     return Problem(
-        problem.names + names,
-        (*problem.blocks, own),
-        problem.torque,
-        problem.rows,
-        np.concatenate((problem.lower, np.full(m, -np.inf))),
-        np.concatenate((problem.upper, np.full(m, np.inf))),
-        np.concatenate((problem.prior_mean, np.zeros(m) if prior_mean is None else prior_mean)),
-        np.concatenate((problem.prior_precision, np.zeros(m) if prior_precision is None else prior_precision)),
-        problem.passive_end,
-        problem.joint_torques,  # the same rows and torques
-        _augmented_statistics(problem, own),
+        names=problem.names + names,
+        blocks=(*problem.blocks, own),
+        torque=problem.torque,
+        rows=problem.rows,
+        lower=np.concatenate((problem.lower, np.full(m, -np.inf))),
+        upper=np.concatenate((problem.upper, np.full(m, np.inf))),
+        prior_mean=np.concatenate((problem.prior_mean, np.zeros(m) if prior_mean is None else prior_mean)),
+        prior_precision=np.concatenate(
+            (problem.prior_precision, np.zeros(m) if prior_precision is None else prior_precision)
+        ),
+        passive_end=problem.passive_end,
+        joint_torques=problem.joint_torques,  # the same rows and torques
+        known_statistics=_augmented_statistics(problem, own),
     )

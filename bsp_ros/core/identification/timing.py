@@ -134,7 +134,15 @@ class DelayProblem:
         if not use.all():
             t, q, velocity, wrench = t[use], q[use], velocity[use], wrench[use]
         tau = contact_torques_nm(q, k.lengths_m, wrench)
-        data = IdentificationData(t, q, velocity, tau, k.lengths_m, k.lengths_std_m, k.direction_velocity_noise_rad_s)
+        data = IdentificationData(
+            t_ns=t,
+            q_rad=q,
+            velocity_rad_s=velocity,
+            tau_nm=tau,
+            lengths_m=k.lengths_m,
+            lengths_std_m=k.lengths_std_m,
+            velocity_noise_rad_s=k.direction_velocity_noise_rad_s,
+        )
         return data, valid
 
     def rows(self, keep: np.ndarray) -> DelayProblem:

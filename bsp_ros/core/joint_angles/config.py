@@ -48,7 +48,7 @@ class KinematicsConfig:
         check_positive("outlier_sd", self.outlier_sd, 1000.0)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MarkerKinematics:
     """Joint angles on a uniform marker-rate grid.
 

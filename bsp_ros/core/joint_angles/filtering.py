@@ -177,7 +177,19 @@ def kinematics_from_angles(
     invalid = int((~np.isfinite(q_grid).all(axis=1)).sum())
     qd, qdd = _motion_runs(gridded, q_grid, 1e9 / step_ns, config.dynamics_cutoff_hz)
     return MarkerKinematics(
-        grid_ns, q_grid, velocity, lengths, np.zeros_like(lengths), {}, invalid, noise, notes, {}, qd, qdd, config
+        t_ns=grid_ns,
+        q_rad=q_grid,
+        direction_velocity_rad_s=velocity,
+        lengths_m=lengths,
+        lengths_std_m=np.zeros_like(lengths),
+        n_frames_bridged={},
+        n_frames_invalid=invalid,
+        direction_velocity_noise_rad_s=noise,
+        warnings=notes,
+        n_frames_rejected={},
+        velocity_rad_s=qd,
+        acceleration_rad_s2=qdd,
+        config=config,
     )
 
 
@@ -243,5 +255,16 @@ def kinematics_from_markers(
         )
     qd, qdd = _motion_runs(raw_q, q_rad, 1e9 / step_ns, config.dynamics_cutoff_hz)
     return MarkerKinematics(
-        grid_ns, q_rad, velocity, lengths_m, lengths_std_m, bridged, n_invalid, noise, warnings, rejected, qd, qdd
+        t_ns=grid_ns,
+        q_rad=q_rad,
+        direction_velocity_rad_s=velocity,
+        lengths_m=lengths_m,
+        lengths_std_m=lengths_std_m,
+        n_frames_bridged=bridged,
+        n_frames_invalid=n_invalid,
+        direction_velocity_noise_rad_s=noise,
+        warnings=warnings,
+        n_frames_rejected=rejected,
+        velocity_rad_s=qd,
+        acceleration_rad_s2=qdd,
     )

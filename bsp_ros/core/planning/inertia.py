@@ -119,7 +119,17 @@ def plan_inertia_protocol(request: PlanRequest, max_acceleration_rad_s2: float) 
     ratio = inertial_torque_ratio(trajectory, request.nominal)
     amplitudes = np.array(sines.amplitude_deg).sum(axis=1)
     centres = np.array(sines.center_deg)[None]
-    return with_budget(Plan(request, trajectory, centres, amplitudes, _predict(request, trajectory), ratio, notes))
+    return with_budget(
+        Plan(
+            request=request,
+            trajectory=trajectory,
+            centres_deg=centres,
+            amplitudes_deg=amplitudes,
+            prediction=_predict(request, trajectory),
+            inertia_ratio=ratio,
+            notes=notes,
+        )
+    )
 
 
 def simulated_inertia_std(

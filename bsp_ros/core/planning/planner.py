@@ -58,7 +58,7 @@ _INFEASIBLE = 1e3
 
 
 @normalising
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PlanRequest:
     """What the planner is given.
 
@@ -146,7 +146,7 @@ class PlanRequest:
         return amplitude
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Plan:
     """A planned protocol and what it is predicted to deliver.
 
@@ -472,7 +472,15 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
                 "from them; the predicted stds above are the quasi-static model's"
             )
     notes.append(f"optimiser: {result.nfev} evaluations, objective {request.objective} {cost(best):.4g}")
-    return Plan(request, trajectory, np.degrees(centres), np.degrees(amplitudes), prediction, ratio, notes)
+    return Plan(
+        request=request,
+        trajectory=trajectory,
+        centres_deg=np.degrees(centres),
+        amplitudes_deg=np.degrees(amplitudes),
+        prediction=prediction,
+        inertia_ratio=ratio,
+        notes=notes,
+    )
 
 
 def inertial_torque_ratio(

@@ -27,7 +27,7 @@ from bsp_ros.validation import check_finite_scalar, check_positive
 
 
 @normalising
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CellSpec:
     """Everything that defines one simulated session.
 

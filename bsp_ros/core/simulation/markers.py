@@ -17,7 +17,7 @@ MAX_SKIN_OFFSET_M = 0.1
 
 
 @normalising
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MarkerSpec:
     """The motion-capture streams (one marker per joint centre, ``hand`` at the contact point).
 

@@ -23,7 +23,7 @@ _EXPONENTIAL_SPAN = 8.0  # bins cover 8 time constants; the tail beyond is one m
 
 
 @normalising
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SensorSpec:
     """The force/torque sensor stream.
 

@@ -244,7 +244,7 @@ class SubjectTruth:
 
 
 @normalising
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PassiveTruth:
     """True passive joint moment, per joint (shoulder, elbow, wrist), the torque the driver must supply.
 

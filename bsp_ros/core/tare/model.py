@@ -65,7 +65,7 @@ def gravity_in_sensor(rotation_world_from_sensor: npt.ArrayLike) -> np.ndarray:
 
 
 @normalising
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Tare:
     """A tare: what the sensor reads with the handle free, as a function of its orientation.
 

@@ -14,7 +14,7 @@ from bsp_ros.core.identification.priors import BasePrior
 from bsp_ros.validation import check_finite_scalar, check_positive
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class JointConfig:
     """Settings of the stacked identification.
 

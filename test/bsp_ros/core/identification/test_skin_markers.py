@@ -21,7 +21,7 @@ DATA_SOURCES = ("data", "data+prior")
 def _planned() -> object:
     nominal = NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
     limits = JointLimits(((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0)))
-    return plan_protocol(PlanRequest(nominal, (0.0, 1.2), limits)).trajectory
+    return plan_protocol(PlanRequest(nominal=nominal, shoulder_yz_m=(0.0, 1.2), limits=limits)).trajectory
 
 
 def _session(seed: int, planned: bool) -> sim.SimulatedSession:
@@ -76,7 +76,7 @@ def _inertia_plan() -> object:
 
     nominal = NominalArm.from_anthropometry(sim.human_arm_cell().subject.lengths_m)
     limits = JointLimits(((-70.0, -10.0), (10.0, 100.0), (-20.0, 20.0)), 0.15)
-    return plan_inertia_protocol(PlanRequest(nominal, (0.0, 1.2), limits), 0.3).trajectory
+    return plan_inertia_protocol(PlanRequest(nominal=nominal, shoulder_yz_m=(0.0, 1.2), limits=limits), 0.3).trajectory
 
 
 @pytest.mark.parametrize("offset_nm", [0.0, 0.5])

@@ -10,10 +10,12 @@ from bsp_ros.core.planning import JointLimits, Plan, PlanRequest, plan_protocol
 
 @pytest.fixture(scope="session")
 def plan() -> Plan:
-    return plan_protocol(PlanRequest(nominal_arm(), SHOULDER_YZ_M, JointLimits(RANGES_DEG)))
+    return plan_protocol(
+        PlanRequest(nominal=nominal_arm(), shoulder_yz_m=SHOULDER_YZ_M, limits=JointLimits(RANGES_DEG))
+    )
 
 
 @pytest.fixture(scope="session")
 def wrist_limited_plan() -> Plan:
     limits = JointLimits((RANGES_DEG[0], RANGES_DEG[1], (-5.0, 5.0)))
-    return plan_protocol(PlanRequest(nominal_arm(), SHOULDER_YZ_M, limits, n_points=1))
+    return plan_protocol(PlanRequest(nominal=nominal_arm(), shoulder_yz_m=SHOULDER_YZ_M, limits=limits, n_points=1))

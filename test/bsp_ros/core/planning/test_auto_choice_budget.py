@@ -24,7 +24,11 @@ SKIN_BOUND_M = 0.002 * math.sqrt(3.0)
 @pytest.fixture(scope="module")
 def auto_plan() -> Plan:
     request = PlanRequest(
-        nominal_arm(), SHOULDER_YZ_M, JointLimits(RANGES_DEG), passive=PassiveModel.parse("auto"), n_points=1
+        nominal=nominal_arm(),
+        shoulder_yz_m=SHOULDER_YZ_M,
+        limits=JointLimits(RANGES_DEG),
+        passive=PassiveModel.parse("auto"),
+        n_points=1,
     )
     return plan_protocol(request)
 

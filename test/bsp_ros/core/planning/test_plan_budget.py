@@ -26,7 +26,13 @@ SKIN_BOUND_M = 0.002 * math.sqrt(3.0)
 @pytest.fixture(scope="module")
 def quick_plan() -> Plan:
     return plan_protocol(
-        PlanRequest(nominal_arm(), SHOULDER_YZ_M, JointLimits(RANGES_DEG), n_points=1, max_evaluations=60)
+        PlanRequest(
+            nominal=nominal_arm(),
+            shoulder_yz_m=SHOULDER_YZ_M,
+            limits=JointLimits(RANGES_DEG),
+            n_points=1,
+            max_evaluations=60,
+        )
     )
 
 

@@ -25,10 +25,10 @@ SUBJECT = sim.SubjectTruth.from_anthropometry("female", 62.0, 1.66, 2)
 
 def _plan(tilts_rad: tuple[float, ...]) -> object:
     request = PlanRequest(
-        NominalArm.from_anthropometry(list(NOMINAL.lengths_m)),
-        (0.0, 1.2),
-        LIMITS,
-        120.0,
+        nominal=NominalArm.from_anthropometry(list(NOMINAL.lengths_m)),
+        shoulder_yz_m=(0.0, 1.2),
+        limits=LIMITS,
+        duration_s=120.0,
         passive=PassiveModel.parse("auto"),
         trunk_tilts_rad=tilts_rad,
         max_evaluations=40,

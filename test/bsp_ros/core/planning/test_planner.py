@@ -52,7 +52,13 @@ def test_a_two_segment_chain_is_planned_within_its_limits() -> None:
 
     limits = JointLimits(((-60.0, -15.0), (20.0, 80.0)))
     plan = plan_protocol(
-        PlanRequest(NominalArm.from_anthropometry((0.3, 0.3)), SHOULDER_YZ_M, limits, n_points=1, max_evaluations=60)
+        PlanRequest(
+            nominal=NominalArm.from_anthropometry((0.3, 0.3)),
+            shoulder_yz_m=SHOULDER_YZ_M,
+            limits=limits,
+            n_points=1,
+            max_evaluations=60,
+        )
     )
     assert plan.trajectory.n_joints == 2
     check_trajectory_within(plan.trajectory, limits)

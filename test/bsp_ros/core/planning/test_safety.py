@@ -85,12 +85,17 @@ def test_reachability_check_refuses_a_nearly_straight_elbow() -> None:
 def test_elbow_range_across_a_straight_arm_is_refused() -> None:
     limits = JointLimits((RANGES_DEG[0], (-20.0, 100.0), RANGES_DEG[2]))
     with pytest.raises(InputError, match="crosses a straight arm"):
-        PlanRequest(nominal_arm(), SHOULDER_YZ_M, limits).usable_range_deg()
+        PlanRequest(nominal=nominal_arm(), shoulder_yz_m=SHOULDER_YZ_M, limits=limits).usable_range_deg()
 
 
 def test_a_session_too_short_for_the_reversals_is_refused() -> None:
     request = PlanRequest(
-        nominal_arm(), SHOULDER_YZ_M, JointLimits(RANGES_DEG), duration_s=20.0, amplitude_deg=(20, 30, 10), n_points=2
+        nominal=nominal_arm(),
+        shoulder_yz_m=SHOULDER_YZ_M,
+        limits=JointLimits(RANGES_DEG),
+        duration_s=20.0,
+        amplitude_deg=(20, 30, 10),
+        n_points=2,
     )
     with pytest.raises(InfeasiblePlanError, match="session is too short"):
         plan_protocol(request)
@@ -98,18 +103,20 @@ def test_a_session_too_short_for_the_reversals_is_refused() -> None:
 
 def test_an_amplitude_wider_than_the_range_is_refused() -> None:
     limits = JointLimits((RANGES_DEG[0], RANGES_DEG[1], (-5.0, 5.0)))
-    request = PlanRequest(nominal_arm(), SHOULDER_YZ_M, limits, amplitude_deg=(5.0, 5.0, 6.0))
+    request = PlanRequest(
+        nominal=nominal_arm(), shoulder_yz_m=SHOULDER_YZ_M, limits=limits, amplitude_deg=(5.0, 5.0, 6.0)
+    )
     with pytest.raises(InputError, match="wrist amplitude 6 deg does not fit"):
         plan_protocol(request)
 
 
 def test_limits_for_another_chain_are_refused() -> None:
     with pytest.raises(InputError, match="2 joint ranges given for a 3-segment arm"):
-        PlanRequest(nominal_arm(), SHOULDER_YZ_M, JointLimits(RANGES_DEG[:2]))
+        PlanRequest(nominal=nominal_arm(), shoulder_yz_m=SHOULDER_YZ_M, limits=JointLimits(RANGES_DEG[:2]))
 
 
 def test_the_elbow_is_narrowed_never_widened() -> None:
     limits = JointLimits((RANGES_DEG[0], (0.0, 180.0), RANGES_DEG[2]))
-    usable = PlanRequest(nominal_arm(), SHOULDER_YZ_M, limits).usable_range_deg()
+    usable = PlanRequest(nominal=nominal_arm(), shoulder_yz_m=SHOULDER_YZ_M, limits=limits).usable_range_deg()
     assert tuple(usable[1]) == (5.0, 175.0)
     assert math.isclose(usable[0][0], -70.0)

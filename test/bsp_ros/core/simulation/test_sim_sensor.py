@@ -94,7 +94,10 @@ def test_filter_averaging_and_clock_offset_delay_the_wrench_by_the_recorded_amou
     The passive moment is smooth (viscous, no Coulomb step) so that a filter only delays the signal.
     """
     base = human_arm_cell(
-        seed=3, duration_s=16.0, inertia=True, passive=PassiveTruth((0.0, 0.0, 0.0), (0.5, 0.2, 0.05))
+        seed=3,
+        duration_s=16.0,
+        inertia=True,
+        passive=PassiveTruth(coulomb_nm=(0.0, 0.0, 0.0), viscous_nms=(0.5, 0.2, 0.05)),
     )
     spec = _quiet(dataclasses.replace(base, trajectory=base.trajectory.speed_scaled(3.0)), **sensor)
     simulated = simulate_cell(spec)
