@@ -10,7 +10,9 @@ Each prints its wall time, bags per second and memory: the peak resident set sum
 once (sampled every 20 ms from /proc, or psutil where installed: the main process, the forkserver and the
 workers together) and the largest single process (the same sampling, and ``getrusage(RUSAGE_CHILDREN)`` of a
 wrapper as a cross-check; the forkserver's workers are not its waited children, so it sees the main process only).
-The two summaries must be equal and the loop's exit codes those of the summary's rows.
+The two summaries must be equal, each run's JSON directory must hold one estimate per summary row with an estimate
+(its ``json`` cell naming it), and the loop's exit codes must be those of the summary's rows; the bench exits 1
+otherwise.
 
     PYTHONPATH=. nice -n 10 python bench/bench_identify_each.py /tmp/each-cache --bags 200
 """
@@ -148,6 +150,19 @@ def _codes(summary: Path) -> dict[str, str]:
         return {Path(r["bag"]).name: r["exit_code"] for r in csv.DictReader(stream)}
 
 
+def check_json_count(out: Path) -> str | None:
+    """None when the run's JSON directory holds one estimate per summary row with an estimate (``valid`` given)
+    and each such row names its file; else what differs."""
+    with open(out / "summary.csv", newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    estimated = [r for r in rows if r["valid"] != ""]
+    files = sorted(p.name for p in (out / "json").glob("*.json"))
+    named = sorted(r["json"] for r in estimated)
+    if len(files) != len(estimated) or files != named:
+        return f"{out.name}: {len(files)} JSON files, {len(estimated)} rows with an estimate naming {len(named)}"
+    return None
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("cache", type=Path, help="folder for the bags (reused) and the outputs")
@@ -171,6 +186,8 @@ def main() -> int:
         )
     one, two = (args.cache / f"each-jobs{j}" / "summary.csv" for j in (1, 2))
     same = one.read_text() == two.read_text()
+    json_failures = [f for f in (check_json_count(args.cache / f"each-jobs{j}") for j in (1, 2)) if f is not None]
+    failed = json_failures + ([] if same else ["the summaries of --jobs 1 and --jobs 2 differ"])
     if not args.no_loop:
         out = args.cache / "loop"
         shutil.rmtree(out, ignore_errors=True)
@@ -181,6 +198,7 @@ def main() -> int:
         with open(out / "codes.csv", newline="") as stream:
             loop_codes = {Path(bag).name: code for bag, code in csv.reader(stream)}
         print(f"the loop's exit codes equal the summary's: {loop_codes == _codes(one)}")
+        failed += [] if loop_codes == _codes(one) else ["the loop's exit codes differ from the summary's"]
     codes = _codes(one)
     tally = {code: sum(c == code for c in codes.values()) for code in sorted(set(codes.values()), key=int)}
     print(f"summaries of --jobs 1 and --jobs 2 equal: {same}; exit codes per bag: {tally}")
@@ -194,7 +212,10 @@ def main() -> int:
             f"{run.label:18s} {run.bags:5d} {run.wall_s:8.1f} {run.bags / run.wall_s:7.2f} {run.tree_peak_mib:14.0f} "
             f"{run.process_peak_mib:14.0f} {run.rusage_children_mib:14.0f} {code:>5s}"
         )
-    return 0
+    print(f"one JSON per row with an estimate, each named in its row: {not json_failures}")
+    for failure in failed:
+        print(f"FAILED: {failure}", file=sys.stderr)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
