@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bsp_ros.clinic.report.analysis import Analysis, Change, Series
+from bsp_ros.clinic.report.analysis import NON_NEGATIVE, Analysis, Change, Series
 from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
 from bsp_ros.clinic.report.priors import PRIOR_SOURCE, PeerRow
 from bsp_ros.clinic.report.summary import arm_title, percent
@@ -70,9 +70,25 @@ def change_text(change: Change | None, unit: str, *, with_percent: bool = True) 
     return text
 
 
+AT_ZERO_TEXT = "not judged (estimated at 0)"
+
+
+def at_zero(series: Series) -> bool:
+    """Whether the latest change of a judged ``series`` is not judged because a value sits at the bound 0 (the
+    latest value, or the earlier one of every latest comparison): the data did not show the term."""
+    latest = series.latest
+    if not series.judged or latest is None or series.key[2] not in NON_NEGATIVE:
+        return False
+    changes = [c for c in (series.since_previous, series.since_first) if c is not None]
+    return latest.value == 0.0 or (bool(changes) and all(c.at_bound for c in changes))
+
+
 def error_text(series: Series) -> str:
-    """The limit a change of ``series`` is flagged beyond, and the MDC95 it comes from, in words."""
+    """The limit a change of ``series`` is flagged beyond, and the MDC95 it comes from, in words; ``not judged
+    (estimated at 0)`` where a value at the bound 0 leaves the latest change unjudged."""
     error = series.error
+    if at_zero(series):
+        return AT_ZERO_TEXT
     if error.mdc95 is None:
         return "unknown (too few retests)" if series.judged else "not judged"
     whose = "this patient" if error.source == "subject" else "the cell"

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import statistics
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bsp_ros.clinic.report.analysis import RETEST_LETTERS, Analysis, Change, Series
+from bsp_ros.clinic.report.analysis import RETEST_LETTERS, Analysis, Change, Series, Untared
 from bsp_ros.clinic.report.labels import PART_NAMES, plain_name, plain_number, short_label, with_unit
 from bsp_ros.clinic.report.speed_lines import speed_dependence_lines
 from bsp_ros.clinic.store.records import ParamKey, SessionRecord, format_time, ns_to_datetime
@@ -329,14 +330,42 @@ def flag_rule(analysis: Analysis) -> str:
     )
 
 
+def _difference(analysis: Analysis, untared: Untared, segment: str) -> tuple[float, str] | None:
+    """The untared session's static moment of ``segment`` less the median of the arm's usable (tared) sessions, and
+    its unit; None where either is missing."""
+    key = ("segments", segment, "static_moment_kgm")
+    quantity = untared.record.parameters.get(key)
+    series = next((s for s in analysis.arm_series(untared.arm) if s.key == key), None)
+    if quantity is None or quantity.value is None or series is None:
+        return None
+    values = [p.value for p in series.points if p.usable and p.value is not None]
+    return (quantity.value - statistics.median(values), series.unit) if values else None
+
+
+def weight_read(analysis: Analysis, untared: Untared) -> str:
+    """What an untared session's static moments read against the tared sessions, shoulder to hand: in % where the
+    tared median is clear of 0 (``+12 % (upper arm)``), else in units (``+0.021 kg·m (hand)``)."""
+    percents = dict(untared.deviations)
+    parts = []
+    for segment in SEGMENT_ORDER:
+        name = PART_NAMES.get(segment, segment).lower()
+        if segment in percents:
+            share = percents[segment]
+            parts.append(f"{'+' if share > 0 else '−'}{percent(share)} ({name})")
+            continue
+        difference = _difference(analysis, untared, segment)
+        if difference is not None:
+            delta, unit_name = difference
+            parts.append(f"{'+' if delta > 0 else '−'}{with_unit(abs(delta), unit_name)} ({name})")
+    return ", ".join(parts)
+
+
 def tare_sentences(analysis: Analysis) -> list[str]:
     """Page 1's sentence on each untared session among tared ones: what was left out, and why."""
     out = []
     for untared in analysis.untared:
         record = untared.record
-        read = ", ".join(
-            f"{'+' if d > 0 else '−'}{percent(d)} ({PART_NAMES.get(seg, seg).lower()})" for seg, d in untared.deviations
-        )
+        read = weight_read(analysis, untared)
         against = f": its arm weight read {read} against the tared sessions" if read else ""
         out.append(
             f"Session {untared.label} ({long_day(record.session_time_ns)}) was recorded without a tare (the sensor's "

@@ -26,6 +26,7 @@ from bsp_ros.clinic.mdc import NO_ERROR
 from bsp_ros.clinic.report import Analysis, analyse, render_report
 from bsp_ros.clinic.report.analysis import WEIGHT_QUANTITIES, Change, Point
 from bsp_ros.clinic.report.detail import detail_rows, peer_rows
+from bsp_ros.clinic.report.labels import plain_name
 from bsp_ros.clinic.report.summary import (
     CHANGE,
     NO_CHANGE,
@@ -211,6 +212,11 @@ def test_an_untared_session_among_tared_ones_is_left_out_of_the_arm_weight(untar
     first_page = render_report(analysis).split("<section id='detail'>")[0]
     assert "without a tare" in first_page
     assert f"{HANDLE_KG}" not in sentence  # it says what was measured, not the simulation's truth
+    # Every segment, shoulder to hand; the hand, whose tared median is not clear of 0, in units rather than %.
+    read = sentence.split("its arm weight read ")[1].split(" against the tared sessions")[0]
+    parts = [part.rsplit("(", 1)[1].rstrip(")") for part in read.split(", ")]
+    assert parts == ["upper arm", "forearm", "hand"], read
+    assert "kg·m (hand)" in read and "%" not in read.split("(forearm)")[1]
 
 
 def test_the_arm_against_its_peers(peers: Path) -> None:
@@ -246,6 +252,27 @@ def test_the_detail_reads_clinically_first(peers: Path) -> None:
     assert len(texts) == len(set(texts))
     page = render_report(analysis)
     assert page.index("id='changes'") < page.index("id='peers'") < page.index("id='appendix'")
+
+
+def test_a_passive_term_estimated_at_zero_is_not_judged_in_the_detail(peers: Path) -> None:
+    from bsp_ros.clinic.report.analysis import NON_NEGATIVE
+    from bsp_ros.clinic.report.detail import AT_ZERO_TEXT
+
+    at_zero = 0
+    for subject in [*sorted(UNCHANGED), DECLINE]:
+        analysis = _analyse(peers, subject)
+        rows = {row.name: row for row in detail_rows(analysis, "passive")}
+        for series in analysis.series:
+            latest = series.latest
+            if series.key[2] not in NON_NEGATIVE or latest is None or latest.value != 0.0:
+                continue
+            name = plain_name(series.key)
+            row = rows[name[0].upper() + name[1:]]
+            assert row.error == AT_ZERO_TEXT and not row.flagged, (subject, row)
+            at_zero += 1
+        judged = [row for row in rows.values() if row.error != AT_ZERO_TEXT]
+        assert judged and all(row.error.startswith("flagged beyond") for row in judged)
+    assert at_zero > 0  # the simulated arms have no shoulder or wrist stiffness: some sessions estimate 0
 
 
 def test_no_percent_of_a_value_within_two_sd_of_zero() -> None:
