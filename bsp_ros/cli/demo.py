@@ -10,10 +10,13 @@ import subprocess
 import sys
 import textwrap
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bsp_ros.cli.argtypes import float_within, positive_float
 from bsp_ros.cli.live_table import estimate_rows, state_line, support_line
+
+if TYPE_CHECKING:
+    from bsp_ros.core.estimate_schema import Estimate
 
 __all__ = [
     "add_parser",
@@ -93,24 +96,22 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return parser
 
 
-def _rows(
-    document: dict[str, Any], truth: dict[str, Any]
-) -> list[tuple[str, float | None, float | None, float | None]]:
+def _rows(estimate: Estimate, truth: dict[str, Any]) -> list[tuple[str, float | None, float | None, float | None]]:
     return [
-        (f"{owner} {key}", q.get("value"), q.get("std"), truth.get(group, {}).get(owner, {}).get(key))
-        for group, owner, key, q in estimate_rows(document)
+        (f"{owner} {key}", q.value, q.std, truth.get(group, {}).get(owner, {}).get(key))
+        for group, owner, key, q in estimate_rows(estimate)
     ]
 
 
-def render(document: dict[str, Any] | None, truth: dict[str, Any], elapsed_s: float, warming_up: bool = False) -> str:
+def render(estimate: Estimate | None, truth: dict[str, Any], elapsed_s: float, warming_up: bool = False) -> str:
     """The live table: each identifiable parameter, its estimate +- std, the truth and the error."""
-    if document is None:
+    if estimate is None:
         return f"t={elapsed_s:5.1f} s  waiting for the first estimate (the nodes are starting)..."
     lines = [
-        f"t={elapsed_s:5.1f} s  {state_line(document, warming_up)}",
+        f"t={elapsed_s:5.1f} s  {state_line(estimate, warming_up)}",
         f"{'parameter':28s} {'estimate':>10s} {'+- std':>9s} {'truth':>9s} {'error %':>8s}",
     ]
-    for name, value, std, true in _rows(document, truth):
+    for name, value, std, true in _rows(estimate, truth):
         if value is None:
             continue
         error = "" if not true else f"{100 * (value - true) / true:+8.2f}"
@@ -161,19 +162,19 @@ def introduction(args: argparse.Namespace, middleware: str, domain: int) -> str:
     )
 
 
-def verdict(document: dict[str, Any] | None, truth: dict[str, Any]) -> tuple[bool, str]:
+def verdict(estimate: Estimate | None, truth: dict[str, Any]) -> tuple[bool, str]:
     """Whether the demo worked (a valid final estimate, static moments near the truth), and what it showed."""
-    if document is None:
+    if estimate is None:
         return False, (
             "verdict: FAILED - no estimate arrived. The nodes did not reach each other over the middleware; "
             "see the messages above (a firewall or a ROS_LOCALHOST_ONLY setting can block discovery)."
         )
-    if not document["quality"]["valid"]:
+    if not estimate.valid:
         return False, (
-            f"verdict: FAILED - the last estimate is invalid: {document['quality'].get('message', '')}. "
+            f"verdict: FAILED - the last estimate is invalid: {estimate.quality.message}. "
             "Run longer (--duration) if it was still warming up."
         )
-    errors = [(name, 100 * (value - true) / true) for name, value, _, true in _rows(document, truth) if value and true]
+    errors = [(name, 100 * (value - true) / true) for name, value, _, true in _rows(estimate, truth) if value and true]
     static = [(name.split()[0], error) for name, error in errors if "static_moment" in name]
     friction = [(name.split()[0], error) for name, error in errors if "coulomb" in name]
     worst_name, worst = max(static, key=lambda item: abs(item[1])) if static else ("", 0.0)
@@ -226,6 +227,7 @@ def node_arguments(args: argparse.Namespace) -> dict[str, list[str]]:
 
 def run(args: argparse.Namespace) -> int:
     """Start the nodes, watch the estimates converge, print the final errors."""
+    from bsp_ros.core.estimate_schema import Estimate
     from bsp_ros.live.runtime.ros import Client
 
     # 1..101: the ROS 2 domain ids safe on Linux; 0 (everyone's default) is left alone.
@@ -237,7 +239,10 @@ def run(args: argparse.Namespace) -> int:
     latest: dict[str, Any] = {}
     truth: dict[str, Any] = {}
     client.subscribe(
-        "std_msgs/msg/String", "bsp/estimate_json", lambda m: latest.__setitem__("doc", json.loads(m.data)), "estimates"
+        "std_msgs/msg/String",
+        "bsp/estimate_json",
+        lambda m: latest.__setitem__("estimate", Estimate.from_json(json.loads(m.data))),
+        "estimates",
     )
     client.subscribe(
         "std_msgs/msg/String", "sim/truth", lambda m: truth.update(json.loads(m.data)), "tf_static_listener"
@@ -267,14 +272,14 @@ def run(args: argparse.Namespace) -> int:
                 print(f"bsp demo: node(s) {failed} stopped", file=sys.stderr)
                 break
             elapsed_s = time.monotonic() - start
-            document = latest.get("doc")
-            if document is not None and first_estimate_s is None:
+            estimate = latest.get("estimate")
+            if estimate is not None and first_estimate_s is None:
                 first_estimate_s = elapsed_s  # the nodes take seconds to start and to discover each other
-            if document is not None and document["quality"]["valid"]:
+            if estimate is not None and estimate.valid:
                 seen_valid = True
             since_first_s = 0.0 if first_estimate_s is None else elapsed_s - first_estimate_s
             warming_up = not seen_valid and since_first_s * args.speed < WINDOW_S + 10.0
-            table = render(document, truth, elapsed_s, warming_up)
+            table = render(estimate, truth, elapsed_s, warming_up)
             table += "\n" + render_support(latest.get("support"), args.support_fraction)
             print(("\033[2J\033[H" if interactive else "") + table + ("" if interactive else "\n"), flush=True)
     finally:
@@ -287,11 +292,11 @@ def run(args: argparse.Namespace) -> int:
                 process.kill()
                 process.wait(5)
         client.close()
-    document = latest.get("doc")
+    estimate = latest.get("estimate")
     print("\nfinal estimate (truth beside it):")
-    print(render(document, truth, time.monotonic() - start))
+    print(render(estimate, truth, time.monotonic() - start))
     print(render_support(latest.get("support"), args.support_fraction))
-    worked, text = verdict(document, truth)
+    worked, text = verdict(estimate, truth)
     print("\n" + "\n\n".join(textwrap.fill(part, WIDTH) for part in text.split("\n")))
     return 0 if worked else 1
 

@@ -1,12 +1,16 @@
 """A live estimate as terminal lines, shared by `bsp demo` (beside the simulated truth) and `bsp watch` (any cell).
 
-Light at import (the standard library only): the `bsp` parser imports every subcommand module at start.
+Light at import (the standard library only): the `bsp` parser imports every subcommand module at start. The callers
+read the received JSON into an :class:`~bsp_ros.core.estimate_schema.Estimate` (``Estimate.from_json``) at the edge.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
-from typing import Any
+from collections.abc import Iterator, Sequence
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from bsp_ros.core.estimate_schema import Estimate, Quantity
 
 __all__ = ["ROW_KEYS", "estimate_rows", "quantity_cells", "state_line", "support_line"]
 
@@ -16,35 +20,36 @@ ROW_KEYS: tuple[tuple[str, str], ...] = (("segments", "static_moment_kgm"), ("jo
 
 
 def estimate_rows(
-    document: Mapping[str, Any], keys: Sequence[tuple[str, str]] = ROW_KEYS
-) -> Iterator[tuple[str, str, str, Mapping[str, Any]]]:
-    """``(group, owner, key, quantity block)`` of each shown quantity of an estimate document, in table order."""
+    estimate: Estimate, keys: Sequence[tuple[str, str]] = ROW_KEYS
+) -> Iterator[tuple[str, str, str, Quantity]]:
+    """``(group, owner, key, quantity)`` of each shown quantity of an estimate, in table order (``group``:
+    ``segments`` or ``joints``)."""
     for group, key in keys:
-        for owner, quantities in document.get(group, {}).items():
-            block = quantities.get(key)
-            if isinstance(block, Mapping):
-                yield group, owner, key, block
+        owners = estimate.segments if group == "segments" else estimate.joints
+        for owner, quantities in owners.items():
+            quantity = quantities.get(key)
+            if quantity is not None:
+                yield group, owner, key, quantity
 
 
-def quantity_cells(block: Mapping[str, Any]) -> str:
-    """``estimate  +- std`` of a quantity block, right-aligned in 10 and 9 characters (blank where missing)."""
-    value, std = block.get("value"), block.get("std")
+def quantity_cells(quantity: Quantity) -> str:
+    """``estimate  +- std`` of a quantity, right-aligned in 10 and 9 characters (blank where missing)."""
+    value, std = quantity.value, quantity.std
     if value is None:
         return f"{'-':>10s} {'':>9s}"
     return f"{value:10.4f} {'' if std is None else format(std, '9.2g'):>9s}"
 
 
-def state_line(document: Mapping[str, Any], warming_up: bool) -> str:
+def state_line(estimate: Estimate, warming_up: bool) -> str:
     """VALID, a warm-up that is expected, or INVALID (a real problem), with the estimator's message."""
-    quality = document["quality"]
-    if quality["valid"]:
-        return f"VALID: {quality.get('message', '')}"
+    message = estimate.quality.message
+    if estimate.valid:
+        return f"VALID: {message}"
     if warming_up:
         return (
-            "warming up (expected: the window is still filling, and every joint must have moved both ways): "
-            f"{quality.get('message', '')}"
+            f"warming up (expected: the window is still filling, and every joint must have moved both ways): {message}"
         )
-    return f"INVALID: {quality.get('message', '')}"
+    return f"INVALID: {message}"
 
 
 def support_line(wrench_yzx: Sequence[float] | None, support_fraction: float | None = None) -> str:

@@ -11,7 +11,6 @@ import math
 from collections import deque
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 from bsp_ros.cli.live_table import estimate_rows, quantity_cells, state_line, support_line
 from bsp_ros.core.estimate_schema import Estimate, Quantity
@@ -93,7 +92,6 @@ class WatchView:
 
     def __init__(self) -> None:
         self.estimate: Estimate | None = None
-        self.document: Mapping[str, Any] | None = None
         self.estimate_t_s: float | None = None
         self.estimates = 0
         self.unreadable = 0
@@ -104,16 +102,17 @@ class WatchView:
 
     # -- messages ---------------------------------------------------------------------------------------
     def on_estimate(self, text: str, t_s: float) -> None:
-        """A ``bsp/estimate_json`` message (one that is not an estimate document is counted and skipped)."""
+        """A ``bsp/estimate_json`` message (one that is not an estimate document, or names a method or mode this
+        version does not know, is counted and skipped)."""
         import json
 
         try:
-            document = json.loads(text)
-            estimate = Estimate.from_json(document)
+            estimate = Estimate.from_json(json.loads(text))
+            _ = estimate.mode  # an unknown mode raises here, not while the table is drawn
         except (ValueError, TypeError, KeyError, AttributeError):
             self.unreadable += 1
             return
-        self.document, self.estimate, self.estimate_t_s = document, estimate, t_s
+        self.estimate, self.estimate_t_s = estimate, t_s
         self.estimates += 1
 
     def on_diagnostics(self, name: str, values: Mapping[str, str], stamp_ns: int) -> None:
@@ -165,7 +164,7 @@ class WatchView:
     def render(self, now_s: float, header: str) -> str:
         """The table: ``header``, the verdict and its cause, the precision, each parameter, support and inputs."""
         lines = [header]
-        if self.estimate is None or self.document is None or self.estimate_t_s is None:
+        if self.estimate is None or self.estimate_t_s is None:
             lines.append("waiting for the first estimate on bsp/estimate_json (is bsp_identifier running?)")
         else:
             age_s = now_s - self.estimate_t_s
@@ -182,16 +181,16 @@ class WatchView:
         return "\n".join(lines)
 
     def _verdict_lines(self) -> list[str]:
-        assert self.estimate is not None and self.document is not None
-        mode = self.document.get("mode")
-        lines = [state_line(self.document, warming_up=False) + (f" ({mode})" if mode else "")]
+        assert self.estimate is not None
+        mode = self.estimate.mode
+        lines = [state_line(self.estimate, warming_up=False) + (f" ({mode})" if mode else "")]
         cause = plain_cause(self.estimate.quality.findings)
         if cause is not None:
             lines.append(f"  cause: {cause[0]}; what to do: {cause[1]}")
         return lines
 
     def _precision_line(self) -> str:
-        block = self.document.get("precision") if self.document is not None else None
+        block = self.estimate.extra.get("precision") if self.estimate is not None else None
         state = None
         if isinstance(block, Mapping):
             try:
@@ -218,11 +217,12 @@ class WatchView:
         )
 
     def _parameter_lines(self) -> list[str]:
-        assert self.estimate is not None and self.document is not None
+        assert self.estimate is not None
         lines = [f"{'parameter':28s} {'estimate':>10s} {'+- std':>9s} {'std %':>7s}  largest uncertainty"]
-        for _, owner, key, block in estimate_rows(self.document):
-            quantity = self.estimate.quantity(key, owner)
-            lines.append(f"{owner + ' ' + key:28s} {quantity_cells(block)} {_relative(quantity)}  {_largest(quantity)}")
+        for _, owner, key, quantity in estimate_rows(self.estimate):
+            lines.append(
+                f"{owner + ' ' + key:28s} {quantity_cells(quantity)} {_relative(quantity)}  {_largest(quantity)}"
+            )
         return lines
 
     def _input_lines(self) -> list[str]:

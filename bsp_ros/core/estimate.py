@@ -16,11 +16,12 @@ import numpy as np
 from bsp_ros import __version__
 from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
 from bsp_ros.core.estimate_schema import Estimate, Level, Quality, Quantity, Source
-from bsp_ros.core.findings import Finding, FindingCode, Severity, note
+from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.speed_split import speed_dependence_block
 from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.methods import Method
 from bsp_ros.core.streams import joints_for, segments_for
 
 
@@ -29,18 +30,9 @@ def quantity(value: float, std: float, source: str) -> Quantity:
     return Quantity(value=_clean(value), std=_clean(std), source=Source(source))
 
 
-def invalid_document(method: str, finding: Finding) -> dict[str, Any]:
+def invalid_document(method: Method, finding: Finding) -> dict[str, Any]:
     """The JSON of :meth:`Estimate.invalid`: no parameters, made invalid by ``finding`` (live inputs not usable)."""
     return Estimate.invalid(method, finding).to_json()
-
-
-def add_finding(quality: dict[str, Any], finding: Finding, at: int | None = None) -> None:
-    """Add ``finding`` to a written document's ``quality`` block, in place, as :meth:`Quality.with_finding` adds it
-    to a typed one (``findings``, ``warnings``, ``message``, ``valid`` and ``level`` change; nothing else)."""
-    added = Quality.from_json(quality).with_finding(finding, at).to_json()
-    invalid = finding.severity is Severity.INVALID
-    changed = ("findings", "message", "valid", "level") if invalid else ("findings", "warnings")
-    quality.update({key: added[key] for key in changed})
 
 
 def estimate_from_result(

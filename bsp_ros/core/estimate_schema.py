@@ -15,6 +15,7 @@ from enum import StrEnum
 from typing import Any
 
 from bsp_ros.core.findings import Finding, Severity, findings_of, verdict_of
+from bsp_ros.core.methods import LiveMode, Method
 from bsp_ros.core.quantities import PASSIVE_CURVE
 
 __all__ = ["SCHEMA", "Estimate", "Level", "Quality", "Quantity", "Source"]
@@ -189,7 +190,7 @@ class Estimate:
 
     Attributes
     ----------
-    method : the identification method (``joint``, ``paper``, ``recursive``).
+    method : the identification method.
     segments : segment -> quantity key -> quantity (``static_moment_kgm``, ``mass_kg``, ...).
     joints : joint -> quantity key -> quantity (``coulomb_nm``, ...).
     passive_curves : joint -> its passive moment curve (docs/contract.md), where estimated.
@@ -202,7 +203,7 @@ class Estimate:
     schema : the schema tag.
     """
 
-    method: str
+    method: Method
     segments: Mapping[str, Mapping[str, Quantity]]
     joints: Mapping[str, Mapping[str, Quantity]]
     quality: Quality
@@ -231,8 +232,14 @@ class Estimate:
                 for key, q in quantities.items():
                     yield group, owner, key, q
 
+    @property
+    def mode(self) -> LiveMode | None:
+        """The live mode that made it (the ``mode`` block), or None for an offline estimate."""
+        mode = self.extra.get("mode")
+        return LiveMode(mode) if mode is not None else None
+
     @classmethod
-    def invalid(cls, method: str, finding: Finding) -> Estimate:
+    def invalid(cls, method: Method, finding: Finding) -> Estimate:
         """An estimate with no parameters, made invalid by ``finding`` (live inputs not usable)."""
         quality = Quality(valid=False, level=Level.INVALID, message=finding.text, findings=(finding,))
         return cls(method=method, segments={}, joints={}, quality=quality)
@@ -255,6 +262,10 @@ class Estimate:
         """This estimate with the top-level blocks ``keys`` (``bag``, ``bags``, ``mode``...) set, after its own."""
         return replace(self, extra={**self.extra, **keys})
 
+    def with_mode(self, mode: LiveMode) -> Estimate:
+        """This estimate as the live ``mode`` made it (the top-level ``mode``, after its other blocks)."""
+        return self.with_extra({"mode": mode.value})
+
     def to_json(self) -> dict[str, Any]:
         """The docs/contract.md document (JSON-ready: no NaN; key order as written by the estimator)."""
         joints: dict[str, dict[str, Any]] = {}
@@ -264,7 +275,7 @@ class Estimate:
                 joints[joint][PASSIVE_CURVE] = self.passive_curves[joint]
         out: dict[str, Any] = {
             "schema": self.schema,
-            "method": self.method,
+            "method": str(self.method),
             "segments": {s: {k: q.to_json() for k, q in qs.items()} for s, qs in self.segments.items()},
             "joints": joints,
             "quality": self.quality.to_json(),
@@ -282,7 +293,8 @@ class Estimate:
         Raises
         ------
         KeyError, TypeError, ValueError
-            The document lacks ``quality`` or holds a quantity that is not ``{"value", "std", "source"}``.
+            The document lacks ``quality``, holds a quantity that is not ``{"value", "std", "source"}`` or a
+            ``method`` that is none of :class:`Method` (a document without one is the ``joint`` method's).
         """
         joints: dict[str, dict[str, Quantity]] = {}
         curves: dict[str, Any] = {}
@@ -293,7 +305,7 @@ class Estimate:
         typed = {"schema", "method", "segments", "joints", "quality", "subject", "diagnostics", "software", "session"}
         return cls(
             schema=str(document.get("schema", SCHEMA)),
-            method=str(document.get("method", "")),
+            method=Method(str(document.get("method", Method.JOINT))),
             segments={
                 s: {k: Quantity.from_json(q) for k, q in block.items()}
                 for s, block in (document.get("segments") or {}).items()

@@ -34,20 +34,22 @@ from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import WrenchDelay, compensate_wrench_delay
 from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_markers
+from bsp_ros.core.methods import OFFLINE_METHODS, Method
 from bsp_ros.core.sensor_rotation import rotation_quality
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import Session
 from bsp_ros.core.tare import Tare, corrected_session
 from bsp_ros.errors import BspError, InputError
 
-METHODS = ("joint", "paper")
+# The offline methods' words (`bsp identify --method`), as the CLI's parser spells them.
+METHODS = tuple(m.value for m in OFFLINE_METHODS)
 
 
 @dataclass(frozen=True)
 class IdentifyOptions:
     """Everything `bsp identify` can be told about the method and the subject."""
 
-    method: str = "joint"
+    method: Method = Method.JOINT
     passive: PassiveModel = field(default_factory=PassiveModel)
     subject: SubjectInfo = field(default_factory=SubjectInfo)
     kinematics: KinematicsConfig = field(default_factory=KinematicsConfig)
@@ -113,7 +115,7 @@ def identify_data(
     does between its checks. A valid result whose static moments are implausible for a human arm
     (:func:`bsp_ros.core.fusion.implausible_static_moments`) is made invalid.
     """
-    if options.method == "paper":
+    if options.method == Method.PAPER:
         result = identify_paper(data, PaperConfig())
     else:
         config = JointConfig(

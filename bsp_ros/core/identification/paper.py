@@ -10,6 +10,7 @@ from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.stacked import bounded_least_squares
+from bsp_ros.core.methods import Method
 from bsp_ros.core.model import GRAVITY_M_S2, absolute_angles_rad, running_sum
 from bsp_ros.core.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_scalar, check_positive
@@ -79,7 +80,7 @@ def identify_paper(data: IdentificationData, config: PaperConfig | None = None) 
     passive_std = [float(np.std(np.abs(r))) / np.sqrt(n_samples) for r in _residuals(data, values, n)]
     covariance = np.diag(np.concatenate((fits.static_std_kgm, passive_std)) ** 2)
     return IdentificationResult(
-        method="paper",
+        method=Method.PAPER,
         names=names,
         values=values,
         covariance=covariance,

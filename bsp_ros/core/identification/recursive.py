@@ -12,6 +12,7 @@ from scipy.linalg.lapack import dposv
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.passive import TERMS, PassiveModel
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
+from bsp_ros.core.methods import Method
 from bsp_ros.core.model import FloatVector, gravity_regressor_one
 from bsp_ros.core.streams import joints_for, segments_for
 from bsp_ros.validation import check_finite_scalar, check_positive
@@ -190,7 +191,7 @@ class RecursiveIdentifier:
         if "coulomb" in self.config.passive.terms and (self._directions.min(axis=1) < 10).any():
             problems.append(Finding(code=FindingCode.ONE_DIRECTION))
         return IdentificationResult(
-            method="recursive",
+            method=Method.RECURSIVE,
             names=list(self.names),
             values=self.theta.copy(),
             covariance=covariance,

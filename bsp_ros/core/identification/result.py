@@ -10,6 +10,7 @@ import numpy as np
 
 from bsp_ros.core.findings import Finding, Severity, invalid_texts, note_texts
 from bsp_ros.core.identification.ledger import Ledger, Term
+from bsp_ros.core.methods import Method
 
 if TYPE_CHECKING:
     from bsp_ros.core.identification.joint.held import HeldModel
@@ -28,7 +29,8 @@ class IdentificationResult:
 
     Attributes
     ----------
-    method : ``"joint"`` (ours), ``"paper"`` (the method paper's sequential procedure) or ``"recursive"``.
+    method : the stacked fit of every joint (``joint``, ours), the method paper's sequential procedure
+        (``paper``) or the live per-sample filter (``recursive``).
     names : (p,) parameter names.
     values : (p,) estimates (SI units of each key).
     covariance : (p, p) covariance of the estimates.
@@ -45,7 +47,7 @@ class IdentificationResult:
         (:func:`bsp_ros.core.identification.joint.refit.refit_held`).
     """
 
-    method: str
+    method: Method
     names: list[ParameterName]
     values: np.ndarray
     covariance: np.ndarray

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from functools import partial
 from typing import Any
 
 import numpy as np
 
 from bsp_ros.core.contact_point import CONTACT_FROM_ROBOT
-from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.streams import segments_for
 from bsp_ros.core.weight_support import live_support
@@ -245,10 +245,10 @@ class BspIdentifierNode(RosNode):
 
     def _outputs(self, estimate: ModeEstimate) -> jobs.EstimateOutputs:
         """An update's estimate serialised for its topics; with a precision target, the signal after it joins the
-        document (``precision``)."""
+        estimate (``precision``)."""
         if self.precision is not None:
-            self.precision_state = self.precision.update(Estimate.from_json(estimate.document), self.now_ns())
-            estimate.document["precision"] = self.precision_state.to_json()
+            self.precision_state = state = self.precision.update(estimate.estimate, self.now_ns())
+            estimate = replace(estimate, estimate=estimate.estimate.with_extra({"precision": state.to_json()}))
         return jobs.outputs_from_estimate(estimate)
 
     def _restart_precision(self) -> None:

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
 from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding
-from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.pipeline import IdentifyOptions, recursive_estimate
+from bsp_ros.core.methods import LiveMode, Method
+from bsp_ros.core.pipeline import recursive_estimate
 from bsp_ros.live.online.identifier_settings import IdentifierSettings
 from bsp_ros.live.online.recursive_check import WindowCheck
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
@@ -27,16 +27,15 @@ __all__ = [
     "RecursiveMode",
     "WindowedMode",
     "mode_for",
-    "recursive_document",
 ]
 
 
 @dataclass(frozen=True)
 class ModeEstimate:
-    """One update's estimate: its document (docs/contract.md, with the ``mode``), the stamp it goes out with (ns),
-    and whether the passive moments go out with it (``bsp/passive_moments``; the recursive mode's go per sample)."""
+    """One update's estimate (with its ``mode``), the stamp it goes out with (ns), and whether the passive moments go
+    out with it (``bsp/passive_moments``; the recursive mode's go per sample)."""
 
-    document: dict[str, Any]
+    estimate: Estimate
     stamp_ns: int
     with_passive: bool
 
@@ -50,18 +49,9 @@ Orientation = tuple[str, np.ndarray] | None
 _WINDOW_STALE_S = 60.0
 
 
-def _invalid(name: str, method: str, reason: Finding, now_ns: int, with_passive: bool) -> ModeEstimate:
+def _invalid(mode: LiveMode, method: Method, reason: Finding, now_ns: int, with_passive: bool) -> ModeEstimate:
     """An invalid estimate stamped ``now_ns`` saying why (an input stale or waiting)."""
-    document = Estimate.invalid(method, reason).with_extra({"mode": name}).to_json()
-    return ModeEstimate(document, now_ns, with_passive)
-
-
-def recursive_document(
-    result: IdentificationResult, lengths_m: np.ndarray, options: IdentifyOptions, contact_from_robot: bool = False
-) -> dict[str, Any]:
-    """The document of :func:`bsp_ros.core.pipeline.recursive_estimate` (fused with the anthropometric prior when
-    valid); ``contact_from_robot``: the contact point came from the robot's handle pose (its placement sd)."""
-    return recursive_estimate(result, lengths_m, options, contact_from_robot).to_json()
+    return ModeEstimate(Estimate.invalid(method, reason).with_mode(mode), now_ns, with_passive)
 
 
 class IdentifierMode(Protocol):
@@ -71,7 +61,7 @@ class IdentifierMode(Protocol):
     windowed mode's estimate, the recursive mode's model checks.
     """
 
-    name: str  # the estimate documents' ``mode``
+    name: LiveMode  # the estimates' ``mode``
     takes_joint_states: bool  # the causally filtered joint states (arm/joint_states) feed it
     raw_angles_count: str  # the diagnostics counter of the unfiltered angles it accepts
     window: WindowedIdentifier
@@ -116,7 +106,7 @@ class WindowedMode:
     """The newest ``window_s`` of samples identified each update, as `bsp identify` would identify them (the model
     checks every ``WindowConfig.elastic_check_every`` updates, refits of what they chose in between)."""
 
-    name = "windowed"
+    name = LiveMode.WINDOWED
     takes_joint_states = False
     raw_angles_count = "joint_states"
 
@@ -147,14 +137,14 @@ class WindowedMode:
         # one) joins the std, as `bsp identify` adds it.
         window = self.window.snapshot(orientation=orientation)
         if isinstance(window, WindowEstimate):
-            document = window.estimate.with_extra({"mode": self.name}).to_json()
-            return ModeEstimate(document, window.last_wrench_t_ns or now_ns, with_passive=True)
+            stamp_ns = window.last_wrench_t_ns or now_ns
+            return ModeEstimate(window.estimate.with_mode(self.name), stamp_ns, with_passive=True)
         estimator = self.window.estimator
 
         def job() -> ModeEstimate:
             estimate = estimator.estimate_window(window)
-            document = estimate.estimate.with_extra({"mode": self.name}).to_json()
-            return ModeEstimate(document, estimate.last_wrench_t_ns or 0, with_passive=True)
+            stamp_ns = estimate.last_wrench_t_ns or 0
+            return ModeEstimate(estimate.estimate.with_mode(self.name), stamp_ns, with_passive=True)
 
         return job
 
@@ -169,7 +159,7 @@ class RecursiveMode:
     """The recursive filter, one wrench at a time (its passive moments published per sample), held each update to
     its window's checked estimate (the window identified with every model check every ``CHECK_EVERY`` updates)."""
 
-    name = "recursive"
+    name = LiveMode.RECURSIVE
     takes_joint_states = True
     raw_angles_count = "raw_angles"  # its joint states are the causal ones; these only fill its checks' window
 
@@ -211,8 +201,8 @@ class RecursiveMode:
         def job() -> ModeEstimate:
             self.window_check.tick(orientation)  # the window's model checks, when due (timed with the update)
             result = self.window_check.checked(self.feed.identifier.result())
-            estimate = recursive_estimate(result, lengths, self.options, robot).with_extra({"mode": self.name})
-            return ModeEstimate(estimate.to_json(), stamp, with_passive=False)
+            estimate = recursive_estimate(result, lengths, self.options, robot).with_mode(self.name)
+            return ModeEstimate(estimate, stamp, with_passive=False)
 
         return job
 
@@ -224,7 +214,7 @@ class RecursiveMode:
         return {"wrench_spikes": self.feed.spike_gate.spikes}  # taken, kept out of the filter
 
 
-_MODES: dict[str, Callable[[IdentifierSettings], IdentifierMode]] = {
+_MODES: dict[LiveMode, Callable[[IdentifierSettings], IdentifierMode]] = {
     WindowedMode.name: WindowedMode,
     RecursiveMode.name: RecursiveMode,
 }

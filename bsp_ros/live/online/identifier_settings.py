@@ -11,6 +11,7 @@ import numpy as np
 
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.identification.passive import PassiveModel
+from bsp_ros.core.methods import LiveMode, Method
 from bsp_ros.core.pipeline import IdentifyOptions
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import segments_for
@@ -24,7 +25,7 @@ from bsp_ros.live.runtime.parameters import Param
 __all__ = ["MODES", "NAME", "PARAMETERS", "IdentifierSettings"]
 
 NAME = "bsp_identifier"
-MODES = ("windowed", "recursive")
+MODES = tuple(m.value for m in LiveMode)
 
 PARAMETERS = (
     CELL_FILE,
@@ -178,7 +179,7 @@ class IdentifierSettings:
 
     Attributes
     ----------
-    mode : ``windowed`` or ``recursive``.
+    mode : the sliding window or the per-sample filter.
     n_segments : 2 or 3.
     window_s, update_hz, stale_s, tf_wait_s : as the parameters (s, Hz).
     options : what each estimate is identified with (method, passive model, subject, tare, sensor zero's sd, the
@@ -194,7 +195,7 @@ class IdentifierSettings:
         the segments whose static moments it is for: :attr:`precision_target`.
     """
 
-    mode: str
+    mode: LiveMode
     n_segments: int
     window_s: float
     update_hz: float
@@ -236,7 +237,7 @@ class IdentifierSettings:
         # The model named by the parameter, kept: a window showing an elastic moment it lacks is invalid with the
         # warning (choosing among the elastic family per 5 Hz update is `bsp identify --passive auto`'s work).
         options = IdentifyOptions(
-            method=p["method"],
+            method=Method(p["method"]),
             passive=_passive(p["passive"]),
             subject=SubjectInfo(p["body_mass_kg"] or None, p["height_m"] or None, p["sex"]),
             tare=_tare(p["tare_file"]),
@@ -246,7 +247,7 @@ class IdentifierSettings:
             zero_sd_nm=p["zero_sd_nm"],
         )
         return cls(
-            mode=p["mode"],
+            mode=LiveMode(p["mode"]),
             n_segments=p["n_segments"],
             window_s=p["window_s"],
             update_hz=p["update_hz"],

@@ -8,11 +8,12 @@ import time
 import traceback
 from collections import deque
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Generic, TypeVar
 
 import numpy as np
 
-from bsp_ros.core.estimate import add_finding, invalid_document
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.live.online.identifier_modes import IdentifierMode, ModeEstimate, Orientation, mode_for
 from bsp_ros.live.online.identifier_settings import IdentifierSettings
@@ -179,23 +180,17 @@ class LiveIdentifier(Generic[Outputs]):
         except Exception as exc:
             self._log_error(f"estimate failed: {traceback.format_exc()}")
             finding = Finding(code=FindingCode.INTERNAL_ERROR, values={"error": repr(exc)})
-            document = invalid_document(self.method, finding)
-            document["mode"] = self.mode.name
-            outputs = self._serialize(ModeEstimate(document, now_ns, with_passive=False))
+            estimate = Estimate.invalid(self.method, finding).with_mode(self.mode.name)
+            outputs = self._serialize(ModeEstimate(estimate, now_ns, with_passive=False))
         self.update_s.append((time.perf_counter() - started, time.thread_time() - started_cpu))
         return outputs
 
     def _with_frame_findings(self, estimate: ModeEstimate) -> ModeEstimate:
-        """``estimate`` with the wrench frame's findings in its quality (a copy: a mode may hand out a document
-        again)."""
+        """``estimate`` with the wrench frame's findings in its quality."""
         findings = self._frame_findings()
         if not findings:
             return estimate
-        quality = dict(estimate.document.get("quality") or {})
-        quality.update(findings=list(quality.get("findings") or []), warnings=list(quality.get("warnings") or []))
-        for finding in findings:
-            add_finding(quality, finding)
-        return ModeEstimate({**estimate.document, "quality": quality}, estimate.stamp_ns, estimate.with_passive)
+        return replace(estimate, estimate=estimate.estimate.with_findings(*findings))
 
     def counters(self) -> dict[str, int]:
         """The samples taken, refused and waiting, and the mode's own counters."""

@@ -13,6 +13,7 @@ import pytest
 from bsp_ros.cli import build_parser
 from bsp_ros.cli.demo import NODES, VERDICT_STATIC_PERCENT, introduction, node_arguments, render, state_line, verdict
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.estimate_schema import Estimate
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -34,8 +35,8 @@ def _truth() -> dict:
     return sim.simulate_cell(sim.human_arm_cell(seed=0, duration_s=5.0)).truth.to_dict()
 
 
-def _estimate(truth: dict, valid: bool = True, scale: float = 1.0, message: str = "identified") -> dict:
-    """An estimate document of the shape bsp/estimate_json carries, off the truth by ``scale``."""
+def _estimate(truth: dict, valid: bool = True, scale: float = 1.0, message: str = "identified") -> Estimate:
+    """An estimate as read from a document of the shape bsp/estimate_json carries, off the truth by ``scale``."""
     segments = {
         name: {"static_moment_kgm": {"value": scale * q["static_moment_kgm"], "std": 1e-4, "source": "data"}}
         for name, q in truth["segments"].items()
@@ -44,7 +45,7 @@ def _estimate(truth: dict, valid: bool = True, scale: float = 1.0, message: str 
         name: {"coulomb_nm": {"value": q["coulomb_nm"], "std": 1e-3, "source": "data"}}
         for name, q in truth["joints"].items()
     }
-    return {"segments": segments, "joints": joints, "quality": {"valid": valid, "message": message}}
+    return Estimate.from_json({"segments": segments, "joints": joints, "quality": {"valid": valid, "message": message}})
 
 
 def test_the_verdict_is_ok_for_a_valid_estimate_near_the_truth_and_says_what_the_numbers_mean() -> None:
@@ -68,10 +69,10 @@ def test_the_verdict_fails_when_the_estimate_is_far_off_invalid_or_missing() -> 
 
 def test_an_invalid_estimate_during_the_warm_up_is_called_expected_and_later_invalid() -> None:
     truth = _truth()
-    document = _estimate(truth, valid=False, message="the wrist moved in one direction only")
-    assert state_line(document, warming_up=True).startswith("warming up (expected")
-    assert state_line(document, warming_up=False).startswith("INVALID: the wrist moved")
-    assert "warming up (expected" in render(document, truth, 10.0, warming_up=True)
+    estimate = _estimate(truth, valid=False, message="the wrist moved in one direction only")
+    assert state_line(estimate, warming_up=True).startswith("warming up (expected")
+    assert state_line(estimate, warming_up=False).startswith("INVALID: the wrist moved")
+    assert "warming up (expected" in render(estimate, truth, 10.0, warming_up=True)
 
 
 def test_the_introduction_names_the_processes_and_the_middleware() -> None:

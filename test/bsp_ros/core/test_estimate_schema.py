@@ -12,6 +12,7 @@ from bsp_ros.bag.offline import identify_bag
 from bsp_ros.core.estimate import invalid_document
 from bsp_ros.core.estimate_schema import Estimate, Level, Quantity, Source
 from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.methods import LiveMode, Method
 from bsp_ros.core.weight_support import support_inputs
 
 SAMPLES = Path(__file__).resolve().parents[3] / "bags"
@@ -27,6 +28,7 @@ def test_the_json_round_trip_is_exact_key_order_included(document: dict) -> None
     estimate = Estimate.from_json(document)
     assert json.dumps(estimate.to_json()) == json.dumps(document)
     assert estimate.valid and estimate.quality.level is Level.OK and estimate.extra.keys() == {"bag"}
+    assert estimate.method is Method.JOINT and estimate.mode is None  # an offline estimate has no live mode
 
 
 def test_quantities_and_the_verdict_are_typed(document: dict) -> None:
@@ -47,7 +49,21 @@ def test_an_invalid_live_estimate_names_its_cause() -> None:
     estimate = Estimate.from_json(document)
     assert not estimate.valid and estimate.quality.verdict is not None
     assert estimate.quality.verdict.code is FindingCode.INPUT_WAITING and estimate.extra == {"mode": "windowed"}
+    assert estimate.mode is LiveMode.WINDOWED and estimate.method is Method.JOINT
     assert json.dumps(estimate.to_json()) == json.dumps(document)
+    # The typed operation writes the same document as the key set by hand.
+    typed = Estimate.invalid(Method.JOINT, estimate.quality.verdict).with_mode(LiveMode.WINDOWED)
+    assert json.dumps(typed.to_json()) == json.dumps(document)
+
+
+def test_the_method_and_the_mode_are_closed_vocabularies_whose_json_is_their_word(document: dict) -> None:
+    paper = Estimate.from_json({**document, "method": "paper"})
+    assert paper.method is Method.PAPER and json.loads(json.dumps(paper.to_json()))["method"] == "paper"
+    assert Estimate.from_json({k: v for k, v in document.items() if k != "method"}).method is Method.JOINT
+    with pytest.raises(ValueError, match="stacked"):
+        Estimate.from_json({**document, "method": "stacked"})
+    recursive = Estimate.from_json(document).with_mode(LiveMode.RECURSIVE)
+    assert json.dumps(recursive.to_json()).endswith('"mode": "recursive"}')
 
 
 def test_an_older_document_and_a_newer_one_keep_what_they_hold(document: dict) -> None:

@@ -18,10 +18,12 @@ from bsp_ros.clinic.report.labels import PART_NAMES
 from bsp_ros.clinic.report.speed_lines import speed_dependence_lines
 from bsp_ros.clinic.report.summary import invalid_cause, session_notes, technical_notes
 from bsp_ros.clinic.store.records import Quality, SessionRecord
-from bsp_ros.core.estimate import add_finding, invalid_document
+from bsp_ros.core.estimate_schema import Estimate, Level
+from bsp_ros.core.estimate_schema import Quality as EstimateQuality
 from bsp_ros.core.findings import Finding, FindingCode, Severity, findings_of, note
 from bsp_ros.core.findings_specs import SPECS
 from bsp_ros.core.identification.result import IdentificationResult
+from bsp_ros.core.methods import Method
 
 TEST_ROOT = Path(__file__).resolve().parents[2]
 
@@ -170,22 +172,24 @@ def test_validity_weakness_and_message_derive_from_the_findings() -> None:
     assert noted.valid and not noted.weak
 
 
-def test_a_document_gains_findings_in_its_message_and_warnings() -> None:
-    document = invalid_document("joint", Finding(code=FindingCode.INPUT_WAITING, values={"what": "markers"}))
-    quality = document["quality"]
-    assert quality["message"] == "waiting for markers" and [f.code for f in findings_of(quality)] == [
-        FindingCode.INPUT_WAITING
-    ]
-    add_finding(quality, note(FindingCode.BAG_NOTE, "first"), at=0)
-    add_finding(quality, sample(FindingCode.ROTATION_ASSUMED))
-    assert quality["warnings"] == ["first"]
-    assert (
-        quality["message"].startswith("missing transform world -> ft_sensor")
-        and "; waiting for markers" in (quality["message"])
+def test_an_estimate_gains_findings_in_its_message_and_warnings() -> None:
+    waiting = Estimate.invalid(Method.JOINT, Finding(code=FindingCode.INPUT_WAITING, values={"what": "markers"}))
+    assert waiting.quality.message == "waiting for markers"
+    assert [f.code for f in waiting.quality.findings] == [FindingCode.INPUT_WAITING]
+    added = waiting.with_findings(note(FindingCode.BAG_NOTE, "first"), at=0)
+    quality = added.with_findings(sample(FindingCode.ROTATION_ASSUMED)).quality
+    assert quality.warnings == ("first",) and waiting.quality.warnings == ()  # a new estimate, the old one as it was
+    assert quality.message.startswith("missing transform world -> ft_sensor") and "; waiting for markers" in (
+        quality.message
     )
-    valid = {"valid": True, "message": "identified from 10 samples", "warnings": [], "level": "ok"}
-    add_finding(valid, sample(FindingCode.STATIC_MOMENT_IMPLAUSIBLE, "forearm"))
-    assert not valid["valid"] and valid["level"] == "invalid" and valid["message"].startswith("implausible forearm")
+    assert [f.code for f in quality.findings] == [
+        FindingCode.ROTATION_ASSUMED,
+        FindingCode.INPUT_WAITING,
+        FindingCode.BAG_NOTE,
+    ]
+    valid = EstimateQuality(valid=True, level=Level.OK, message="identified from 10 samples")
+    judged = valid.with_finding(sample(FindingCode.STATIC_MOMENT_IMPLAUSIBLE, "forearm"))
+    assert not judged.valid and judged.level is Level.INVALID and judged.message.startswith("implausible forearm")
 
 
 def test_findings_of_skips_a_code_it_does_not_know() -> None:

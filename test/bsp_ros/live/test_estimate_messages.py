@@ -1,13 +1,15 @@
-"""The estimate document as ROS message samples: passive curves reach bsp/passive_moments and bsp/diagnostics."""
+"""The estimate as ROS message samples: passive curves reach bsp/passive_moments and bsp/diagnostics."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.live.estimate_messages import diagnostics_from_estimate, passive_moments_from_estimate
@@ -26,7 +28,7 @@ def spring_estimate() -> dict:
 
 
 def test_passive_moments_carry_the_coulomb_amplitudes_then_every_curve_point(spring_estimate: dict) -> None:
-    sample = passive_moments_from_estimate(spring_estimate, 7)
+    sample = passive_moments_from_estimate(Estimate.from_json(spring_estimate), 7)
     assert sample is not None
     joints = spring_estimate["joints"]
     curves = {j: q["passive_curve"] for j, q in joints.items() if "passive_curve" in q}
@@ -49,17 +51,15 @@ def test_passive_moments_carry_the_coulomb_amplitudes_then_every_curve_point(spr
     assert np.all(np.abs(np.array(elbow["moment_nm"]) - truth) <= 3 * np.array(elbow["std_nm"]))
 
 
-def test_a_document_without_curves_publishes_efforts_only(spring_estimate: dict) -> None:
-    document = {
-        **spring_estimate,
-        "joints": {j: {"coulomb_nm": q["coulomb_nm"]} for j, q in spring_estimate["joints"].items()},
-    }
-    sample = passive_moments_from_estimate(document, 7)
-    assert sample is not None and sample.position.size == 0 and sample.effort.size == len(document["joints"])
+def test_an_estimate_without_curves_publishes_efforts_only(spring_estimate: dict) -> None:
+    estimate = Estimate.from_json(spring_estimate)
+    assert estimate.passive_curves
+    sample = passive_moments_from_estimate(replace(estimate, passive_curves={}), 7)
+    assert sample is not None and sample.position.size == 0 and sample.effort.size == len(estimate.joints)
 
 
 def test_diagnostics_hold_the_curve_with_its_std(spring_estimate: dict) -> None:
-    array = diagnostics_from_estimate(spring_estimate, 7)
+    array = diagnostics_from_estimate(Estimate.from_json(spring_estimate), 7)
     elbow = dict(next(s for s in array.status if s.name == "bsp/elbow").values)
     curve = spring_estimate["joints"]["elbow"]["passive_curve"]
     for k, (angle, moment, std) in enumerate(zip(curve["angle_deg"], curve["moment_nm"], curve["std_nm"], strict=True)):

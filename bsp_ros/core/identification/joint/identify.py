@@ -45,6 +45,7 @@ from bsp_ros.core.identification.joint.tremor_step import calm_tremor, widen_dit
 from bsp_ros.core.identification.ledger import Ledger, Term
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.stacked import fit_problem
+from bsp_ros.core.methods import Method
 from bsp_ros.core.streams import joints_for
 
 __all__ = [
@@ -104,7 +105,7 @@ def failed_result(
     """An invalid result: NaN values and covariance, with ``problems`` (invalid findings) and ``warnings``."""
     p = len(names)
     return IdentificationResult(
-        method="joint",
+        method=Method.JOINT,
         names=names,
         values=np.full(p, np.nan),
         covariance=np.full((p, p), np.nan),
@@ -233,7 +234,7 @@ def result_of(stage: Stage) -> IdentificationResult:
         joint: float(np.sqrt(np.nanmean(fit.residual[:, j] ** 2))) for j, joint in enumerate(joints_for(stage.n))
     }
     return IdentificationResult(
-        method="joint",
+        method=Method.JOINT,
         names=stage.problem.names,
         values=fit.values,
         covariance=fit.covariance,

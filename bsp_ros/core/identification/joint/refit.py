@@ -25,6 +25,7 @@ from bsp_ros.core.identification.joint.torque_response import TorqueResponse
 from bsp_ros.core.identification.ledger import Ledger, Term
 from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.stacked import Fit, Problem, augmented, build_problem, fit_problem
+from bsp_ros.core.methods import Method
 from bsp_ros.core.streams import joints_for
 
 # The findings of the arm's activity: with EMG, a refit's own stand for the held ones.
@@ -95,7 +96,7 @@ def refit_held(data: IdentificationData, held: HeldModel, config: JointConfig | 
         "prior_share": prior_share(kept.problem, own),
     }
     return IdentificationResult(
-        method="joint",
+        method=Method.JOINT,
         names=kept.problem.names,
         values=fit.values,
         covariance=fit.covariance,

@@ -9,9 +9,8 @@ import numpy as np
 
 from bsp_ros.core import simulation as sim
 from bsp_ros.core.identification.data import wrench_world_yzx
-from bsp_ros.core.pipeline import IdentifyOptions
+from bsp_ros.core.pipeline import IdentifyOptions, recursive_estimate
 from bsp_ros.live.online.causal_angles import CausalJointAngles
-from bsp_ros.live.online.identifier_modes import recursive_document
 from bsp_ros.live.online.recursive_check import WindowCheck
 from bsp_ros.live.online.recursive_feed import RecursiveFeed
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
@@ -91,7 +90,7 @@ def recursive_mode(inputs, options: IdentifyOptions, window_s: float = 30.0, fro
             started = time.perf_counter()
             check.tick(frame)
             result = feed.identifier.result()
-            document = recursive_document(check.checked(result) if checked else result, lengths, options)
+            document = recursive_estimate(check.checked(result) if checked else result, lengths, options).to_json()
             if tick_ns >= from_ns:
                 documents.append(document)
                 seconds.append(time.perf_counter() - started)

@@ -55,7 +55,7 @@ def _feed(identifier: LiveIdentifier, frames: WrenchFrames, streams, until_s: fl
 
 
 def _estimate(identifier: LiveIdentifier, now_ns: int) -> dict:
-    document = json.loads(json.dumps(identifier.update(now_ns).document, allow_nan=False))
+    document = json.loads(json.dumps(identifier.update(now_ns).estimate.to_json(), allow_nan=False))
     assert document["quality"]["valid"], document["quality"]["message"]
     return document
 
@@ -86,8 +86,8 @@ def agreeing(live_streams) -> dict:
     frames = WrenchFrames("world", use_tf=True, parameter_rotation=MOUNT, tf_wait_s=2.0)
     frames.on_transforms([TransformSample(1, "world", FRAME, np.zeros(3), quaternion_from_matrix(MOUNT))], static=True)
     identifier = _identifier(frames)
-    waiting = identifier.update(0).document  # an invalid estimate before any input: no frame finding either
-    assert [f.code for f in findings_of(waiting["quality"])] == [FindingCode.INPUT_WAITING]
+    waiting = identifier.update(0).estimate  # an invalid estimate before any input: no frame finding either
+    assert [f.code for f in waiting.quality.findings] == [FindingCode.INPUT_WAITING]
     return _estimate(identifier, _feed(identifier, frames, live_streams, 25.0))
 
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from bsp_ros.core.findings import FindingCode, findings_of
+from bsp_ros.core.methods import LiveMode
 from bsp_ros.live.online.identifier_modes import ModeEstimate
 from bsp_ros.live.online.identifier_settings import IdentifierSettings
 from bsp_ros.live.online.live_identifier import LiveIdentifier
@@ -26,7 +27,7 @@ def _identifier(log_error=pytest.fail, **values) -> LiveIdentifier[ModeEstimate]
 
 
 def _document(estimate: ModeEstimate) -> dict:
-    return json.loads(json.dumps(estimate.document, allow_nan=False))
+    return json.loads(json.dumps(estimate.estimate.to_json(), allow_nan=False))
 
 
 def _feed(identifier: LiveIdentifier, streams, until_s: float) -> list:
@@ -65,6 +66,7 @@ def test_the_windowed_mode_publishes_its_windows_estimate(live_streams) -> None:
     estimate = identifier.update(now)
     document = _document(estimate)
     assert document["mode"] == "windowed" and document["quality"]["valid"], document["quality"]["message"]
+    assert estimate.estimate.mode is LiveMode.WINDOWED
     assert passive == [] and estimate.with_passive  # the windowed passive moments go out with each estimate
     assert estimate.stamp_ns == now  # stamped with the window's newest wrench
     assert set(identifier.update_times()) == {
@@ -82,9 +84,8 @@ def test_the_windowed_mode_publishes_its_windows_estimate(live_streams) -> None:
     t_w, yzx = identifier.mode.window.wrench.since(0)
     for t, row in zip(t_w, yzx, strict=True):
         direct.add_wrench(int(t), row)
-    expected = direct.estimate(orientation=(FRAME, np.eye(3))).document
-    expected["mode"] = "windowed"
-    assert document == json.loads(json.dumps(expected))
+    expected = direct.estimate(orientation=(FRAME, np.eye(3))).estimate.with_mode(LiveMode.WINDOWED)
+    assert document == json.loads(json.dumps(expected.to_json()))
     assert document["quality"]["timing"] == {"wrench_delay_s": 0.0, "wrench_delay_std_s": 0.0, "source": "none"}
     counters = identifier.counters()
     assert counters["wrench"] > 0 and counters["joint_states"] > 0 and "wrench_spikes" not in counters
@@ -97,6 +98,7 @@ def test_the_recursive_mode_publishes_its_passive_moments_per_sample(live_stream
     estimate = identifier.update(identifier.mode.window.wrench.last_t_ns)
     document = _document(estimate)
     assert document["mode"] == "recursive" and "timing" not in document["quality"] and not estimate.with_passive
+    assert estimate.estimate.mode is LiveMode.RECURSIVE and estimate.estimate.method == "recursive"
     counters = identifier.counters()
     assert counters["raw_angles"] > 0 and counters["joint_states"] > 0 and "wrench_spikes" in counters
     assert identifier.update_times()  # the filter's update is timed
@@ -124,4 +126,5 @@ def test_an_update_that_fails_is_published_invalid_and_logged(live_streams) -> N
     document = _document(identifier.update(identifier.mode.window.wrench.last_t_ns))
     assert not document["quality"]["valid"] and document["mode"] == "windowed"
     assert [f.code for f in findings_of(document["quality"])] == [FindingCode.INTERNAL_ERROR]
+    assert document["quality"]["message"] == "internal error: RuntimeError('broken')"
     assert logged and "RuntimeError: broken" in logged[0]
