@@ -22,7 +22,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "package is not installed is refused). Each topic's metadata.yaml entry and MCAP channel list the same "
             "QoS profiles, those its publishers offered when its first message arrived, as rosbag2 records them. "
             "The cell file's sensor mounting (frames and rotation) goes into metadata.yaml's custom_data, where "
-            "`bsp identify` finds it if the bag records no transform; where tf2_msgs is not installed, /tf_static "
+            "`bsp identify` finds it if the bag records no transform; one line names the file (and says so where it "
+            "is the shipped simulated cell's, whose mounting is the simulator's); where tf2_msgs is not installed, "
+            "/tf_static "
             "and /tf give way to the cell's transform topic (geometry_msgs/TransformStamped). "
             "Stop with Ctrl-C/SIGTERM or --duration. Exit codes: 0 recorded, 2 bad argument "
             "(topic or type name, a type not installed), 3 nothing recorded (no message arrived: no bag is left), "
@@ -49,7 +51,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Record until stopped; return the exit code."""
-    from bsp_ros.bag.cell_metadata import custom_data_from_cell
+    from bsp_ros.bag.cell_metadata import cell_file_said, custom_data_from_cell
     from bsp_ros.cell import read_cell_file
     from bsp_ros.live.recorder import parse_topic_specs, record, transform_topic_for_tf
     from bsp_ros.live.runtime.ros import has_message
@@ -57,6 +59,10 @@ def run(args: argparse.Namespace) -> int:
 
     check_output_dir("--out", args.out)  # a clear error before subscribing (the recorder refuses an existing bag)
     cell = read_cell_file(args.cell)
+    # Which cell's mounting goes into metadata.yaml: `bsp identify` takes it where the bag records no transform.
+    rotation = [round(float(v), 6) for v in cell.rotation_xyzw]
+    mounting = f"sensor {cell.sensor_frame} in {cell.world_frame}, rotation xyzw {rotation}"
+    print(f"cell: {mounting} from {cell_file_said(cell)}", flush=True)
     tf_installed = has_message("tf2_msgs/msg/TFMessage")
     specs, note = transform_topic_for_tf(parse_topic_specs(args.topics), cell.transform_topic, tf_installed)
     if note:

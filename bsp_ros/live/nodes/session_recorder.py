@@ -39,41 +39,85 @@ SERVICES = ("bsp/session/start", "bsp/session/start_retest", "bsp/session/stop",
 PARAMETERS = (
     CELL_FILE,
     Param(
-        "subject",
-        "",
-        "pseudonymous id of the subject whose sessions are recorded (empty: nothing is recorded); may be set while "
-        "no session records (ros2 param set)",
+        name="subject",
+        default="",
+        description="pseudonymous id of the subject whose sessions are recorded (empty: nothing is recorded); may be "
+        "set while no session records (ros2 param set)",
     ),
-    Param("store", "", "store file or postgresql:// URL (empty: the per-user default)"),
+    Param(name="store", default="", description="store file or postgresql:// URL (empty: the per-user default)"),
     Param(
-        "recordings_dir",
-        "",
-        "folder of the session bags (empty: live_recordings beside a SQLite store, else in the per-user data folder)",
-    ),
-    Param("auto_start", True, "a session starts when the wrench stream starts (else only bsp/session/start)"),
-    Param("end_timeout_s", 5.0, "the wrench stream silent this long ends a session", "s", lo=0.5, hi=3600.0),
-    Param("max_session_s", 1800.0, "a session longer than this ends (and is stored)", "s", lo=1.0, hi=14400.0),
-    Param("keep_recordings", False, "keep the bag of a valid stored session (else removed; never a failed one's)"),
-    Param("cell", "", "the robot cell's name stored with each session (empty: none)"),
-    Param("method", "joint", "identification method", choices=("joint", "paper")),
-    Param("passive", "", "passive model as `bsp identify --passive` (empty: its default)"),
-    Param("tare_file", "", "tare file of `bsp tare` (empty: none)"),
-    Param("wrench_delay_s", None, "the wrench delay the cell knows (unset: estimated from the data)", "s", kind=float),
-    Param("marker_placement_sd_mm", 2.0, "skin marker placement sd", "mm", lo=0.0, hi=50.0),
-    Param("handle_pose_sd_mm", 0.5, "the robot's contact point registration sd", "mm", lo=0.0, hi=50.0),
-    Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
-    Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
-    Param("handle_pose_topic", "/robot/handle_pose", "the robot's contact point (PoseStamped; empty: not recorded)"),
-    Param(
-        "emg_topic",
-        "/emg/envelope",
-        "the muscles' EMG envelopes (std_msgs/Float32MultiArray; empty: not recorded), recorded where they stream",
+        name="recordings_dir",
+        default="",
+        description="folder of the session bags (empty: live_recordings beside a SQLite store, else in the per-user "
+        "data folder)",
     ),
     Param(
-        "wrench_frame_rotation_xyzw",
-        [0.0, 0.0, 0.0, 1.0],
-        "rotation world <- wrench frame [x, y, z, w] written into each session's bag metadata where tf2_msgs is "
-        "missing, read where the bag records no transform (default: the cell's mounting; the identity: none)",
+        name="auto_start",
+        default=True,
+        description="a session starts when the wrench stream starts (else only bsp/session/start)",
+    ),
+    Param(
+        name="end_timeout_s",
+        default=5.0,
+        description="the wrench stream silent this long ends a session",
+        unit="s",
+        lo=0.5,
+        hi=3600.0,
+    ),
+    Param(
+        name="max_session_s",
+        default=1800.0,
+        description="a session longer than this ends (and is stored)",
+        unit="s",
+        lo=1.0,
+        hi=14400.0,
+    ),
+    Param(
+        name="keep_recordings",
+        default=False,
+        description="keep the bag of a valid stored session (else removed; never a failed one's)",
+    ),
+    Param(name="cell", default="", description="the robot cell's name stored with each session (empty: none)"),
+    Param(name="method", default="joint", description="identification method", choices=("joint", "paper")),
+    Param(name="passive", default="", description="passive model as `bsp identify --passive` (empty: its default)"),
+    Param(name="tare_file", default="", description="tare file of `bsp tare` (empty: none)"),
+    Param(
+        name="wrench_delay_s",
+        default=None,
+        description="the wrench delay the cell knows (unset: estimated from the data)",
+        unit="s",
+        kind=float,
+    ),
+    Param(
+        name="marker_placement_sd_mm", default=2.0, description="skin marker placement sd", unit="mm", lo=0.0, hi=50.0
+    ),
+    Param(
+        name="handle_pose_sd_mm",
+        default=0.5,
+        description="the robot's contact point registration sd",
+        unit="mm",
+        lo=0.0,
+        hi=50.0,
+    ),
+    Param(name="wrench_topic", default="/ft_sensor/wrench", description="WrenchStamped topic"),
+    Param(name="marker_topic_prefix", default="/mocap/", description="PoseStamped topics: prefix + marker name"),
+    Param(
+        name="handle_pose_topic",
+        default="/robot/handle_pose",
+        description="the robot's contact point (PoseStamped; empty: not recorded)",
+    ),
+    Param(
+        name="emg_topic",
+        default="/emg/envelope",
+        description="the muscles' EMG envelopes (std_msgs/Float32MultiArray; empty: not recorded), recorded where they "
+        "stream",
+    ),
+    Param(
+        name="wrench_frame_rotation_xyzw",
+        default=[0.0, 0.0, 0.0, 1.0],
+        description="rotation world <- wrench frame [x, y, z, w] written into each session's bag metadata where "
+        "tf2_msgs is missing, read where the bag records no transform (default: the cell's mounting; the identity: "
+        "none)",
     ),
 )
 
@@ -129,7 +173,12 @@ class SessionRecorderNode(RosNode):
         self.cell = p["cell"] or None
         self.keep_recordings = p["keep_recordings"]
         with_tf = has_message(TF_TYPE)
-        control = SessionControl(NAME, p["end_timeout_s"], p["max_session_s"], p["auto_start"])
+        control = SessionControl(
+            node_name=NAME,
+            end_timeout_s=p["end_timeout_s"],
+            max_session_s=p["max_session_s"],
+            auto_start=p["auto_start"],
+        )
         self.recording = SessionRecording(
             control,
             recordings_dir_for(p["recordings_dir"], self.store_name),
@@ -138,6 +187,7 @@ class SessionRecorderNode(RosNode):
             p["wrench_frame_rotation_xyzw"],
             cell,
         )
+        self._say_cell(cell, p["wrench_frame_rotation_xyzw"])
         self._name_subject(str(self.get_parameter("subject").value))
         self.add_on_set_parameters_callback(self.on_set_parameters)
         # A whole session takes seconds to identify: off the executor thread, one session at a time.
@@ -166,7 +216,9 @@ class SessionRecorderNode(RosNode):
     @staticmethod
     def _identify_settings(p: dict[str, Any], cell: CellDescription) -> IdentifySettings:
         markers = {name: p["marker_topic_prefix"] + name for name in TopicMap().markers}
-        topics = TopicMap(p["wrench_topic"], markers, handle_pose=p["handle_pose_topic"], emg=p["emg_topic"])
+        topics = TopicMap(
+            wrench=p["wrench_topic"], markers=markers, handle_pose=p["handle_pose_topic"], emg=p["emg_topic"]
+        )
         # Without tf2_msgs the cell's TransformStamped topic is recorded: identified with the cell file that names it.
         topics = replace(topics, transform=cell.transform_topic, world_frame=cell.world_frame)
         return IdentifySettings(
@@ -199,6 +251,22 @@ class SessionRecorderNode(RosNode):
     def now_ns(self) -> int:
         """The node clock, ns."""
         return int(self.get_clock().now().nanoseconds)
+
+    def _say_cell(self, cell: CellDescription, rotation_xyzw: list[float]) -> None:
+        """Name the cell file the sessions are recorded and identified with; plainly a warning where its mounting,
+        written into each bag without tf2_msgs and used where no transform is recorded, is the shipped simulated
+        cell's."""
+        import numpy as np
+
+        from bsp_ros.bag.cell_metadata import cell_file_said, is_shipped_cell
+
+        if np.allclose(np.asarray(rotation_xyzw, dtype=np.float64), cell.rotation_xyzw, atol=1e-9):
+            log = self.get_logger().warning if is_shipped_cell(cell) else self.get_logger().info
+            log(f"cell: {cell_file_said(cell)}")
+        else:
+            self.get_logger().info(
+                f"cell: cell file {cell.source}, the sensor's mounting from parameter wrench_frame_rotation_xyzw"
+            )
 
     # Subject ------------------------------------------------------------------------------------------------
     def _name_subject(self, subject: str) -> None:

@@ -13,7 +13,12 @@ import pytest
 from node_processes import NodeProcesses, Peer
 from ros_domains import next_domain_id
 
+from bsp_ros.bag.cell_metadata import CELL_KEYS, SHIPPED_NOTE
+from bsp_ros.bag.metadata import read_metadata
+from bsp_ros.bag.topics import TF_TYPE
+from bsp_ros.cell import SHIPPED_CELL
 from bsp_ros.clinic.store import SubjectRecord, open_store
+from bsp_ros.live.runtime.ros import has_message
 
 pytestmark = [pytest.mark.dds, pytest.mark.slow]
 
@@ -172,6 +177,8 @@ def test_a_retest_started_for_a_named_subject_is_stored_whole_as_a_retest_with_i
     assert f"recording sessions for {SUBJECT} into {store}" in log
     assert f"retest of {SUBJECT} started (service)" in log
     assert f"stored session 2 of {SUBJECT} (right arm, retest" in log
+    # The cell file it used, named once, plainly the shipped simulated cell's.
+    assert log.count(f"cell: cell file {SHIPPED_CELL}: {SHIPPED_NOTE}") == 1
     assert not any((tmp_path / "recordings").iterdir()) or not outcome.valid  # a valid session's bag is removed
 
 
@@ -230,6 +237,10 @@ def test_stop_reset_and_session_end_end_sessions_and_one_that_cannot_be_identifi
     assert outcome.kind == "failed" and outcome.retest
     assert outcome.kept is not None and (outcome.kept / "metadata.yaml").is_file()
     assert (by_stop.kept / "metadata.yaml").is_file()
+    # Without tf2_msgs each bag states the mounting, from the shipped simulated cell's file, and says so.
+    custom = read_metadata(by_stop.kept / "metadata.yaml").custom
+    if not has_message(TF_TYPE):
+        assert custom[CELL_KEYS["file"]] == str(SHIPPED_CELL) and custom[CELL_KEYS["shipped"]] == "true", custom
     with open_store(store) as opened:
         assert opened.sessions() == []
     log = capfd.readouterr().err
