@@ -9,10 +9,10 @@ the arm's geometry alone does, COM off the segment axis and oblique joint axes),
 sine, ``bsp_ros.core.simulation``; a plan of ``bsp_ros.core.planning`` within elevation 42-70 deg) and seed, a
 session of ``test/physics/opensim_cell.py`` is written as a bag and identified with ``bsp identify --json``
 (in-process, ``bsp_ros.cli.main``) with the default passive model and every ``--passive`` model the tool offers
-(each valid combination of ``bsp_ros.core.identification.passive.TERMS``) or suggests in a warning. Every
-data-sourced quantity (source ``data`` / ``data+prior``) that the truth has is scored by
-``|z| = |value - truth| / std``: the static moments (with ``--all-quantities`` also lengths, masses, COMs, first
-moments, inertias and the joints' Coulomb level, whose truth is 0) and, where the estimate has
+(each valid combination of ``bsp_ros.core.identification.passive.TERMS``) or a finding names
+(``values.passive_option``). Every data-sourced quantity (source ``data`` / ``data+prior``) that the truth has is
+scored by ``|z| = |value - truth| / std``: the static moments (with ``--all-quantities`` also lengths, masses, COMs,
+first moments, inertias and the joints' Coulomb level, whose truth is 0) and, where the estimate has
 ``joints.<joint>.passive_curve``, its points against the truth's curve. Per row: runs, valid, valid-and-wrong
 (some |z| > 3), invalid-and-right (every |z| <= 3), two-sided calibration over the scored quantities of the valid
 runs but not the curves, whose points are not independent (``bench/calibration.py``: z RMS with
@@ -22,7 +22,8 @@ error across the valid runs, 1 ideal; per kind, static moments "SM", Coulomb amp
 ``--all-quantities``, the median and range over its quantities), the worst |z| over valid runs and over all, the
 median over valid runs of the largest static-moment error (% of the truth) and of the largest passive-curve error
 (RMS over the truth curve's range, % of its RMS), how many runs are "accurate" (issue 20's target: valid, static
-moments within 3 % and 3 std, curves within 10 % RMS), the most common message of the invalid ones.
+moments within 3 % and 3 std, curves within 10 % RMS), the most common cause of the invalid ones (the first
+invalid finding's code and where, or the error line of a run that wrote no estimate).
 ``--quick``: one seed, 60 s, rigid and three strengths, three models (and suggestions). ``--planar``: arm26 with
 both joint axes made exactly lateral. ``--trunk-tilt-deg DEG``: each session is also recorded with arm26's ground
 (the trunk, with the shoulder and the muscles' origins) turned by DEG about world x, the same motion relative to it,
@@ -55,6 +56,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "test" / "physics"))
 
 from bsp_ros.cli import main as bsp_main  # noqa: E402
+from bsp_ros.core.findings import findings_of, verdict_of  # noqa: E402
 from bsp_ros.core.identification.passive import TERMS, PassiveModel  # noqa: E402
 from bsp_ros.errors import InputError  # noqa: E402
 
@@ -77,7 +79,6 @@ ALL_SEGMENT_KEYS = (
     "grouped_inertia_kgm2",
 )
 ALL_JOINT_KEYS = ("coulomb_nm",)
-_SUGGESTION = re.compile(r"--passive[ =]([a-z]+(?:\+[a-z]+)*)")
 _NUMBER = re.compile(r"[-+]?\d[\d.e+-]*%?")
 
 
@@ -203,8 +204,18 @@ def accuracy(document: dict[str, Any], truth: dict[str, Any]) -> dict[str, float
 
 
 def _message(document: dict[str, Any]) -> str:
-    text = document.get("error") or document.get("quality", {}).get("message") or "invalid (no message)"
-    return _NUMBER.sub("#", str(text))[:70]
+    """Why a run is invalid: the first invalid finding's code and where, or the error line of a run that wrote no
+    estimate (numbers blanked, so that alike errors count together)."""
+    if "error" in document:
+        return _NUMBER.sub("#", str(document["error"]))[:70]
+    verdict = verdict_of(findings_of(document.get("quality", {})))
+    return "invalid (no finding)" if verdict is None else f"{verdict.code} {verdict.where}".strip()
+
+
+def suggested_models(document: dict[str, Any]) -> list[str]:
+    """The ``--passive`` models the findings of ``document`` name (``values["passive_option"]``), in their order."""
+    findings = findings_of(document.get("quality", {}))
+    return [str(f.values["passive_option"]) for f in findings if "passive_option" in f.values]
 
 
 def session_bag(
@@ -337,8 +348,7 @@ def main(argv: list[str] | None = None) -> int:
                     errors = {"static_pct": math.nan, "curve_rms_pct": math.nan}
                     if "error" not in document:
                         errors = accuracy(document, truth)
-                    warnings = document.get("quality", {}).get("warnings", [])
-                    queue += [m for w in warnings for m in _SUGGESTION.findall(w) if m not in done]
+                    queue += [m for m in suggested_models(document) if m not in done]
                     rows[(share, label, model)].append(
                         {
                             "seed": seed,

@@ -9,16 +9,17 @@ same sines with periods / 4: 0.12 rad/s; ``--plan FILE`` adds a ``bsp plan`` tra
 sensor fixed in world (``/tf_static``) or turning with the handle (per-sample ``/tf``). A seed draws the subject
 (de Leva prior), its inertias, its friction and the sensor and marker noise. The bag goes through
 ``bsp identify BAG --json OUT`` (the CLI's own ``main``, in process) with the default model and again with
-every ``--passive MODEL`` its warnings suggest (and every ``--also-passive MODEL``). Every data-sourced
+every ``--passive MODEL`` its findings name (and every ``--also-passive MODEL``). Every data-sourced
 parameter (``source`` "data" or "data+prior") is scored against truth.json: |z| = |value - truth| / std. Per
 scenario and model: runs, valid, valid-and-wrong (valid, some |z| > 3), invalid-and-right (invalid, every
 |z| <= 3), the worst |z| and its parameter, two-sided calibration over the data-sourced parameters of its valid
 runs (``bench/calibration.py``: z RMS with z = (value - truth) / std, 1 for an honest std; the shares within 1 and 2
 std, 68 % and 95 % for an honest std), the sharpness (per parameter the median std over the RMS error across the
 valid runs, 1 ideal; per kind, static moments "SM", Coulomb amplitudes "C", masses "m", the median and range over
-its parameters), the most common reason for invalid, and the engine's inertial / gravity torque per joint (RMS over
-RMS, peak over peak). Each seed draws its own arm unless ``--arm-seed`` fixes one (the seeds then vary the noise
-only): the sharpness is meant over one arm, and over arms drawn per seed it mixes their errors.
+its parameters), the most common cause of invalid (the first invalid finding's code and where), and the engine's
+inertial / gravity torque per joint (RMS over RMS, peak over peak). Each seed draws its own arm unless
+``--arm-seed`` fixes one (the seeds then vary the noise only): the sharpness is meant over one arm, and over arms
+drawn per seed it mixes their errors.
 
 How it was run for the issue-19 report (the estimator of main at 3f2534c, 2 shared cores, 1078 s):
 ``bsp plan --shoulder 0 1.2 --shoulder-range -70 -10 --elbow-range 10 100 --wrist-range -20 20 --duration 120
@@ -41,7 +42,6 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import re
 import sys
 import tempfile
 import time
@@ -59,11 +59,10 @@ from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine
 from scoring import Counts
 
+from bsp_ros.core.findings import findings_of, verdict_of
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import gravity_regressor
 from bsp_ros.core.planning import planned_trajectory_from_file
-
-_SUGGESTION = re.compile(r"--passive ([a-z]+(?:\+[a-z]+)*)")
 
 
 @dataclass(frozen=True)
@@ -97,10 +96,16 @@ class Tally(Counts):
 
 
 def _reason(estimate: dict[str, Any]) -> str:
-    """The first clause of ``quality.message``, numbers blanked, so alike messages count together."""
-    message = str(estimate.get("quality", {}).get("message") or "(no message)")
-    first = message.split(";")[0].split(":")[0]
-    return re.sub(r"[-+]?\d[\d.e+-]*", "#", first).strip()[:90]
+    """The code of the first finding that made ``estimate`` invalid, with its joint or segment, so that alike
+    verdicts count together (``model_misfit elbow``)."""
+    verdict = verdict_of(findings_of(estimate.get("quality", {})))
+    return "(no finding)" if verdict is None else f"{verdict.code} {verdict.where}".strip()
+
+
+def suggested_models(estimate: dict[str, Any]) -> set[str]:
+    """The ``--passive`` models the findings of ``estimate`` name (``values["passive_option"]``)."""
+    findings = findings_of(estimate.get("quality", {}))
+    return {str(f.values["passive_option"]) for f in findings if "passive_option" in f.values}
 
 
 def inertia_only_shift(run: EngineRun, passive: str) -> np.ndarray:
@@ -153,9 +158,7 @@ def run_scenario(
         bag = write_bag(workdir / stem, cell)
         code, estimate = identify(bag, workdir / f"{stem}_default.json")
         models = [("default", code, estimate)]
-        warnings = estimate.get("quality", {}).get("warnings", [])
-        suggested = {m for w in warnings for m in _SUGGESTION.findall(str(w))}
-        for model in sorted(suggested | set(args.also_passive)):
+        for model in sorted(suggested_models(estimate) | set(args.also_passive)):
             code_m, estimate_m = identify(bag, workdir / f"{stem}_{model}.json", "--passive", model)
             models.append((model, code_m, estimate_m))
         for model, code_m, estimate_m in models:

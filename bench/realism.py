@@ -15,7 +15,8 @@ right result thrown away), two-sided calibration over the data-sourced parameter
 and 2 std (68 %, 95 % for an honest std), the sharpness over the seeds (one arm, re-simulated; the nuisance's
 seeded directions change with it): per parameter the median std over the RMS error across the seeds (1 ideal),
 per kind (static moments "SM", Coulomb amplitudes "C", masses "m") the median (range) over its parameters, and
-the most frequent warning kinds; the totals of both rates and the pooled calibration close the table.
+the most frequent kinds of warning (the codes of the findings that qualify or annotate it, with their joint or
+segment); the totals of both rates and the pooled calibration close the table.
 Sensor nuisances (offset, drift, handle) pick a seeded random direction per seed.
 """
 
@@ -26,7 +27,6 @@ import collections
 import dataclasses
 import json
 import math
-import re
 import sys
 import time
 from collections.abc import Callable
@@ -36,6 +36,7 @@ import numpy as np
 from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header, summary_line
 from scoring import Counts, Scored, scored
 
+from bsp_ros.core.findings import FindingCode, Severity, findings_of
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.core.simulation import (
@@ -99,15 +100,14 @@ NUISANCES: dict[str, Callable[[CellSpec, int], CellSpec]] = {
     "30 s session": lambda s, seed: dataclasses.replace(s, duration_s=30.0),
 }
 
-_NUMBER = re.compile(r"[-+]?\d[\d.e+-]*%?")
-# Notes every session carries (edge samples without angles, the prior used): not counted as warnings.
-_ROUTINE = ("# of # wrench samples have no joint angles", "masses and COMs")
+# Notes of every session (the prior used; the data layer's count of samples without angles): not counted as warnings.
+_ROUTINE = frozenset({str(FindingCode.PRIOR_NOTE), str(FindingCode.DATA_NOTE)})
 
 
-def _kind(warning: str) -> str:
-    """A warning without its numbers, cut to its first clause (so that alike warnings count together)."""
-    head = warning.split(":")[0] if not warning.startswith(("confounded", "uncertain")) else warning
-    return _NUMBER.sub("#", head)[:60]
+def _kinds(quality: dict[str, Any]) -> list[str]:
+    """The kinds of the findings that qualify or annotate an estimate (its warnings): each code with its joint or
+    segment (``elastic_term elbow``), so that alike warnings count together."""
+    return [f"{f.code} {f.where}".strip() for f in findings_of(quality) if f.severity is not Severity.INVALID]
 
 
 def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
@@ -143,7 +143,7 @@ def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
         else math.nan,
         "max_z": run.max_z,
         "residuals": run.residuals,
-        "warnings": [_kind(w) for w in document["quality"]["warnings"]],
+        "warnings": _kinds(document["quality"]),
         "message": document["quality"].get("message", ""),
     }
 
@@ -194,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
             pooled.pool(counts)
             # Each run's kinds once, in the order it gave them (a set's order changes with the hash seed).
             once = (k for r in results for k in dict.fromkeys(r["warnings"]))
-            kinds = collections.Counter(k for k in once if not k.startswith(_ROUTINE))
+            kinds = collections.Counter(k for k in once if k not in _ROUTINE)
             common = "; ".join(f"{k} ({c})" for k, c in kinds.most_common(2)) or "-"
             row = (
                 f"{name:28s} {'yes' if tare else 'no':4s} "

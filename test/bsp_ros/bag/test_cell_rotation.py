@@ -66,7 +66,8 @@ def test_the_mounting_record_wrote_into_the_metadata_gives_the_rotation(session,
     bag = write_session_bag(tmp_path / "meta", session, tf_static=False, custom_data=custom_data_from_cell(cell))
     document = identify_bag(bag)
     assert document["quality"]["valid"] and document["bag"]["rotation_source"] == "metadata"
-    assert any("the bag's metadata" in w and "states" in w for w in document["quality"]["warnings"])
+    notes = [f.values["detail"] for f in findings_of(document["quality"]) if f.code is FindingCode.BAG_NOTE]
+    assert any("the bag's metadata" in detail and "states" in detail for detail in notes), notes
     assert _static_moments(document) == pytest.approx(_static_moments(reference), rel=1e-6)
 
 

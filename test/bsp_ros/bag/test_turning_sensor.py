@@ -10,6 +10,7 @@ from turning_sensor import TurningSession, assert_within_3_std, turning_session
 
 from bsp_ros.bag import read_session, write_session_bag
 from bsp_ros.bag.offline import identify_bag
+from bsp_ros.core.findings import FindingCode, findings_of
 
 
 @pytest.fixture(scope="module")
@@ -42,8 +43,8 @@ def test_the_same_turning_sensor_with_one_fixed_rotation_is_a_fit_failure(
     # /tf_static only (the mount orientation): nothing says the sensor turns, so the model cannot fit.
     bag = write_session_bag(tmp_path / "fixed", turning.session, tf_static=True)
     document = identify_bag(bag)
-    assert not document["quality"]["valid"]
-    assert "does not fit" in document["quality"]["message"]
+    quality = document["quality"]
+    assert not quality["valid"] and FindingCode.MODEL_MISFIT in [f.code for f in findings_of(quality)], quality
     assert document["quality"]["rotation"] == {"source": "tf", "per_sample": False, "range_deg": 0.0}
 
 

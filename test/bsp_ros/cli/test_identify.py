@@ -80,8 +80,8 @@ def test_a_truncated_bag_is_identified_from_its_intact_part_and_says_so(human_ba
     assert code == 0
     assert estimate["bag"]["truncated"]
     assert estimate["bag"]["lost_messages"] > 0
-    assert estimate["quality"]["warnings"][0].startswith("bag damaged")
-    assert FindingCode.BAG_DAMAGED in [f.code for f in findings_of(estimate["quality"])]
+    (damage,) = [f for f in findings_of(estimate["quality"]) if f.code is FindingCode.BAG_DAMAGED]
+    assert estimate["quality"]["warnings"][0] == damage.text  # the first note a reader sees
 
 
 @pytest.mark.parametrize(("option", "value"), [("--body-mass", "-70"), ("--height", "nan"), ("--passive", "foo")])
@@ -118,7 +118,8 @@ def test_a_bag_with_nan_wrenches_is_identified_without_them_and_says_how_many(tm
     bag = _write_modified(tmp_path, "nan_bag", with_nan)
     code, estimate = _identify(bag, tmp_path / "n.json")
     assert code == 0
-    assert any("50 samples with NaN/Inf removed" in w for w in estimate["quality"]["warnings"])
+    notes = [f.values["detail"] for f in findings_of(estimate["quality"]) if f.code is FindingCode.DATA_NOTE]
+    assert any("50 samples with NaN/Inf removed" in detail for detail in notes), notes
 
 
 def test_a_bag_whose_clock_jumps_back_is_refused_with_a_clear_message(tmp_path, capsys) -> None:
@@ -143,8 +144,8 @@ def test_a_rotated_sensor_bag_without_tf_static_is_invalid_naming_the_transform(
     code, estimate = _identify(lost, tmp_path / "l.json")
     assert code == 1
     assert not estimate["quality"]["valid"]
-    assert findings_of(estimate["quality"])[0].code is FindingCode.ROTATION_ASSUMED  # the cause of the misfit
-    assert estimate["quality"]["message"].startswith("missing transform world -> ft_sensor")
+    assumed = findings_of(estimate["quality"])[0]
+    assert assumed.code is FindingCode.ROTATION_ASSUMED and assumed.values["frame"] == "ft_sensor"  # the misfit's cause
     # The verdict a user reads: the cause in plain words and what to do, then the estimator's reasons.
     first, *reasons = capsys.readouterr().err.splitlines()
     assert first == (

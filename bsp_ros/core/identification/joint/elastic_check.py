@@ -12,6 +12,7 @@ from bsp_ros.core.identification.covariance import correlation_from_covariance
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
 from bsp_ros.core.identification.joint.unmodelled import MODEL_CHECK_SHIFT_SD
+from bsp_ros.core.identification.passive import AUTO
 from bsp_ros.core.identification.stacked import (
     Extras,
     Fit,
@@ -103,6 +104,8 @@ def elastic_check(
                 "change_percent": float(100 * change[worst]),
                 "shift_sd": float(shift_sd[worst]),
                 "fallback": bool(config.elastic_fallback),
+                # The `--passive` model that takes the terms up: the estimate's own with the fallback, else to try.
+                "passive_option": AUTO,
             }
             notes.append(Finding(code=FindingCode.ELASTIC_TERM, where=joint, values=values))
     return notes

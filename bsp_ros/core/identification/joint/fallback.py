@@ -7,6 +7,7 @@ import dataclasses
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.identification.passive import AUTO
 from bsp_ros.core.identification.result import IdentificationResult
 
 __all__ = ["elastic_family_fit", "family_result"]
@@ -40,6 +41,7 @@ def elastic_family_fit(
         return None
     values = {
         "model": config.passive.label,
+        "passive_option": AUTO,  # the `--passive` model whose choice the estimate uses
         "joints": tuple(f.where for f in misfits),
         **{key: tuple(float(f.values[key]) for f in misfits) for key in ("rms_nm", "ratio", "noise_nm")},
     }

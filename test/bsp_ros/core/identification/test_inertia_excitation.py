@@ -13,6 +13,7 @@ from __future__ import annotations
 import pytest
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 
 PERIODS_S = ((2.1, 7.9), (2.7, 9.3), (3.3, 11.1))
@@ -41,7 +42,8 @@ def test_a_faster_protocol_identifies_the_inertias(seed: int) -> None:
     options = IdentifyOptions(marker_placement_sd_m=0.0, zero_sd_n=0.0, zero_sd_nm=0.0)
     document = identify_session(simulated.session, options)
     assert document["quality"]["valid"], document["quality"]["message"]
-    assert any("direction filter" in w for w in document["quality"]["warnings"])  # the filters followed the motion
+    notes = [f.values["detail"] for f in findings_of(document["quality"]) if f.code is FindingCode.DATA_NOTE]
+    assert any("direction filter" in detail for detail in notes), notes  # the filters followed the motion
     for segment in ("upper_arm", "forearm"):
         q = document["segments"][segment]["grouped_inertia_kgm2"]
         true = truth["segments"][segment]["grouped_inertia_kgm2"]

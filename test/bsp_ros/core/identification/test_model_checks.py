@@ -35,7 +35,8 @@ def identified(seed: int, **changes: object) -> IdentificationResult:
 def test_a_clean_session_shows_neither_drift_nor_speed_dependent_friction(seed: int) -> None:
     result = identified(seed)
     assert result.valid, result.message
-    assert not any("drifts" in w or "Stribeck" in w for w in result.warnings)
+    codes = [f.code for f in result.findings]
+    assert FindingCode.DRIFT_MODELLED not in codes and FindingCode.FRICTION_SPEED_DEPENDENT not in codes, codes
 
 
 def test_a_drifting_force_sensor_is_named_and_modelled_within_its_std() -> None:

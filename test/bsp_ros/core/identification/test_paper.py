@@ -40,7 +40,6 @@ def test_paper_method_splits_unidentifiable_masses_arbitrarily(paper_arm_session
     # m1 l1 + a1 m2 is determined, the split is not: the bounded solver puts it anywhere.
     grouped = pi["m1l1"] + truth.lengths_m[0] * pi["m2"]
     assert grouped == pytest.approx(truth.static_moments_kgm[0], rel=0.01)
-    assert any("not identifiable" in w for w in result.warnings)
     codes = [f.code for f in result.findings]
     assert FindingCode.PAPER_SPLIT_ARBITRARY in codes and FindingCode.PAPER_STD_CLASSICAL in codes
 

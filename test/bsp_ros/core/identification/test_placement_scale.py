@@ -173,9 +173,10 @@ def test_a_friction_the_model_lacks_is_not_taken_for_misplaced_markers() -> None
     )
     document = identify_session(sim.simulate_cell(spec).session)
     quality = document["quality"]
-    assert not quality["valid"] and "lacks" in quality["message"], quality["message"]
+    codes = [f.code for f in findings_of(quality)]
+    assert not quality["valid"] and FindingCode.UNMODELLED_EFFECT in codes, quality["message"]
     assert "marker_placement" not in quality
-    assert not any(w.startswith("the markers sit further off") for w in quality["warnings"])
+    assert FindingCode.PLACEMENT_WIDER not in codes
 
 
 @pytest.mark.parametrize("seed", [0, 2])

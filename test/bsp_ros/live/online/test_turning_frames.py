@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bsp_ros.core.findings import FindingCode, findings_of
 from bsp_ros.live.online.causal_angles import CausalJointAngles
 from bsp_ros.live.online.frames import WrenchFrames, WrenchQueue
 from bsp_ros.live.online.windowed import WindowConfig, WindowedIdentifier
@@ -72,7 +73,8 @@ def test_a_turning_sensor_on_tf_is_rotated_per_wrench_stamp_and_identified(turni
 def test_the_same_sensor_with_its_first_transform_only_does_not_fit(turning: TurningSession) -> None:
     document, frames = _run(turning, turning.tf_samples[:1])
     assert frames.sources == {"ft_sensor": "tf"}
-    assert not document["quality"]["valid"] and "does not fit" in document["quality"]["message"]
+    quality = document["quality"]
+    assert not quality["valid"] and FindingCode.MODEL_MISFIT in [f.code for f in findings_of(quality)], quality
 
 
 def test_a_wrench_newer_than_the_newest_tf_holds_it_and_older_ones_are_slerped(turning: TurningSession) -> None:
