@@ -18,6 +18,7 @@ import argparse
 import numpy as np
 
 from bsp_ros.core import simulation as sim
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.identification.data import identification_data_from_session
 from bsp_ros.core.identification.joint import JointConfig, identify_joint
 from bsp_ros.core.identification.passive import PassiveModel
@@ -35,7 +36,7 @@ def _scatter(trajectory: object, seeds: int) -> tuple[np.ndarray, int, int]:
         result = identify_joint(identification_data_from_session(session.session), JointConfig(passive=MODEL))
         values.append(result.values)
         valid += result.valid
-        flagged += any(w.startswith("confounded") for w in result.warnings)
+        flagged += any(f.code is FindingCode.CONFOUNDED for f in result.findings)
     return np.array(values).std(axis=0, ddof=1), valid, flagged
 
 
