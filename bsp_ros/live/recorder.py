@@ -162,6 +162,7 @@ class RecordReport:
     counts : topic -> messages written.
     types : topic -> message type of the topics subscribed.
     missing : topics never subscribed (no publisher with a type appeared, and none was given).
+    unsubscribed : topic -> why it could not be subscribed (its type not installed, or no definition to store).
     warnings : human-readable findings.
     start_ns, end_ns : first and last receive time (0 if nothing was received).
     wall_s : recording time, s.
@@ -171,6 +172,7 @@ class RecordReport:
     counts: dict[str, int] = field(default_factory=dict)
     types: dict[str, str] = field(default_factory=dict)
     missing: list[str] = field(default_factory=list)
+    unsubscribed: dict[str, str] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     start_ns: int = 0
     end_ns: int = 0
@@ -436,7 +438,7 @@ def record(
         raise DataError(
             f"nothing was recorded in {report.wall_s:.1f} s: no message arrived (topics subscribed: {heard}; "
             f"no publisher found: {', '.join(report.missing) or 'none'}); no bag was left at {out}"
-            + "".join(f"; {w}" for w in report.warnings if "cannot subscribe" in w)
+            + "".join(f"; {topic}: cannot subscribe ({why})" for topic, why in report.unsubscribed.items())
         )
     return report
 
@@ -575,6 +577,7 @@ def _subscribe_pending(
             reliable, durable = subscription_qos(topic, [(p.reliable, p.transient_local) for p in matching.values()])
             rec.subscribe(topic, msgtype, reliable, durable, {gid: p.profile for gid, p in matching.items()})
         except BspError as error:
+            report.unsubscribed[topic] = str(error)
             report.warnings.append(f"{topic}: cannot subscribe ({error})")
             _LOG.warning("%s: cannot subscribe (%s)", topic, error)
             del pending[topic]
