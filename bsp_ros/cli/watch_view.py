@@ -201,16 +201,15 @@ class WatchView:
             if self.precision_signal is None:
                 return "precision: no target (bsp_identifier's target_std_percent is 0)"
             return f"precision: {'REACHED' if self.precision_signal else 'not yet'} (bsp/precision_reached)"
-        targets = ", ".join(f"{p.owner}" for p in state.parameters)
-        limit = max((p.target for p in state.parameters), default=0.0)
+        targets, limit = _targets(state), max((p.target for p in state.parameters), default=0.0)
         if state.reached or self.precision_signal:
             after = "" if state.reached_after_s is None else f" {state.reached_after_s:.1f} s into the session"
-            return f"precision: REACHED{after}: the static moments of {targets} within {100 * limit:g} % std"
+            return f"precision: REACHED{after}: {_within(state)}"
         worst = state.worst
         if state.within_s is not None:
             return f"precision: not yet: every target met for {state.within_s:.1f} of {state.hold_s:g} s"
         if worst is None or worst.relative_std is None:
-            return f"precision: not yet: no std for the static moments of {targets} yet (target {100 * limit:g} %)"
+            return f"precision: not yet: no std for {targets} yet (target {100 * limit:g} %)"
         return (
             f"precision: not yet: {worst.owner} {worst.quantity} std {100 * worst.relative_std:.2f} % "
             f"(target {100 * worst.target:g} %)"
@@ -233,6 +232,21 @@ class WatchView:
             f"marker frames {_hz(rates.marker_frames_hz)} ({ANGLES})",
             f"lost (received, not usable; since each node started): {lost}",
         ]
+
+
+def _targets(state: PrecisionState) -> str:
+    """The targeted parameters: ``the static moments of upper_arm, forearm``, else each ``owner quantity``."""
+    if all(p.quantity == "static_moment_kgm" for p in state.parameters):
+        return "the static moments of " + ", ".join(p.owner for p in state.parameters)
+    return ", ".join(f"{p.owner} {p.quantity}" for p in state.parameters)
+
+
+def _within(state: PrecisionState) -> str:
+    """The targets met: ``... within 5 % std``, or each parameter's own target where they differ (a plan's)."""
+    limits = {p.target for p in state.parameters}
+    if len(limits) == 1:
+        return f"{_targets(state)} within {100 * limits.pop():g} % std"
+    return ", ".join(f"{p.owner} {p.quantity} within {100 * p.target:.3g} %" for p in state.parameters) + " std"
 
 
 def _hz(rate: float | None) -> str:

@@ -19,6 +19,7 @@ from bsp_ros.core.tare import Tare, read_tare_file
 from bsp_ros.errors import BspError, InputError
 from bsp_ros.live.online.frames import FrameSource, frame_source, rotation_from_quaternion_xyzw
 from bsp_ros.live.online.precision import PrecisionTarget
+from bsp_ros.live.online.precision_targets import precision_target_from_parameters
 from bsp_ros.live.runtime.cell_parameters import CELL_FILE
 from bsp_ros.live.runtime.parameters import Param
 
@@ -137,6 +138,18 @@ PARAMETERS = (
         "the segments whose static moment target_std_percent is for (the hand's short lever leaves its static moment "
         "15-40 % uncertain from skin markers: add it where the robot gives the contact point)",
     ),
+    Param(
+        name="target_parameters",
+        default="",
+        description="the parameters target_std_percent is for instead, owner.quantity joined by commas, e.g. "
+        "forearm.static_moment_kgm,elbow.coulomb_nm (a joint's: its passive model's; empty: target_segments)",
+    ),
+    Param(
+        name="plan_file",
+        default="",
+        description="a `bsp plan --json` file: the session is precise enough once each static moment has the "
+        "relative std the plan predicts (target_std_percent then 0; window_s at least the plan's duration)",
+    ),
 )
 
 _BY_NAME = {p.name: p for p in PARAMETERS}
@@ -192,7 +205,9 @@ class IdentifierSettings:
     wrench_delay_s : the wrench delay the cell knows (s), or None when unset (live applies 0:
         :attr:`live_wrench_delay_s`).
     target_std_percent, precision_hold_s, target_segments : the precision signal's target (%, 0: off), hold (s) and
-        the segments whose static moments it is for: :attr:`precision_target`.
+        the segments whose static moments it is for.
+    precision_target : what the session is for (the parameters above, ``target_parameters`` or ``plan_file``:
+        :func:`bsp_ros.live.online.precision_targets.precision_target_from_parameters`), or None when off.
     """
 
     mode: LiveMode
@@ -215,6 +230,7 @@ class IdentifierSettings:
     precision_hold_s: float = 5.0
     target_segments: tuple[str, ...] = ("upper_arm", "forearm")
     emg_topic: str = ""
+    precision_target: PrecisionTarget | None = None
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> IdentifierSettings:
@@ -246,6 +262,7 @@ class IdentifierSettings:
             zero_sd_n=p["zero_sd_n"],
             zero_sd_nm=p["zero_sd_nm"],
         )
+        segments = _target_segments(p["target_segments"], p["n_segments"])
         return cls(
             mode=LiveMode(p["mode"]),
             n_segments=p["n_segments"],
@@ -265,17 +282,11 @@ class IdentifierSettings:
             tf_wait_s=p["tf_wait_s"],
             target_std_percent=p["target_std_percent"],
             precision_hold_s=p["precision_hold_s"],
-            target_segments=_target_segments(p["target_segments"], p["n_segments"]),
+            target_segments=segments,
             emg_topic=p["emg_topic"],
-        )
-
-    @property
-    def precision_target(self) -> PrecisionTarget | None:
-        """What the session is for (every static moment within ``target_std_percent``), or None when off."""
-        if self.target_std_percent <= 0.0:
-            return None
-        return PrecisionTarget.static_moments(
-            self.target_std_percent, self.target_segments, hold_s=self.precision_hold_s
+            precision_target=precision_target_from_parameters(
+                p, segments, options.passive, p["window_s"] if p["mode"] == LiveMode.WINDOWED else None
+            ),
         )
 
     @property

@@ -167,6 +167,30 @@ def test_the_precision_line_follows_the_estimates_block_and_the_signal(session: 
     assert _line(view.render(0.0, ""), "precision:").startswith("precision: REACHED")
 
 
+def test_the_precision_line_names_passive_targets_and_each_target_of_a_plan(session: Any) -> None:
+    # A plan gives each static moment its own target; target_parameters may name a joint's passive term.
+    document, _ = session
+    limits = {("forearm", "static_moment_kgm"): 0.5, ("elbow", "coulomb_nm"): 0.9}
+    state = PrecisionTracker(PrecisionTarget(relative_std=limits, hold_s=0.0)).update(Estimate.from_json(document), 0)
+    for (owner, key), limit in limits.items():  # the simulated session's estimate is within both
+        group = "segments" if owner == "forearm" else "joints"
+        assert document[group][owner][key]["std"] <= limit * abs(document[group][owner][key]["value"])
+    view = WatchView()
+    view.on_estimate(json.dumps({**document, "precision": state.to_json()}), 0.0)
+    assert _line(view.render(0.0, ""), "precision:") == (
+        "precision: REACHED 0.0 s into the session: forearm static_moment_kgm within 50 %, elbow coulomb_nm within "
+        "90 % std"
+    )
+    same = PrecisionTarget(relative_std=dict.fromkeys(limits, 0.9), hold_s=0.0)
+    view.on_estimate(
+        json.dumps({**document, "precision": PrecisionTracker(same).update(Estimate.from_json(document), 0).to_json()}),
+        0.0,
+    )
+    assert _line(view.render(0.0, ""), "precision:").endswith(
+        ": forearm static_moment_kgm, elbow coulomb_nm within 90 % std"
+    )
+
+
 def test_the_lost_counters_watch_reads_are_those_bsp_identifier_counts() -> None:
     # The identifier's counters come from LiveIdentifier (the node publishes them on /diagnostics as they are): a
     # wrench before its frame's first transform, a wrench of another frame than the tare's; refused from the start.
