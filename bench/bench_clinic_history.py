@@ -5,12 +5,19 @@ Patient P-SAME: nothing changes; markers re-placed (+-3 mm) and the sensor re-ze
 Patient P-STIF: elbow stiffness falls 1.5 -> 1.0 Nm/rad.
 Each has retests on the first five days. Prints every flagged step and writes the reports.
 
+With ``--false-flags N``: N unchanged arms instead (people of seeded sex, size and passive moments, six weekly
+visits each with a same-day retest, markers re-placed +-3 mm and the sensor re-zeroed every session), and how many
+of their reports show any flag with the report's limit (Bonferroni over its comparisons) and with each comparison at
+95 % alone (its MDC95).
+
     python bench/bench_clinic_history.py OUT_DIR
+    python bench/bench_clinic_history.py OUT_DIR --false-flags 60 [--first-seed 0]
 """
 
 from __future__ import annotations
 
-import sys
+import argparse
+import random
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -65,5 +72,69 @@ def main(out: Path) -> None:
     print(f"reports in {out}")
 
 
+UNCHANGED_VISITS = 6
+
+
+def unchanged_patient(rng: random.Random) -> Patient:
+    """A person of seeded sex, size and passive moments (the ranges of docs/clinic.md's simulated histories)."""
+    sex = rng.choice(("female", "male"))
+    height = rng.uniform(1.55, 1.75) if sex == "female" else rng.uniform(1.65, 1.90)
+    return Patient(
+        sex=sex,
+        body_mass_kg=rng.uniform(50.0, 95.0),
+        height_m=height,
+        coulomb_nm=(rng.uniform(0.3, 0.7), rng.uniform(0.15, 0.8), rng.uniform(0.04, 0.09)),
+        stiffness_nm_per_rad=(0.0, rng.uniform(0.8, 2.0), 0.0),
+        passive=MODEL,
+    )
+
+
+def false_flags(out: Path, count: int, first_seed: int) -> None:
+    """Simulate ``count`` unchanged arms and print how many reports flag anything, with and without the report's
+    limit."""
+    out.mkdir(parents=True, exist_ok=True)
+    store_path = out / "unchanged.sqlite"
+    store_path.unlink(missing_ok=True)
+    started = time.perf_counter()
+    any_limit = any_single = comparisons = 0
+    with open_store(store_path) as store:
+        for k in range(count):
+            seed = first_seed + k
+            rng = random.Random(seed)
+            patient, subject = unchanged_patient(rng), f"U{seed:04d}"
+            record = SubjectRecord(
+                subject=subject,
+                body_mass_kg=patient.body_mass_kg,
+                height_m=patient.height_m,
+                sex=patient.sex,
+                arm="left",
+            )
+            store.set_subject(record)
+            for week in range(UNCHANGED_VISITS):
+                base = 100_000 + 100 * seed + 2 * week
+                store.add_estimate(session_estimate(patient, 7 * week, base), subject)
+                store.add_estimate(session_estimate(patient, 7 * week, base + 1, retest=True), subject)
+            analysis = analyse(subject, store.sessions(subject), subject_record=store.subject_record(subject))
+            judged = [c for s in analysis.series for c in s.comparisons]
+            flagged, beyond = sum(c.flagged for c in judged), sum(c.beyond_mdc for c in judged)
+            any_limit += flagged > 0
+            any_single += beyond > 0
+            comparisons += len(judged)
+            print(f"{subject}: {len(judged)} comparisons, {flagged} flagged, {beyond} beyond one comparison's MDC95")
+    print(
+        f"{count} unchanged arms ({comparisons / max(count, 1):.1f} comparisons a report) in "
+        f"{time.perf_counter() - started:.0f} s: any flag with the report's limit in {any_limit} reports, with each "
+        f"comparison at 95 % alone (its MDC95) in {any_single}"
+    )
+
+
 if __name__ == "__main__":
-    main(Path(sys.argv[1] if len(sys.argv) > 1 else "clinic_history"))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", nargs="?", default="clinic_history", type=Path)
+    parser.add_argument("--false-flags", type=int, default=0, metavar="N", help="count false flags over N arms")
+    parser.add_argument("--first-seed", type=int, default=0)
+    args = parser.parse_args()
+    if args.false_flags > 0:
+        false_flags(args.out, args.false_flags, args.first_seed)
+    else:
+        main(args.out)
