@@ -61,7 +61,11 @@ class BspIdentifierNode(RosNode):
         self.settings = settings = IdentifierSettings.from_parameters(values)
         self.frame_source = settings.frame_source(has_message(TF_TYPE))
         self.frames = WrenchFrames(
-            settings.world_frame, self.frame_source.transforms, settings.wrench_frame_rotation, settings.tf_wait_s
+            settings.world_frame,
+            self.frame_source.transforms,
+            settings.wrench_frame_rotation,
+            settings.tf_wait_s,
+            transform_source="topic" if self.frame_source.topic else "tf",
         )
         self.wrench_queue = WrenchQueue(self.frames)  # a turning sensor's wrench waits for the /tf after it
         stated = stated_rotation(settings.wrench_frame_rotation_xyzw, self.cell)

@@ -110,6 +110,9 @@ class WrenchFrames:
         How long to wait for a transform before taking the frame as world, s.
     history_s : float
         /tf samples kept per link, s.
+    transform_source : str
+        Where the stamped transforms come from, as the frame's source names it (``tf`` for /tf_static and /tf,
+        ``topic`` for the TransformStamped topic): the words a bag read the same way gives its ``rotation_source``.
     """
 
     def __init__(
@@ -119,8 +122,10 @@ class WrenchFrames:
         parameter_rotation: np.ndarray,
         tf_wait_s: float,
         history_s: float = 10.0,
+        transform_source: str = "tf",
     ) -> None:
         self.world_frame = world_frame
+        self.transform_source = transform_source
         self.use_tf = use_tf
         self.parameter_rotation = np.asarray(parameter_rotation, dtype=np.float64)
         self.tf_wait_s = tf_wait_s
@@ -134,7 +139,7 @@ class WrenchFrames:
     def _fixed(self, frame_id: str, rotation: np.ndarray) -> None:
         """Take a fixed ``rotation`` of ``frame_id`` from the transforms, noting how far it is off the stated one."""
         self.rotations[frame_id] = rotation
-        self.sources[frame_id] = "tf"
+        self.sources[frame_id] = self.transform_source
         angle = angle_between_deg(rotation, self.parameter_rotation)
         if angle > DISAGREE_DEG:
             self.disagreement_deg[frame_id] = angle
@@ -153,7 +158,7 @@ class WrenchFrames:
         changed = []
         for frame_id, old in list(self.rotations.items()):
             source = self.sources.get(frame_id)
-            if source not in ("tf", NO_TRANSFORM):
+            if source not in (self.transform_source, NO_TRANSFORM):
                 continue
             track = self.buffer.track(self.world_frame, frame_id, [0])
             if track is None:
@@ -161,7 +166,7 @@ class WrenchFrames:
             if track.turning:
                 del self.rotations[frame_id]
                 self.turning.add(frame_id)
-                self.sources[frame_id] = "tf (per sample)"
+                self.sources[frame_id] = f"{self.transform_source} (per sample)"
             elif source == NO_TRANSFORM or not np.allclose(track.rotations[0], old, atol=1e-9):
                 self._fixed(frame_id, np.asarray(track.rotations[0]))
                 if not np.allclose(track.rotations[0], old, atol=1e-9):
@@ -191,7 +196,7 @@ class WrenchFrames:
                 rotation, source = self.parameter_rotation, NO_TRANSFORM
             elif track.turning:
                 self.turning.add(frame_id)
-                self.sources[frame_id] = "tf (per sample)"
+                self.sources[frame_id] = f"{self.transform_source} (per sample)"
                 return np.asarray(track.rotations[0])
             else:
                 self._fixed(frame_id, np.asarray(track.rotations[0]))

@@ -42,6 +42,34 @@ def test_with_tf_the_transform_wins_and_a_change_is_reported() -> None:
     np.testing.assert_allclose(frames.rotation_for("ft_sensor", 0), turned, atol=1e-12)
 
 
+def test_transforms_from_the_topic_are_said_to_come_from_it() -> None:
+    # As a bag read the same way says (rotation_source "topic"), not "tf": the TransformStamped topic without tf2_msgs.
+    frames = WrenchFrames("world", use_tf=True, parameter_rotation=np.eye(3), tf_wait_s=2.0, transform_source="topic")
+    frames.on_transforms([_transform(R_SENSOR)])
+    rotation = frames.rotation_for("ft_sensor", 0)
+    assert rotation is not None and np.allclose(rotation, R_SENSOR, atol=1e-12)
+    assert frames.sources["ft_sensor"] == "topic"
+    turned = rotation_from_rpy_deg(180.0, 0.0, 45.0)
+    assert frames.on_transforms([_transform(turned)]) == ["ft_sensor"]  # a re-mounted sensor: still the topic's
+    assert frames.sources["ft_sensor"] == "topic"
+    waited = WrenchFrames("world", use_tf=True, parameter_rotation=R_SENSOR, tf_wait_s=2.0, transform_source="topic")
+    assert waited.rotation_for("ft_sensor", 0) is None
+    waited.rotation_for("ft_sensor", 3_000_000_000)
+    assert waited.sources["ft_sensor"] == NO_TRANSFORM
+    waited.on_transforms([_transform(R_SENSOR)])  # the transform came late: it replaces the stated rotation
+    assert waited.sources["ft_sensor"] == "topic"
+    # A sensor turning with the handle: rotated per wrench stamp, from the topic.
+    turning = WrenchFrames("world", use_tf=True, parameter_rotation=np.eye(3), tf_wait_s=2.0, transform_source="topic")
+    quaternions = [quaternion_from_matrix(rotation_from_rpy_deg(180.0, 0.0, yaw)) for yaw in (30.0, 40.0)]
+    turning.on_transforms(
+        [TransformSample(k * 10**9, "world", "ft_sensor", np.zeros(3), quaternions[k]) for k in (0, 1)]
+    )
+    halfway = rotation_from_rpy_deg(180.0, 0.0, 35.0)
+    rotation = turning.rotation_for("ft_sensor", 0, 500_000_000)  # between the two: slerped
+    assert rotation is not None and np.allclose(rotation, halfway, atol=1e-9)
+    assert turning.sources == {"ft_sensor": "topic (per sample)"}
+
+
 def test_with_tf_a_frame_without_transform_waits_then_takes_the_stated_rotation() -> None:
     frames = WrenchFrames("world", use_tf=True, parameter_rotation=R_SENSOR, tf_wait_s=2.0)
     assert frames.rotation_for("ft_sensor", 1_000_000_000) is None
