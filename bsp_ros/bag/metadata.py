@@ -25,7 +25,7 @@ class TopicEntry:
     message_count: int
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BagMetadata:
     """The parts of ``metadata.yaml`` a reader uses."""
 

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 
-@dataclass
+@dataclass(kw_only=True)
 class TopicReport:
     """Counts and anomalies of one topic.
 
@@ -56,7 +56,7 @@ class TopicReport:
         return self.non_finite + self.out_of_order + self.duplicate_stamps + self.nonpositive_stamps
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ReadReport:
     """Everything a bag read noticed.
 

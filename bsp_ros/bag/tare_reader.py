@@ -95,7 +95,15 @@ def read_tare_bag(path: str | Path, topics: TopicMap | None = None, world_frame:
         Missing path, not a bag, empty, no wrench messages, wrong types, several wrench frames.
     """
     topic_map = topics or TopicMap()
-    wanted = TopicMap(topic_map.wrench, {}, topic_map.tf_static, topic_map.tf, "", topic_map.transform, emg="")
+    wanted = TopicMap(
+        wrench=topic_map.wrench,
+        markers={},
+        tf_static=topic_map.tf_static,
+        tf=topic_map.tf,
+        handle_pose="",
+        transform=topic_map.transform,
+        emg="",
+    )
     root = Path(path)
     layout = resolve_bag(root)
     sink = SessionSink(wanted)

@@ -39,7 +39,7 @@ class StatedRotation:
     where: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TopicMap:
     """Topic names of one cell.
 

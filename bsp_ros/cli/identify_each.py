@@ -57,7 +57,7 @@ class BagTask:
     tilts_rad: list[float] | None
 
 
-@dataclass
+@dataclass(kw_only=True)
 class BagRow:
     """What one bag gave: its summary row before the columns are known.
 
@@ -104,11 +104,16 @@ def identify_one(task: BagTask) -> BagRow:
         document = identify_bags([Path(task.bag)], task.options, task.topics, None, task.tilts_rad)
     except BagError as error:
         code = BAG_EXIT_CODES.get(getattr(error, "code", ""), error.exit_code)
-        return BagRow(task.index, task.bag, code, cause=_one_line(error))
+        return BagRow(index=task.index, bag=task.bag, exit_code=code, cause=_one_line(error))
     except BspError as error:
-        return BagRow(task.index, task.bag, error.exit_code, cause=_one_line(error))
+        return BagRow(index=task.index, bag=task.bag, exit_code=error.exit_code, cause=_one_line(error))
     except Exception as error:  # a defect on one bag: said in its row, the batch goes on
-        return BagRow(task.index, task.bag, 1, cause=f"internal error: {type(error).__name__}: {_one_line(error)}")
+        return BagRow(
+            index=task.index,
+            bag=task.bag,
+            exit_code=1,
+            cause=f"internal error: {type(error).__name__}: {_one_line(error)}",
+        )
     row = row_of(task.index, task.bag, document)
     try:
         _write_json(Path(task.json_path), document)
@@ -131,7 +136,7 @@ def row_of(index: int, bag: str, document: dict[str, Any]) -> BagRow:
         code = DataError.exit_code
     else:
         code = EXIT_INVALID
-    row = BagRow(index, bag, code, valid=bool(quality["valid"]))
+    row = BagRow(index=index, bag=bag, exit_code=code, valid=bool(quality["valid"]))
     if not quality["valid"]:
         if invalid is not None:
             plain = plain_cause([invalid])
@@ -252,7 +257,14 @@ def run_tasks(tasks: Sequence[BagTask], jobs: int, done: Callable[[BagRow], None
     while queue:
         for task in _run_until_broken(queue, jobs, done):
             for lost in _run_until_broken(deque([task]), 1, done):
-                done(BagRow(lost.index, lost.bag, EXIT_WORKER_DIED, cause="the worker process died on this bag"))
+                done(
+                    BagRow(
+                        index=lost.index,
+                        bag=lost.bag,
+                        exit_code=EXIT_WORKER_DIED,
+                        cause="the worker process died on this bag",
+                    )
+                )
 
 
 def _run_until_broken(queue: deque[BagTask], jobs: int, done: Callable[[BagRow], None]) -> list[BagTask]:

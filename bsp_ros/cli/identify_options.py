@@ -192,7 +192,14 @@ def topics_from_args(args: argparse.Namespace) -> Any:
             raise InputError(f"--marker-topic {item}: {topic} is already the wrench, a tf or the handle pose topic")
         markers[name] = topic
     emg = base.emg if args.emg_topic == default.emg else args.emg_topic
-    topics = TopicMap(wrench, markers, args.tf_static_topic, args.tf_topic, handle_pose, emg=emg)
+    topics = TopicMap(
+        wrench=wrench,
+        markers=markers,
+        tf_static=args.tf_static_topic,
+        tf=args.tf_topic,
+        handle_pose=handle_pose,
+        emg=emg,
+    )
     return replace(topics, transform=base.transform, stated=base.stated, world_frame=base.world_frame)
 
 

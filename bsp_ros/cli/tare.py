@@ -164,7 +164,9 @@ def tare_topics(args: argparse.Namespace) -> Any:
     cell = None if args.cell_file is None else topic_map_from_cell(read_cell_file(args.cell_file))
     wrench = args.wrench_topic if cell is None or args.wrench_topic != WRENCH_TOPIC else cell.wrench
     world = args.world_frame if cell is None or args.world_frame != WORLD_FRAME else cell.world_frame
-    topics = TopicMap(wrench, {}, args.tf_static_topic, args.tf_topic, "", world_frame=world)
+    topics = TopicMap(
+        wrench=wrench, markers={}, tf_static=args.tf_static_topic, tf=args.tf_topic, handle_pose="", world_frame=world
+    )
     return topics if cell is None else replace(topics, transform=cell.transform, stated=cell.stated)
 
 

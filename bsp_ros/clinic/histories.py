@@ -115,4 +115,13 @@ def session_tare(sensor: SensorSpec, frame_id: str) -> Tare:
     force, torque = sensor.payload_wrench(sensor.rotation_world_from_sensor)
     values = np.concatenate([force_offset[0] + force, torque_offset[0] + torque])
     covariance = np.diag([TARE_SD[0] ** 2] * 3 + [TARE_SD[1] ** 2] * 3)
-    return Tare(frame_id, "constant", values, covariance, 1000, 0, 20.0, source="tare.mcap")
+    return Tare(
+        frame_id=frame_id,
+        load="constant",
+        values=values,
+        covariance=covariance,
+        n_samples=1000,
+        start_time_ns=0,
+        duration_s=20.0,
+        source="tare.mcap",
+    )

@@ -36,7 +36,7 @@ class MessageSink(Protocol):
         ...
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ScanResult:
     """What scanning one file found besides the messages.
 

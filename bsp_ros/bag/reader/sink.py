@@ -26,7 +26,7 @@ from msg_adapters.tf import read_transform_stamped
 Collected = tuple[np.ndarray, np.ndarray, np.ndarray, list[str], np.ndarray]
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Stream:
     """Accumulates the decoded messages of one topic."""
 
@@ -79,7 +79,7 @@ class SessionSink:
         """The stream collecting ``channel``'s topic, made on its first message."""
         stream = self.streams.get(channel.topic)
         if stream is None:
-            stream = self.streams[channel.topic] = Stream(channel.topic, channel.msgtype)
+            stream = self.streams[channel.topic] = Stream(topic=channel.topic, msgtype=channel.msgtype)
         return stream
 
     def feed(

@@ -38,7 +38,7 @@ def is_passive(key: ParamKey) -> bool:
     return is_judged(key)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Point:
     """One session's estimate of one parameter.
 
@@ -185,7 +185,7 @@ class Change:
         return None if not self.mdc95 else abs(self.delta) / self.mdc95
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Series:
     """One parameter of one arm across the subject's sessions (retests left out), in time order.
 
@@ -240,7 +240,7 @@ class Series:
         return tuple(c for c in found if c.judged)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Analysis:
     """Everything a report shows about one subject."""
 
@@ -405,15 +405,15 @@ def _points(key: ParamKey, visits: Sequence[tuple[SessionRecord, str]], left_out
     weight = key[0] == "segments" and key[2] in WEIGHT_QUANTITIES
     return tuple(
         Point(
-            int(lab),
-            r.id,
-            r.session_time_ns,
-            r.parameters[key].value,
-            r.parameters[key].std,
-            r.parameters[key].source,
-            r.quality.valid,
-            session_prior(r, key),
-            "recorded without a tare" if weight and id(r) in left_out else "",
+            number=int(lab),
+            session_id=r.id,
+            time_ns=r.session_time_ns,
+            value=r.parameters[key].value,
+            std=r.parameters[key].std,
+            source=r.parameters[key].source,
+            valid=r.quality.valid,
+            prior=session_prior(r, key),
+            left_out="recorded without a tare" if weight and id(r) in left_out else "",
         )
         for r, lab in visits
         if key in r.parameters
@@ -435,16 +435,16 @@ def _arm_series(
         first = _compare(key, usable[0], usable[-1], error) if len(usable) >= 3 else None
         series.append(
             Series(
-                arm,
-                key,
-                label(key),
-                unit(key[2]),
-                points,
-                error,
-                is_judged(key),
-                steps,
-                steps[-1] if steps else None,
-                first,
+                arm=arm,
+                key=key,
+                label=label(key),
+                unit=unit(key[2]),
+                points=points,
+                error=error,
+                judged=is_judged(key),
+                steps=steps,
+                since_previous=steps[-1] if steps else None,
+                since_first=first,
             )
         )
     return series
@@ -513,17 +513,17 @@ def analyse(
         visits = [(r, lab) for r, lab in zip(sessions, labels, strict=True) if r.arm == arm and not r.retest]
         series += _arm_series(arm, visits, lambda key: day_to_day_error(key, subject, cell, pairs, min_pairs), left_out)
     return Analysis(
-        subject,
-        subject_record,
-        sessions,
-        arms,
-        _widened(series),
-        _prior_note(sessions),
-        pairs,
-        cell,
-        min_pairs,
-        labels,
-        untared,
+        subject=subject,
+        record=subject_record,
+        sessions=sessions,
+        arms=arms,
+        series=_widened(series),
+        prior_note=_prior_note(sessions),
+        pairs=pairs,
+        cell=cell,
+        min_pairs=min_pairs,
+        labels=labels,
+        untared=untared,
     )
 
 

@@ -37,7 +37,7 @@ ParamKey = tuple[str, str, str]
 """``(group, part, quantity)``, e.g. ``("joints", "elbow", "coulomb_nm")``."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Quality:
     """How far an estimate can be trusted.
 
@@ -69,7 +69,7 @@ class Quality:
         return verdict_of(self.findings)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SessionRecord:
     """One identification session of one subject.
 

@@ -79,7 +79,7 @@ def test_emg_topic_remapped_and_ignored(human_session: SimulatedSession, tmp_pat
 
 def test_changing_channels_are_counted() -> None:
     """A message with other channels than the first's is counted in ``other_layout`` and left out, not merged."""
-    stream = Stream("/emg/envelope", EMG_TYPE)
+    stream = Stream(topic="/emg/envelope", msgtype=EMG_TYPE)
     for k in range(6):
         channels = CHANNELS[:2] if k == 3 else CHANNELS
         SessionSink._feed_envelope(stream, encode_envelope(channels, np.full(len(channels), k + 0.5)), 1000 + k)

@@ -171,8 +171,8 @@ def test_progress_is_one_line_rewritten_on_a_terminal_and_nothing_elsewhere() ->
     terminal, pipe = _Terminal(), io.StringIO()
     for stream in (terminal, pipe):
         progress = Progress(2, stream)
-        progress(BagRow(0, "a", 0))
-        progress(BagRow(1, "b", 15))
+        progress(BagRow(index=0, bag="a", exit_code=0))
+        progress(BagRow(index=1, bag="b", exit_code=15))
     assert terminal.getvalue() == "\ridentify --each: 1/2 bags, 0 not valid\ridentify --each: 2/2 bags, 1 not valid\n"
     assert pipe.getvalue() == ""
 

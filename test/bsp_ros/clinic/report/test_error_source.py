@@ -20,7 +20,15 @@ def _series(joint: str, noise: float, seed: int) -> Series:
     pairs = [
         (a + noise * rng.standard_normal(), a + noise * rng.standard_normal(), f"S{i}") for i, a in enumerate(level)
     ]
-    return Series(None, ("joints", joint, "coulomb_nm"), joint, "Nm", (), pooled_error(pairs, "cell"), True)
+    return Series(
+        arm=None,
+        key=("joints", joint, "coulomb_nm"),
+        label=joint,
+        unit="Nm",
+        points=(),
+        error=pooled_error(pairs, "cell"),
+        judged=True,
+    )
 
 
 def test_two_judged_quantities_give_the_range_of_their_agreement() -> None:
