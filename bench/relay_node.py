@@ -51,7 +51,9 @@ class RelayNode(RosNode):
 
 def main(args: list[str] | None = None) -> int:
     sys.setswitchinterval(min(sys.getswitchinterval(), 0.0002))  # as bsp_identifier's main
-    return run_node(NAME, RelayNode, __doc__.splitlines()[0], (Param("unused", 0, "no parameters"),), args)
+    return run_node(
+        NAME, RelayNode, __doc__.splitlines()[0], (Param(name="unused", default=0, description="no parameters"),), args
+    )
 
 
 if __name__ == "__main__":

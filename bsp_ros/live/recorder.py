@@ -152,7 +152,7 @@ class _Publisher:
     transient_local: bool
 
 
-@dataclass
+@dataclass(kw_only=True)
 class RecordReport:
     """What a recording wrote.
 
@@ -185,7 +185,7 @@ class RecordReport:
         return lines + [f"warning: {w}" for w in self.warnings]
 
 
-@dataclass
+@dataclass(kw_only=True)
 class _Sub:
     """A subscribed topic: its publishers so far, its MCAP channel once opened, and what it received.
 
@@ -290,7 +290,7 @@ class _Recorder:
             except Exception as exc:  # rosbags: a type outside its Jazzy store
                 raise InputError(f"{topic}: no message definition of {msgtype} to store in the bag: {exc}") from exc
             self.schemas[msgtype] = self.writer.register_schema(msgtype, "ros2msg", msgdef.encode("utf-8"))
-        sub = _Sub(topic, msgtype, None, dict(offered))
+        sub = _Sub(topic=topic, msgtype=msgtype, subscription=None, offered=dict(offered))
         qos = QoSProfile(
             history=HistoryPolicy.KEEP_ALL,
             reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,

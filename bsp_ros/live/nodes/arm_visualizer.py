@@ -25,16 +25,29 @@ TF_TYPE = "tf2_msgs/msg/TFMessage"
 MARKERS_TOPIC = "bsp/arm_markers"
 
 PARAMETERS = (
-    Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
-    Param("world_frame", "world", "frame of the markers (the joint angles' plane is its y-z plane)"),
-    Param("rate_hz", 10.0, "marker (and /tf) rate", "Hz", lo=0.5, hi=60.0),
+    Param(name="n_segments", default=3, description="2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
     Param(
-        "shoulder_topic",
-        "/mocap/shoulder",
-        "PoseStamped of the shoulder marker: where the arm is drawn ('': at shoulder_xyz_m)",
+        name="world_frame",
+        default="world",
+        description="frame of the markers (the joint angles' plane is its y-z plane)",
     ),
-    Param("shoulder_xyz_m", [0.0, 0.0, 0.0], "the shoulder in world before (or without) a shoulder marker", "m"),
-    Param("frame_prefix", "arm_", "TF child frames are <frame_prefix><segment> (e.g. arm_forearm)"),
+    Param(name="rate_hz", default=10.0, description="marker (and /tf) rate", unit="Hz", lo=0.5, hi=60.0),
+    Param(
+        name="shoulder_topic",
+        default="/mocap/shoulder",
+        description="PoseStamped of the shoulder marker: where the arm is drawn ('': at shoulder_xyz_m)",
+    ),
+    Param(
+        name="shoulder_xyz_m",
+        default=[0.0, 0.0, 0.0],
+        description="the shoulder in world before (or without) a shoulder marker",
+        unit="m",
+    ),
+    Param(
+        name="frame_prefix",
+        default="arm_",
+        description="TF child frames are <frame_prefix><segment> (e.g. arm_forearm)",
+    ),
 )
 
 

@@ -33,17 +33,27 @@ NAME = "joint_angle_estimator"
 
 PARAMETERS = (
     CELL_FILE,
-    Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
-    Param("marker_hz", 50.0, "nominal mocap frame rate", "Hz", lo=1.0, hi=1000.0),
-    Param("cutoff_hz", 5.0, "causal low-pass of the angles", "Hz", lo=0.1, hi=100.0),
-    Param("direction_cutoff_hz", 0.5, "low-pass of the direction velocity", "Hz", lo=0.01, hi=10.0),
-    Param("max_gap_s", 0.1, "longer marker gaps restart the filters", "s", lo=0.0, hi=10.0),
-    Param("stale_s", 0.5, "no frame for this long: stale", "s", lo=0.01, hi=60.0),
-    Param("marker_topic_prefix", "/mocap/", "PoseStamped topics: prefix + marker name"),
+    Param(name="n_segments", default=3, description="2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
+    Param(name="marker_hz", default=50.0, description="nominal mocap frame rate", unit="Hz", lo=1.0, hi=1000.0),
+    Param(name="cutoff_hz", default=5.0, description="causal low-pass of the angles", unit="Hz", lo=0.1, hi=100.0),
     Param(
-        "handle_pose_topic",
-        "/robot/handle_pose",
-        "the robot's contact point (PoseStamped in world): once it streams, it stands for the hand marker ('': ignore)",
+        name="direction_cutoff_hz",
+        default=0.5,
+        description="low-pass of the direction velocity",
+        unit="Hz",
+        lo=0.01,
+        hi=10.0,
+    ),
+    Param(
+        name="max_gap_s", default=0.1, description="longer marker gaps restart the filters", unit="s", lo=0.0, hi=10.0
+    ),
+    Param(name="stale_s", default=0.5, description="no frame for this long: stale", unit="s", lo=0.01, hi=60.0),
+    Param(name="marker_topic_prefix", default="/mocap/", description="PoseStamped topics: prefix + marker name"),
+    Param(
+        name="handle_pose_topic",
+        default="/robot/handle_pose",
+        description="the robot's contact point (PoseStamped in world): once it streams, it stands for the hand marker "
+        "('': ignore)",
     ),
 )
 # Complete frames waiting for the robot's pose after them: more than this many and the oldest is given up.
@@ -75,7 +85,10 @@ class JointAngleEstimatorNode(RosNode):
         self.n = n_segments
         self.names = markers_for(n_segments)
         config = CausalAnglesConfig(
-            p["marker_hz"], p["cutoff_hz"], min(p["direction_cutoff_hz"], p["cutoff_hz"]), p["max_gap_s"]
+            rate_hz=p["marker_hz"],
+            cutoff_hz=p["cutoff_hz"],
+            direction_cutoff_hz=min(p["direction_cutoff_hz"], p["cutoff_hz"]),
+            max_gap_s=p["max_gap_s"],
         )
         self.estimator = CausalJointAngles(n_segments, config)
         self.delay_ns = int(self.estimator.group_delay_s() * 1e9)

@@ -13,7 +13,7 @@ from bsp_ros.live.online.streaming_filter import StreamingFilter
 from bsp_ros.validation import check_finite_scalar, check_positive
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class CausalAnglesConfig:
     """Settings of :class:`CausalJointAngles`.
 

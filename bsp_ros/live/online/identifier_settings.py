@@ -30,113 +30,144 @@ MODES = tuple(m.value for m in LiveMode)
 
 PARAMETERS = (
     CELL_FILE,
-    Param("mode", "windowed", "windowed (sliding window) or recursive (per sample)", choices=MODES),
-    Param("n_segments", 3, "2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
-    Param("window_s", 30.0, "sliding window length", "s", lo=1.0, hi=3600.0),
-    Param("update_hz", 5.0, "estimate rate", "Hz", lo=0.1, hi=100.0),
-    Param("stale_s", 0.4, "an input silent this long makes the estimate invalid", "s", lo=0.01, hi=60.0),
     Param(
-        "method", "joint", "joint (ours) or paper (the method paper's sequential procedure)", choices=("joint", "paper")
+        name="mode",
+        default="windowed",
+        description="windowed (sliding window) or recursive (per sample)",
+        choices=MODES,
     ),
-    Param("passive", "coulomb", "passive model, e.g. coulomb+viscous"),
-    Param("body_mass_kg", 0.0, "subject body mass for the prior (0: unknown)", "kg", lo=0.0, hi=300.0),
-    Param("height_m", 0.0, "subject height (0: unknown)", "m", lo=0.0, hi=2.5),
-    Param("sex", "male", "anthropometric table", choices=("male", "female")),
-    Param("world_frame", "world", "frame of the markers and of gravity (z up)"),
-    Param("wrench_topic", "/ft_sensor/wrench", "WrenchStamped topic"),
+    Param(name="n_segments", default=3, description="2 (mechanical arm) or 3 (human arm)", lo=2, hi=3),
+    Param(name="window_s", default=30.0, description="sliding window length", unit="s", lo=1.0, hi=3600.0),
+    Param(name="update_hz", default=5.0, description="estimate rate", unit="Hz", lo=0.1, hi=100.0),
     Param(
-        "emg_topic",
-        "/emg/envelope",
-        "EMG envelopes (std_msgs/Float32MultiArray, channel names in layout.dim[0].label; '': not subscribed): the "
-        "stretches they show active are left out of the window as `bsp identify` leaves them out; each message is "
-        "stamped at its receipt, on the wrench stamps' clock",
+        name="stale_s",
+        default=0.4,
+        description="an input silent this long makes the estimate invalid",
+        unit="s",
+        lo=0.01,
+        hi=60.0,
     ),
     Param(
-        "wrench_frame_source",
-        "auto",
-        "where the wrench frame's rotation comes from: tf (/tf_static and /tf), topic (TransformStamped of the "
-        "wrench frame in world on wrench_frame_topic, e.g. the robot's flange: a sensor that turns without tf2_msgs), "
-        "parameter (wrench_frame_rotation_xyzw), or auto (tf if tf2_msgs is installed, else the topic); where tf or "
-        "the topic sends nothing within tf_wait_s, wrench_frame_rotation_xyzw stands in",
+        name="method",
+        default="joint",
+        description="joint (ours) or paper (the method paper's sequential procedure)",
+        choices=("joint", "paper"),
+    ),
+    Param(name="passive", default="coulomb", description="passive model, e.g. coulomb+viscous"),
+    Param(
+        name="body_mass_kg",
+        default=0.0,
+        description="subject body mass for the prior (0: unknown)",
+        unit="kg",
+        lo=0.0,
+        hi=300.0,
+    ),
+    Param(name="height_m", default=0.0, description="subject height (0: unknown)", unit="m", lo=0.0, hi=2.5),
+    Param(name="sex", default="male", description="anthropometric table", choices=("male", "female")),
+    Param(name="world_frame", default="world", description="frame of the markers and of gravity (z up)"),
+    Param(name="wrench_topic", default="/ft_sensor/wrench", description="WrenchStamped topic"),
+    Param(
+        name="emg_topic",
+        default="/emg/envelope",
+        description="EMG envelopes (std_msgs/Float32MultiArray, channel names in layout.dim[0].label; '': not "
+        "subscribed): the stretches they show active are left out of the window as `bsp identify` leaves them out; "
+        "each message is stamped at its receipt, on the wrench stamps' clock",
+    ),
+    Param(
+        name="wrench_frame_source",
+        default="auto",
+        description="where the wrench frame's rotation comes from: tf (/tf_static and /tf), topic (TransformStamped of "
+        "the wrench frame in world on wrench_frame_topic, e.g. the robot's flange: a sensor that turns without "
+        "tf2_msgs), parameter (wrench_frame_rotation_xyzw), or auto (tf if tf2_msgs is installed, else the topic); "
+        "where tf or the topic sends nothing within tf_wait_s, wrench_frame_rotation_xyzw stands in",
         choices=("auto", "tf", "topic", "parameter"),
     ),
     Param(
-        "wrench_frame_topic",
-        "ft_sensor/transform",
-        "geometry_msgs/TransformStamped topic of the wrench frame in world (wrench_frame_source topic)",
+        name="wrench_frame_topic",
+        default="ft_sensor/transform",
+        description="geometry_msgs/TransformStamped topic of the wrench frame in world (wrench_frame_source topic)",
     ),
     Param(
-        "wrench_frame_rotation_xyzw",
-        [0.0, 0.0, 0.0, 1.0],
-        "rotation world <- wrench frame as a unit quaternion [x, y, z, w] (default: the cell file's mounting), used "
-        "without a transform; a transform more than 1 deg off it is reported",
+        name="wrench_frame_rotation_xyzw",
+        default=[0.0, 0.0, 0.0, 1.0],
+        description="rotation world <- wrench frame as a unit quaternion [x, y, z, w] (default: the cell file's "
+        "mounting), used without a transform; a transform more than 1 deg off it is reported",
     ),
     Param(
-        "tare_file",
-        "",
-        "a `bsp tare` file (bsp_ros/core/tare/1) of this sensor: its offset and handle load are removed from every "
-        "wrench and its uncertainty joins the windowed estimate's ('': none, and the estimate says so)",
+        name="tare_file",
+        default="",
+        description="a `bsp tare` file (bsp_ros/core/tare/1) of this sensor: its offset and handle load are removed "
+        "from every wrench and its uncertainty joins the windowed estimate's ('': none, and the estimate says so)",
     ),
     Param(
-        "zero_sd_n",
-        ZERO_SD_N,
-        "without a tare, how far (1 sd per sensor axis) the sensor's force zero may be off: the data cannot tell a "
-        "force offset from arm weight, so it is in the std (`bsp identify --zero-sd-n`)",
-        "N",
+        name="zero_sd_n",
+        default=ZERO_SD_N,
+        description="without a tare, how far (1 sd per sensor axis) the sensor's force zero may be off: the data "
+        "cannot tell a force offset from arm weight, so it is in the std (`bsp identify --zero-sd-n`)",
+        unit="N",
         lo=0.0,
         hi=100.0,
     ),
-    Param("zero_sd_nm", ZERO_SD_NM, "the same for the sensor's moment zero", "N m", lo=0.0, hi=10.0),
     Param(
-        "support_fraction",
-        0.0,
-        "share of the identified arm's gravity torques the robot should carry (bsp/weight_support, published "
-        "at the joint-state rate while the estimate is valid; 0: not published)",
+        name="zero_sd_nm",
+        default=ZERO_SD_NM,
+        description="the same for the sensor's moment zero",
+        unit="N m",
+        lo=0.0,
+        hi=10.0,
+    ),
+    Param(
+        name="support_fraction",
+        default=0.0,
+        description="share of the identified arm's gravity torques the robot should carry (bsp/weight_support, "
+        "published at the joint-state rate while the estimate is valid; 0: not published)",
         lo=0.0,
         hi=1.0,
     ),
     Param(
-        "wrench_delay_s",
-        None,
-        "delay of the wrench stamps behind the joint-state (marker) stamps the cell knows: a wrench stamped t was "
-        "measured at t - wrench_delay_s; its stamps are shifted back by it, as `bsp identify --wrench-delay-s` does "
-        "(unset: `bsp identify` estimates it, which live updates cannot: live applies 0 and says so)",
-        "s",
+        name="wrench_delay_s",
+        default=None,
+        description="delay of the wrench stamps behind the joint-state (marker) stamps the cell knows: a wrench "
+        "stamped t was measured at t - wrench_delay_s; its stamps are shifted back by it, as `bsp identify "
+        "--wrench-delay-s` does (unset: `bsp identify` estimates it, which live updates cannot: live applies 0 and "
+        "says so)",
+        unit="s",
         lo=-10.0,
         hi=10.0,
         kind=float,
     ),
     Param(
-        "tf_wait_s",
-        2.0,
-        "wait this long for the wrench frame's transform before taking wrench_frame_rotation_xyzw",
-        "s",
+        name="tf_wait_s",
+        default=2.0,
+        description="wait this long for the wrench frame's transform before taking wrench_frame_rotation_xyzw",
+        unit="s",
         lo=0.0,
         hi=60.0,
     ),
     Param(
-        "target_std_percent",
-        0.0,
-        "the session is precise enough once the static moment of every segment of target_segments has a relative "
-        "std at or below this in valid estimates for precision_hold_s: bsp/precision_reached (latched Bool) turns "
-        "true for the rest of the session, the estimate JSON says so under `precision` (0: off, nothing published)",
-        "%",
+        name="target_std_percent",
+        default=0.0,
+        description="the session is precise enough once the static moment of every segment of target_segments has a "
+        "relative std at or below this in valid estimates for precision_hold_s: bsp/precision_reached (latched Bool) "
+        "turns true for the rest of the session, the estimate JSON says so under `precision` (0: off, nothing "
+        "published)",
+        unit="%",
         lo=0.0,
         hi=100.0,
     ),
     Param(
-        "precision_hold_s",
-        5.0,
-        "how long every targeted std must stay within target_std_percent before the signal comes",
-        "s",
+        name="precision_hold_s",
+        default=5.0,
+        description="how long every targeted std must stay within target_std_percent before the signal comes",
+        unit="s",
         lo=0.0,
         hi=600.0,
     ),
     Param(
-        "target_segments",
-        ["upper_arm", "forearm"],
-        "the segments whose static moment target_std_percent is for (the hand's short lever leaves its static moment "
-        "15-40 % uncertain from skin markers: add it where the robot gives the contact point)",
+        name="target_segments",
+        default=["upper_arm", "forearm"],
+        description="the segments whose static moment target_std_percent is for (the hand's short lever leaves its "
+        "static moment 15-40 % uncertain from skin markers: add it where the robot gives the contact point)",
     ),
     Param(
         name="target_parameters",

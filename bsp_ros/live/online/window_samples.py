@@ -58,7 +58,7 @@ class WindowEstimate:
         return self.estimate.to_json()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class WindowSamples:
     """A copy of one window's samples, taken by :meth:`WindowedIdentifier.snapshot`.
 

@@ -130,11 +130,15 @@ class WindowedIdentifier:
             **{f"joint_states_{k}": v for k, v in self.angle_guard.refused.items()},
         }
         frame_id, rotation = orientation if orientation is not None else ("", None)
+        wrench_t_ns, wrench_yzx = self.wrench.since(start)
+        angle_t_ns, angle_rows = self.angles.since(start - int(2e9))
         return WindowSamples(
-            *self.wrench.since(start),
-            *self.angles.since(start - int(2e9)),
-            refused,
-            self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
+            wrench_t_ns=wrench_t_ns,
+            wrench_yzx=wrench_yzx,
+            angle_t_ns=angle_t_ns,
+            angle_rows=angle_rows,
+            refused=refused,
+            clock_jumps=self.wrench_guard.clock_jumps + self.angle_guard.clock_jumps,
             rotation_world_from_sensor=rotation,
             wrench_frame_id=frame_id,
             contact_from_robot=self.contact_from_robot,

@@ -8,7 +8,7 @@ from bsp_ros.bag.mcap_scan import ScanResult
 from bsp_ros.cell import CellDescription
 
 
-@dataclass
+@dataclass(kw_only=True)
 class PlayReport:
     """What a playback did.
 

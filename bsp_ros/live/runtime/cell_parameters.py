@@ -25,11 +25,11 @@ __all__ = [
 FromCell = Mapping[str, Callable[[CellDescription], Any]]
 
 CELL_FILE = Param(
-    "cell_file",
-    "",
-    "the cell description (bsp_ros/cell/1 YAML: world frame, the F/T sensor's frame, topic, mounting rotation, "
-    "transform topic and tare, the marker, handle pose and EMG topics): the default of the parameters it names "
-    "('': the shipped bsp_ros/config/cell.yaml, the simulated cell)",
+    name="cell_file",
+    default="",
+    description="the cell description (bsp_ros/cell/1 YAML: world frame, the F/T sensor's frame, topic, mounting "
+    "rotation, transform topic and tare, the marker, handle pose and EMG topics): the default of the parameters it "
+    "names ('': the shipped bsp_ros/config/cell.yaml, the simulated cell)",
 )
 
 IDENTIFIER_FROM_CELL: FromCell = {

@@ -16,7 +16,7 @@ __all__ = ["Param", "declare_parameters", "help_text", "wants_help"]
 _INT64_MIN, _INT64_MAX = -(2**63), 2**63 - 1
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Param:
     """One ROS parameter of a node: its default fixes the type (a float parameter wants ``1.0``, not ``1``).
 

@@ -75,7 +75,7 @@ def naming_hint(node_name: str) -> str:
     )
 
 
-@dataclass
+@dataclass(kw_only=True)
 class SessionControl:
     """The session state of `session_recorder`.
 

@@ -31,9 +31,9 @@ def _core_simulator(truth: dict[str, Any]) -> sim.CellSimulator:
     )
     markers = sim.MarkerSpec(skin_offset_m=tuple(tuple(pair) for pair in block["skin_offset_m"]))
     spec = sim.CellSpec(
-        known.subject,
-        known.passive,
-        known.trajectory,
+        subject=known.subject,
+        passive=known.passive,
+        trajectory=known.trajectory,
         sensor=sensor,
         markers=markers,
         duration_s=block["duration_s"],

@@ -57,10 +57,10 @@ def test_a_transform_off_the_cell_by_more_than_a_degree_is_said_once_naming_what
 
 def test_the_cell_gives_the_defaults_of_the_parameters_it_names() -> None:
     table = (
-        Param("world_frame", "world", ""),
-        Param("wrench_frame_rotation_xyzw", [0.0, 0.0, 0.0, 1.0], ""),
-        Param("tare_file", "x", ""),
-        Param("window_s", 30.0, "", "s", lo=1.0),
+        Param(name="world_frame", default="world", description=""),
+        Param(name="wrench_frame_rotation_xyzw", default=[0.0, 0.0, 0.0, 1.0], description=""),
+        Param(name="tare_file", default="x", description=""),
+        Param(name="window_s", default=30.0, description="", unit="s", lo=1.0),
     )
     merged = {p.name: p for p in with_cell_defaults(table, CELL, IDENTIFIER_FROM_CELL)}
     assert merged["wrench_frame_rotation_xyzw"].default == list(CELL.rotation_xyzw)
@@ -68,6 +68,8 @@ def test_the_cell_gives_the_defaults_of_the_parameters_it_names() -> None:
     assert merged["window_s"] == table[3]  # not the cell's: as it was
     simulator = {
         p.name: p
-        for p in with_cell_defaults((Param("sensor_roll_pitch_yaw_deg", [0.0] * 3, ""),), CELL, SIMULATOR_FROM_CELL)
+        for p in with_cell_defaults(
+            (Param(name="sensor_roll_pitch_yaw_deg", default=[0.0] * 3, description=""),), CELL, SIMULATOR_FROM_CELL
+        )
     }
     np.testing.assert_allclose(simulator["sensor_roll_pitch_yaw_deg"].default, (180.0, 0.0, 30.0), atol=1e-6)

@@ -26,7 +26,15 @@ def _separated_tare(frame_id: str = "ft_sensor") -> tuple[Tare, np.ndarray, np.n
         0.3 * np.array([0.0, 0.02, 0.05]),
     )
     values = np.concatenate((offset_force, [mass], offset_moment, first_moment))
-    tare = Tare(frame_id, "separated", values, np.zeros((10, 10)), n_samples=100, start_time_ns=0, duration_s=10.0)
+    tare = Tare(
+        frame_id=frame_id,
+        load="separated",
+        values=values,
+        covariance=np.zeros((10, 10)),
+        n_samples=100,
+        start_time_ns=0,
+        duration_s=10.0,
+    )
     gravity_sensor = ROTATION.T @ G_WORLD
     return tare, offset_force + mass * gravity_sensor, offset_moment + np.cross(first_moment, gravity_sensor)
 

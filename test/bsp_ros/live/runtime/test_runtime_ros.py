@@ -42,8 +42,8 @@ def test_help_is_asked_before_the_ros_arguments_only() -> None:
 
 def test_help_text_shows_type_default_unit_and_range() -> None:
     params = (
-        Param("rate_hz", 5.0, "estimate rate", "Hz", lo=0.1, hi=100.0),
-        Param("mode", "a", "mode", choices=("a", "b")),
+        Param(name="rate_hz", default=5.0, description="estimate rate", unit="Hz", lo=0.1, hi=100.0),
+        Param(name="mode", default="a", description="mode", choices=("a", "b")),
     )
     text = help_text("demo_node", "Does things.", params)
     assert "rate_hz  float default 5.0" in text and "[Hz] (range 0.1 .. 100)" in text

@@ -12,7 +12,9 @@ T0 = 1_700_000_000 * S
 
 
 def _control(auto_start: bool = False, max_session_s: float = 1800.0) -> SessionControl:
-    return SessionControl("session_recorder", end_timeout_s=5.0, max_session_s=max_session_s, auto_start=auto_start)
+    return SessionControl(
+        node_name="session_recorder", end_timeout_s=5.0, max_session_s=max_session_s, auto_start=auto_start
+    )
 
 
 def _stream(control: SessionControl, start_ns: int, seconds: float, period_ns: int = S // 10) -> int:

@@ -52,7 +52,7 @@ def test_the_recorder_records_the_emg_and_its_session_leaves_the_burst_out(cell_
     types = topic_types(topics)
     assert types[EMG_TOPIC] == "std_msgs/msg/Float32MultiArray"
     assert EMG_TOPIC not in topic_types(dataclasses.replace(topics, emg=""))
-    control = SessionControl("session_recorder", end_timeout_s=2.0, max_session_s=1800.0, auto_start=True)
+    control = SessionControl(node_name="session_recorder", end_timeout_s=2.0, max_session_s=1800.0, auto_start=True)
     control.name_subject("P012")
     recording = SessionRecording(control, tmp_path / "live_recordings", topics, with_tf=True)
     sent: list[bytes] = []

@@ -52,7 +52,7 @@ def _store(path: Path) -> Path:
 def _record_session(bag: Path, out: Path, topics: set[str] | None = None) -> tuple[SessionJob, int]:
     """Feed ``bag``'s messages (those of ``topics``) to a recording that starts with the wrench stream and ends with
     its silence; returns the finished session's job and the messages fed."""
-    control = SessionControl("session_recorder", end_timeout_s=2.0, max_session_s=1800.0, auto_start=True)
+    control = SessionControl(node_name="session_recorder", end_timeout_s=2.0, max_session_s=1800.0, auto_start=True)
     control.name_subject(SUBJECT)
     recording = SessionRecording(control, out, TopicMap(), with_tf=True)
     fed, last_ns = 0, 0
@@ -130,7 +130,7 @@ def test_a_session_that_cannot_be_identified_keeps_its_bag_and_says_how_to_add_i
 
 
 def test_a_session_without_a_wrench_leaves_nothing(bag: Path, tmp_path: Path) -> None:
-    control = SessionControl("session_recorder", end_timeout_s=2.0, max_session_s=1800.0)
+    control = SessionControl(node_name="session_recorder", end_timeout_s=2.0, max_session_s=1800.0)
     control.name_subject(SUBJECT)
     recording = SessionRecording(control, tmp_path, TopicMap(), with_tf=True)
     reply, change = recording.start(1_700_000_000_000_000_000)

@@ -59,7 +59,7 @@ def _messages(bag: Path) -> Iterator[tuple[str, int, bytes]]:
 def _record(bag: Path, out: Path, recorded: set[str]) -> SessionJob:
     """Feed ``bag``'s messages on the topics a recorder without tf2_msgs subscribes to (``recorded``) into a
     recording of the shipped cell; the session ends with the wrench's silence."""
-    control = SessionControl("session_recorder", end_timeout_s=2.0, max_session_s=1800.0, auto_start=True)
+    control = SessionControl(node_name="session_recorder", end_timeout_s=2.0, max_session_s=1800.0, auto_start=True)
     control.name_subject(SUBJECT)
     topics = replace(TopicMap(), transform=CELL.transform_topic)
     recording = SessionRecording(control, out, topics, with_tf=False, rotation_xyzw=CELL.rotation_xyzw, cell=CELL)
