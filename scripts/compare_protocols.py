@@ -47,7 +47,7 @@ def main() -> int:
     base = sim.human_arm_cell()
     nominal = NominalArm.from_anthropometry(base.subject.lengths_m)
     paper = predict_covariance(base.trajectory, 120.0, nominal, MODEL)
-    plan = plan_protocol(PlanRequest(nominal, (0.0, 1.2), JointLimits(RANGES_DEG)))
+    plan = plan_protocol(PlanRequest(nominal=nominal, shoulder_yz_m=(0.0, 1.2), limits=JointLimits(RANGES_DEG)))
     print("paper protocol: one operating point (-43.3, 29.5, 0.2) deg, amplitudes (6, 1.7, 0.9) deg")
     centres = "; ".join("(" + ", ".join(f"{v:.1f}" for v in row) + ")" for row in plan.centres_deg)
     amplitudes = ", ".join(f"{a:.1f}" for a in plan.amplitudes_deg)

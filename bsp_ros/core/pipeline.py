@@ -45,7 +45,7 @@ from bsp_ros.errors import BspError, InputError
 METHODS = tuple(m.value for m in OFFLINE_METHODS)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class IdentifyOptions:
     """Everything `bsp identify` can be told about the method and the subject."""
 
