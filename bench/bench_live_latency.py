@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import signal
 import struct
 import subprocess
@@ -17,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from finding_kinds import cause_of
 
 from bsp_ros.live.runtime.ros import EXECUTOR_ENV, Client, has_message
 from msg_adapters.diagnostics import read_diagnostic_array
@@ -141,7 +141,9 @@ class RawStamps(threading.Thread):
                 sec, nanosec = struct.unpack_from("<iI", data, 4)
                 stream.add(sec * 1_000_000_000 + nanosec, info)
 
-            self.client.node.create_subscription(self.client_message(type_name), topic, on_raw, qos, raw=True)
+            # rclpy hands a callback of two parameters the message's info too (its stubs name one parameter only).
+            callback: Any = on_raw
+            self.client.node.create_subscription(self.client_message(type_name), topic, callback, qos, raw=True)
         self.stop = threading.Event()
 
     @staticmethod
@@ -154,6 +156,13 @@ class RawStamps(threading.Thread):
         while not self.stop.is_set():
             self.client.spin(0.1)
         self.client.close()
+
+
+def invalid_cause(estimate_json: str) -> str | None:
+    """Why the estimate ``estimate_json`` (as ``bsp/estimate_json`` carries it) is invalid: its first invalid
+    finding's code and where (``bench/finding_kinds.py``); None for a valid one."""
+    quality = json.loads(estimate_json).get("quality", {})
+    return None if quality.get("valid") else cause_of(quality)
 
 
 class Listener:
@@ -174,7 +183,10 @@ class Listener:
         self.invalid_reasons: dict[str, int] = {}
         self.diagnostics: dict[str, list[tuple[int, int, dict[str, str]]]] = {}
         self.start_ns: int | None = None
-        self.client.subscribe("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", self._on_estimate, "estimates")
+        # With the message's info, as RawStamps' callbacks (rclpy's stubs name one parameter only).
+        on_estimate: Any = self._on_estimate
+        self.client.subscribe("diagnostic_msgs/msg/DiagnosticArray", "bsp/estimate", on_estimate, "estimates")
+        self.client.subscribe("std_msgs/msg/String", "bsp/estimate_json", self._on_estimate_json, "estimates")
         self.client.subscribe("diagnostic_msgs/msg/DiagnosticArray", "/diagnostics", self._on_diag, "default")
         self.client.subscribe("std_msgs/msg/String", "sim/truth", self._on_truth, "tf_static_listener")
 
@@ -183,9 +195,11 @@ class Listener:
         quality = [s for s in msg.status if s.name.endswith("/quality")]
         valid = any(kv.key == "valid" and kv.value == "True" for s in quality for kv in s.values)
         self.estimate_valid.append(int(valid))
-        if not valid and self.start_ns is not None:
-            reason = re.sub(r"[0-9.]+", "#", quality[0].message if quality else "no quality status")
-            self.invalid_reasons[reason] = self.invalid_reasons.get(reason, 0) + 1
+
+    def _on_estimate_json(self, msg: Any) -> None:
+        cause = None if self.start_ns is None else invalid_cause(msg.data)
+        if cause is not None:
+            self.invalid_reasons[cause] = self.invalid_reasons.get(cause, 0) + 1
 
     def _on_diag(self, msg: Any) -> None:
         sample = read_diagnostic_array(msg)

@@ -3,7 +3,8 @@
 For each seed and scenario a human arm cell is simulated and identified (joint method, defaults). Reported:
 the share of valid estimates, for valid ones the share of data-sourced parameters whose truth lies within
 3 std, both error rates per session (valid-and-wrong: valid, some data-sourced parameter beyond 3 std;
-invalid-and-right: invalid, every one within 3 std), and how often each kind of warning fires. Two-sided
+invalid-and-right: invalid, every one within 3 std), how often each kind of warning fires and what made the
+invalid ones invalid (a kind: a finding's code with its joint or segment, ``bench/finding_kinds.py``). Two-sided
 calibration (``bench/calibration.py``) over the data-sourced parameters of valid estimates: z RMS (1 for an
 honest std), the shares within 1 and 2 std (68 %, 95 % for an honest std), and per parameter kind (static
 moments, Coulomb amplitudes, masses) the sharpness, median and range over the parameters of the median std over
@@ -30,12 +31,12 @@ import collections
 import dataclasses
 import functools
 import json
-import re
 import time
 from typing import Any
 
 import numpy as np
 from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header, summary_line
+from finding_kinds import cause_of, warning_kinds
 from scoring import Counts
 
 from bsp_ros.core import glitches
@@ -124,16 +125,11 @@ def _transition_document(spec: sim.CellSpec, simulated: sim.SimulatedSession, wi
     )
 
 
-def _kind(warning: str) -> str:
-    """A warning's kind: its text up to the first number or colon (counts, names of joints vary)."""
-    return re.sub(r"[0-9][0-9.e+-]*", "#", warning)[:60]
-
-
 def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dict[str, Any]:
     z_all: list[float] = []
     worst: list[tuple[float, int, str]] = []
     kinds: collections.Counter[str] = collections.Counter()
-    messages: collections.Counter[str] = collections.Counter()
+    causes: collections.Counter[str] = collections.Counter()
     counts = Counts()
     started = time.perf_counter()
     for seed in range(first_seed, first_seed + sessions):
@@ -153,12 +149,12 @@ def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dic
                 truth["joints"][joint]["coulomb_nm"] = float(COULOMB_NM[j])
         else:
             document = identify_session(simulated.session)
-        # Each kind once, in the order the warnings give them (a set's order changes with the hash seed).
-        for kind in dict.fromkeys(_kind(w) for w in document["quality"]["warnings"]):
+        # Each kind once, in the order the findings give them (a set's order changes with the hash seed).
+        for kind in dict.fromkeys(warning_kinds(document["quality"])):
             kinds[kind] += 1
         scored = counts.score(document, truth)
         if not scored.valid:
-            messages[_kind(document["quality"]["message"])] += 1
+            causes[cause_of(document["quality"])] += 1
             continue
         for name, z_value in scored.z.items():
             z_all.append(z_value)
@@ -182,7 +178,7 @@ def run(scenario: str, sessions: int, duration_s: float, first_seed: int) -> dic
         "invalid_and_right": counts.invalid_right,
         "worst": sorted(worst, reverse=True)[:5],
         "warning_rate": {k: v / sessions for k, v in kinds.most_common()},
-        "invalid_reasons": dict(messages),
+        "invalid_reasons": dict(causes),
         "seconds": round(time.perf_counter() - started, 1),
         "counts": counts,
     }

@@ -22,9 +22,10 @@ data-sourced parameters of the valid updates (``bench/calibration.py``: z RMS, 1
 1 and 2 std, 68 % and 95 % for an honest std) and the sharpness (per parameter the median std over the RMS error
 across the valid updates of every seed, one arm re-simulated, 1 ideal; per kind, static moments "SM", Coulomb
 amplitudes "C", masses "m", the median and range over its parameters), the mean compute time per update
-(ms, in process, one thread; the recursive mode's: its estimate document only) and the most frequent message of an
-invalid one. The totals close the table. Updates 0.2 s apart share most of their samples: the rates count updates,
-not independent sessions (nor do they give the sharpness more than one error per seed).
+(ms, in process, one thread; the recursive mode's: its estimate document only) and the most frequent cause of an
+invalid one (its first invalid finding's code and where, ``bench/finding_kinds.py``). The totals close the table.
+Updates 0.2 s apart share most of their samples: the rates count updates, not independent sessions (nor do they
+give the sharpness more than one error per seed).
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ from typing import Any
 
 import numpy as np
 from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header, summary_line
-from realism import _NUMBER, NUISANCES
+from finding_kinds import cause_of
+from realism import NUISANCES
 from scoring import Counts, Scored, residuals, scored
 
 from bsp_ros.core.fusion import SubjectInfo
@@ -57,7 +59,7 @@ def _updates(
     inputs: tuple[Any, ...], rate_hz: float, window_s: float, span_s: float, counts: Counts
 ) -> tuple[list[Scored], list[float], list[str]]:
     """Feed one session's live inputs and identify every 0.2 s over its last ``span_s`` s: (each update scored, ms,
-    the invalid updates' messages); each update is counted in ``counts``."""
+    the invalid updates' causes); each update is counted in ``counts``."""
     simulated, stamps, wrench, _, raw = inputs
     truth = simulated.truth.to_dict()
     frame = orientation(simulated)
@@ -67,7 +69,7 @@ def _updates(
     # As the node, from the stream's start: what the model checks before the scored span found holds into it.
     period_ns = int(PERIOD_S * 1e9)
     tick_ns = first_ns - (first_ns - int(stamps[0])) // period_ns * period_ns  # the first tick on the span's grid
-    updates, ms, messages = [], [], []
+    updates, ms, causes = [], [], []
     while tick_ns < first_ns:
         feed.until(tick_ns)
         identifier.estimate(orientation=frame)
@@ -79,8 +81,8 @@ def _updates(
         ms.append(1e3 * (time.perf_counter() - started))
         updates.append(counts.count(Scored.from_residuals(bool(estimate.valid), residuals(estimate.document, truth))))
         if not estimate.valid:
-            messages.append(_NUMBER.sub("#", str(estimate.document["quality"].get("message", "")))[:70])
-    return updates, ms, messages
+            causes.append(cause_of(estimate.document["quality"]))
+    return updates, ms, causes
 
 
 def _recursive_updates(
@@ -94,8 +96,8 @@ def _recursive_updates(
     from_ns = int(stamps[-1]) - int(span_s * 1e9)
     documents, seconds = recursive_mode(inputs, _node_options(), window_s, from_ns, checked)
     updates = [counts.count(scored(d, truth)) for d in documents]
-    messages = [_NUMBER.sub("#", str(d["quality"]["message"]))[:70] for d in documents if not d["quality"]["valid"]]
-    return updates, [1e3 * t for t in seconds], messages
+    causes = [cause_of(d["quality"]) for d in documents if not d["quality"]["valid"]]
+    return updates, [1e3 * t for t in seconds], causes
 
 
 def _node_options() -> IdentifyOptions:
@@ -124,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     names = [n for n in NUISANCES if not args.only or any(o.lower() in n.lower() for o in args.only)]
     header = (
         f"{'nuisance':28s} {'Hz':>4s} {'valid':>8s} {'v&wrong':>7s} {'inv&right':>9s} {'worst|z|':>8s}"
-        f" {calibration_header()} {sharpness_header()} {'ms':>5s}  most frequent invalid message"
+        f" {calibration_header()} {sharpness_header()} {'ms':>5s}  most frequent invalid cause"
     )
     print(header)
     print("-" * len(header))
@@ -147,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
             )
             sessions.append(live_inputs(spec))
         for mode in modes:
-            updates, ms, messages = [], [], []
+            updates, ms, causes = [], [], []
             counts = Counts()
             for inputs in sessions:
                 if mode in ("rec", "filt"):
@@ -156,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
                     u, t, m = _updates(inputs, float(mode), args.window, args.span, counts)
                 updates += u
                 ms += t
-                messages += m
+                causes += m
             times[mode] += ms
             pooled[mode].pool(counts)
             worst_valid = max((u.max_z for u in updates if u.valid), default=float("nan"))
@@ -164,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{name:28s} {mode:>4} {counts.valid:>4d}/{counts.runs:<3d} {counts.valid_wrong:>7d}"
                 f" {counts.invalid_right:>9d} {worst_valid:8.2f} {calibration_columns(counts.two_sided.calibration())}"
                 f" {sharpness_columns(counts.two_sided.sharpness())}"
-                f" {np.mean(ms):5.1f}  {collections.Counter(messages).most_common(1)[0][0] if messages else '-'}",
+                f" {np.mean(ms):5.1f}  {collections.Counter(causes).most_common(1)[0][0] if causes else '-'}",
                 flush=True,
             )
     for mode in modes:

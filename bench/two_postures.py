@@ -11,8 +11,9 @@ recording is a bag (250 Hz wrench, 100 Hz markers); ``bsp identify`` (the CLI's 
 the upright bag alone and on both with ``--trunk-tilt-deg 0 TILT``, with the default model and with
 ``--passive coulomb+offset+stiffness``. Every data-sourced parameter is scored against truth.json
 (``bench/scoring.py``). Per speed, recordings and model: runs, valid, valid-and-wrong (some |z| > 3),
-invalid-and-right (every |z| <= 3), the worst |z| and its parameter, and the median relative std of each
-static moment.
+invalid-and-right (every |z| <= 3), the worst |z| and its parameter, the median relative std of each
+static moment and the most common cause of the invalid runs (the first invalid finding's code and where,
+``bench/finding_kinds.py``; "(no estimate)" where ``bsp identify`` wrote none).
 """
 
 from __future__ import annotations
@@ -23,7 +24,6 @@ import contextlib
 import io
 import json
 import math
-import re
 import sys
 import tempfile
 import time
@@ -34,6 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
+from finding_kinds import cause_of
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, draw_arm, paper_sine
 from scoring import rates, verdict, z_scores
@@ -43,6 +44,7 @@ from bsp_ros.cli import main as bsp_main
 MODELS = ("default", "coulomb+offset+stiffness")
 SEGMENTS = ("upper_arm", "forearm", "hand")
 START_NS = 1_700_000_000_000_000_000
+NO_ESTIMATE = "(no estimate)"
 
 
 def identify(bags: list[Path], tilts_deg: list[float], model: str, out: Path) -> dict[str, Any]:
@@ -58,13 +60,18 @@ def identify(bags: list[Path], tilts_deg: list[float], model: str, out: Path) ->
     return json.loads(out.read_text()) if out.exists() else {"quality": {"valid": False}}
 
 
-def _common_message(runs: list[dict[str, Any]]) -> str:
-    """The most common message of the invalid runs (numbers masked), with its count; '-' when all are valid."""
-    messages = collections.Counter(re.sub(r"[-+]?\d[\d.e+-]*", "#", r["message"])[:80] for r in runs if not r["valid"])
-    if not messages:
+def _cause(document: dict[str, Any]) -> str:
+    """Why a run is invalid: its first invalid finding's code and where, or "(no estimate)" where none was written."""
+    return cause_of(document["quality"]) if "schema" in document else NO_ESTIMATE
+
+
+def _common_cause(runs: list[dict[str, Any]]) -> str:
+    """The most common cause of the invalid runs, with its count; '-' when all are valid."""
+    causes = collections.Counter(r["cause"] for r in runs if not r["valid"])
+    if not causes:
         return "-"
-    text, count = messages.most_common(1)[0]
-    return f"{text} ({count})"
+    cause, count = causes.most_common(1)[0]
+    return f"{cause} ({count})"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -115,6 +122,7 @@ def main(argv: list[str] | None = None) -> int:
                                 "worst": worst,
                                 "verdict": verdict(valid, worst[1]),
                                 "relative_std": relative,
+                                "cause": _cause(document) if not valid else "",
                                 "message": document["quality"].get("message", ""),
                             }
                         )
@@ -131,15 +139,15 @@ def main(argv: list[str] | None = None) -> int:
     for (speed, label, model), runs in rows.items():
         n, wrong, right = rates(r["verdict"] for r in runs)
         totals = [totals[0] + n, totals[1] + wrong, totals[2] + right]
-        valid = sum(r["valid"] for r in runs)
+        n_valid = sum(r["valid"] for r in runs)
         worst = max(runs, key=lambda r: r["worst"][1] if not math.isnan(r["worst"][1]) else -1.0)["worst"]
         medians = [np.median([r["relative_std"][s] for r in runs if s in r["relative_std"]]) * 100 for s in SEGMENTS]
         print(
-            f"{speed:6g} {label:10s} {model:26s} {n:4d} {valid:5d} {wrong:7d} {right:9d}  "
+            f"{speed:6g} {label:10s} {model:26s} {n:4d} {n_valid:5d} {wrong:7d} {right:9d}  "
             f"{worst[1]:5.2f} ({worst[0]})".ljust(105)
             + "  "
             + ", ".join(f"{m:.3g}" for m in medians).ljust(22)
-            + _common_message(runs)
+            + _common_cause(runs)
         )
     elapsed = time.perf_counter() - started
     print(f"valid-and-wrong {totals[1]}/{totals[0]}, invalid-and-right {totals[2]}/{totals[0]} ({elapsed:.0f} s)")

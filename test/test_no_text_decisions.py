@@ -17,6 +17,8 @@ SCANNED = ("bsp_ros", "bench", "scripts", "test")
 
 # An estimate's warnings: in its JSON, its typed quality or an identification result.
 _WARNINGS = r"""([\w.]*\[["']quality["']\]\[["']warnings["']\]|quality\[["']warnings["']\]|result\.warnings)"""
+# A message: an attribute, a key or a key read with a default (an estimate's, a run's row, a diagnostic status').
+_MESSAGE = r"""(\.message\b|\[["']message["']\]|\.get\(["']message["'])"""
 
 # Each pattern and what it catches. The estimate's ``message`` joins the invalid findings' texts and ``warnings``
 # holds the others': a substring, split or prefix of either decides on text.
@@ -35,6 +37,13 @@ PATTERNS = {
     ),
     "a stale input told by its text": re.compile(r"""["']stale["'] in """),
     "a --passive model parsed out of a text": re.compile(r"""re\.compile\(r?["']--passive"""),
+    # Counting alike messages or warnings together: their numbers blanked, or each one mapped to a "kind".
+    "a message's numbers blanked to group it": re.compile(rf"""\.sub\(.*{_MESSAGE}"""),
+    "a count keyed by a message": re.compile(rf"""\w\[\w+\((str\()?[\w.]*(\[["']\w+["']\])*{_MESSAGE}"""),
+    # A function of each warning (``str`` only converts it) in a comprehension over an estimate's warnings.
+    "a kind made of each warning's text": re.compile(
+        rf"""\b(?!str\b)\w+\((\w+|str\(\w+\))\) for \w+ in ({_WARNINGS}|.*\.get\(["']warnings["'])"""
+    ),
 }
 
 # Tests of the rendering itself: they check that a text reads right, having decided on codes what happened.
@@ -83,6 +92,15 @@ def test_no_source_decides_on_a_finding_s_text() -> None:
         'lambda: "stale" in _latest(c)["quality"]["message"]',
         '_SUGGESTION = re.compile(r"--passive ([a-z]+)")',
         'estimate["quality"]["warnings"][0].startswith("bag damaged")',
+        'for kind in dict.fromkeys(_kind(w) for w in document["quality"]["warnings"]):',
+        'messages[_kind(document["quality"]["message"])] += 1',
+        'messages = collections.Counter(re.sub(r"[-+]?\\d[\\d.e+-]*", "#", r["message"])[:80] for r in runs)',
+        'messages.append(_NUMBER.sub("#", str(estimate.document["quality"].get("message", "")))[:70])',
+        'messages = [_NUMBER.sub("#", str(d["quality"]["message"]))[:70] for d in documents]',
+        'reason = re.sub(r"[0-9.]+", "#", quality[0].message if quality else "no quality status")',
+        '"warnings": [_kind(w) for w in document["quality"]["warnings"]],',
+        "held = {_kind(str(w)) for w in result.warnings}",
+        'kinds = collections.Counter(_kind(w) for w in estimate.get("quality", {}).get("warnings", []))',
     ],
 )
 def test_each_pattern_catches_the_shape_it_names(line: str) -> None:
@@ -96,6 +114,12 @@ def test_each_pattern_catches_the_shape_it_names(line: str) -> None:
         "assert result.valid, result.message  # the text only explains a failure",
         'assert any("no CRC" in w for w in report.warnings)  # a bag reader\'s own notes have no code',
         'assert "ros2 param set /session_recorder subject" in reply.message  # a service reply',
+        'causes[cause_of(document["quality"])] += 1',
+        "for kind in dict.fromkeys(warning_kinds(document['quality'])):",
+        'return _NUMBER.sub("#", str(document["error"]))[:70]  # a run that wrote no estimate: the CLI\'s error line',
+        'print(f"{n}x {m!r}" for m, n in top)',
+        'warnings=tuple(str(w) for w in block.get("warnings") or ()),  # a conversion',
+        'messages = collections.Counter(r["message"] for r in runs if not r["valid"])  # a row\'s cause, not a text',
     ],
 )
 def test_deciding_on_codes_and_other_layers_texts_pass(line: str) -> None:
