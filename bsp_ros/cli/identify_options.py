@@ -214,6 +214,7 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
     """
     from bsp_ros.core.fusion import SubjectInfo
     from bsp_ros.core.identification.passive import PassiveModel
+    from bsp_ros.core.methods import Method
     from bsp_ros.core.pipeline import IdentifyOptions
 
     known = body or {}
@@ -227,7 +228,7 @@ def options_from_args(args: argparse.Namespace, body: dict[str, Any] | None = No
         args.sex or known.get("sex") or "male",
     )
     return IdentifyOptions(
-        method=args.method,
+        method=Method(args.method),
         passive=passive,
         elastic_fallback=args.passive is None,
         subject=subject,

@@ -13,6 +13,7 @@ from bsp_ros.bag.topics import TF_TYPE
 from bsp_ros.cell import CellDescription
 from bsp_ros.clinic.store import is_database_url, open_store
 from bsp_ros.clinic.store.location import default_location
+from bsp_ros.core.methods import Method
 from bsp_ros.errors import InputError
 from bsp_ros.live.runtime.cell_parameters import CELL_FILE, FromCell, declare_with_cell
 from bsp_ros.live.runtime.parameters import Param
@@ -222,7 +223,7 @@ class SessionRecorderNode(RosNode):
         # Without tf2_msgs the cell's TransformStamped topic is recorded: identified with the cell file that names it.
         topics = replace(topics, transform=cell.transform_topic, world_frame=cell.world_frame)
         return IdentifySettings(
-            method=p["method"],
+            method=Method(p["method"]),
             passive=p["passive"],
             tare_file=p["tare_file"],
             wrench_delay_s=p["wrench_delay_s"],

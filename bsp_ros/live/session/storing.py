@@ -20,6 +20,7 @@ import numpy as np
 from bsp_ros.bag import TopicMap
 from bsp_ros.cell import CellDescription
 from bsp_ros.clinic.store import WALL_CLOCK_START_NS, open_store
+from bsp_ros.core.methods import Method
 from bsp_ros.errors import BspError
 from bsp_ros.live.session.control import SessionEnd
 from bsp_ros.live.session.spool import SpoolSummary
@@ -53,7 +54,7 @@ class IdentifySettings:
         and its mounting where the bag records no transform); '' none.
     """
 
-    method: str = "joint"
+    method: Method = Method.JOINT
     passive: str = ""
     tare_file: str = ""
     wrench_delay_s: float | None = None
@@ -64,7 +65,7 @@ class IdentifySettings:
 
     def command_line(self) -> list[str]:
         """These settings as `bsp identify` / `bsp sessions add` options."""
-        line = ["--method", self.method, "--wrench-topic", self.topics.wrench]
+        line = ["--method", str(self.method), "--wrench-topic", self.topics.wrench]
         line += ["--tf-topic", self.topics.tf, "--tf-static-topic", self.topics.tf_static]
         line += ["--handle-pose-topic", self.topics.handle_pose]
         line += [f"--marker-topic={name}={topic}" for name, topic in self.topics.markers.items()]

@@ -38,3 +38,15 @@ def test_the_logged_add_command_carries_the_sessions_own_settings_and_cell(tmp_p
 
 def test_without_settings_the_command_is_the_bare_one(tmp_path: Path) -> None:
     assert add_command(tmp_path / "b", "P001", False) == f"bsp sessions add {tmp_path / 'b'} --subject P001"
+
+
+def test_the_method_is_typed_from_the_recorder_to_the_options(tmp_path: Path) -> None:
+    from bsp_ros.cli.identify_options import options_from_args
+    from bsp_ros.core.methods import Method
+
+    settings = IdentifySettings(method=Method.PAPER)
+    command = add_command(tmp_path / "b", "P001", False, settings.add_options())
+    args = build_parser().parse_args(shlex.split(command)[1:])
+    options = options_from_args(args)
+    assert options.method is Method.PAPER
+    assert options_from_args(build_parser().parse_args(["identify", "b"])).method is Method.JOINT
