@@ -16,23 +16,17 @@ import numpy as np
 from bsp_ros import __version__
 from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
 from bsp_ros.core.estimate_schema import Estimate, Level, Quality, Quantity, Source
-from bsp_ros.core.findings import Finding, FindingCode, note
+from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.fusion import Posterior, SubjectInfo
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.speed_split import speed_dependence_block
 from bsp_ros.core.identification.result import IdentificationResult
-from bsp_ros.core.methods import Method
 from bsp_ros.core.streams import joints_for, segments_for
 
 
 def quantity(value: float, std: float, source: str) -> Quantity:
     """One docs/contract.md quantity; a value that could not be computed is None (``null``), never NaN."""
     return Quantity(value=_clean(value), std=_clean(std), source=Source(source))
-
-
-def invalid_document(method: Method, finding: Finding) -> dict[str, Any]:
-    """The JSON of :meth:`Estimate.invalid`: no parameters, made invalid by ``finding`` (live inputs not usable)."""
-    return Estimate.invalid(method, finding).to_json()
 
 
 def estimate_from_result(

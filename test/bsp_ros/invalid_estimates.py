@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.methods import Method
 
 WAITING = Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench"})
 STALE = Finding(code=FindingCode.INPUT_STALE, values={"what": "wrench", "silent_s": 0.5})
@@ -17,4 +18,4 @@ ONE_WAY_WRIST = Finding(code=FindingCode.ONE_DIRECTION, where="wrist", values={"
 
 def invalid(finding: Finding = STALE) -> dict[str, Any]:
     """The document of an invalid estimate made so by ``finding`` (``STALE``: the identifier's inputs stopped)."""
-    return invalid_document("joint", finding)
+    return Estimate.invalid(Method.JOINT, finding).to_json()

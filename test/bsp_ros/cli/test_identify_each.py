@@ -13,8 +13,9 @@ import pytest
 
 from bsp_ros.cli import main
 from bsp_ros.cli.identify_each import BagRow, BagTask, Progress, row_of, run_tasks
-from bsp_ros.core.estimate import invalid_document
+from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode
+from bsp_ros.core.methods import Method
 
 # Coulomb only: the stiff arm's elastic moment then makes its estimate invalid (the others stay valid).
 PASSIVE = ["--passive", "coulomb"]
@@ -179,5 +180,5 @@ def test_progress_is_one_line_rewritten_on_a_terminal_and_nothing_elsewhere() ->
 
 def test_a_row_names_the_joint_its_cause_is_at() -> None:
     still = Finding(code=FindingCode.NO_MOTION, where="upper_arm", values={"range_deg": 0.01, "min_range_deg": 2.0})
-    row = row_of(0, "day1", invalid_document("joint", still))
+    row = row_of(0, "day1", Estimate.invalid(Method.JOINT, still).to_json())
     assert (row.exit_code, row.cause_code, row.cause) == (3, "no_motion", "the upper arm did not move")

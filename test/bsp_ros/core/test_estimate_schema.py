@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from bsp_ros.bag.offline import identify_bag
-from bsp_ros.core.estimate import invalid_document
 from bsp_ros.core.estimate_schema import Estimate, Level, Quantity, Source
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.methods import LiveMode, Method
@@ -44,7 +43,8 @@ def test_quantities_and_the_verdict_are_typed(document: dict) -> None:
 
 
 def test_an_invalid_live_estimate_names_its_cause() -> None:
-    document = invalid_document("joint", Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench"}))
+    waiting = Finding(code=FindingCode.INPUT_WAITING, values={"what": "wrench"})
+    document = Estimate.invalid(Method.JOINT, waiting).to_json()
     document["mode"] = "windowed"
     estimate = Estimate.from_json(document)
     assert not estimate.valid and estimate.quality.verdict is not None
