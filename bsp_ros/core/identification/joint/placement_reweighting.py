@@ -122,9 +122,17 @@ def _responses(stats: OffsetStatistics, weights: np.ndarray, scores: np.ndarray)
     design = (weights @ stats.gram.reshape(n, p * p)).reshape(-1, p, p) + np.diag(stats.prior_precision)
     moment = np.einsum("kj,jkp->kp", weights, scores)
     # Scaled to a unit diagonal: the parameters span decades of units.
-    scale = np.sqrt(np.clip(np.einsum("kpp->kp", design), 1e-300, None))
+    diagonal = np.einsum("kpp->kp", design)
+    scale = np.sqrt(np.where(diagonal > 0.0, diagonal, 1.0))
     unit = design / (scale[:, :, None] * scale[:, None, :])
-    return np.asarray(np.linalg.solve(unit, (moment / scale)[..., None])[..., 0] / scale)
+    rhs = (moment / scale)[..., None]
+    try:
+        solved = np.linalg.solve(unit, rhs)
+    except np.linalg.LinAlgError:
+        # A design no prior holds in some direction (a session too short for its model, which the checks call
+        # not identifiable): the least-squares response, which is 0 along that direction.
+        solved = np.linalg.pinv(unit, hermitian=True) @ rhs
+    return np.asarray(solved[..., 0] / scale)
 
 
 def _reweighted_responses(stats: OffsetStatistics, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -120,3 +120,24 @@ def test_with_each_session_s_residual_variances_the_term_holds_its_error() -> No
     assert np.all((z_rms > 0.7) & (z_rms < 1.3)), z_rms  # the acceptance's band; 60 sessions scatter it by 9 %
     assert np.abs(z).max() < 3.0
     assert widened > 2  # some sessions' offsets took a joint's weight away, and their std says so
+
+
+def test_a_parameter_no_data_or_prior_holds_gets_no_response_and_no_failure() -> None:
+    # A session too short for its model (a 4 s MuJoCo session fitted with stiffness left the design singular):
+    # the term is finite, 0 (to rounding) along the parameter nothing holds, and unchanged elsewhere in size.
+    data = _fast_session()
+    problem = usable_samples(data, JointConfig()).problem
+    fit = fit_problem(problem)
+    statistics = _statistics(problem, offset_columns(data, problem, fit, SD_M))
+    held = np.sqrt(np.diag(reweighted_placement_covariance(statistics)))
+    free = 1  # the forearm's static moment, its columns and its prior taken away
+    gram, cross = statistics.gram.copy(), statistics.cross.copy()
+    gram[:, free, :] = 0.0
+    gram[:, :, free] = 0.0
+    cross[:, free, :] = 0.0
+    precision = statistics.prior_precision.copy()
+    precision[free] = 0.0
+    singular = dataclasses.replace(statistics, gram=gram, cross=cross, prior_precision=precision)
+    term = np.sqrt(np.diag(reweighted_placement_covariance(singular)))
+    assert np.all(np.isfinite(term)) and term[free] < 1e-5 * held.max()
+    assert np.all(term[[0, 2]] > 0.1 * held[[0, 2]])
