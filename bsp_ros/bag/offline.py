@@ -9,6 +9,7 @@ from typing import Any
 from bsp_ros.bag import TopicMap, read_session
 from bsp_ros.bag.fingerprint import content_sha256, recordings_sha256
 from bsp_ros.bag.reader import BagRead
+from bsp_ros.core.estimate_blocks import BagSection
 from bsp_ros.core.estimate_schema import Estimate
 from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.pipeline import IdentifyOptions, estimate_recordings
@@ -74,11 +75,9 @@ def with_read(estimate: Estimate, read: BagRead, recording: int | None = None) -
         if finding.text not in quality.warnings:
             quality = quality.with_finding(finding, at=at)
             at += 1
-    rotation = quality.extra.get("rotation")
-    if isinstance(rotation, dict):  # where the bag's sensor orientation came from (the pipeline knows only its shape)
-        sources = [] if not recording else str(rotation.get("source", "")).split(", ")
-        source = ", ".join(dict.fromkeys([*sources, report.rotation_source]))
-        quality = quality.with_extra({"rotation": {**rotation, "source": source}})
+    if quality.rotation is not None:  # where the bag's sensor orientation came from (the pipeline knows its shape)
+        rotation = quality.rotation.with_source(report.rotation_source, appended=bool(recording))
+        quality = quality.with_rotation(rotation)
     if report.rotation_source == "assumed" and not quality.valid:
         frame = read.session.wrench.frame_id
         quality = quality.with_finding(Finding(code=FindingCode.ROTATION_ASSUMED, values={"frame": frame}))
@@ -91,21 +90,18 @@ def with_read(estimate: Estimate, read: BagRead, recording: int | None = None) -
             code=FindingCode.BAG_POSSIBLY_DAMAGED, values={"implausible": tuple((k, v) for k, v in implausible.items())}
         )
         quality = quality.with_finding(in_recording(possibly), at=0)
-    section = {
-        "files": [Path(f).name for f in report.files],
-        "messages": {topic: t.read for topic, t in report.topics.items()},
-        "lost_messages": report.lost_messages,
-        "crc_errors": report.crc_errors,
-        "truncated": report.truncated,
-        "chunks_without_crc": report.chunks_without_crc,
-        "rotation_source": report.rotation_source,
-        "damage": list(report.damage),
-        "implausible_samples_removed": implausible,
-    }
-    estimate = estimate.with_quality(quality)
-    if recording is None:
-        return estimate.with_extra({"bag": section})
-    return estimate.with_extra({"bags": [*estimate.extra.get("bags", []), section]})
+    section = BagSection(
+        files=tuple(Path(f).name for f in report.files),
+        messages={topic: t.read for topic, t in report.topics.items()},
+        lost_messages=report.lost_messages,
+        crc_errors=report.crc_errors,
+        truncated=report.truncated,
+        chunks_without_crc=report.chunks_without_crc,
+        rotation_source=report.rotation_source,
+        damage=tuple(report.damage),
+        implausible_samples_removed=implausible,
+    )
+    return estimate.with_quality(quality).with_bag(section, recording=recording)
 
 
 def identify_bags(

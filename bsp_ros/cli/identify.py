@@ -120,8 +120,8 @@ def tare_line(quality: Quality) -> str:
     sensitivity = quality.extra.get("offset_sensitivity") or {}
     percent = [p for p in sensitivity.get("static_moment_percent", {}).values() if p]
     worst = f": 0.1 N of sensor offset moves a static moment by up to {max(percent):.2g}%" if percent else ""
-    zero = (quality.extra.get("tare") or {}).get("zero_sd") or {}
-    assumed = f"; the std assumes the sensor's zero within {zero['force_n']:g} N" if zero.get("force_n") else ""
+    zero = quality.tare.zero_sd if quality.tare is not None else None
+    assumed = f"; the std assumes the sensor's zero within {zero.force_n:g} N" if zero and zero.force_n else ""
     return f"tare: none applied{worst}{assumed} (bsp tare, then --tare FILE)"
 
 

@@ -22,6 +22,7 @@ from typing import Any, TextIO
 
 from bsp_ros.bag.batch import bag_name, expand_bags
 from bsp_ros.cli.identify import BAG_EXIT_CODES, DATA_PROBLEMS, EXIT_INVALID
+from bsp_ros.core.estimate_blocks import TareBlock, typed_block
 from bsp_ros.core.findings import findings_of, plain_cause, verdict_of
 from bsp_ros.core.quantities import quantities_of
 from bsp_ros.errors import BspError, DataError, InputError
@@ -144,7 +145,8 @@ def row_of(index: int, bag: str, document: dict[str, Any]) -> BagRow:
         else:  # a document without findings (an older writer): its message says why
             row.cause = _one_line(quality.get("message", ""))
     row.values = parameter_values(document)
-    row.tare_applied = bool((quality.get("tare") or {}).get("applied", False))
+    tare = typed_block(TareBlock.from_json, quality.get("tare"))
+    row.tare_applied = tare is not None and tare.applied
     session = document.get("session") or {}
     configured = (session.get("config") or {}).get("passive", "")
     row.passive_model = str((document.get("diagnostics") or {}).get("passive_model") or configured)

@@ -15,6 +15,7 @@ import numpy as np
 
 from bsp_ros import __version__
 from bsp_ros.core.contact_point import CONTACT_FROM_MARKER, CONTACT_FROM_ROBOT
+from bsp_ros.core.estimate_blocks import PlacementBlock
 from bsp_ros.core.estimate_schema import Estimate, Level, Quality, Quantity, Source
 from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.fusion import Posterior, SubjectInfo
@@ -202,9 +203,9 @@ def _quality(
         "contact_point": CONTACT_FROM_ROBOT if contact_from_robot else CONTACT_FROM_MARKER,
     }
     placement = result.diagnostics.get("marker_placement")
-    if placement:
-        # The skin markers' placement the std holds: as assumed, or wider where the data put them further off.
-        extra["marker_placement"] = placement
+    # The skin markers' placement the std holds: as assumed, or wider where the data put them further off.
+    marker_placement = PlacementBlock.from_json(placement) if isinstance(placement, Mapping) and placement else None
+    key_order = ["removed_samples", "contact_point", *(["marker_placement"] if marker_placement else [])]
     sensitivity = result.diagnostics.get("offset_sensitivity_kgm_per_0_05_nm")
     if sensitivity:
         # What the data cannot test at one operating point, and what it would cost if false.
@@ -215,6 +216,7 @@ def _quality(
                 "static_moment_shift_kgm_per_0_05_nm": sensitivity,
             }
         ]
+        key_order.append("assumptions")
     return Quality(
         valid=bool(result.valid),
         level=Level.INVALID if not result.valid else (Level.WEAK if result.weak else Level.OK),
@@ -224,7 +226,9 @@ def _quality(
         n_samples=int(result.n_samples),
         condition_number=float(result.condition_number) if math.isfinite(result.condition_number) else None,
         residual_rms_nm={k: float(v) for k, v in result.residual_rms_nm.items()},
+        marker_placement=marker_placement,
         extra=extra,
+        key_order=tuple(key_order),
     )
 
 

@@ -9,11 +9,12 @@ in ``extra`` so that nothing recorded is lost and the round trip is exact.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import Any
 
+from bsp_ros.core.estimate_blocks import BagSection, PlacementBlock, RotationBlock, TareBlock, TimingBlock, typed_block
 from bsp_ros.core.findings import Finding, Severity, findings_of, verdict_of
 from bsp_ros.core.methods import LiveMode, Method
 from bsp_ros.core.quantities import PASSIVE_CURVE
@@ -21,6 +22,10 @@ from bsp_ros.core.quantities import PASSIVE_CURVE
 __all__ = ["SCHEMA", "Estimate", "Level", "Quality", "Quantity", "Source"]
 
 SCHEMA = "bsp_ros/core/estimate/1"
+
+#: The typed blocks of the ``quality`` block and of the document (beside their core keys), by key.
+QUALITY_BLOCKS = ("tare", "timing", "rotation", "marker_placement")
+ESTIMATE_BLOCKS = ("bag", "bags")
 
 
 class Source(StrEnum):
@@ -101,7 +106,16 @@ class Quality:
     n_samples : samples used.
     condition_number : of the column-scaled regressor, None where not finite.
     residual_rms_nm : per joint, the torque residual's RMS.
-    extra : the other keys of the JSON's ``quality`` block, in order (tare, timing, rotation, placement...).
+    tare : whether a tare was subtracted, and the sensor zero's share of the std (``tare``).
+    timing : the wrench delay compensated (``timing``).
+    rotation : where the wrench frame's rotation came from (``rotation``).
+    marker_placement : the markers' placement the std holds (``marker_placement``).
+    extra : the other keys of the JSON's ``quality`` block (removed samples, contact point, assumptions...).
+    key_order : the keys of the typed blocks and of ``extra`` in the document's order (as read, or as set); those
+        not named in it follow, ``extra``'s first.
+
+    Each typed block is None where the document lacks it (or holds it in a shape its type does not write: it then
+    stays in ``extra`` as it is).
     """
 
     valid: bool
@@ -112,7 +126,12 @@ class Quality:
     n_samples: int = 0
     condition_number: float | None = None
     residual_rms_nm: Mapping[str, float] = field(default_factory=dict)
+    tare: TareBlock | None = None
+    timing: TimingBlock | None = None
+    rotation: RotationBlock | None = None
+    marker_placement: PlacementBlock | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
+    key_order: tuple[str, ...] = ()
 
     @property
     def verdict(self) -> Finding | None:
@@ -122,15 +141,12 @@ class Quality:
     @property
     def tare_applied(self) -> bool:
         """Whether a tare was subtracted."""
-        tare = self.extra.get("tare")
-        return isinstance(tare, Mapping) and tare.get("applied") is True
+        return self.tare is not None and self.tare.applied
 
     @property
     def tare_file(self) -> str | None:
         """The applied tare's file name, or None."""
-        tare = self.extra.get("tare")
-        name = tare.get("file") if isinstance(tare, Mapping) else None
-        return name if isinstance(name, str) else None
+        return self.tare.file if self.tare is not None else None
 
     def with_finding(self, finding: Finding, at: int | None = None) -> Quality:
         """This quality with ``finding`` added: an invalid one first, its text leading the ``message``, the
@@ -144,8 +160,41 @@ class Quality:
         return replace(self, findings=(*self.findings, finding), warnings=tuple(warnings))
 
     def with_extra(self, keys: Mapping[str, Any]) -> Quality:
-        """This quality with the untyped blocks ``keys`` (tare, timing, rotation...) set, after those it has."""
-        return replace(self, extra={**self.extra, **keys})
+        """This quality with the untyped blocks ``keys`` (offset sensitivity...) set, after those it has.
+
+        Raises
+        ------
+        ValueError
+            A key is one of the typed blocks' (set those with their own ``with_...``).
+        """
+        _check_untyped(keys, QUALITY_BLOCKS)
+        return replace(self, extra={**self.extra, **keys}, key_order=_placed(self._blocks(), keys))
+
+    def with_tare(self, tare: TareBlock) -> Quality:
+        """This quality with its ``tare`` block (in its place, or after the blocks it has)."""
+        return replace(self, tare=tare, key_order=_placed(self._blocks(), ("tare",)))
+
+    def with_timing(self, timing: TimingBlock) -> Quality:
+        """This quality with its ``timing`` block (in its place, or after the blocks it has)."""
+        return replace(self, timing=timing, key_order=_placed(self._blocks(), ("timing",)))
+
+    def with_rotation(self, rotation: RotationBlock) -> Quality:
+        """This quality with its ``rotation`` block (in its place, or after the blocks it has)."""
+        return replace(self, rotation=rotation, key_order=_placed(self._blocks(), ("rotation",)))
+
+    def _blocks(self) -> dict[str, Any]:
+        """The JSON of the typed blocks present and of ``extra``, in the document's order (see ``key_order``)."""
+        typed = {
+            key: block.to_json()
+            for key, block in (
+                ("tare", self.tare),
+                ("timing", self.timing),
+                ("rotation", self.rotation),
+                ("marker_placement", self.marker_placement),
+            )
+            if block is not None
+        }
+        return _in_order({**self.extra, **typed}, self.key_order)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON ``quality`` block, its keys in docs/contract.md's order and then the others."""
@@ -158,7 +207,7 @@ class Quality:
             "message": self.message,
             "findings": [f.to_json() for f in self.findings],
             "level": str(self.level),
-            **self.extra,
+            **self._blocks(),
         }
 
     @classmethod
@@ -167,6 +216,12 @@ class Quality:
         typed = {"valid", "n_samples", "condition_number", "residual_rms_nm", "warnings", "message", "findings"}
         valid = bool(block.get("valid"))
         level = block.get("level") or ("ok" if valid else "invalid")
+        blocks = {k: v for k, v in block.items() if k not in typed and k != "level"}
+        tare = typed_block(TareBlock.from_json, blocks.get("tare"))
+        timing = typed_block(TimingBlock.from_json, blocks.get("timing"))
+        rotation = typed_block(RotationBlock.from_json, blocks.get("rotation"))
+        placement = typed_block(PlacementBlock.from_json, blocks.get("marker_placement"))
+        typed_blocks = {"tare": tare, "timing": timing, "rotation": rotation, "marker_placement": placement}
         return cls(
             valid=valid,
             level=Level(level),
@@ -180,7 +235,12 @@ class Quality:
                 for k, v in (block.get("residual_rms_nm") or {}).items()
                 if (number := _number(v)) is not None
             },
-            extra={k: v for k, v in block.items() if k not in typed and k != "level"},
+            tare=tare,
+            timing=timing,
+            rotation=rotation,
+            marker_placement=placement,
+            extra={k: v for k, v in blocks.items() if typed_blocks.get(k) is None},
+            key_order=tuple(blocks),
         )
 
 
@@ -199,7 +259,11 @@ class Estimate:
     diagnostics : the figures behind the verdict (parameters, correlation, ...).
     software : name and version of what made it.
     session : times, source, configuration; None for a live estimate before its first window.
-    extra : the document's other top-level keys, in order (``bag``, ``bags``, ``mode``, ``repeatability``...).
+    bag : what the read of its bag found (``bag``); None for a live estimate or several recordings.
+    bags : with several recordings identified together, each bag's section (``bags``); else None.
+    extra : the document's other top-level keys (``mode``, ``repeatability``, ``speed_dependence``...).
+    key_order : the keys of ``bag``, ``bags`` and ``extra`` in the document's order (as read, or as set); those not
+        named in it follow, ``extra``'s first.
     schema : the schema tag.
     """
 
@@ -212,7 +276,10 @@ class Estimate:
     diagnostics: Mapping[str, Any] | None = None
     software: Mapping[str, Any] | None = None
     session: Mapping[str, Any] | None = None
+    bag: BagSection | None = None
+    bags: tuple[BagSection, ...] | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
+    key_order: tuple[str, ...] = ()
     schema: str = SCHEMA
 
     @property
@@ -259,8 +326,32 @@ class Estimate:
         return replace(self, quality=quality)
 
     def with_extra(self, keys: Mapping[str, Any]) -> Estimate:
-        """This estimate with the top-level blocks ``keys`` (``bag``, ``bags``, ``mode``...) set, after its own."""
-        return replace(self, extra={**self.extra, **keys})
+        """This estimate with the untyped top-level blocks ``keys`` (``mode``, ``precision``...) set, after its own.
+
+        Raises
+        ------
+        ValueError
+            A key is ``bag`` or ``bags`` (set those with :meth:`with_bag`).
+        """
+        _check_untyped(keys, ESTIMATE_BLOCKS)
+        return replace(self, extra={**self.extra, **keys}, key_order=_placed(self._blocks(), keys))
+
+    def with_bag(self, section: BagSection, *, recording: int | None = None) -> Estimate:
+        """This estimate with the ``bag`` section of its one bag, or (``recording`` k of several) with ``section``
+        appended to ``bags``."""
+        if recording is None:
+            return replace(self, bag=section, key_order=_placed(self._blocks(), ("bag",)))
+        bags = (*(self.bags or ()), section)
+        return replace(self, bags=bags, key_order=_placed(self._blocks(), ("bags",)))
+
+    def _blocks(self) -> dict[str, Any]:
+        """The JSON of ``bag``, ``bags`` and ``extra``, in the document's order (see ``key_order``)."""
+        typed: dict[str, Any] = {}
+        if self.bag is not None:
+            typed["bag"] = self.bag.to_json()
+        if self.bags is not None:
+            typed["bags"] = [b.to_json() for b in self.bags]
+        return _in_order({**self.extra, **typed}, self.key_order)
 
     def with_mode(self, mode: LiveMode) -> Estimate:
         """This estimate as the live ``mode`` made it (the top-level ``mode``, after its other blocks)."""
@@ -284,7 +375,7 @@ class Estimate:
             value = getattr(self, key)
             if value is not None:
                 out[key] = value
-        return {**out, **self.extra}
+        return {**out, **self._blocks()}
 
     @classmethod
     def from_json(cls, document: Mapping[str, Any]) -> Estimate:
@@ -303,6 +394,9 @@ class Estimate:
             if PASSIVE_CURVE in block:
                 curves[joint] = block[PASSIVE_CURVE]
         typed = {"schema", "method", "segments", "joints", "quality", "subject", "diagnostics", "software", "session"}
+        blocks = {k: v for k, v in document.items() if k not in typed}
+        bag = typed_block(BagSection.from_json, blocks.get("bag"))
+        bags = _typed_bags(blocks.get("bags"))
         return cls(
             schema=str(document.get("schema", SCHEMA)),
             method=Method(str(document.get("method", Method.JOINT))),
@@ -317,8 +411,36 @@ class Estimate:
             diagnostics=document.get("diagnostics"),
             software=document.get("software"),
             session=document.get("session"),
-            extra={k: v for k, v in document.items() if k not in typed},
+            bag=bag,
+            bags=bags,
+            extra={k: v for k, v in blocks.items() if {"bag": bag, "bags": bags}.get(k) is None},
+            key_order=tuple(blocks),
         )
+
+
+def _typed_bags(sections: object) -> tuple[BagSection, ...] | None:
+    """The ``bags`` list typed, where every section is a :class:`BagSection`'s exactly; else None."""
+    if not isinstance(sections, list):
+        return None
+    typed = [typed_block(BagSection.from_json, section) for section in sections]
+    return tuple(t for t in typed if t is not None) if all(t is not None for t in typed) else None
+
+
+def _check_untyped(keys: Iterable[str], typed: tuple[str, ...]) -> None:
+    """Refuse a typed block's key among untyped ones (its typed field would hide it)."""
+    if clash := [key for key in keys if key in typed]:
+        raise ValueError(f"{clash} are typed blocks: set them with their own with_... operation")
+
+
+def _in_order(blocks: Mapping[str, Any], key_order: tuple[str, ...]) -> dict[str, Any]:
+    """``blocks`` with the keys ``key_order`` names first, in its order, then the others in theirs."""
+    named = {key: blocks[key] for key in key_order if key in blocks}
+    return {**named, **{k: v for k, v in blocks.items() if k not in named}}
+
+
+def _placed(blocks: Mapping[str, Any], keys: Iterable[str]) -> tuple[str, ...]:
+    """The key order of ``blocks`` with ``keys`` set: each in its place, a new one after the others."""
+    return tuple(dict.fromkeys([*blocks, *keys]))
 
 
 def _number(value: Any) -> float | None:

@@ -11,6 +11,7 @@ import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
 from bsp_ros.core.estimate import estimate_from_fit, estimate_from_result
+from bsp_ros.core.estimate_blocks import TimingBlock
 from bsp_ros.core.estimate_schema import Estimate, Quality
 from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.fusion import (
@@ -35,7 +36,7 @@ from bsp_ros.core.identification.sensitivity import account_for_tare
 from bsp_ros.core.identification.timing import WrenchDelay, compensate_wrench_delay
 from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_markers
 from bsp_ros.core.methods import OFFLINE_METHODS, Method
-from bsp_ros.core.sensor_rotation import rotation_quality
+from bsp_ros.core.sensor_rotation import rotation_block
 from bsp_ros.core.sensor_zero import ZERO_SD_N, ZERO_SD_NM
 from bsp_ros.core.streams import Session
 from bsp_ros.core.tare import Tare, corrected_session
@@ -279,7 +280,7 @@ def estimate_recordings(
         placement_sd_m=options.placement_sd_used_m(result, data),
         session=info,
     )
-    quality = _with_timing_and_rotation(estimate.quality.with_extra(offsets), [p.timing for p in prepared], rotation)
+    quality = _with_timing_and_rotation(offsets.applied_to(estimate.quality), [p.timing for p in prepared], rotation)
     return estimate.with_quality(quality)
 
 
@@ -326,13 +327,12 @@ def _session_info(
 def _with_timing_and_rotation(quality: Quality, timings: Sequence[WrenchDelay], rotation: np.ndarray) -> Quality:
     """``quality`` with the stream timing of each recording and the sensor rotation's shape (timing.py,
     sensor_rotation.py); the timing's notes as findings."""
-    timing = timings[0].quality() if len(timings) == 1 else {"recordings": [t.quality() for t in timings]}
-    quality = quality.with_extra({"timing": timing})
+    quality = quality.with_timing(TimingBlock(recordings=tuple(t.block() for t in timings)))
     for delay in timings:
         for text in delay.warnings:
             if text not in quality.warnings:
                 quality = quality.with_finding(note(FindingCode.TIMING_NOTE, text))
-    return quality.with_extra({"rotation": rotation_quality(rotation, "session")})
+    return quality.with_rotation(rotation_block(rotation, "session"))
 
 
 __all__ = [

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.estimate_blocks import RotationBlock
 from bsp_ros.errors import InputError
 
-__all__ = ["rotation_quality", "rotation_range_deg"]
+__all__ = ["rotation_block", "rotation_range_deg"]
 
 
 def rotation_range_deg(rotation_world_from_sensor: npt.ArrayLike) -> float:
@@ -41,8 +40,8 @@ def rotation_range_deg(rotation_world_from_sensor: npt.ArrayLike) -> float:
     return float(np.degrees(np.ptp(vectors @ vt[0])))
 
 
-def rotation_quality(rotation_world_from_sensor: npt.ArrayLike, source: str) -> dict[str, Any]:
-    """``quality.rotation`` of an estimate: ``{"source", "per_sample", "range_deg"}``.
+def rotation_block(rotation_world_from_sensor: npt.ArrayLike, source: str) -> RotationBlock:
+    """``quality.rotation`` of an estimate: where the rotation came from and how much it varied.
 
     Parameters
     ----------
@@ -50,4 +49,4 @@ def rotation_quality(rotation_world_from_sensor: npt.ArrayLike, source: str) -> 
     source : where it came from (``tf``, ``tf_static``, ``alias``, ``assumed``, ``parameter``, ``session``).
     """
     rotation = np.asarray(rotation_world_from_sensor, dtype=np.float64)
-    return {"source": source, "per_sample": rotation.ndim == 3, "range_deg": rotation_range_deg(rotation)}
+    return RotationBlock(sources=(source,), per_sample=rotation.ndim == 3, range_deg=rotation_range_deg(rotation))

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from bsp_ros.core.estimate_blocks import SensorZero, TareBlock
+from bsp_ros.core.estimate_schema import Quality
 from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.ledger import Term
@@ -23,12 +26,14 @@ __all__ = [
     "TORQUE_STEP_NM",
     "ZERO_SD_N",
     "ZERO_SD_NM",
+    "TareShare",
     "account_for_tare",
     "add_tare_covariance",
     "offset_sensitivity",
     "offset_torques_nm",
     "response_sensitivity",
     "tare_quality",
+    "tare_share",
     "zero_covariance",
 ]
 
@@ -158,6 +163,24 @@ def zero_covariance(zero_sd_n: float, zero_sd_nm: float) -> np.ndarray:
     return np.diag([zero_sd_n**2] * 3 + [zero_sd_nm**2] * 3)
 
 
+@dataclass(frozen=True, kw_only=True)
+class TareShare:
+    """What the sensor's zero means for an estimate: its ``quality.tare`` and ``quality.offset_sensitivity``.
+
+    Attributes
+    ----------
+    tare : whether a tare was applied, and the zero's share of each parameter's std.
+    offset_sensitivity : the document's ``offset_sensitivity`` block (:func:`tare_quality`).
+    """
+
+    tare: TareBlock
+    offset_sensitivity: Mapping[str, Any]
+
+    def applied_to(self, quality: Quality) -> Quality:
+        """``quality`` with both blocks, the tare's first."""
+        return quality.with_tare(self.tare).with_extra({"offset_sensitivity": self.offset_sensitivity})
+
+
 def tare_quality(
     result: IdentificationResult,
     g: np.ndarray | None,
@@ -166,7 +189,21 @@ def tare_quality(
     added: np.ndarray | None = None,
     zero_sd: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
-    """The ``quality.tare`` and ``quality.offset_sensitivity`` blocks of the estimate document.
+    """The ``quality.tare`` and ``quality.offset_sensitivity`` blocks of the estimate document (the JSON of
+    :func:`tare_share`)."""
+    share = tare_share(result, g, frame_id, tare_file, added, zero_sd)
+    return {"tare": share.tare.to_json(), "offset_sensitivity": share.offset_sensitivity}
+
+
+def tare_share(
+    result: IdentificationResult,
+    g: np.ndarray | None,
+    frame_id: str,
+    tare_file: str | None,
+    added: np.ndarray | None = None,
+    zero_sd: tuple[float, float] | None = None,
+) -> TareShare:
+    """The ``quality.tare`` and ``quality.offset_sensitivity`` blocks of the estimate.
 
     ``offset_sensitivity.static_moment_kgm[segment]`` is how much a 0.1 N force offset along the sensor's
     x, y, z moves that static moment (kg m), ``static_moment_percent`` the largest of the three in % of the
@@ -192,14 +229,16 @@ def tare_quality(
         block["static_moment_percent"][segment] = (
             float(100.0 * np.abs(change).max() / value) if value > 0 and np.isfinite(value) else None
         )
-    tare: dict[str, Any] = {"applied": tare_file is not None, "file": tare_file}
+    zero = None
     if tare_file is None and zero_sd is not None:
-        tare["zero_sd"] = {"force_n": zero_sd[0], "moment_nm": zero_sd[1]}
+        zero = SensorZero(force_n=zero_sd[0], moment_nm=zero_sd[1])
+    std_added = None
     if added is not None:
-        tare["std_added"] = {
+        std_added = {
             f"{key}/{owner}": float(np.sqrt(max(added[i, i], 0.0))) for i, (key, owner) in enumerate(result.names)
         }
-    return {"tare": tare, "offset_sensitivity": block}
+    tare = TareBlock(applied=tare_file is not None, file=tare_file, zero_sd=zero, std_added=std_added)
+    return TareShare(tare=tare, offset_sensitivity=block)
 
 
 def account_for_tare(
@@ -210,7 +249,7 @@ def account_for_tare(
     tare: Any,
     refit: Refit,
     zero_sd: tuple[float, float] | None = (ZERO_SD_N, ZERO_SD_NM),
-) -> tuple[IdentificationResult, dict[str, Any]]:
+) -> tuple[IdentificationResult, TareShare]:
     """Sensitivity to a sensor offset, and ``result`` with the uncertainty of the wrench's zero added.
 
     With a tare, its own uncertainty; without, the assumed ``zero_sd`` (force N, moment Nm; 1 SD per sensor
@@ -228,8 +267,8 @@ def account_for_tare(
 
     Returns
     -------
-    ``result`` with the zero's share in its covariance and a tare's notes in its findings; ``{"tare": {...},
-    "offset_sensitivity": {...}}`` for ``quality`` (see :func:`tare_quality`).
+    ``result`` with the zero's share in its covariance and a tare's notes in its findings; the ``tare`` and
+    ``offset_sensitivity`` blocks for ``quality`` (see :func:`tare_share`).
     """
     from bsp_ros.core.tare import recording_warnings, tare_warnings
 
@@ -250,4 +289,4 @@ def account_for_tare(
     elif g is not None and zero_sd is not None and max(zero_sd) > 0.0:
         result, added = add_tare_covariance(result, g, zero_covariance(*zero_sd))
     source = (tare.file or tare.source or "tare") if tare is not None else None
-    return result, tare_quality(result, g, frame_id, source, added, zero_sd)
+    return result, tare_share(result, g, frame_id, source, added, zero_sd)

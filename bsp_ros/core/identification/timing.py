@@ -11,6 +11,7 @@ from typing import Any, overload
 import numpy as np
 
 from bsp_ros.core.contact_point import chain_markers
+from bsp_ros.core.estimate_blocks import DelayBlock, DelaySource, TimingBlock
 from bsp_ros.core.identification.covariance import hac_covariance
 from bsp_ros.core.identification.data import IdentificationData, _clean_wrench, wrench_world_yzx
 from bsp_ros.core.identification.joint.placement_covariance import averaged_torques
@@ -40,6 +41,7 @@ __all__ = [
     "linear_rss",
     "measured_stamps_ns",
     "parameter_timing",
+    "parameter_timing_block",
     "shifted_session",
 ]
 
@@ -82,18 +84,21 @@ class WrenchDelay:
     n_fits: int = 0
     warnings: list[str] = field(default_factory=list)
 
-    def quality(self) -> dict[str, Any]:
-        """``quality.timing`` of the estimate document."""
-        out: dict[str, Any] = {
-            "wrench_delay_s": float(self.delay_s),
+    def block(self) -> DelayBlock:
+        """This recording's ``quality.timing`` of the estimate."""
+        estimated = math.isfinite(self.estimate_s)
+        return DelayBlock(
+            wrench_delay_s=float(self.delay_s),
             # JSON holds no NaN: a delay that was neither given nor estimated has no std (0, source "none").
-            "wrench_delay_std_s": float(self.std_s) if math.isfinite(self.std_s) else 0.0,
-            "source": self.source,
-        }
-        if math.isfinite(self.estimate_s):
-            out["estimated_delay_s"] = float(self.estimate_s)
-            out["estimated_delay_std_s"] = float(self.estimate_std_s)
-        return out
+            wrench_delay_std_s=float(self.std_s) if math.isfinite(self.std_s) else 0.0,
+            source=DelaySource(self.source),
+            estimated_delay_s=float(self.estimate_s) if estimated else None,
+            estimated_delay_std_s=float(self.estimate_std_s) if estimated else None,
+        )
+
+    def quality(self) -> dict[str, Any]:
+        """``quality.timing`` of the estimate document (the JSON of :meth:`block`)."""
+        return self.block().to_json()
 
 
 @dataclass(frozen=True)
@@ -713,8 +718,13 @@ def compensate_wrench_delay(
 
 
 def parameter_timing(wrench_delay_s: float | None) -> dict[str, Any]:
+    """The JSON of :func:`parameter_timing_block`."""
+    return parameter_timing_block(wrench_delay_s).to_json()
+
+
+def parameter_timing_block(wrench_delay_s: float | None) -> TimingBlock:
     """``quality.timing`` where the delay is not estimated (live, which cannot estimate it per update): the
     parameter's, ``"none"`` when 0 or unset (live applies 0 then)."""
     if not wrench_delay_s:
-        return WrenchDelay(0.0, 0.0, "none").quality()
-    return WrenchDelay(float(wrench_delay_s), 0.0, "parameter").quality()
+        return TimingBlock(recordings=(WrenchDelay(0.0, 0.0, "none").block(),))
+    return TimingBlock(recordings=(WrenchDelay(float(wrench_delay_s), 0.0, "parameter").block(),))

@@ -14,8 +14,8 @@ from bsp_ros.core.findings import FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
 from bsp_ros.core.identification.joint.held import HeldModel
 from bsp_ros.core.identification.rate import block_means, identification_rate_hz
-from bsp_ros.core.identification.sensitivity import account_for_tare
-from bsp_ros.core.identification.timing import parameter_timing
+from bsp_ros.core.identification.sensitivity import TareShare, account_for_tare
+from bsp_ros.core.identification.timing import parameter_timing_block
 from bsp_ros.core.joint_angles import KinematicsConfig, MarkerKinematics, kinematics_from_angles, resample_with_motion
 from bsp_ros.core.model import contact_torques_nm
 from bsp_ros.core.pipeline import fused, identify_data, refit_options
@@ -205,13 +205,13 @@ class WindowEstimator:
             else:
                 result = identify_data(data, self.config.options, held=self._held)
                 self._since_check += 1
-            tare_blocks: dict[str, Any] = {}
+            tare_share: TareShare | None = None
             if window.rotation_world_from_sensor is not None:
                 # The sensor zero's share of the std (the tare's, or the assumed zero's), from the estimate's own
                 # response to a torque change (no refits).
                 options = self.config.options
                 refit = refit_options(result, options)
-                result, tare_blocks = account_for_tare(
+                result, tare_share = account_for_tare(
                     result,
                     data,
                     window.rotation_world_from_sensor,
@@ -241,6 +241,7 @@ class WindowEstimator:
             session=info,
         )
         # The node shifts the wrench stamps by the delay the cell states: its timing, then the sensor zero's share.
-        timing = {"timing": parameter_timing(self.config.options.wrench_delay_s)}
-        quality = estimate.quality.with_extra({**timing, **tare_blocks})
+        quality = estimate.quality.with_timing(parameter_timing_block(self.config.options.wrench_delay_s))
+        if tare_share is not None:
+            quality = tare_share.applied_to(quality)
         return WindowEstimate(estimate.with_quality(quality), result.valid, last_wrench)

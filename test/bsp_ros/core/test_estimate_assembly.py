@@ -83,7 +83,9 @@ def test_the_offline_estimate_is_assembled_by_the_same_function(
     calls = _spy(monkeypatch)
     estimate = pipeline.estimate_recordings([session.session], IdentifyOptions())
     assert calls == ["joint"] and estimate.session is not None
-    assert {"timing", "rotation", "tare"} <= set(estimate.quality.extra)
+    quality = estimate.quality
+    assert quality.timing is not None and quality.rotation is not None and quality.tare is not None
+    assert quality.rotation.sources == ("session",)  # a session read from no bag: the pipeline's own word
 
 
 def test_findings_join_a_typed_estimate_as_the_contract_orders_them() -> None:
