@@ -1,28 +1,34 @@
 """A clinic's history in a store: three simulated patients over ten weeks with same-day retests, then reports.
 
 Patient P-FRIC: elbow friction falls 0.80 -> 0.38 Nm in steps, one session not usable (no elbow motion).
-Patient P-SAME: nothing changes; markers re-placed (+-3 mm) and the sensor re-zeroed every session.
+Patient P-SAME: nothing changes; markers re-placed and the sensor re-zeroed every session.
 Patient P-STIF: elbow stiffness falls 1.5 -> 1.0 Nm/rad.
 Each has retests on the first five days. Prints every flagged step and writes the reports.
 
 With ``--false-flags N``: N unchanged arms instead (people of seeded sex, size and passive moments, six weekly
-visits each with a same-day retest, markers re-placed +-3 mm and the sensor re-zeroed every session), and how many
-of their reports show any flag with the report's limit (Bonferroni over its comparisons) and with each comparison at
-95 % alone (its MDC95).
+visits each with a same-day retest, markers re-placed and the sensor re-zeroed every session), and how many of their
+reports show any flag with the report's limit (Bonferroni over its comparisons) and with each comparison at 95 %
+alone (its MDC95), and how many of their sessions were invalid (by the first invalid finding's code).
 
-    python bench/bench_clinic_history.py OUT_DIR
-    python bench/bench_clinic_history.py OUT_DIR --false-flags 60 [--first-seed 0]
+Every session re-places every marker, shoulder to contact point, by a Gaussian draw of ``--placement-sd-mm`` per
+in-plane axis (default: the 2 mm `bsp identify` assumes); ``--placement-sd-mm 0`` re-places the shoulder and elbow
+markers alone, within +-3 mm.
+
+    python bench/bench_clinic_history.py OUT_DIR [--placement-sd-mm MM]
+    python bench/bench_clinic_history.py OUT_DIR --false-flags 60 [--first-seed 0] [--placement-sd-mm MM]
+        [--duration-s S]
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
 import random
 import time
 from dataclasses import replace
 from pathlib import Path
 
-from bsp_ros.clinic.histories import Patient, session_estimate
+from bsp_ros.clinic.histories import PLACEMENT_SD_MM, Patient, session_estimate
 from bsp_ros.clinic.report import analyse, write_csv, write_html, write_pdf
 from bsp_ros.clinic.store import SubjectRecord, open_store
 
@@ -34,7 +40,7 @@ PLANS = {
 }
 
 
-def main(out: Path) -> None:
+def main(out: Path, placement_sd_mm: float) -> None:
     out.mkdir(parents=True, exist_ok=True)
     store_path = out / "clinic.sqlite"
     store_path.unlink(missing_ok=True)
@@ -49,12 +55,17 @@ def main(out: Path) -> None:
                 seed = 1000 * k + week
                 if subject == "P-FRIC" and week == 6:
                     patient = replace(patient)  # same arm; the session below is cut too short to be usable
-                    document = session_estimate(patient, 7 * week, seed, duration_s=8.0)
+                    document = session_estimate(
+                        patient, 7 * week, seed, duration_s=8.0, placement_sd_mm=placement_sd_mm
+                    )
                 else:
-                    document = session_estimate(patient, 7 * week, seed)
+                    document = session_estimate(patient, 7 * week, seed, placement_sd_mm=placement_sd_mm)
                 store.add_estimate(document, subject)
                 if week < 5:
-                    store.add_estimate(session_estimate(patient, 7 * week, seed + 500, retest=True), subject)
+                    retest = session_estimate(
+                        patient, 7 * week, seed + 500, retest=True, placement_sd_mm=placement_sd_mm
+                    )
+                    store.add_estimate(retest, subject)
         print(f"simulated and stored in {time.perf_counter() - started:.1f} s")
         for subject in PLANS:
             analysis = analyse(
@@ -89,14 +100,16 @@ def unchanged_patient(rng: random.Random) -> Patient:
     )
 
 
-def false_flags(out: Path, count: int, first_seed: int) -> None:
+def false_flags(out: Path, count: int, first_seed: int, placement_sd_mm: float, duration_s: float) -> None:
     """Simulate ``count`` unchanged arms and print how many reports flag anything, with and without the report's
-    limit."""
+    limit, the largest change over its limit, and how many sessions were invalid and why."""
     out.mkdir(parents=True, exist_ok=True)
     store_path = out / "unchanged.sqlite"
     store_path.unlink(missing_ok=True)
     started = time.perf_counter()
-    any_limit = any_single = comparisons = 0
+    any_limit = any_single = comparisons = sessions = 0
+    worst = 0.0
+    invalid: collections.Counter[str] = collections.Counter()
     with open_store(store_path) as store:
         for k in range(count):
             seed = first_seed + k
@@ -112,19 +125,41 @@ def false_flags(out: Path, count: int, first_seed: int) -> None:
             store.set_subject(record)
             for week in range(UNCHANGED_VISITS):
                 base = 100_000 + 100 * seed + 2 * week
-                store.add_estimate(session_estimate(patient, 7 * week, base), subject)
-                store.add_estimate(session_estimate(patient, 7 * week, base + 1, retest=True), subject)
-            analysis = analyse(subject, store.sessions(subject), subject_record=store.subject_record(subject))
+                for retest in (False, True):
+                    document = session_estimate(
+                        patient,
+                        7 * week,
+                        base + retest,
+                        retest=retest,
+                        placement_sd_mm=placement_sd_mm,
+                        duration_s=duration_s,
+                    )
+                    store.add_estimate(document, subject)
+            records = store.sessions(subject)
+            for stored in records:
+                verdict = stored.quality.verdict()
+                invalid.update([] if stored.quality.valid else [verdict.code if verdict else "unknown"])
+            sessions += len(records)
+            analysis = analyse(subject, records, subject_record=store.subject_record(subject))
             judged = [c for s in analysis.series for c in s.comparisons]
             flagged, beyond = sum(c.flagged for c in judged), sum(c.beyond_mdc for c in judged)
+            ratios = [abs(c.delta) / c.limit for c in judged if c.judged and c.limit]
+            worst = max([worst, *ratios])
             any_limit += flagged > 0
             any_single += beyond > 0
             comparisons += len(judged)
-            print(f"{subject}: {len(judged)} comparisons, {flagged} flagged, {beyond} beyond one comparison's MDC95")
+            print(
+                f"{subject}: {len(judged)} comparisons, {flagged} flagged, {beyond} beyond one comparison's MDC95, "
+                f"largest change {max(ratios, default=0.0):.2f} of its limit, "
+                f"{sum(not r.quality.valid for r in records)} of {len(records)} sessions invalid"
+            )
+    causes = ", ".join(f"{code} {n}" for code, n in invalid.most_common()) or "none"
     print(
-        f"{count} unchanged arms ({comparisons / max(count, 1):.1f} comparisons a report) in "
-        f"{time.perf_counter() - started:.0f} s: any flag with the report's limit in {any_limit} reports, with each "
-        f"comparison at 95 % alone (its MDC95) in {any_single}"
+        f"{count} unchanged arms ({comparisons / max(count, 1):.1f} comparisons a report, markers re-placed "
+        f"{placement_sd_mm:g} mm sd, {duration_s:g} s sessions) in {time.perf_counter() - started:.0f} s: any flag "
+        f"with the report's limit in {any_limit} reports, with each comparison at 95 % alone (its MDC95) in "
+        f"{any_single}; largest change "
+        f"{worst:.2f} of its limit; {sum(invalid.values())} of {sessions} sessions invalid ({causes})"
     )
 
 
@@ -133,8 +168,23 @@ if __name__ == "__main__":
     parser.add_argument("out", nargs="?", default="clinic_history", type=Path)
     parser.add_argument("--false-flags", type=int, default=0, metavar="N", help="count false flags over N arms")
     parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument(
+        "--placement-sd-mm",
+        type=float,
+        default=PLACEMENT_SD_MM,
+        metavar="MM",
+        help="re-place every marker by this sd per axis each session (0: shoulder and elbow alone, +-3 mm) "
+        f"(default: {PLACEMENT_SD_MM:g}, what bsp identify assumes)",
+    )
+    parser.add_argument(
+        "--duration-s",
+        type=float,
+        default=40.0,
+        metavar="S",
+        help="each session's length with --false-flags (default: 40, the report tests' histories)",
+    )
     args = parser.parse_args()
     if args.false_flags > 0:
-        false_flags(args.out, args.false_flags, args.first_seed)
+        false_flags(args.out, args.false_flags, args.first_seed, args.placement_sd_mm, args.duration_s)
     else:
-        main(args.out)
+        main(args.out, args.placement_sd_mm)

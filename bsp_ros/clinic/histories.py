@@ -1,11 +1,13 @@
 """Simulated patient histories: sessions on different days with the day-to-day error of a real clinic.
 
-Between any two sessions (days apart, or a same-day retest) the markers are re-placed (the shoulder and
-elbow skin markers off their joint centres by up to ``skin_mm`` along and across the segment; the wrist and
-hand markers by up to ``distal_skin_mm``, default 0: they sit on the handle fixture, and re-placing them by
-millimetres on the 8 cm hand makes the current estimator's wrist fit fail) and the force sensor is re-zeroed
-(a fresh offset of ``bias_n`` N per axis, 1 SD), and the recording noise is drawn anew. The estimate
-comes from :func:`bsp_ros.core.pipeline.identify_session`, as for a recorded bag.
+Between any two sessions (days apart, or a same-day retest) the markers are re-placed and the force sensor is
+re-zeroed (a fresh offset of ``bias_n`` N per axis, 1 SD), and the recording noise is drawn anew. The
+re-placement is either every marker, shoulder to contact point, off its joint centre by a Gaussian draw of
+``placement_sd_mm`` per in-plane axis (:data:`PLACEMENT_SD_MM`: the sd `bsp identify` assumes,
+``--marker-placement-sd-mm``), or, with ``placement_sd_mm`` 0 (the default), the shoulder and elbow markers
+within +-``skin_mm`` and the wrist and hand markers within +-``distal_skin_mm`` (uniform draws, as
+``bsp simulate --skin-offset-mm``). The estimate comes from :func:`bsp_ros.core.pipeline.identify_session`, as
+for a recorded bag.
 """
 
 from __future__ import annotations
@@ -29,6 +31,11 @@ RETEST_AFTER_NS = 3_600 * 10**9
 HANDLE_COM_M = (0.0, 0.0, 0.05)
 TARE_SD = (0.02, 0.002)
 """A tare's 1 SD per axis (force N, moment Nm): a few seconds of the handle at rest, averaged."""
+PLACEMENT_SD_MM = 1e3 * IdentifyOptions().marker_placement_sd_m
+"""The marker placement sd `bsp identify` assumes (1 sd per in-plane axis, mm): re-placing every marker by it
+draws the day-to-day error its std holds."""
+N_MARKERS = 4
+"""Shoulder, elbow, wrist and hand (the contact point)."""
 
 
 @dataclass(frozen=True)
@@ -59,6 +66,7 @@ def session_estimate(
     retest: bool = False,
     skin_mm: float = 3.0,
     distal_skin_mm: float = 0.0,
+    placement_sd_mm: float = 0.0,
     bias_n: float = 0.2,
     duration_s: float = 40.0,
     wrench_hz: float = 50.0,
@@ -68,17 +76,16 @@ def session_estimate(
 ) -> dict[str, Any]:
     """The estimate document of one simulated session of ``patient`` on ``day`` (0 = 2024-06-01).
 
-    ``seed`` draws the marker re-placement, the sensor offset and the recording noise. The rates are half
+    ``seed`` draws the marker re-placement, the sensor offset and the recording noise. ``placement_sd_mm`` > 0
+    re-places every marker by a Gaussian draw of that sd per axis (mm) in place of the uniform ``skin_mm`` and
+    ``distal_skin_mm`` draws (:func:`skin_offsets_m`). The rates are half
     the simulator's defaults, so a history of a dozen sessions is made in seconds. ``handle_mass_kg`` hangs
     a handle between the sensor and the hand (its centre 5 cm beyond the sensor); ``tared`` subtracts a tare
     of the sensor's offset and the handle's weight (read with the handle free: :func:`session_tare`), as
     ``bsp sessions add --tare`` does; untared, both load the arm's estimate.
     """
     rng = random.Random(seed)
-    skin = tuple(
-        (rng.uniform(-mm, mm) / 1e3, rng.uniform(-mm, mm) / 1e3)
-        for mm in (skin_mm, skin_mm, distal_skin_mm, distal_skin_mm)
-    )
+    skin = skin_offsets_m(rng, placement_sd_mm=placement_sd_mm, skin_mm=skin_mm, distal_skin_mm=distal_skin_mm)
     bias = (rng.gauss(0.0, bias_n), rng.gauss(0.0, bias_n), rng.gauss(0.0, bias_n))
     start_ns = HISTORY_START_NS + day * DAY_NS + (RETEST_AFTER_NS if retest else 0)
     spec = human_arm_cell(
@@ -106,6 +113,29 @@ def session_estimate(
     if retest:
         document["session"]["retest"] = True
     return document
+
+
+def skin_offsets_m(
+    rng: random.Random, *, placement_sd_mm: float, skin_mm: float, distal_skin_mm: float
+) -> tuple[tuple[float, float], ...]:
+    """One session's marker offsets from the joint centres, ``(along, normal)`` per marker (m), shoulder first.
+
+    Parameters
+    ----------
+    rng : the session's draws; the sensor offset is drawn from it next.
+    placement_sd_mm : > 0: every marker re-placed by a Gaussian draw of this sd per axis (mm), as the placement
+        prior of `bsp identify` has it; 0: the uniform draws below.
+    skin_mm, distal_skin_mm : half-widths (mm) of the uniform draws of the shoulder and elbow markers and of the
+        wrist and hand markers.
+    """
+    if placement_sd_mm > 0.0:
+        return tuple(
+            (rng.gauss(0.0, placement_sd_mm) / 1e3, rng.gauss(0.0, placement_sd_mm) / 1e3) for _ in range(N_MARKERS)
+        )
+    return tuple(
+        (rng.uniform(-mm, mm) / 1e3, rng.uniform(-mm, mm) / 1e3)
+        for mm in (skin_mm, skin_mm, distal_skin_mm, distal_skin_mm)
+    )
 
 
 def session_tare(sensor: SensorSpec, frame_id: str) -> Tare:
