@@ -14,7 +14,7 @@ Every session re-places every marker, shoulder to contact point, by a Gaussian d
 in-plane axis (default: the 2 mm `bsp identify` assumes); ``--placement-sd-mm 0`` re-places the shoulder and elbow
 markers alone, within +-3 mm.
 
-    python bench/bench_clinic_history.py OUT_DIR [--placement-sd-mm MM]
+    python bench/bench_clinic_history.py OUT_DIR [--placement-sd-mm MM] [--duration-s S]
     python bench/bench_clinic_history.py OUT_DIR --false-flags 60 [--first-seed 0] [--placement-sd-mm MM]
         [--duration-s S]
 """
@@ -40,7 +40,14 @@ PLANS = {
 }
 
 
-def main(out: Path, placement_sd_mm: float) -> None:
+def _placement(placement_sd_mm: float) -> str:
+    """How the sessions re-place the markers, in words."""
+    if placement_sd_mm > 0.0:
+        return f"every marker re-placed at {placement_sd_mm:g} mm sd"
+    return "shoulder and elbow markers re-placed within +-3 mm"
+
+
+def main(out: Path, placement_sd_mm: float, duration_s: float) -> None:
     out.mkdir(parents=True, exist_ok=True)
     store_path = out / "clinic.sqlite"
     store_path.unlink(missing_ok=True)
@@ -59,14 +66,21 @@ def main(out: Path, placement_sd_mm: float) -> None:
                         patient, 7 * week, seed, duration_s=8.0, placement_sd_mm=placement_sd_mm
                     )
                 else:
-                    document = session_estimate(patient, 7 * week, seed, placement_sd_mm=placement_sd_mm)
+                    document = session_estimate(
+                        patient, 7 * week, seed, placement_sd_mm=placement_sd_mm, duration_s=duration_s
+                    )
                 store.add_estimate(document, subject)
                 if week < 5:
                     retest = session_estimate(
-                        patient, 7 * week, seed + 500, retest=True, placement_sd_mm=placement_sd_mm
+                        patient,
+                        7 * week,
+                        seed + 500,
+                        retest=True,
+                        placement_sd_mm=placement_sd_mm,
+                        duration_s=duration_s,
                     )
                     store.add_estimate(retest, subject)
-        print(f"simulated and stored in {time.perf_counter() - started:.1f} s")
+        print(f"simulated and stored in {time.perf_counter() - started:.1f} s ({_placement(placement_sd_mm)})")
         for subject in PLANS:
             analysis = analyse(
                 subject, store.sessions(subject), pool=store.sessions(), subject_record=store.subject_record(subject)
@@ -155,11 +169,11 @@ def false_flags(out: Path, count: int, first_seed: int, placement_sd_mm: float, 
             )
     causes = ", ".join(f"{code} {n}" for code, n in invalid.most_common()) or "none"
     print(
-        f"{count} unchanged arms ({comparisons / max(count, 1):.1f} comparisons a report, markers re-placed "
-        f"{placement_sd_mm:g} mm sd, {duration_s:g} s sessions) in {time.perf_counter() - started:.0f} s: any flag "
-        f"with the report's limit in {any_limit} reports, with each comparison at 95 % alone (its MDC95) in "
-        f"{any_single}; largest change "
-        f"{worst:.2f} of its limit; {sum(invalid.values())} of {sessions} sessions invalid ({causes})"
+        f"{count} unchanged arms ({comparisons / max(count, 1):.1f} comparisons a report, "
+        f"{_placement(placement_sd_mm)}, {duration_s:g} s sessions) in {time.perf_counter() - started:.0f} s: any "
+        f"flag with the report's limit in {any_limit} reports, with each comparison at 95 % alone (its MDC95) in "
+        f"{any_single}; largest change {worst:.2f} of its limit; {sum(invalid.values())} of {sessions} sessions "
+        f"invalid ({causes})"
     )
 
 
@@ -181,10 +195,10 @@ if __name__ == "__main__":
         type=float,
         default=40.0,
         metavar="S",
-        help="each session's length with --false-flags (default: 40, the report tests' histories)",
+        help="each session's length (default: 40, the report tests' histories)",
     )
     args = parser.parse_args()
     if args.false_flags > 0:
         false_flags(args.out, args.false_flags, args.first_seed, args.placement_sd_mm, args.duration_s)
     else:
-        main(args.out, args.placement_sd_mm)
+        main(args.out, args.placement_sd_mm, args.duration_s)
