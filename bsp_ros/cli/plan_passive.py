@@ -52,7 +52,7 @@ def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str |
         notes.append(f"{joint} {smallest:.2g} Nm ({share:.2g} % of gravity)")
     lines.append(
         "  static moments of the simulated session: "
-        + ", ".join(f"{s} +- {100 * sd / abs(v):.2g} %" for s, (v, sd) in check.static_moments.items())
+        + ", ".join(_static_moment_text(s, v, sd) for s, (v, sd) in check.static_moments.items())
     )
     if not check.valid:
         lines.append(f"  the simulated session was not valid: {check.message}")
@@ -83,3 +83,10 @@ def passive_check_lines(plan: Any, args: argparse.Namespace) -> tuple[str, str |
             f"curves of {named} are not followed"
         )
     return "\n".join(lines), f"{head}. To follow them: " + ", or ".join(hints)
+
+
+def _static_moment_text(segment: str, value_kgm: float, std_kgm: float) -> str:
+    """``segment +- X %`` of the simulated session, or ``segment not identified`` where it gave no value."""
+    if not (math.isfinite(value_kgm) and math.isfinite(std_kgm)) or value_kgm == 0.0:
+        return f"{segment} not identified"
+    return f"{segment} +- {100 * std_kgm / abs(value_kgm):.2g} %"

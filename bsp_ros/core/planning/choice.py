@@ -59,7 +59,10 @@ class AutoChoice:
         diagnostics = estimate.get("diagnostics")
         quality = estimate.get("quality")
         if not isinstance(diagnostics, dict) or not isinstance(diagnostics.get("passive_model"), str):
-            raise InputError("the check session's estimate records no passive model")
+            # An invalid estimate of data that cannot tell a model (a joint still) chooses none: say why.
+            why = quality.get("message") if isinstance(quality, dict) and not quality.get("valid") else None
+            cause = f": it is not valid ({why})" if why else ""
+            raise InputError(f"the check session's estimate records no passive model{cause}")
         candidates = {model.label: model for model in passive.candidates()}
         chosen = candidates.get(diagnostics["passive_model"])
         if chosen is None:

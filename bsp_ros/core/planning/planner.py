@@ -13,6 +13,7 @@ from scipy.optimize import differential_evolution
 from threadpoolctl import threadpool_limits
 
 from bsp_ros.core.anthropometry import segment_norm
+from bsp_ros.core.identification.joint import JointConfig
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import check_lengths_m, gravity_regressor, static_moments_kgm
 from bsp_ros.core.normalised import normalising
@@ -131,19 +132,47 @@ class PlanRequest:
         return ranges
 
     def amplitudes_deg(self) -> np.ndarray:
-        """(n,) the oscillation amplitudes used, deg."""
+        """(n,) the oscillation amplitudes used, deg.
+
+        Raises
+        ------
+        InputError
+            A usable range or a given amplitude (+-amplitude) that spans less than the estimator's no-motion
+            range (``JointConfig.min_range_deg``): its sessions would call the joint still.
+        """
         width = np.diff(self.usable_range_deg(), axis=1)[:, 0]
+        joints = joints_for(width.size)
+        moving_deg = self.min_oscillation_deg()
+        narrow = np.flatnonzero(width < moving_deg)
+        if narrow.size:
+            j = int(narrow[0])
+            raise InputError(
+                f"the {joints[j]} range is {width[j]:g} deg wide: the estimator takes a joint that moves less than "
+                f"{moving_deg:g} deg as still (widen the range)"
+            )
         if self.amplitude_deg is None:
-            return np.minimum(AMPLITUDE_SHARE * width, MAX_AMPLITUDE_DEG)
+            return np.maximum(np.minimum(AMPLITUDE_SHARE * width, MAX_AMPLITUDE_DEG), 0.5 * moving_deg)
         amplitude = np.asarray(self.amplitude_deg)
+        too_small = np.flatnonzero(2 * amplitude < moving_deg)
+        if too_small.size:
+            j = int(too_small[0])
+            raise InputError(
+                f"the {joints[j]} amplitude {amplitude[j]:g} deg is too small: +-amplitude spans {2 * amplitude[j]:g} "
+                f"deg, and the estimator takes a joint that moves less than {moving_deg:g} deg as still"
+            )
         too_wide = np.flatnonzero(2 * amplitude > width)
         if too_wide.size:
             j = int(too_wide[0])
             raise InputError(
-                f"the {joints_for(amplitude.size)[j]} amplitude {amplitude[j]:g} deg does not fit its usable range "
+                f"the {joints[j]} amplitude {amplitude[j]:g} deg does not fit its usable range "
                 f"of {width[j]:g} deg (+-amplitude about each operating point)"
             )
         return amplitude
+
+    def min_oscillation_deg(self) -> float:
+        """The smallest peak-to-peak motion a joint may make, deg: the estimator's no-motion range for the
+        request's passive model (``JointConfig.min_range_deg``)."""
+        return float(JointConfig(passive=self.passive).min_range_deg)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -416,8 +445,12 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     ranges = np.radians(request.usable_range_deg())
     width = ranges[:, 1] - ranges[:, 0]
     # amplitudes: given, or optimised between a small wobble and half the range (one sweep end to end)
-    fixed = None if request.amplitude_deg is None else np.radians(request.amplitudes_deg())
-    smallest = np.minimum(np.radians(MIN_AMPLITUDE_DEG), 0.25 * width)
+    used = np.radians(request.amplitudes_deg())  # refuses ranges and amplitudes the estimator would call still
+    fixed = None if request.amplitude_deg is None else used
+    # never below half the no-motion range: a smaller oscillation's sessions would call the joint still
+    smallest = np.maximum(
+        np.minimum(np.radians(MIN_AMPLITUDE_DEG), 0.25 * width), np.radians(0.5 * request.min_oscillation_deg())
+    )
     notes = []
     given = np.array(request.limits.range_deg)
     if not np.allclose(np.degrees(ranges[1]), given[1]):

@@ -35,7 +35,7 @@ class SimulatedPlanCheck:
     Attributes
     ----------
     model : the passive model identified (the plan's: with ``auto`` the data choose, and the std holds the choice).
-    static_moments : segment -> (value, std), kg m.
+    static_moments : segment -> (value, std), kg m; NaN where the simulated estimate could not tell them.
     curve_rms_std_nm : joint -> RMS over the planned range of the passive curve's std, Nm.
     gravity_rms_nm : joint -> RMS of the gravity torque along the plan (first posture), Nm.
     valid : the simulated estimate's verdict; ``message`` its message.
@@ -98,6 +98,13 @@ def plan_cell_spec(
     )
 
 
+def _value_std(quantity: dict[str, Any]) -> tuple[float, float]:
+    """A quantity's ``(value, std)``; NaN for each that the estimate leaves null (an invalid estimate of data that
+    cannot tell it, e.g. a plan whose amplitudes are below the no-motion threshold)."""
+    value, std = quantity.get("value"), quantity.get("std")
+    return (math.nan if value is None else float(value), math.nan if std is None else float(std))
+
+
 def simulated_plan_check(
     plan: Plan,
     subject: Any,
@@ -131,10 +138,7 @@ def simulated_plan_check(
     ]
     options = IdentifyOptions(passive=model, zero_sd_n=0.0, zero_sd_nm=0.0)
     document = identify_recordings(sessions, options, trunk_tilts_rad=request.trunk_tilts_rad)
-    static = {
-        segment: (float(q_["static_moment_kgm"]["value"]), float(q_["static_moment_kgm"]["std"]))
-        for segment, q_ in document["segments"].items()
-    }
+    static = {segment: _value_std(q_["static_moment_kgm"]) for segment, q_ in document["segments"].items()}
     beta = np.asarray(subject.static_moments_kgm, dtype=float)
     gravity = np.einsum("kij,j->ki", gravity_regressor(q), beta)
     curves, gravity_rms = {}, {}
