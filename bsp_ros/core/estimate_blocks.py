@@ -13,7 +13,7 @@ import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from enum import StrEnum
-from typing import Any, Protocol, TypeVar
+from typing import Protocol, TypeVar
 
 __all__ = [
     "BagSection",
@@ -35,7 +35,7 @@ class _Block(Protocol):
 BlockT = TypeVar("BlockT", bound=_Block)
 
 
-def typed_block(read: Callable[[Mapping[str, Any]], BlockT], block: object) -> BlockT | None:
+def typed_block(read: Callable[[Mapping[str, object]], BlockT], block: object) -> BlockT | None:
     """``read(block)`` where that types ``block`` exactly (its ``to_json()`` is ``block``, key order included), else
     None: the block then stays untyped where it was found.
 
@@ -66,7 +66,7 @@ class SensorZero:
         return {"force_n": self.force_n, "moment_nm": self.moment_nm}
 
     @classmethod
-    def from_json(cls, block: Mapping[str, Any]) -> SensorZero:
+    def from_json(cls, block: Mapping[str, object]) -> SensorZero:
         """The zero of a ``{"force_n", "moment_nm"}`` block."""
         return cls(force_n=_float(block["force_n"]), moment_nm=_float(block["moment_nm"]))
 
@@ -99,7 +99,7 @@ class TareBlock:
         return out
 
     @classmethod
-    def from_json(cls, block: Mapping[str, Any]) -> TareBlock:
+    def from_json(cls, block: Mapping[str, object]) -> TareBlock:
         """The tare block of a document (``applied`` a bool, ``file`` a name or null)."""
         applied, file = block["applied"], block.get("file")
         if not isinstance(applied, bool) or not (file is None or isinstance(file, str)):
@@ -109,8 +109,8 @@ class TareBlock:
         return cls(
             applied=applied,
             file=file,
-            zero_sd=SensorZero.from_json(zero) if zero is not None else None,
-            std_added={str(k): _float(v) for k, v in added.items()} if added is not None else None,
+            zero_sd=SensorZero.from_json(_object(zero)) if zero is not None else None,
+            std_added={k: _float(v) for k, v in _object(added).items()} if added is not None else None,
         )
 
 
@@ -153,13 +153,13 @@ class DelayBlock:
         return out
 
     @classmethod
-    def from_json(cls, block: Mapping[str, Any]) -> DelayBlock:
+    def from_json(cls, block: Mapping[str, object]) -> DelayBlock:
         """The delay of one recording's timing block."""
         estimated = block.get("estimated_delay_s")
         return cls(
             wrench_delay_s=_float(block["wrench_delay_s"]),
             wrench_delay_std_s=_float(block["wrench_delay_std_s"]),
-            source=DelaySource(block["source"]),
+            source=DelaySource(_str(block["source"])),
             estimated_delay_s=_float(estimated) if estimated is not None else None,
             estimated_delay_std_s=_float(block["estimated_delay_std_s"]) if estimated is not None else None,
         )
@@ -184,10 +184,10 @@ class TimingBlock:
         return {"recordings": [r.to_json() for r in self.recordings]}
 
     @classmethod
-    def from_json(cls, block: Mapping[str, Any]) -> TimingBlock:
+    def from_json(cls, block: Mapping[str, object]) -> TimingBlock:
         """The timing of a ``quality.timing`` block."""
         if "recordings" in block:
-            return cls(recordings=tuple(DelayBlock.from_json(r) for r in block["recordings"]))
+            return cls(recordings=tuple(DelayBlock.from_json(_object(r)) for r in _list(block["recordings"])))
         return cls(recordings=(DelayBlock.from_json(block),))
 
 
@@ -223,7 +223,7 @@ class RotationBlock:
         return {"source": self.source, "per_sample": self.per_sample, "range_deg": self.range_deg}
 
     @classmethod
-    def from_json(cls, block: Mapping[str, Any]) -> RotationBlock:
+    def from_json(cls, block: Mapping[str, object]) -> RotationBlock:
         """The rotation block of a document."""
         source, per_sample = block["source"], block["per_sample"]
         if not isinstance(source, str) or not isinstance(per_sample, bool):
@@ -261,11 +261,11 @@ class PlacementBlock:
         }
 
     @classmethod
-    def from_json(cls, block: Mapping[str, Any]) -> PlacementBlock:
+    def from_json(cls, block: Mapping[str, object]) -> PlacementBlock:
         """The placement block of a document."""
         return cls(
-            assumed_sd_mm=tuple(_float(v) for v in block["assumed_sd_mm"]),
-            sd_mm=tuple(_float(v) for v in block["sd_mm"]),
+            assumed_sd_mm=tuple(_float(v) for v in _list(block["assumed_sd_mm"])),
+            sd_mm=tuple(_float(v) for v in _list(block["sd_mm"])),
             scale_from_data=_float(block["scale_from_data"]),
             likelihood_ratio=_float(block["likelihood_ratio"]),
             scale_most_likely=_float(block["scale_most_likely"]),
@@ -315,19 +315,19 @@ class BagSection:
         }
 
     @classmethod
-    def from_json(cls, block: Mapping[str, Any]) -> BagSection:
+    def from_json(cls, block: Mapping[str, object]) -> BagSection:
         """The bag section of a document."""
         lost = block["lost_messages"]
         return cls(
-            files=tuple(_str(f) for f in block["files"]),
-            messages={_str(k): _int(v) for k, v in block["messages"].items()},
+            files=tuple(_str(f) for f in _list(block["files"])),
+            messages={k: _int(v) for k, v in _object(block["messages"]).items()},
             lost_messages=_int(lost) if lost is not None else None,
             crc_errors=_int(block["crc_errors"]),
             truncated=_bool(block["truncated"]),
             chunks_without_crc=_int(block["chunks_without_crc"]),
             rotation_source=_str(block["rotation_source"]),
-            damage=tuple(_str(d) for d in block["damage"]),
-            implausible_samples_removed={_str(k): _int(v) for k, v in block["implausible_samples_removed"].items()},
+            damage=tuple(_str(d) for d in _list(block["damage"])),
+            implausible_samples_removed={k: _int(v) for k, v in _object(block["implausible_samples_removed"]).items()},
         )
 
 
@@ -352,4 +352,16 @@ def _bool(value: object) -> bool:
 def _str(value: object) -> str:
     if not isinstance(value, str):
         raise TypeError(f"not a string: {value!r:.40}")
+    return value
+
+
+def _list(value: object) -> list[object]:
+    if not isinstance(value, list):
+        raise TypeError(f"not a list: {value!r:.40}")
+    return value
+
+
+def _object(value: object) -> Mapping[str, object]:
+    if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
+        raise TypeError(f"not an object: {value!r:.40}")
     return value

@@ -182,7 +182,7 @@ class Quality:
         """This quality with its ``rotation`` block (in its place, or after the blocks it has)."""
         return replace(self, rotation=rotation, key_order=_placed(self._blocks(), ("rotation",)))
 
-    def _blocks(self) -> dict[str, Any]:
+    def _blocks(self) -> dict[str, object]:
         """The JSON of the typed blocks present and of ``extra``, in the document's order (see ``key_order``)."""
         typed = {
             key: block.to_json()
@@ -344,9 +344,9 @@ class Estimate:
         bags = (*(self.bags or ()), section)
         return replace(self, bags=bags, key_order=_placed(self._blocks(), ("bags",)))
 
-    def _blocks(self) -> dict[str, Any]:
+    def _blocks(self) -> dict[str, object]:
         """The JSON of ``bag``, ``bags`` and ``extra``, in the document's order (see ``key_order``)."""
-        typed: dict[str, Any] = {}
+        typed: dict[str, object] = {}
         if self.bag is not None:
             typed["bag"] = self.bag.to_json()
         if self.bags is not None:
@@ -432,13 +432,13 @@ def _check_untyped(keys: Iterable[str], typed: tuple[str, ...]) -> None:
         raise ValueError(f"{clash} are typed blocks: set them with their own with_... operation")
 
 
-def _in_order(blocks: Mapping[str, Any], key_order: tuple[str, ...]) -> dict[str, Any]:
+def _in_order(blocks: Mapping[str, object], key_order: tuple[str, ...]) -> dict[str, object]:
     """``blocks`` with the keys ``key_order`` names first, in its order, then the others in theirs."""
     named = {key: blocks[key] for key in key_order if key in blocks}
     return {**named, **{k: v for k, v in blocks.items() if k not in named}}
 
 
-def _placed(blocks: Mapping[str, Any], keys: Iterable[str]) -> tuple[str, ...]:
+def _placed(blocks: Mapping[str, object], keys: Iterable[str]) -> tuple[str, ...]:
     """The key order of ``blocks`` with ``keys`` set: each in its place, a new one after the others."""
     return tuple(dict.fromkeys([*blocks, *keys]))
 

@@ -174,7 +174,7 @@ class TareShare:
     """
 
     tare: TareBlock
-    offset_sensitivity: Mapping[str, Any]
+    offset_sensitivity: Mapping[str, object]
 
     def applied_to(self, quality: Quality) -> Quality:
         """``quality`` with both blocks, the tare's first."""

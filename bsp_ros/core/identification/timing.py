@@ -6,7 +6,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, overload
+from typing import overload
 
 import numpy as np
 
@@ -96,7 +96,7 @@ class WrenchDelay:
             estimated_delay_std_s=float(self.estimate_std_s) if estimated else None,
         )
 
-    def quality(self) -> dict[str, Any]:
+    def quality(self) -> dict[str, object]:
         """``quality.timing`` of the estimate document (the JSON of :meth:`block`)."""
         return self.block().to_json()
 
@@ -717,7 +717,7 @@ def compensate_wrench_delay(
     return shifted_session(session, delay.delay_s), delay
 
 
-def parameter_timing(wrench_delay_s: float | None) -> dict[str, Any]:
+def parameter_timing(wrench_delay_s: float | None) -> dict[str, object]:
     """The JSON of :func:`parameter_timing_block`."""
     return parameter_timing_block(wrench_delay_s).to_json()
 
