@@ -12,6 +12,7 @@ TERM_WORDS: dict[Term, str] = {
     Term.DRIFT: "the force sensor drifting during the session",
     Term.SENSOR_ZERO: "the force sensor's zero (no tare)",
     Term.CONTACT_SLIP: "the hand slipping in the handle",
+    Term.STATIC_MOMENT_BOUND: "an arm weight the session could not measure, held at zero",
     Term.WINDOW_CHECK: "the short window of the live estimate",
 }
 """What each budget term is, for a reader who does not know the estimator."""
@@ -24,6 +25,7 @@ TERM_REMEDIES: dict[Term, str] = {
     Term.DRIFT: "letting the force sensor warm up, then taring it again",
     Term.SENSOR_ZERO: "a tare: the force sensor recorded with the handle free before the session (bsp tare)",
     Term.CONTACT_SLIP: "a strap that keeps the hand against the handle's stop",
+    Term.STATIC_MOMENT_BOUND: "a longer session, with more movement of that part of the arm",
     Term.WINDOW_CHECK: "a longer live window",
 }
 """What would shrink each term, in the clinic's words (:attr:`Term.remedy` is the engineer's)."""

@@ -41,6 +41,9 @@ class Term(StrEnum):
     """A hand that slipped in the handle: how far the parameters move between the coarsest and the finest
     estimate of the contact point's travel, and between counting it from the session's start and from its mean.
     A strap that keeps the hand against the handle's stop removes it."""
+    STATIC_MOMENT_BOUND = "static_moment_bound"
+    """A static moment the data put below 0, held at its bound: how far holding it there moves the other
+    parameters (rank one). A longer session or a protocol that moves that segment more shrinks it."""
     WINDOW_CHECK = "window_check"
     """The recursive mode: its window's checked variances and the filter's distance from that window's values."""
 
@@ -58,6 +61,7 @@ _REMEDIES = {
     "drift": "a warmed-up, re-tared sensor removes it",
     "sensor_zero": "a tare shrinks it (bsp tare, then --tare FILE)",
     "contact_slip": "a strap that keeps the hand against the handle's stop removes it",
+    "static_moment_bound": "a longer session, or more motion of the segment held at 0, shrinks it",
     "window_check": "a longer window shrinks it",
 }
 

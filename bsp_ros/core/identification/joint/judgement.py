@@ -19,7 +19,13 @@ from bsp_ros.core.identification.result import IdentificationResult
 from bsp_ros.core.identification.stacked import Problem, reweighted_values
 from bsp_ros.core.streams import joints_for
 
-__all__ = ["UNIDENTIFIABLE_CONDITION", "judge_fit", "judge_parameters", "unidentifiable_problem"]
+__all__ = [
+    "UNIDENTIFIABLE_CONDITION",
+    "judge_fit",
+    "judge_parameters",
+    "unbounded_static_moments",
+    "unidentifiable_problem",
+]
 
 # Above this column-scaled condition number no std is meaningful: parameters the motion cannot tell apart.
 UNIDENTIFIABLE_CONDITION = 1e8
@@ -30,7 +36,7 @@ def unidentifiable_problem(condition: float) -> Finding:
     return Finding(code=FindingCode.NOT_IDENTIFIABLE, values={"condition": float(condition)})
 
 
-def _unbounded_static_moments(problem: Problem) -> np.ndarray:
+def unbounded_static_moments(problem: Problem) -> np.ndarray:
     """(p,) the fit of ``problem`` with the static moments' lower bound 0 lifted: the data's own estimate."""
     n = problem.torque.shape[1]
     lower = np.where(np.arange(len(problem.names)) < n, -np.inf, problem.lower)
@@ -120,7 +126,7 @@ def judge_parameters(stage: Stage) -> Stage:
     names = stage.problem.names[: stage.problem.passive_end]
     lower = stage.problem.lower[:n]
     at_bound = np.isfinite(lower) & (fit.values[:n] <= lower + 1e-12)
-    unbounded = _unbounded_static_moments(stage.problem) if at_bound.any() else None
+    unbounded = unbounded_static_moments(stage.problem) if at_bound.any() else None
     problems: list[Finding] = []
     notes: list[Finding] = []
     correlated: dict[str, float] = {}
