@@ -8,6 +8,10 @@ import numpy as np
 
 from bsp_ros.core.findings import Finding, FindingCode, note
 from bsp_ros.core.identification.data import IdentificationData
+from bsp_ros.core.identification.joint.config import JointConfig
+from bsp_ros.core.identification.joint.excitation import excitation_problems, motion_rows
+from bsp_ros.core.identification.joint.grip import direction_share
+from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.identification.result import IdentificationResult, ParameterName
 from bsp_ros.core.identification.stacked import bounded_least_squares
 from bsp_ros.core.methods import Method
@@ -172,20 +176,40 @@ def _sequential_fit(data: IdentificationData, config: PaperConfig) -> _Sequentia
 def _paper_findings(
     data: IdentificationData, n_samples: int, n_parameters: int, values: np.ndarray
 ) -> tuple[Finding, ...]:
-    """The findings of a paper identification: too few samples for its ``n_parameters`` parameters or values not
-    finite (``values``, shape (p,)), the data's notes, and the method's two caveats (an arbitrary split, classical
-    standard deviations)."""
+    """The findings of a paper identification: too few samples for its ``n_parameters`` parameters, values not
+    finite (``values``, shape (p,)) or a motion that cannot tell them (:func:`_excitation_problems`), the data's
+    notes, and the method's two caveats (an arbitrary split, classical standard deviations)."""
     problems = []
     if n_samples < 2 * n_parameters:
         problems.append(Finding(code=FindingCode.TOO_FEW_SAMPLES))
     elif not np.isfinite(values).all():
         problems.append(Finding(code=FindingCode.NON_FINITE))
+    else:
+        problems.extend(_excitation_problems(data, 2 * n_parameters))
     return (
         *problems,
         *(note(FindingCode.DATA_NOTE, w) for w in data.warnings),
         Finding(code=FindingCode.PAPER_SPLIT_ARBITRARY),
         Finding(code=FindingCode.PAPER_STD_CLASSICAL),
     )
+
+
+def _excitation_problems(data: IdentificationData, min_samples: int) -> list[Finding]:
+    """A joint that did not move (``no_motion``), moved in one direction only (``one_direction``) or too slowly
+    to tell its direction in most samples (``direction_unclear``): the joint method's checks, at the paper's own
+    sample minimum. Eq. 11 reads the passive moment off the residual's magnitude and Eq. 6-8 the static moment
+    off the change of ``cos(phi)``: a still joint gives neither, and friction in one direction only is a constant
+    the gravity column takes up."""
+    config = JointConfig(passive=PassiveModel.parse("coulomb"), min_samples=min_samples)
+    rows, _ = motion_rows(data, config)
+    problems = excitation_problems(data, rows, config)
+    judged = {finding.where for finding in problems}
+    for j, joint in enumerate(joints_for(data.n_joints)):
+        share = direction_share(rows[:, j], int(data.t_ns.size), None)
+        if joint not in judged and share < config.min_row_share:
+            values = {"share_percent": float(100 * share)}
+            problems.append(Finding(code=FindingCode.DIRECTION_UNCLEAR, where=joint, values=values))
+    return problems
 
 
 def _residuals(data: IdentificationData, values: np.ndarray, n: int) -> list[np.ndarray]:
