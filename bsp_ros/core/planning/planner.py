@@ -39,6 +39,8 @@ if TYPE_CHECKING:
 AMPLITUDE_SHARE = 0.25
 MAX_AMPLITUDE_DEG = 6.0
 MIN_AMPLITUDE_DEG = 1.0
+#: Ranges and amplitudes are compared with the no-motion range within this much, deg (decimal input's rounding).
+_RANGE_ROUNDING_DEG = 1e-9
 #: Time to reach cruise speed from rest, s. Short, because near a reversal the direction of motion (hence the
 #: Coulomb sign) is uncertain: with 2 s ramps, runs of wrong signs at the wrist gave heavy-tailed errors (wrist
 #: stiffness scatter 2x the prediction over 40 seeds), with 1 s none (0.9x). 0.03 rad/s in 1 s is 0.03
@@ -143,7 +145,8 @@ class PlanRequest:
         width = np.diff(self.usable_range_deg(), axis=1)[:, 0]
         joints = joints_for(width.size)
         moving_deg = self.min_oscillation_deg()
-        narrow = np.flatnonzero(width < moving_deg)
+        # within rounding: a range typed as -28.66 -28.46 is 0.2 deg wide, not 0.19999999999999929
+        narrow = np.flatnonzero(width < moving_deg - _RANGE_ROUNDING_DEG)
         if narrow.size:
             j = int(narrow[0])
             raise InputError(
@@ -153,7 +156,7 @@ class PlanRequest:
         if self.amplitude_deg is None:
             return np.maximum(np.minimum(AMPLITUDE_SHARE * width, MAX_AMPLITUDE_DEG), 0.5 * moving_deg)
         amplitude = np.asarray(self.amplitude_deg)
-        too_small = np.flatnonzero(2 * amplitude < moving_deg)
+        too_small = np.flatnonzero(2 * amplitude < moving_deg - _RANGE_ROUNDING_DEG)
         if too_small.size:
             j = int(too_small[0])
             raise InputError(

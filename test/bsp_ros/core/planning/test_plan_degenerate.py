@@ -42,6 +42,12 @@ def test_a_range_the_estimator_calls_still_is_refused_naming_it() -> None:
         plan_protocol(_request(((-70.0, -10.0), (50.0, 50.1))))
 
 
+def test_a_range_of_exactly_the_no_motion_range_is_planned() -> None:
+    """-28.66 to -28.46 deg is 0.19999999999999929 deg in floating point: not refused as narrower than 0.2."""
+    plan = plan_protocol(_request(((-28.66, -28.46), (10.0, 100.0))))
+    assert 2.0 * plan.amplitudes_deg[0] == pytest.approx(STILL_DEG, rel=1e-6)
+
+
 def test_an_amplitude_the_estimator_calls_still_is_refused_naming_it() -> None:
     request = _request(((-70.0, -10.0), (10.0, 100.0)), amplitude_deg=(0.01, 2.0))
     with pytest.raises(InputError, match=r"the shoulder amplitude 0\.01 deg is too small: .* spans 0\.02 deg"):
