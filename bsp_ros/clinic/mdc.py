@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 import numpy.typing as npt
@@ -16,6 +17,27 @@ Z95 = 1.96
 MIN_PAIRS = 5
 """Fewer retest pairs give no MDC: the SD of fewer differences is too uncertain to judge changes by."""
 DAY_NS = 86_400 * 10**9
+POOL_ALPHA = 0.05
+"""A subject's own retest pairs are pooled with its cell's unless their variances differ at this level (F-test)."""
+RELATIVE_QUANTITIES = ("coulomb_nm", "stiffness_nm_per_rad", "viscous_nms")
+"""Positive passive parameters whose day-to-day error grows with their value: judged on the log scale."""
+
+
+class ErrorScale(StrEnum):
+    """The scale a parameter's day-to-day error and its changes are measured on."""
+
+    ABSOLUTE = "absolute"
+    """Differences in the parameter's unit."""
+    LOG = "log"
+    """Differences of natural logarithms: relative changes (0.1 is about 10 %)."""
+
+
+def scale_of(key: ParamKey) -> ErrorScale:
+    """The scale ``key`` is judged on: the log scale for :data:`RELATIVE_QUANTITIES` (their error grows with the
+    value: 6-7 % of the friction over a wide range of frictions), else absolute (a quantity that can be 0 or
+    negative, such as an elastic offset or a passive moment at one angle)."""
+    return ErrorScale.LOG if key[0] == "joints" and key[2] in RELATIVE_QUANTITIES else ErrorScale.ABSOLUTE
+
 
 RETEST_METHOD = (
     "The minimal detectable change (MDC95) comes from test-retest pairs: the same subject measured twice on "
@@ -23,8 +45,11 @@ RETEST_METHOD = (
     "between. SEM = SD of the retest differences / √2 (the SD taken about zero, so a systematic shift between "
     "test and retest counts as error too); MDC95 = 1.96 × √2 × SEM, where 1.96 is replaced by Student's t "
     "quantile for n degrees of freedom while there are few pairs (n pairs), so a small sample "
-    "does not claim changes its own uncertainty could explain. A subject's own pairs are used once there are "
-    f"at least {MIN_PAIRS}; until then the pairs of every subject measured in the same cell. The spread of "
+    "does not claim changes its own uncertainty could explain. Friction, stiffness and damping are compared as "
+    "ratios (differences of their logarithms), because their measurement error grows with their value; the MDC95 "
+    "is then a share of the value. A subject's own pairs are used once there are "
+    f"at least {MIN_PAIRS}, together with those of every subject measured in the same cell unless the subject's "
+    "own spread differently (F-test at 5 %); until then the cell's pairs. The spread of "
     "cycles within one session leaves out everything that differs between days and never judges a change."
 )
 
@@ -104,6 +129,8 @@ class DayToDayError:
     n_pairs : retest pairs used; n_subjects : how many subjects they come from.
     icc : ICC(2,1) (absolute agreement) of the pairs where defined (pairs of at least two subjects), else None.
     source : ``subject`` (the subject's own pairs), ``cell`` (every subject of the cell) or ``none``.
+    scale : :class:`ErrorScale`; on the log scale ``sem`` and ``mdc95`` are of the natural logarithm of the
+        value (unitless: 0.1 is about 10 % of the value), converted to units by :meth:`mdc95_at`.
     """
 
     sem: float | None
@@ -112,18 +139,36 @@ class DayToDayError:
     n_subjects: int
     icc: float | None
     source: str
+    scale: ErrorScale = ErrorScale.ABSOLUTE
 
     @property
     def known(self) -> bool:
         """Whether changes can be judged against this error."""
         return self.mdc95 is not None
 
+    def mdc95_at(self, value: float | None) -> float | None:
+        """The MDC95 in the parameter's unit for a change from ``value`` (a fall on the log scale, the smaller of
+        its two directions); None if unknown, or on the log scale without a positive ``value``."""
+        if self.mdc95 is None:
+            return None
+        if self.scale is ErrorScale.ABSOLUTE:
+            return self.mdc95
+        if value is None or not value > 0:
+            return None
+        return value * -math.expm1(-self.mdc95)
+
 
 NO_ERROR = DayToDayError(None, None, 0, 0, None, "none")
 
 
-def pooled_error(values: Sequence[tuple[float, float, str]], source: str, min_pairs: int = MIN_PAIRS) -> DayToDayError:
-    """The day-to-day error from ``(test, retest, subject)`` value pairs of one parameter.
+def pooled_error(
+    values: Sequence[tuple[float, float, str]],
+    source: str,
+    min_pairs: int = MIN_PAIRS,
+    scale: ErrorScale = ErrorScale.ABSOLUTE,
+) -> DayToDayError:
+    """The day-to-day error from ``(test, retest, subject)`` value pairs of one parameter (on ``scale``: for
+    :attr:`ErrorScale.LOG` the values are already logarithms).
 
     SEM = SD of the retest differences / sqrt(2), the SD taken about zero (sqrt(mean d^2)): a test and its
     retest measure the same arm, so a systematic shift between them is measurement error too, and counting
@@ -134,11 +179,12 @@ def pooled_error(values: Sequence[tuple[float, float, str]], source: str, min_pa
     n = len(pairs)
     subjects = len({s for _, _, s in pairs})
     if n < max(min_pairs, 2):
-        return DayToDayError(None, None, n, subjects, None, source if n else "none")
+        return DayToDayError(None, None, n, subjects, None, source if n else "none", scale)
     x = np.array([[a, b] for a, b, _ in pairs])
     sd_diff = float(np.sqrt(np.mean((x[:, 1] - x[:, 0]) ** 2)))
     sem = sd_diff / math.sqrt(2.0)
-    return DayToDayError(sem, t95(n) * sd_diff, n, subjects, icc_agreement(x) if subjects >= 2 else None, source)
+    icc = icc_agreement(x) if subjects >= 2 else None
+    return DayToDayError(sem, t95(n) * sd_diff, n, subjects, icc, source, scale)
 
 
 def icc_agreement(x: npt.ArrayLike) -> float | None:
@@ -158,23 +204,57 @@ def icc_agreement(x: npt.ArrayLike) -> float | None:
     return (msr - mse) / denominator
 
 
+def retest_values(
+    key: ParamKey, pairs: Iterable[RetestPair], scale: ErrorScale = ErrorScale.ABSOLUTE
+) -> list[tuple[float, float, str]]:
+    """``(test, retest, subject)`` of ``key`` in each pair that holds it on both sides, on ``scale`` (the natural
+    logarithms for :attr:`ErrorScale.LOG`, where a pair with a value <= 0, at its bound, is left out)."""
+    found = []
+    for pair in pairs:
+        a, b = pair.test.parameters.get(key), pair.retest.parameters.get(key)
+        if a is None or b is None or a.value is None or b.value is None:
+            continue
+        if scale is ErrorScale.ABSOLUTE:
+            found.append((a.value, b.value, pair.test.subject))
+        elif a.value > 0 and b.value > 0:
+            found.append((math.log(a.value), math.log(b.value), pair.test.subject))
+    return found
+
+
+def consistency_p(own: Sequence[tuple[float, float, str]], others: Sequence[tuple[float, float, str]]) -> float:
+    """Two-sided p of the F-test that ``own`` and ``others`` retest differences have one variance (each taken about
+    zero, as the SEM is: mean squared difference over its number of pairs); 0 with fewer than 2 pairs in either."""
+    from scipy.stats import f
+
+    if len(own) < 2 or len(others) < 2:
+        return 0.0
+    own_ms = float(np.mean([(b - a) ** 2 for a, b, _ in own]))
+    others_ms = float(np.mean([(b - a) ** 2 for a, b, _ in others]))
+    if not others_ms > 0 or not own_ms > 0:
+        return 0.0
+    ratio = own_ms / others_ms
+    below = float(f.cdf(ratio, len(own), len(others)))
+    return min(1.0, 2.0 * min(below, 1.0 - below))
+
+
 def day_to_day_error(
     key: ParamKey, subject: str, cell: str, pairs: Sequence[RetestPair], min_pairs: int = MIN_PAIRS
 ) -> DayToDayError:
-    """The error to judge ``subject``'s changes of ``key`` by: its own pairs if enough, else its cell's."""
+    """The error to judge ``subject``'s changes of ``key`` by, on :func:`scale_of` ``key``.
 
-    def values(chosen: Iterable[RetestPair]) -> list[tuple[float, float, str]]:
-        found = []
-        for pair in chosen:
-            a, b = pair.test.parameters.get(key), pair.retest.parameters.get(key)
-            if a is not None and b is not None and a.value is not None and b.value is not None:
-                found.append((a.value, b.value, pair.test.subject))
-        return found
-
-    own = pooled_error(values(p for p in pairs if p.test.subject == subject), "subject", min_pairs)
+    With at least ``min_pairs`` of its own, the subject's pairs, pooled with every pair of its cell where the
+    other subjects' differences have the same variance (two-sided F-test, p > :data:`POOL_ALPHA`): more pairs
+    give a tighter limit where the subject measures like its peers, and a subject measured worse keeps its own
+    error. With fewer own pairs, its cell's.
+    """
+    scale = scale_of(key)
+    own_values = retest_values(key, (p for p in pairs if p.test.subject == subject), scale)
+    cell_values = retest_values(key, (p for p in pairs if p.test.cell == cell), scale)
+    own = pooled_error(own_values, "subject", min_pairs, scale)
+    cell_error = pooled_error(cell_values, "cell", min_pairs, scale)
     if own.known:
-        return own
-    cell_error = pooled_error(values(p for p in pairs if p.test.cell == cell), "cell", min_pairs)
+        others = retest_values(key, (p for p in pairs if p.test.cell == cell and p.test.subject != subject), scale)
+        return cell_error if consistency_p(own_values, others) > POOL_ALPHA else own
     if cell_error.known or cell_error.n_pairs >= own.n_pairs:
         return cell_error
     return own

@@ -8,7 +8,16 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
-from bsp_ros.clinic.mdc import DAY_NS, MIN_PAIRS, Z95, DayToDayError, RetestPair, day_to_day_error, retest_pairs
+from bsp_ros.clinic.mdc import (
+    DAY_NS,
+    MIN_PAIRS,
+    Z95,
+    DayToDayError,
+    ErrorScale,
+    RetestPair,
+    day_to_day_error,
+    retest_pairs,
+)
 from bsp_ros.clinic.report.labels import label, sort_key, unit
 from bsp_ros.clinic.report.priors import Prior, has_prior_inputs, session_prior
 from bsp_ros.clinic.store.records import ParamKey, SessionRecord, SubjectRecord
@@ -83,8 +92,13 @@ def limit_factor(alpha: float, dof: int | None) -> float:
 class Change:
     """The difference of one parameter between two usable sessions, against the day-to-day error.
 
-    ``comparisons`` is how many comparisons the whole report judges: the limit a change must exceed to be
-    flagged keeps the chance of any false flag in the report at most :data:`REPORT_ALPHA` (Bonferroni).
+    The change is judged on the error's scale (:class:`~bsp_ros.clinic.mdc.ErrorScale`): a positive passive
+    parameter on the log scale (``ln(after / before)`` against the retest pairs' log-ratios and the estimates'
+    relative uncertainty), any other in its unit. Every threshold (:attr:`mdc95`, :attr:`limit`) is given in the
+    parameter's unit, back-transformed at the earlier value in the direction of the change, so that ``|delta|``
+    exceeds it exactly where the change exceeds it on its scale. ``comparisons`` is how many comparisons the whole
+    report judges: the limit a change must exceed to be flagged keeps the chance of any false flag in the report
+    at most :data:`REPORT_ALPHA` (Bonferroni).
     """
 
     key: ParamKey
@@ -95,39 +109,85 @@ class Change:
     comparisons: int = 1
 
     @property
+    def relative(self) -> bool:
+        """Whether the change is judged on the log scale (its error is relative to the value)."""
+        return self.error.scale is ErrorScale.LOG
+
+    @property
+    def scaled_delta(self) -> float | None:
+        """The change on the error's scale: ``delta``, or ``ln(after / before)`` on the log scale (None there
+        unless both values are positive)."""
+        if not self.relative:
+            return self.delta
+        a, b = self.before.value, self.after.value
+        if a is None or b is None or not (a > 0 and b > 0):
+            return None
+        return math.log(b / a)
+
+    def in_unit(self, threshold: float | None) -> float | None:
+        """A threshold on the error's scale as a change of the parameter from the earlier value, in its unit, in
+        the direction of :attr:`delta` (a rise ``before (e^x - 1)``, a fall ``before (1 - e^-x)`` on the log
+        scale); None for None or without a positive earlier value on the log scale."""
+        if threshold is None or not self.relative:
+            return threshold
+        base = self.before.value
+        if base is None or not base > 0:
+            return None
+        return base * (math.expm1(threshold) if self.delta > 0 else -math.expm1(-threshold))
+
+    @property
     def mdc95(self) -> float | None:
-        """The change two sessions must differ by to be more than measurement error, None if unknown.
+        """The change two sessions must differ by to be more than measurement error (unit of the parameter, from
+        the earlier value in the change's direction), None if unknown.
 
         The MDC95 from retest pairs; where the two estimates' own uncertainty is larger
-        (1.96 sqrt(std_a^2 + std_b^2), e.g. a parameter the session could hardly determine), that. None
-        without enough retest pairs: the estimates' own uncertainty alone never judges a change.
+        (1.96 sqrt(std_a^2 + std_b^2), relative stds on the log scale; e.g. a parameter the session could hardly
+        determine), that. None without enough retest pairs: the estimates' own uncertainty alone never judges a
+        change.
         """
         if self.error.mdc95 is None:
             return None
-        return max(self.error.mdc95, self.own_mdc95)
+        return self.in_unit(max(self.error.mdc95, Z95 * self._own_sd))
 
     @property
     def own_mdc95(self) -> float:
-        """The two estimates' own 95 % uncertainty of their difference, 1.96 sqrt(std_a^2 + std_b^2)."""
-        return Z95 * self._own_sd
+        """The two estimates' own 95 % uncertainty of their difference, 1.96 sqrt(std_a^2 + std_b^2) (relative
+        stds on the log scale), in the parameter's unit like :attr:`mdc95`."""
+        return self.in_unit(Z95 * self._own_sd) or 0.0
 
     @property
     def _own_sd(self) -> float:
-        return math.hypot(self.before.std or 0.0, self.after.std or 0.0)
+        """The two estimates' own sd of their difference on the error's scale (relative on the log scale)."""
+        a, b = self.before, self.after
+        if not self.relative:
+            return math.hypot(a.std or 0.0, b.std or 0.0)
+        if not (a.value and b.value and a.value > 0 and b.value > 0):
+            return 0.0
+        return math.hypot((a.std or 0.0) / a.value, (b.std or 0.0) / b.value)
+
+    def _threshold(self, alpha: float) -> float | None:
+        """The change on the error's scale beyond which this comparison is beyond measurement error at two-sided
+        level ``alpha``: the retest pairs' SD of differences times Student's t for their number, or the two
+        estimates' own SD times the normal quantile, whichever is larger. None without enough retest pairs."""
+        if self.error.sem is None:
+            return None
+        retest = limit_factor(alpha, self.error.n_pairs) * self.error.sem * math.sqrt(2.0)
+        return max(retest, limit_factor(alpha, None) * self._own_sd)
+
+    def _beyond(self, threshold: float | None) -> bool:
+        scaled = self.scaled_delta
+        return threshold is not None and scaled is not None and not self.at_bound and abs(scaled) > threshold
 
     @property
     def limit(self) -> float | None:
-        """The change this comparison must exceed to be flagged in a report of :attr:`comparisons` comparisons.
+        """The change this comparison must exceed to be flagged in a report of :attr:`comparisons` comparisons
+        (unit of the parameter, from the earlier value in the change's direction).
 
         The MDC95 with its 95 % widened to ``1 - 0.05 / comparisons``: the retest pairs' SD of differences
         times Student's t for their number, or the two estimates' own SD times the normal quantile, whichever
         is larger. One comparison: the MDC95. None without enough retest pairs.
         """
-        if self.error.sem is None:
-            return None
-        alpha = REPORT_ALPHA / max(self.comparisons, 1)
-        retest = limit_factor(alpha, self.error.n_pairs) * self.error.sem * math.sqrt(2.0)
-        return max(retest, limit_factor(alpha, None) * self._own_sd)
+        return self.in_unit(self._threshold(REPORT_ALPHA / max(self.comparisons, 1)))
 
     @property
     def mdc95_source(self) -> str:
@@ -135,12 +195,15 @@ class Change:
         where larger) or ``none`` (too few retest pairs)."""
         if self.error.mdc95 is None:
             return MDC_SOURCES[2]
-        return MDC_SOURCES[1] if self.own_mdc95 > self.error.mdc95 else MDC_SOURCES[0]
+        return MDC_SOURCES[1] if Z95 * self._own_sd > self.error.mdc95 else MDC_SOURCES[0]
 
     @property
     def at_bound(self) -> bool:
-        """Whether either value sits at the bound 0 of a non-negative passive parameter (not measured there)."""
-        return self.key[2] in NON_NEGATIVE and (self.before.value == 0.0 or self.after.value == 0.0)
+        """Whether either value sits at the bound 0 of a non-negative passive parameter (not measured there), or
+        a value on the log scale is not positive."""
+        if self.key[2] in NON_NEGATIVE and (self.before.value == 0.0 or self.after.value == 0.0):
+            return True
+        return self.scaled_delta is None
 
     @property
     def judged(self) -> bool:
@@ -149,14 +212,15 @@ class Change:
 
     @property
     def beyond_mdc(self) -> bool:
-        """Whether ``|delta|`` exceeds the MDC95 of one comparison alone (not what flags: see :attr:`flagged`)."""
-        return self.mdc95 is not None and not self.at_bound and abs(self.delta) > self.mdc95
+        """Whether the change exceeds the MDC95 of one comparison alone (not what flags: see :attr:`flagged`)."""
+        if self.error.mdc95 is None:
+            return False
+        return self._beyond(max(self.error.mdc95, Z95 * self._own_sd))
 
     @property
     def flagged(self) -> bool:
-        """Whether ``|delta|`` exceeds :attr:`limit`: a change beyond measurement error over the whole report."""
-        limit = self.limit
-        return limit is not None and not self.at_bound and abs(self.delta) > limit
+        """Whether the change exceeds :attr:`limit`: a change beyond measurement error over the whole report."""
+        return self._beyond(self._threshold(REPORT_ALPHA / max(self.comparisons, 1)))
 
     @property
     def percent(self) -> float | None:
@@ -170,8 +234,8 @@ class Change:
     @property
     def mdc_percent(self) -> float | None:
         """The MDC95 in % of the earlier value."""
-        base = self.before.value
-        return None if not base or self.mdc95 is None else 100.0 * self.mdc95 / abs(base)
+        base, mdc = self.before.value, self.mdc95
+        return None if not base or mdc is None else 100.0 * mdc / abs(base)
 
     @property
     def limit_percent(self) -> float | None:
@@ -182,7 +246,8 @@ class Change:
     @property
     def mdc_ratio(self) -> float | None:
         """``|delta| / MDC95`` (None if the MDC is unknown)."""
-        return None if not self.mdc95 else abs(self.delta) / self.mdc95
+        mdc = self.mdc95
+        return None if not mdc else abs(self.delta) / mdc
 
 
 @dataclass(frozen=True, kw_only=True)

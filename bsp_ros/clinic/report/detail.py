@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+from bsp_ros.clinic.mdc import ErrorScale
 from bsp_ros.clinic.report.analysis import NON_NEGATIVE, Analysis, Change, Series
 from bsp_ros.clinic.report.labels import plain_name, plain_number, with_unit
 from bsp_ros.clinic.report.priors import PRIOR_SOURCE, PeerRow
@@ -83,6 +85,21 @@ def at_zero(series: Series) -> bool:
     return latest.value == 0.0 or (bool(changes) and all(c.at_bound for c in changes))
 
 
+def mdc_text(series: Series) -> str:
+    """The retest pairs' MDC95 of ``series`` in words: ``0.05 N·m``, or on the log scale its share of the value and
+    that share of the latest value (``13 % (0.06 N·m at 0.45 N·m)``)."""
+    error = series.error
+    if error.scale is ErrorScale.ABSOLUTE or error.mdc95 is None:
+        return with_unit(error.mdc95, series.unit)
+    latest = series.latest
+    value = latest.value if latest is not None else None
+    share = percent(-100.0 * math.expm1(-error.mdc95))
+    at = error.mdc95_at(value)
+    if at is None or value is None:
+        return share
+    return f"{share} ({with_unit(at, series.unit)} at {with_unit(value, series.unit)})"
+
+
 def error_text(series: Series) -> str:
     """The limit a change of ``series`` is flagged beyond, and the MDC95 it comes from, in words; ``not judged
     (estimated at 0)`` where a value at the bound 0 leaves the latest change unjudged."""
@@ -92,7 +109,7 @@ def error_text(series: Series) -> str:
     if error.mdc95 is None:
         return "unknown (too few retests)" if series.judged else "not judged"
     whose = "this patient" if error.source == "subject" else "the cell"
-    mdc = f"MDC95 {with_unit(error.mdc95, series.unit)} from {error.n_pairs} retests of {whose}"
+    mdc = f"MDC95 {mdc_text(series)} from {error.n_pairs} retests of {whose}"
     if not series.judged:
         return f"{mdc}; for reference, not flagged"
     limit = series.since_previous.limit if series.since_previous is not None else None

@@ -99,7 +99,9 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
                         _num(step.delta if step is not None else None),
                         _num(first.delta if first is not None else None),
                         _num(
-                            step.mdc95 if step is not None and judged else (error.mdc95 if judged and error else None)
+                            step.mdc95
+                            if step is not None and judged
+                            else (error.mdc95_at(quantity.value) if judged and error else None)
                         ),
                         _mdc95_source(step if judged else None, judged),
                         error.n_pairs if error is not None else 0,

@@ -68,8 +68,8 @@ def draw_panel(axes: Axes, panel: Panel, arm_names: Sequence[str], *, compact: b
                 lw=0,
                 label="table range" if k == 0 else None,
             )
-        if usable and series.judged and series.error.mdc95 is not None and len(xs) > 1:
-            mdc = series.error.mdc95
+        mdc = series.error.mdc95_at(ys[0]) if usable else None
+        if usable and series.judged and mdc is not None and len(xs) > 1:
             axes.fill_between(
                 [xs[0], xs[-1]],
                 [ys[0] - mdc] * 2,

@@ -174,13 +174,7 @@ def verdict(series: Series, min_pairs: int, *, latest: SessionRecord | None = No
     usable = sum(p.usable for p in series.points)
     if usable < 2:
         return Verdict(series=series, status=UNKNOWN, reason="one usable session. The next one is compared with it")
-    if not series.error.known:
-        return Verdict(
-            series=series,
-            status=UNKNOWN,
-            reason=f"{_plural(series.error.n_pairs, 'retest pair')} of the {min_pairs} needed. To judge it, record "
-            "a same-day retest with the same passive model (bsp sessions add … --retest)",
-        )
+    # A term at its bound is named as such first: its retests at 0 are no pairs on the log scale either.
     latest_changes = [c for c in (series.since_previous, series.since_first) if c is not None]
     if all(c.at_bound for c in latest_changes):
         return Verdict(
@@ -188,6 +182,13 @@ def verdict(series: Series, min_pairs: int, *, latest: SessionRecord | None = No
             status=UNKNOWN,
             reason=f"{AT_ZERO}, where the movement did not show it. To judge it, record wider or faster movements "
             "(bsp plan)",
+        )
+    if not series.error.known:
+        return Verdict(
+            series=series,
+            status=UNKNOWN,
+            reason=f"{_plural(series.error.n_pairs, 'retest pair')} of the {min_pairs} needed. To judge it, record "
+            "a same-day retest with the same passive model (bsp sessions add … --retest)",
         )
     return Verdict(series=series, status=NO_CHANGE, since=_since(series))
 

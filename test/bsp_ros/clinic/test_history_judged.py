@@ -11,7 +11,7 @@ import pytest
 from clinic_history import FRICTION, INVALID_VALUE_NM, STIFFNESS, UNCHANGED, History, patient
 
 from bsp_ros.clinic.histories import HISTORY_START_NS, session_estimate
-from bsp_ros.clinic.mdc import Z95
+from bsp_ros.clinic.mdc import Z95, ErrorScale
 from bsp_ros.clinic.report import Analysis, analyse
 from bsp_ros.clinic.report.export import write_analysis_csv
 from bsp_ros.clinic.report.summary import headline, headline_parts
@@ -59,9 +59,12 @@ def test_an_unchanged_arm_is_flagged_nowhere_over_ten_sessions(history: History)
     parts = headline_parts(analysis, "left")
     assert [kind for kind, _ in parts] == ["no change", "cannot be judged yet"]
     assert "elbow friction, elbow stiffness" in parts[0][1] and "wrist stiffness" in parts[1][1]
-    # The day-to-day error is what the visits scatter by: the MDC is not a within-session 0.1 %.
+    # The day-to-day error is what the visits scatter by: the MDC is not a within-session 0.1 %. The arm's own 6
+    # pairs agree with the other patient's (F-test), so the cell's 12 judge it, on the log scale (relative).
     (friction,) = [s for s in analysis.series if s.key == ELBOW["coulomb"]]
-    assert friction.error.source == "subject" and friction.error.mdc95 > 0.02 * 0.28
+    assert (friction.error.source, friction.error.n_pairs, friction.error.scale) == ("cell", 12, ErrorScale.LOG)
+    mdc95_nm = friction.error.mdc95_at(0.28)
+    assert mdc95_nm is not None and mdc95_nm > 0.02 * 0.28
 
 
 def test_cell_pairs_serve_a_subject_without_retests(history: History) -> None:
@@ -132,18 +135,31 @@ def test_csv_export_says_which_mdc95_was_used(history: History) -> None:
         if not (series.judged and series.error.known):
             continue
         retest = series.error.mdc95
+        relative = series.error.scale is ErrorScale.LOG
         for step in series.steps:
+            if relative and not step.judged:
+                continue  # a value at its bound 0 has no log
             row = rows[(series.arm or "", series.key[1], series.key[2], str(step.after.number))]
-            own = Z95 * math.hypot(step.before.std or 0.0, step.after.std or 0.0)
+            a, b = step.before, step.after
+            assert a.value is not None and b.value is not None
+            if relative:  # relative stds, and the larger bound back in units from the earlier value
+                own = Z95 * math.hypot((a.std or 0.0) / a.value, (b.std or 0.0) / b.value)
+                larger = max(own, retest)
+                in_unit = a.value * (math.exp(larger) - 1.0 if b.value > a.value else 1.0 - math.exp(-larger))
+            else:
+                own = Z95 * math.hypot(a.std or 0.0, b.std or 0.0)
+                in_unit = max(own, retest)
             # The larger bound is the one used, and the column names it.
             expected = "session uncertainty" if own > retest else "retest pairs"
-            assert (row["mdc95_source"], float(row["mdc95"])) == (expected, pytest.approx(max(own, retest)))
+            assert (row["mdc95_source"], float(row["mdc95"])) == (expected, pytest.approx(in_unit))
             seen.add(expected)
-    assert seen == {"retest pairs", "session uncertainty"}  # the seeded history has both kinds of step
-    # The first session has no step: the MDC95 it shows is the retest pairs'.
+    # With the cell's 12 pairs pooled, every step of this seeded history is bounded by its sessions' own uncertainty.
+    assert seen == {"session uncertainty"}
+    # The first session has no step: the MDC95 it shows is the retest pairs', a fall from its value.
     (friction,) = [s for s in analysis.series if s.key == ELBOW["coulomb"]]
     first = rows[("left", "elbow", "coulomb_nm", "1")]
-    assert (first["mdc95_source"], float(first["mdc95"])) == ("retest pairs", pytest.approx(friction.error.mdc95))
+    at_first = float(first["value"]) * (1.0 - math.exp(-friction.error.mdc95))
+    assert (first["mdc95_source"], float(first["mdc95"])) == ("retest pairs", pytest.approx(at_first))
     # Without retest pairs no MDC95 is used at all, whatever the sessions' own uncertainty.
     visits = [r for r in analysis.sessions if not r.retest]
     alone = analyse(FRICTION, visits, pool=visits, subject_record=analysis.record)
