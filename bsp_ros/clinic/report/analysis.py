@@ -18,6 +18,7 @@ from bsp_ros.clinic.mdc import (
     day_to_day_error,
     retest_pairs,
 )
+from bsp_ros.clinic.report.confirmation import confirmation_alpha
 from bsp_ros.clinic.report.labels import label, sort_key, unit
 from bsp_ros.clinic.report.priors import Prior, has_prior_inputs, session_prior
 from bsp_ros.clinic.store.records import ParamKey, SessionRecord, SubjectRecord
@@ -78,7 +79,8 @@ MDC_SOURCES = ("retest pairs", "session uncertainty", "none")
 
 
 REPORT_ALPHA = 0.05
-"""The chance, at most, that measurement error alone flags anything anywhere in one report (Bonferroni)."""
+"""The chance, at most, that measurement error alone flags anything anywhere in one report (Bonferroni over its
+confirmations: :mod:`bsp_ros.clinic.report.confirmation`)."""
 
 
 def limit_factor(alpha: float, dof: int | None) -> float:
@@ -96,9 +98,12 @@ class Change:
     parameter on the log scale (``ln(after / before)`` against the retest pairs' log-ratios and the estimates'
     relative uncertainty), any other in its unit. Every threshold (:attr:`mdc95`, :attr:`limit`) is given in the
     parameter's unit, back-transformed at the earlier value in the direction of the change, so that ``|delta|``
-    exceeds it exactly where the change exceeds it on its scale. ``comparisons`` is how many comparisons the whole
-    report judges: the limit a change must exceed to be flagged keeps the chance of any false flag in the report
-    at most :data:`REPORT_ALPHA` (Bonferroni).
+    exceeds it exactly where the change exceeds it on its scale.
+
+    A step beyond :attr:`limit` is a possible change; it is a change (:attr:`flagged`) once ``confirmed_by``, the
+    next usable session compared with the same earlier one, is beyond the same level in the same direction.
+    ``comparisons`` is how many such confirmations the whole report judges: the level (:attr:`level`) keeps the
+    chance of any false flag in the report at most :data:`REPORT_ALPHA`.
     """
 
     key: ParamKey
@@ -107,6 +112,7 @@ class Change:
     delta: float
     error: DayToDayError
     comparisons: int = 1
+    confirmed_by: Change | None = None
 
     @property
     def relative(self) -> bool:
@@ -179,15 +185,23 @@ class Change:
         return threshold is not None and scaled is not None and not self.at_bound and abs(scaled) > threshold
 
     @property
-    def limit(self) -> float | None:
-        """The change this comparison must exceed to be flagged in a report of :attr:`comparisons` comparisons
-        (unit of the parameter, from the earlier value in the change's direction).
+    def level(self) -> float:
+        """The two-sided per-comparison level of :attr:`limit` in a report of :attr:`comparisons` confirmations
+        whose retest SD comes from the error's pairs
+        (:func:`~bsp_ros.clinic.report.confirmation.confirmation_alpha`; unused where the error is unknown)."""
+        return confirmation_alpha(max(self.comparisons, 1), max(self.error.n_pairs, 2), REPORT_ALPHA)
 
-        The MDC95 with its 95 % widened to ``1 - 0.05 / comparisons``: the retest pairs' SD of differences
-        times Student's t for their number, or the two estimates' own SD times the normal quantile, whichever
-        is larger. One comparison: the MDC95. None without enough retest pairs.
+    @property
+    def limit(self) -> float | None:
+        """The change this comparison and its confirmation must each exceed to be flagged in a report of
+        :attr:`comparisons` confirmations (unit of the parameter, from the earlier value in the change's
+        direction).
+
+        The MDC95 with its 95 % replaced by ``1 - level``: the retest pairs' SD of differences times Student's t
+        for their number, or the two estimates' own SD times the normal quantile, whichever is larger. None
+        without enough retest pairs.
         """
-        return self.in_unit(self._threshold(REPORT_ALPHA / max(self.comparisons, 1)))
+        return self.in_unit(self._threshold(self.level))
 
     @property
     def mdc95_source(self) -> str:
@@ -218,9 +232,25 @@ class Change:
         return self._beyond(max(self.error.mdc95, Z95 * self._own_sd))
 
     @property
+    def possible(self) -> bool:
+        """Whether the change exceeds :attr:`limit`: beyond measurement error unless the next session shows
+        otherwise (a change once confirmed: :attr:`flagged`)."""
+        return self.judged and self._beyond(self._threshold(self.level))
+
+    @property
+    def awaiting(self) -> bool:
+        """A possible change the next session has not been recorded to confirm yet."""
+        return self.possible and self.confirmed_by is None
+
+    @property
     def flagged(self) -> bool:
-        """Whether the change exceeds :attr:`limit`: a change beyond measurement error over the whole report."""
-        return self._beyond(self._threshold(REPORT_ALPHA / max(self.comparisons, 1)))
+        """Whether this is a change beyond measurement error over the whole report: :attr:`possible`, and the next
+        usable session against the same earlier one (``confirmed_by``) beyond the same level in the same
+        direction."""
+        other = self.confirmed_by
+        if other is None or not self.possible or not other.judged or other.delta * self.delta <= 0:
+            return False
+        return other._beyond(other._threshold(self.level))
 
     @property
     def percent(self) -> float | None:
@@ -271,8 +301,15 @@ class Series:
 
     @property
     def changes(self) -> tuple[Change, ...]:
-        """Steps flagged: beyond the report's limit (none for parameters that are not judged)."""
+        """Steps flagged: beyond the report's limit and confirmed by the next session (none for parameters that are
+        not judged)."""
         return tuple(c for c in self.steps if c.flagged) if self.judged else ()
+
+    @property
+    def possible(self) -> Change | None:
+        """The latest step where it is a possible change awaiting the next session's confirmation, else None."""
+        latest = self.since_previous
+        return latest if self.judged and latest is not None and latest.awaiting else None
 
     @property
     def has_values(self) -> bool:
@@ -291,18 +328,16 @@ class Series:
 
     @property
     def flagged_latest(self) -> list[Change]:
-        """The latest session's comparisons (since previous, since first) that are flagged."""
-        if not self.judged:
-            return []
-        return [c for c in (self.since_previous, self.since_first) if c is not None and c.flagged]
+        """The changes the latest usable session confirmed (the step before it, flagged)."""
+        latest = self.latest
+        return [c for c in self.changes if c.confirmed_by is not None and c.confirmed_by.after is latest]
 
     @property
     def comparisons(self) -> tuple[Change, ...]:
-        """The comparisons of this series the report judges: each step and the latest since the first."""
+        """The confirmations of this series the report judges: each judged step with a judged confirmation."""
         if not self.judged:
             return ()
-        found = (*self.steps, *((self.since_first,) if self.since_first is not None else ()))
-        return tuple(c for c in found if c.judged)
+        return tuple(c for c in self.steps if c.judged and c.confirmed_by is not None and c.confirmed_by.judged)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -323,7 +358,7 @@ class Analysis:
 
     @property
     def comparisons(self) -> int:
-        """How many comparisons the report judges (what each flag's limit is widened for)."""
+        """How many confirmations the report judges (what each flag's level is set for)."""
         return sum(len(s.comparisons) for s in self.series)
 
     def label_of(self, record: SessionRecord) -> str:
@@ -343,8 +378,13 @@ class Analysis:
 
     @property
     def latest_changes(self) -> list[Change]:
-        """Flagged changes of the latest usable session (since previous and since first), every arm."""
+        """Changes the latest usable session confirmed, every arm."""
         return [c for s in self.series for c in s.flagged_latest]
+
+    @property
+    def possible_changes(self) -> list[Change]:
+        """Possible changes of the latest usable session, awaiting the next one, every arm."""
+        return [c for s in self.series if (c := s.possible) is not None]
 
     @property
     def changes(self) -> list[Change]:
@@ -496,7 +536,12 @@ def _arm_series(
         error = errors(key)
         points = _points(key, visits, left_out)
         usable = [p for p in points if p.usable]
-        steps = tuple(_compare(key, a, b, error) for a, b in itertools.pairwise(usable))
+        steps = tuple(
+            replace(_compare(key, a, b, error), confirmed_by=_compare(key, a, usable[k + 2], error))
+            if k + 2 < len(usable)
+            else _compare(key, a, b, error)
+            for k, (a, b) in enumerate(itertools.pairwise(usable))
+        )
         first = _compare(key, usable[0], usable[-1], error) if len(usable) >= 3 else None
         series.append(
             Series(
@@ -516,8 +561,13 @@ def _arm_series(
 
 
 def _widened(series: Sequence[Series]) -> tuple[Series, ...]:
-    """``series`` with every comparison told how many the report judges (the limit of its flags)."""
-    count = sum(len(s.comparisons) for s in series)
+    """``series`` with every comparison told how many confirmations the report judges (the level of its flags).
+
+    At least as many as the judged series' latest steps, which the next session will confirm: a report of two or
+    three sessions, with few confirmations or none, would otherwise call possible changes at a loose level.
+    """
+    latest = sum(1 for s in series if s.judged and s.steps and s.steps[-1].judged)
+    count = max(sum(len(s.comparisons) for s in series), latest)
     out = []
     for s in series:
         steps = tuple(replace(c, comparisons=count) for c in s.steps)
@@ -536,9 +586,9 @@ def analyse(
 ) -> Analysis:
     """Build the per-arm series of ``subject``'s sessions and judge their changes against retest pairs.
 
-    Every comparison (each step between usable sessions, and the latest since the first) of every judged
-    parameter is flagged only beyond a limit widened for their number (:attr:`Change.limit`), so that an
-    unchanged arm is flagged anywhere in the report at most 1 time in 20. An untared session among an arm's
+    Each step between usable sessions of every judged parameter is a possible change beyond a limit set for the
+    report's number of confirmations (:attr:`Change.limit`), and flagged when the next session confirms it, so that
+    an unchanged arm is flagged anywhere in the report at most 1 time in 20. An untared session among an arm's
     tared ones keeps its passive moments but not its arm weight (:func:`untared_sessions`).
 
     Parameters

@@ -55,18 +55,16 @@ def _curve_session(analysis: Analysis, record: SessionRecord, curve: dict[str, A
 
 
 def _changed_angles(analysis: Analysis, arm: str | None, joint: str, first: int, latest: int) -> tuple[int, ...]:
-    """Angles whose change between sessions ``first`` and ``latest`` (numbers) is flagged."""
+    """Angles with a flagged change (a step confirmed by the next session) between sessions ``first`` and
+    ``latest`` (numbers)."""
     found = []
     for series in analysis.arm_series(arm):
         group, part, quantity = series.key
         angle = angle_of(quantity)
         if group != "joints" or part != joint or angle is None or not series.judged:
             continue
-        # Two usable sessions compare in their one step; more, in the comparison since the first.
-        for change in (*series.steps, series.since_first):
-            if change is not None and (change.before.number, change.after.number) == (first, latest):
-                if change.flagged:
-                    found.append(angle)
+        if any(first <= c.before.number and c.after.number <= latest for c in series.changes):
+            found.append(angle)
     return tuple(sorted(set(found)))
 
 

@@ -112,8 +112,12 @@ def error_text(series: Series) -> str:
     mdc = f"MDC95 {mdc_text(series)} from {error.n_pairs} retests of {whose}"
     if not series.judged:
         return f"{mdc}; for reference, not flagged"
-    limit = series.since_previous.limit if series.since_previous is not None else None
-    return f"flagged beyond {with_unit(limit, series.unit)} ({mdc})" if limit is not None else mdc
+    # The latest step's limit; where its earlier value is at the bound 0 (no ratio), the one since the first.
+    limits = [c.limit for c in (series.since_previous, series.since_first) if c is not None and c.judged]
+    limit = next((x for x in limits if x is not None), None)
+    if limit is None:
+        return mdc
+    return f"flagged beyond {with_unit(limit, series.unit)}, when the next session confirms it ({mdc})"
 
 
 def detail_rows(analysis: Analysis, wanted: str) -> list[DetailRow]:
@@ -134,7 +138,7 @@ def detail_rows(analysis: Analysis, wanted: str) -> list[DetailRow]:
                 change_text(series.since_previous, series.unit, with_percent=wanted != "appendix"),
                 change_text(series.since_first, series.unit, with_percent=wanted != "appendix"),
                 error_text(series) if wanted != "appendix" else "",
-                series.judged and bool(series.flagged_latest),
+                series.judged and (bool(series.changes) or series.possible is not None),
             )
         )
     return rows

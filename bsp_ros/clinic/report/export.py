@@ -56,8 +56,9 @@ def write_analysis_csv(analyses: Iterable[Analysis], stream: TextIO) -> int:
     it and with the arm's first usable one (empty for retests, invalid sessions and the first); ``mdc95`` is the
     change it would need to be flagged (empty when unknown: ``mdc95_source`` ``none``) and ``mdc95_source`` says
     what it is: ``retest pairs``, or ``session uncertainty`` where the two sessions' own uncertainty is the larger;
-    ``flag_limit`` is the MDC95 widened for the number of comparisons the report judges (:attr:`Change.limit`) and
-    ``flagged`` is 1 for a change from the previous session beyond it. ``session_number`` is the store's number
+    ``flag_limit`` is the report's limit (:attr:`Change.limit`, set for the number of confirmations it judges) and
+    ``flagged`` is 1 for a change from the previous session beyond it that the next session confirmed.
+    ``session_number`` is the store's number
     (``bsp sessions show``), ``session_label`` the report's (``3``, ``3a`` for the retest of session 3). The join
     columns (:data:`~bsp_ros.clinic.store.csv_export.JOIN_COLUMNS`) and ``session_source``, the recording's name
     (a bag's directory or file name: the last part of the ``bag`` column of `bsp identify --each --summary`), lead

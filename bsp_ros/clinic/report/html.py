@@ -52,6 +52,7 @@ h3 { font-size: 1em; margin: 0.8em 0 0.2em; }
 .headline p { margin: 0.25em 0; } .headline .arm { font-weight: bold; }
 .changed, tr.changed td { color: #b71c1c; font-weight: bold; }
 .unknown { color: #7a4f00; }
+.possible { color: #b71c1c; }
 .source { font-size: 0.85em; color: #555; margin: 0.3em 0; }
 figure { margin: 0.4em 0; } figure img { width: 100%; height: auto; display: block; }
 figcaption { font-size: 0.8em; color: #555; }
@@ -77,7 +78,7 @@ def _png(data: bytes, alt: str) -> str:
     return f"<img alt='{escape(alt, quote=True)}' src='data:image/png;base64,{encoded}'>"
 
 
-_KIND_CLASS = {"change": "changed", "cannot be judged yet": "unknown"}
+_KIND_CLASS = {"change": "changed", "possible change": "possible", "cannot be judged yet": "unknown"}
 
 
 def _headline(analysis: Analysis) -> list[str]:

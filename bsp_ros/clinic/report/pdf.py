@@ -114,9 +114,11 @@ def _headline_box(flow: _Flow, analysis: Analysis) -> None:
         if len(analysis.arms) > 1:
             flow.line(arm_title(analysis, arm), 9.5, INK, "bold", LEFT + 0.015)
         for kind, sentence in headline_parts(analysis, arm):
-            colour, weight = {"change": (RED, "bold"), "cannot be judged yet": (AMBER, "normal")}.get(
-                kind, (INK, "normal")
-            )
+            colour, weight = {
+                "change": (RED, "bold"),
+                "possible change": (RED, "normal"),
+                "cannot be judged yet": (AMBER, "normal"),
+            }.get(kind, (INK, "normal"))
             flow.paragraph(sentence, 9.5, colour, weight, indent=0.015)
     for artist in (
         Rectangle((LEFT - 0.005, flow.y), RIGHT - LEFT + 0.01, top - flow.y, facecolor="#f3f6fa", zorder=-1),

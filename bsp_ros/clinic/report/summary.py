@@ -92,24 +92,51 @@ def short_name(key: ParamKey) -> str:
     return short_label(key).lower()
 
 
-def change_sentence(series: Series, changes: list[Change]) -> str:
-    """One sentence on a parameter's flagged changes (since previous and/or since first) and the limit they pass."""
+def _size(change: Change, unit: str) -> str:
+    return percent(change.percent) if change.percent is not None else with_unit(abs(change.delta), unit)
+
+
+def _limit_text(change: Change, unit: str) -> str:
+    share = f" ({percent(change.limit_percent)})" if change.percent is not None else ""
+    return f"{with_unit(change.limit, unit)}{share}"
+
+
+def _step_text(change: Change, unit: str) -> str:
+    sign = "+" if change.delta > 0 else "−"
+    when = f"{long_day(change.before.time_ns)} to {long_day(change.after.time_ns)}"
+    return f"{when} ({sign}{_size(change, unit)}, {_span(change, unit)})"
+
+
+def change_sentence(series: Series, changes: list[Change] | tuple[Change, ...]) -> str:
+    """One sentence on a parameter's flagged changes: since the first session, then each confirmed step with the
+    limit it passed."""
     name = plain_name(series.key)
-    parts = []
-    for change in changes:
-        since = "since the previous session" if change is series.since_previous else "since the first session"
-        size = percent(change.percent) if change.percent is not None else with_unit(abs(change.delta), series.unit)
-        parts.append(f"{_direction(change)} {size} {since} ({_span(change, series.unit)})")
-    limit = changes[0]
-    share = f" ({percent(limit.limit_percent)})" if limit.percent is not None else ""
-    explained = f"{with_unit(limit.limit, series.unit)}{share}"
+    first = series.since_first
+    overall = (
+        f"{_direction(first)} {_size(first, series.unit)} since the first session ({_span(first, series.unit)}), "
+        if first is not None
+        else ""
+    )
+    steps = " and from ".join(_step_text(c, series.unit) for c in changes)
+    found = list(dict.fromkeys(_limit_text(c, series.unit) for c in changes))
+    limits = ("limit " if len(found) == 1 else "limits ") + " and ".join(found)
     return (
-        f"{name[0].upper()}{name[1:]} {' and '.join(parts)}, beyond the {explained} that measurement error can "
-        "explain in this report."
+        f"{name[0].upper()}{name[1:]} {overall}with a change beyond measurement error from {steps}, each "
+        f"confirmed by the next session ({limits} in this report)."
     )
 
 
-CHANGE, NO_CHANGE, UNKNOWN = "change", "no change", "cannot be judged yet"
+def possible_sentence(series: Series, change: Change) -> str:
+    """Page 1's sentence on a possible change of the latest session, awaiting the next session's confirmation."""
+    name = short_name(series.key)
+    return (
+        f"Possible change, to be confirmed by the next session: {name} {_direction(change)} "
+        f"{_size(change, series.unit)} since the previous session ({_span(change, series.unit)}), beyond the "
+        f"{_limit_text(change, series.unit)} that measurement error can explain in this report."
+    )
+
+
+CHANGE, POSSIBLE, NO_CHANGE, UNKNOWN = "change", "possible change", "no change", "cannot be judged yet"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -119,7 +146,8 @@ class Verdict:
     Attributes
     ----------
     series : the parameter's series.
-    status : ``change``, ``no change`` or ``cannot be judged yet``.
+    status : ``change`` (a confirmed change), ``possible change`` (the latest step, awaiting the next session),
+        ``no change`` or ``cannot be judged yet``.
     reason : for ``cannot be judged yet``, why and what to record.
     since : for ``no change``, what the latest session was compared with (``the previous or the first (1 June
         2024)``, ``the previous session``, or one of them only and why not the other).
@@ -169,8 +197,10 @@ def verdict(series: Series, min_pairs: int, *, latest: SessionRecord | None = No
     """
     if not _in_latest(series, latest):
         return Verdict(series=series, status=UNKNOWN, reason=NOT_IN_LATEST)
-    if series.flagged_latest:
+    if series.changes:
         return Verdict(series=series, status=CHANGE)
+    if series.possible is not None:
+        return Verdict(series=series, status=POSSIBLE)
     usable = sum(p.usable for p in series.points)
     if usable < 2:
         return Verdict(series=series, status=UNKNOWN, reason="one usable session. The next one is compared with it")
@@ -208,7 +238,7 @@ def verdicts(analysis: Analysis, arm: str | None) -> list[Verdict]:
     for series in analysis.arm_series(arm):
         if not series.judged or not series.has_values:
             continue
-        if angle_of(series.key[2]) is not None and not series.flagged_latest:
+        if angle_of(series.key[2]) is not None and not series.changes and series.possible is None:
             continue
         found.append(verdict(series, analysis.min_pairs, latest=latest))
     return found
@@ -247,7 +277,10 @@ def headline_parts(analysis: Analysis, arm: str | None) -> list[tuple[str, str]]
     if not analysis.judgeable:
         return [("note", cannot_judge(analysis))]
     found = verdicts(analysis, arm)
-    parts = [(CHANGE, change_sentence(v.series, v.series.flagged_latest)) for v in found if v.status == CHANGE]
+    parts = [(CHANGE, change_sentence(v.series, v.series.changes)) for v in found if v.status == CHANGE]
+    parts += [
+        (POSSIBLE, possible_sentence(v.series, possible)) for v in found if (possible := v.series.possible) is not None
+    ]
     parts += _no_change_sentences(found, visits[-1])
     unknown: dict[str, list[str]] = {}
     for v in found:
@@ -322,12 +355,14 @@ def error_source(analysis: Analysis) -> str:
 
 def flag_rule(analysis: Analysis) -> str:
     """The rule that flags a change, in one plain sentence."""
-    count = analysis.comparisons
-    if count == 0:
+    if not analysis.judgeable:
         return ""
+    count = next((c.comparisons for s in analysis.series for c in s.steps), analysis.comparisons)
     return (
-        f"A change is flagged only when it exceeds the measurement error by enough that, over all {count} "
-        "comparisons in this report, an unchanged arm shows a flag anywhere at most 1 time in 20."
+        "A step from one session to the next beyond the measurement error is a possible change, and a change once "
+        "the next session, compared with the same earlier one, is beyond it too in the same direction; the limit "
+        f"is set so that, over the {count} steps this report can confirm, an unchanged arm shows a change anywhere "
+        "at most 1 time in 20 (friction, stiffness and damping compared as ratios)."
     )
 
 
@@ -405,17 +440,25 @@ class SessionRow:
         return self.label or str(self.number)
 
 
-def _flagged_steps(analysis: Analysis) -> dict[int | None, list[str]]:
+def _flagged_steps(analysis: Analysis, *, possible: bool = False) -> dict[int | None, list[str]]:
+    """Each session's flagged steps (``possible``: possible changes) as ``elbow friction −25 %``, by session id."""
     flagged: dict[int | None, list[str]] = {}
     for series in analysis.series:
-        for change in series.changes:
+        found = ((series.possible,) if series.possible is not None else ()) if possible else series.changes
+        for change in found:
             sign = "+" if change.delta > 0 else "−"
-            size = percent(change.percent) if change.percent is not None else with_unit(abs(change.delta), series.unit)
-            flagged.setdefault(change.after.session_id, []).append(f"{short_name(series.key)} {sign}{size}")
+            flagged.setdefault(change.after.session_id, []).append(
+                f"{short_name(series.key)} {sign}{_size(change, series.unit)}"
+            )
     return flagged
 
 
-def _status(analysis: Analysis, record: SessionRecord, flagged: dict[int | None, list[str]]) -> tuple[str, bool]:
+def _status(
+    analysis: Analysis,
+    record: SessionRecord,
+    flagged: dict[int | None, list[str]],
+    possible: dict[int | None, list[str]],
+) -> tuple[str, bool]:
     if not record.quality.valid:
         cause, action = invalid_cause(record)
         return f"Not usable: {cause}; {action}.", True
@@ -423,7 +466,12 @@ def _status(analysis: Analysis, record: SessionRecord, flagged: dict[int | None,
         return "Retest (for measurement error)", False
     parts, attention = [], False
     if record.id in flagged:
-        parts.append("Change beyond measurement error: " + "; ".join(flagged[record.id]))
+        parts.append(
+            "Change beyond measurement error (confirmed by the next session): " + "; ".join(flagged[record.id])
+        )
+        attention = True
+    if record.id in possible:
+        parts.append("Possible change, to be confirmed by the next session: " + "; ".join(possible[record.id]))
         attention = True
     if any(u.record is record for u in analysis.untared):
         parts.append("No tare: its arm weight is left out")
@@ -436,11 +484,11 @@ def session_rows(analysis: Analysis, *, retests: bool = True) -> list[SessionRow
 
     With ``retests`` False a retest has no line of its own: its name stands beside its session's status.
     """
-    flagged = _flagged_steps(analysis)
+    flagged, possible = _flagged_steps(analysis), _flagged_steps(analysis, possible=True)
     rows: list[SessionRow] = []
     for record in analysis.sessions:
         name = analysis.label_of(record)
-        status, attention = _status(analysis, record, flagged)
+        status, attention = _status(analysis, record, flagged, possible)
         visit = name.rstrip(RETEST_LETTERS)
         if record.retest and not retests and visit != name:
             partner = next((k for k in range(len(rows) - 1, -1, -1) if rows[k].label == visit), None)

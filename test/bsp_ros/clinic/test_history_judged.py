@@ -83,11 +83,10 @@ def test_invalid_duplicate_and_future_sessions_do_not_move_the_headline(history:
     invalid = [p for p in friction.points if not p.valid]
     assert len(invalid) == 1 and invalid[0].value == INVALID_VALUE_NM
     assert all(INVALID_VALUE_NM not in (c.before.value, c.after.value) for c in friction.steps)
+    with open_store(history.store) as store:
+        pool = [r for r in store.sessions() if r.quality.valid]  # the cell's retest pairs judge it too
     without = analyse(
-        FRICTION,
-        [r for r in before.sessions if r.quality.valid],
-        pool=[r for r in before.sessions if r.quality.valid],
-        subject_record=before.record,
+        FRICTION, [r for r in before.sessions if r.quality.valid], pool=pool, subject_record=before.record
     )
     assert headline(without, "left") == sentence
     first = session_estimate(patient(0.80, 1.5), 0, 100)  # F1 (k = 1): its first session again

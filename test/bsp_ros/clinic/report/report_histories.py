@@ -7,14 +7,11 @@ sensor re-zeroed), written to a SQLite store in seconds.
   has a single retest pair.
 - ``T1`` (its own store): a 0.3 kg handle; every session tared but the latest visit, which was not.
 
-The shoulder and elbow markers are re-placed within +-3 mm every session; the wrist and hand markers sit exactly.
-Re-placing every marker at the 2 mm sd `bsp identify` assumes (``session_estimate(..., placement_sd_mm=2.0)``)
-leaves these 40 s sessions of the paper's small sines half invalid: a contact marker off along the hand's normal
-toward +normal puts the hand's static moment at its bound 0 (its std, 0.12 kg m, is four times its value), the hand's
-perpendicular moment takes up the rest (0.003-0.02 kg m against an allowance of 4 x 0.001) and the check calls it
-implausible. With 120 s sessions every one is valid and no unchanged arm is flagged (largest change 0.58 of its
-limit), but the friction steps stay under D1's limit (0.21 N m: its six retest differences' SD, 0.040 N m, times
-Student's t for 6 pairs at 1 - 0.05 / 56); ``bench/bench_clinic_history.py --false-flags`` measures both.
+The shoulder and elbow markers are re-placed within +-3 mm every session, the wrist and hand markers sit exactly;
+``build_peers(..., placement_sd_mm=2.0)`` re-places every marker by a Gaussian draw of 2 mm per axis instead (the sd
+`bsp identify` assumes), the day-to-day error of a clinic where every marker goes on anew: one of U4's twelve 40 s
+sessions is then invalid, and each of D1's friction steps is a possible change in the report of its visit and
+flagged in the next.
 """
 
 from __future__ import annotations
@@ -45,8 +42,9 @@ def _record(patient: Patient, subject: str) -> SubjectRecord:
     return SubjectRecord(subject, patient.body_mass_kg, patient.height_m, patient.sex, "left", "left")
 
 
-def build_peers(path: Path) -> Path:
-    """The unchanged arms and the two-step decline in one store (one cell)."""
+def build_peers(path: Path, placement_sd_mm: float = 0.0) -> Path:
+    """The unchanged arms and the two-step decline in one store (one cell); ``placement_sd_mm`` > 0 re-places every
+    marker by that sd every session (:func:`~bsp_ros.clinic.histories.session_estimate`)."""
     plans = {s: (p, [p.coulomb_nm[1]] * VISITS) for s, p in UNCHANGED.items()}
     plans[DECLINE] = (DECLINE_PATIENT, list(DECLINE_FRICTION))
     with open_store(path) as store:
@@ -55,8 +53,10 @@ def build_peers(path: Path) -> Path:
             for week, friction in enumerate(plan):
                 arm = replace(patient, coulomb_nm=(patient.coulomb_nm[0], friction, patient.coulomb_nm[2]))
                 seed = 1000 + 100 * k + week
-                store.add_estimate(session_estimate(arm, 7 * week, seed), subject)
-                store.add_estimate(session_estimate(arm, 7 * week, seed + 50, retest=True), subject)
+                day = 7 * week
+                store.add_estimate(session_estimate(arm, day, seed, placement_sd_mm=placement_sd_mm), subject)
+                retest = session_estimate(arm, day, seed + 50, retest=True, placement_sd_mm=placement_sd_mm)
+                store.add_estimate(retest, subject)
     return path
 
 

@@ -4,6 +4,7 @@ retest pairs where the subject's own agree with them (F-test), and its limits gi
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -109,5 +110,10 @@ def test_a_relative_change_is_judged_on_the_log_scale_and_its_limits_read_in_uni
     assert fall.mdc_percent == pytest.approx(100.0 * (1.0 - math.exp(-mdc)))
     for c in (fall, rise, change(0.8, 0.78), change(0.8, 0.7)):
         assert c.limit is not None and c.mdc95 is not None and c.limit > c.mdc95
-        assert c.flagged == (abs(c.delta) > c.limit) and c.beyond_mdc == (abs(c.delta) > c.mdc95)
-    assert fall.flagged and not change(0.8, 0.78).flagged
+        assert c.possible == (abs(c.delta) > c.limit) and c.beyond_mdc == (abs(c.delta) > c.mdc95)
+    assert fall.possible and not change(0.8, 0.78).possible
+    # A possible change is flagged once the next session, against the same earlier one, is beyond it the same way.
+    assert fall.awaiting and not fall.flagged
+    assert replace(fall, confirmed_by=change(0.8, 0.52)).flagged
+    assert not replace(fall, confirmed_by=change(0.8, 0.78)).flagged  # back within the error
+    assert not replace(fall, confirmed_by=change(0.8, 1.3)).flagged  # beyond, but the other way
