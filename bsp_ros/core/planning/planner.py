@@ -436,6 +436,17 @@ def _predict(request: PlanRequest, trajectory: PlannedTrajectory, grid_hz: float
     )
 
 
+def _inertia_notes(ratio: np.ndarray) -> list[str]:
+    """A note per joint whose inertial torques reach :data:`QUASI_STATIC_SHARE` of gravity (``ratio`` (n,))."""
+    return [
+        f"not quasi-static: inertial torques at the {joint} reach {100 * share:.2f}% of gravity (over "
+        f"{100 * QUASI_STATIC_SHARE:g}%): the estimator models them and identifies the grouped inertias "
+        "from them; the predicted stds above are the quasi-static model's"
+        for joint, share in zip(joints_for(ratio.size), ratio, strict=True)
+        if share >= QUASI_STATIC_SHARE
+    ]
+
+
 def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     """One plan with ``k_points`` operating points.
 
@@ -500,13 +511,7 @@ def _plan_points(request: PlanRequest, k_points: int, grid_hz: float) -> Plan:
     centres, amplitudes = decode(best)
     prediction = _predict(request, trajectory)
     ratio = inertial_torque_ratio(trajectory, request.nominal)
-    for joint, share in zip(joints_for(n), ratio, strict=True):
-        if share >= QUASI_STATIC_SHARE:
-            notes.append(
-                f"not quasi-static: inertial torques at the {joint} reach {100 * share:.2f}% of gravity (over "
-                f"{100 * QUASI_STATIC_SHARE:g}%): the estimator models them and identifies the grouped inertias "
-                "from them; the predicted stds above are the quasi-static model's"
-            )
+    notes += _inertia_notes(ratio)
     notes.append(f"optimiser: {result.nfev} evaluations, objective {request.objective} {cost(best):.4g}")
     return Plan(
         request=request,
