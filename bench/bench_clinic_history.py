@@ -7,8 +7,9 @@ Each has retests on the first five days. Prints every flagged step and writes th
 
 With ``--false-flags N``: N unchanged arms instead (people of seeded sex, size and passive moments, six weekly
 visits each with a same-day retest, markers re-placed and the sensor re-zeroed every session), and how many of their
-reports show any flag with the report's limit (Bonferroni over its comparisons) and with each comparison at 95 %
-alone (its MDC95), and how many of their sessions were invalid (by the first invalid finding's code).
+reports show any flag by the report's rule (a step the next session confirms, at a level set for the report's
+confirmable steps) and with each comparison at 95 % alone (its MDC95), and how many of their sessions were
+invalid (by the first invalid finding's code).
 
 Every session re-places every marker, shoulder to contact point, by a Gaussian draw of ``--placement-sd-mm`` per
 in-plane axis (default: the 2 mm `bsp identify` assumes); ``--placement-sd-mm 0`` re-places the shoulder and elbow
@@ -171,7 +172,7 @@ def false_flags(out: Path, count: int, first_seed: int, placement_sd_mm: float, 
     print(
         f"{count} unchanged arms ({comparisons / max(count, 1):.1f} comparisons a report, "
         f"{_placement(placement_sd_mm)}, {duration_s:g} s sessions) in {time.perf_counter() - started:.0f} s: any "
-        f"flag with the report's limit in {any_limit} reports, with each comparison at 95 % alone (its MDC95) in "
+        f"flag by the report's rule in {any_limit} reports, with each comparison at 95 % alone (its MDC95) in "
         f"{any_single}; largest change {worst:.2f} of its limit; {sum(invalid.values())} of {sessions} sessions "
         f"invalid ({causes})"
     )
