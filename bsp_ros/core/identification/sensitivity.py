@@ -32,7 +32,6 @@ __all__ = [
     "offset_sensitivity",
     "offset_torques_nm",
     "response_sensitivity",
-    "tare_quality",
     "tare_share",
     "zero_covariance",
 ]
@@ -170,7 +169,7 @@ class TareShare:
     Attributes
     ----------
     tare : whether a tare was applied, and the zero's share of each parameter's std.
-    offset_sensitivity : the document's ``offset_sensitivity`` block (:func:`tare_quality`).
+    offset_sensitivity : the document's ``offset_sensitivity`` block.
     """
 
     tare: TareBlock
@@ -179,20 +178,6 @@ class TareShare:
     def applied_to(self, quality: Quality) -> Quality:
         """``quality`` with both blocks, the tare's first."""
         return quality.with_tare(self.tare).with_extra({"offset_sensitivity": self.offset_sensitivity})
-
-
-def tare_quality(
-    result: IdentificationResult,
-    g: np.ndarray | None,
-    frame_id: str,
-    tare_file: str | None,
-    added: np.ndarray | None = None,
-    zero_sd: tuple[float, float] | None = None,
-) -> dict[str, Any]:
-    """The ``quality.tare`` and ``quality.offset_sensitivity`` blocks of the estimate document (the JSON of
-    :func:`tare_share`)."""
-    share = tare_share(result, g, frame_id, tare_file, added, zero_sd)
-    return {"tare": share.tare.to_json(), "offset_sensitivity": share.offset_sensitivity}
 
 
 def tare_share(

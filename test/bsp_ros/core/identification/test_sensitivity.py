@@ -15,7 +15,7 @@ from bsp_ros.core.identification.sensitivity import (
     offset_sensitivity,
     offset_torques_nm,
     response_sensitivity,
-    tare_quality,
+    tare_share,
 )
 from bsp_ros.core.model import gravity_regressor
 from bsp_ros.core.pipeline import IdentifyOptions, identify_data, identify_session, refit_options
@@ -122,12 +122,14 @@ def test_quality_says_null_where_the_estimate_could_not_be_differentiated() -> N
     result = IdentificationResult(
         method="x", names=names, values=np.array([0.8, 0.2, 0.5]), covariance=np.eye(3), findings=not_yet
     )
-    block = tare_quality(result, None, "ft_sensor", None)
-    assert block["tare"] == {"applied": False, "file": None}
-    assert block["offset_sensitivity"]["static_moment_kgm"] == {"upper_arm": None, "forearm": None}
+    share = tare_share(result, None, "ft_sensor", None)
+    assert share.tare.to_json() == {"applied": False, "file": None}
+    assert share.offset_sensitivity["static_moment_kgm"] == {"upper_arm": None, "forearm": None}
     g = np.zeros((3, 6))
     g[1, 1] = -0.05  # kgm per N
-    block = tare_quality(dataclasses.replace(result, findings=()), g, "ft_sensor", "cell.tare.yaml")
-    assert block["tare"]["applied"] and block["tare"]["file"] == "cell.tare.yaml"
-    assert block["offset_sensitivity"]["static_moment_kgm"]["forearm"] == pytest.approx([0.0, -0.005, 0.0])
-    assert block["offset_sensitivity"]["static_moment_percent"]["forearm"] == pytest.approx(2.5)
+    share = tare_share(dataclasses.replace(result, findings=()), g, "ft_sensor", "cell.tare.yaml")
+    tare = share.tare.to_json()
+    assert tare["applied"] and tare["file"] == "cell.tare.yaml"
+    sensitivity = share.offset_sensitivity
+    assert sensitivity["static_moment_kgm"]["forearm"] == pytest.approx([0.0, -0.005, 0.0])  # type: ignore[index]
+    assert sensitivity["static_moment_percent"]["forearm"] == pytest.approx(2.5)  # type: ignore[index]
