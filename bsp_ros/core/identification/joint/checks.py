@@ -13,7 +13,7 @@ import numpy as np
 from bsp_ros.core.findings import Finding, FindingCode
 from bsp_ros.core.identification.joint.elastic_check import elastic_check
 from bsp_ros.core.identification.joint.fallback import family_result
-from bsp_ros.core.identification.joint.judgement import unbounded_static_moments
+from bsp_ros.core.identification.joint.judgement import static_moments_at_bound, unbounded_static_moments
 from bsp_ros.core.identification.joint.placement_scale import placement_scale
 from bsp_ros.core.identification.joint.spasticity import speed_dependence
 from bsp_ros.core.identification.joint.stage import Outcome, Stage
@@ -160,11 +160,11 @@ def check_perpendicular(stage: Stage) -> Stage:
         )
 
     problems = implausible(stage.fit.values)
-    bounded = _static_moments_at_bound(stage)
+    bounded = {names[i][1] for i in np.flatnonzero(static_moments_at_bound(stage))}
     if not any(f.where in bounded for f in problems):
         return stage.apply(Outcome(problems=tuple(problems)), from_checks=True)
     # A static moment held at its bound 0 pushes what the data put below it into its segment's off-axis moment (a
-    # contact marker 0.5 mm off the hand's axis did, in short sessions of a light hand): judged on the data's own
+    # contact marker 1.5 mm off the hand's axis did, in short sessions of a light hand): judged on the data's own
     # fit, which the static moment's verdict reads too, and the push joins the covariance.
     own = unbounded_static_moments(stage.problem)
     still = {f.where for f in implausible(own)}
@@ -172,9 +172,3 @@ def check_perpendicular(stage: Stage) -> Stage:
     push = stage.fit.values - own
     added = () if problems else ((Term.STATIC_MOMENT_BOUND, np.outer(push, push)),)
     return stage.apply(Outcome(problems=tuple(problems), added=added), from_checks=True)
-
-
-def _static_moments_at_bound(stage: Stage) -> set[str]:
-    """The segments whose static moment the fit holds at its lower bound."""
-    n, lower, values = stage.n, stage.problem.lower, stage.fit.values
-    return {stage.problem.names[i][1] for i in range(n) if np.isfinite(lower[i]) and values[i] <= lower[i] + 1e-12}

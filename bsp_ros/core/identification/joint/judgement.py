@@ -23,6 +23,7 @@ __all__ = [
     "UNIDENTIFIABLE_CONDITION",
     "judge_fit",
     "judge_parameters",
+    "static_moments_at_bound",
     "unbounded_static_moments",
     "unidentifiable_problem",
 ]
@@ -41,6 +42,12 @@ def unbounded_static_moments(problem: Problem) -> np.ndarray:
     n = problem.torque.shape[1]
     lower = np.where(np.arange(len(problem.names)) < n, -np.inf, problem.lower)
     return reweighted_values(dataclasses.replace(problem, lower=lower)).values
+
+
+def static_moments_at_bound(stage: Stage) -> np.ndarray:
+    """(n,) whether the fit holds each static moment at its lower bound."""
+    lower = stage.problem.lower[: stage.n]
+    return np.asarray(np.isfinite(lower) & (stage.fit.values[: stage.n] <= lower + 1e-12))
 
 
 def judge_fit(stage: Stage) -> Stage | IdentificationResult:
@@ -124,9 +131,7 @@ def judge_parameters(stage: Stage) -> Stage:
     correlation = correlation_from_covariance(fit.covariance)
     std = np.sqrt(np.clip(np.diag(fit.covariance), 0.0, None))
     names = stage.problem.names[: stage.problem.passive_end]
-    lower = stage.problem.lower[:n]
-    at_bound = np.isfinite(lower) & (fit.values[:n] <= lower + 1e-12)
-    unbounded = unbounded_static_moments(stage.problem) if at_bound.any() else None
+    unbounded = unbounded_static_moments(stage.problem) if static_moments_at_bound(stage).any() else None
     problems: list[Finding] = []
     notes: list[Finding] = []
     correlated: dict[str, float] = {}
