@@ -40,3 +40,8 @@ def cause_of(quality: Mapping[str, Any]) -> str:
 def warning_kinds(quality: Mapping[str, Any]) -> list[str]:
     """The kinds of the findings that qualify or annotate an estimate (its ``warnings``: weak and note), in order."""
     return [kind_of(f) for f in findings_of(quality) if f.severity is not Severity.INVALID]
+
+
+def passive_options(quality: Mapping[str, Any]) -> list[str]:
+    """The ``--passive`` models an estimate's findings name (``values["passive_option"]``), in their order."""
+    return [str(f.values["passive_option"]) for f in findings_of(quality) if "passive_option" in f.values]

@@ -50,13 +50,13 @@ from typing import Any
 
 import numpy as np
 from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header
+from finding_kinds import NO_FINDING, cause_of, passive_options
 from scoring import WRONG_Z, Counts, Scored
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "test" / "physics"))
 
 from bsp_ros.cli import main as bsp_main  # noqa: E402
-from bsp_ros.core.findings import findings_of, verdict_of  # noqa: E402
 from bsp_ros.core.identification.passive import TERMS, PassiveModel  # noqa: E402
 from bsp_ros.errors import InputError  # noqa: E402
 
@@ -208,14 +208,8 @@ def _message(document: dict[str, Any]) -> str:
     estimate (numbers blanked, so that alike errors count together)."""
     if "error" in document:
         return _NUMBER.sub("#", str(document["error"]))[:70]
-    verdict = verdict_of(findings_of(document.get("quality", {})))
-    return "invalid (no finding)" if verdict is None else f"{verdict.code} {verdict.where}".strip()
-
-
-def suggested_models(document: dict[str, Any]) -> list[str]:
-    """The ``--passive`` models the findings of ``document`` name (``values["passive_option"]``), in their order."""
-    findings = findings_of(document.get("quality", {}))
-    return [str(f.values["passive_option"]) for f in findings if "passive_option" in f.values]
+    cause = cause_of(document.get("quality", {}))
+    return "invalid (no finding)" if cause == NO_FINDING else cause
 
 
 def session_bag(
@@ -348,7 +342,7 @@ def main(argv: list[str] | None = None) -> int:
                     errors = {"static_pct": math.nan, "curve_rms_pct": math.nan}
                     if "error" not in document:
                         errors = accuracy(document, truth)
-                    queue += [m for m in suggested_models(document) if m not in done]
+                    queue += [m for m in passive_options(document.get("quality", {})) if m not in done]
                     rows[(share, label, model)].append(
                         {
                             "seed": seed,

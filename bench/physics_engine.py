@@ -54,12 +54,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test" / "physics"))
 
+from finding_kinds import cause_of, passive_options
 from in_process import identify
 from mujoco_bag import record, write_bag
 from mujoco_cell import CellOptions, EngineRun, draw_arm, paper_sine
 from scoring import Counts
 
-from bsp_ros.core.findings import findings_of, verdict_of
 from bsp_ros.core.identification.passive import PassiveModel
 from bsp_ros.core.model import gravity_regressor
 from bsp_ros.core.planning import planned_trajectory_from_file
@@ -93,19 +93,6 @@ class Tally(Counts):
 
     messages: collections.Counter[str] = field(default_factory=collections.Counter)
     failures: collections.Counter[str] = field(default_factory=collections.Counter)
-
-
-def _reason(estimate: dict[str, Any]) -> str:
-    """The code of the first finding that made ``estimate`` invalid, with its joint or segment, so that alike
-    verdicts count together (``model_misfit elbow``)."""
-    verdict = verdict_of(findings_of(estimate.get("quality", {})))
-    return "(no finding)" if verdict is None else f"{verdict.code} {verdict.where}".strip()
-
-
-def suggested_models(estimate: dict[str, Any]) -> set[str]:
-    """The ``--passive`` models the findings of ``estimate`` name (``values["passive_option"]``)."""
-    findings = findings_of(estimate.get("quality", {}))
-    return {str(f.values["passive_option"]) for f in findings if "passive_option" in f.values}
 
 
 def inertia_only_shift(run: EngineRun, passive: str) -> np.ndarray:
@@ -158,7 +145,7 @@ def run_scenario(
         bag = write_bag(workdir / stem, cell)
         code, estimate = identify(bag, workdir / f"{stem}_default.json")
         models = [("default", code, estimate)]
-        for model in sorted(suggested_models(estimate) | set(args.also_passive)):
+        for model in sorted(set(passive_options(estimate.get("quality", {}))) | set(args.also_passive)):
             code_m, estimate_m = identify(bag, workdir / f"{stem}_{model}.json", "--passive", model)
             models.append((model, code_m, estimate_m))
         for model, code_m, estimate_m in models:
@@ -169,7 +156,7 @@ def run_scenario(
                 continue
             run = tally.score(estimate_m, cell.truth)
             if not run.valid:
-                tally.messages[_reason(estimate_m)] += 1
+                tally.messages[cause_of(estimate_m.get("quality", {}))] += 1
             if args.verbose:
                 top = ", ".join(f"{k} {v:.1f}" for k, v in sorted(run.z.items(), key=lambda kv: -kv[1])[:3])
                 print(f"  seed {seed} {model}: valid={run.valid} {top}", flush=True)

@@ -34,9 +34,10 @@ from typing import Any
 
 import numpy as np
 from calibration import calibration_columns, calibration_header, sharpness_columns, sharpness_header, summary_line
+from finding_kinds import warning_kinds
 from scoring import Counts, Scored, scored
 
-from bsp_ros.core.findings import FindingCode, Severity, findings_of
+from bsp_ros.core.findings import FindingCode
 from bsp_ros.core.fusion import SubjectInfo
 from bsp_ros.core.pipeline import IdentifyOptions, identify_session
 from bsp_ros.core.simulation import (
@@ -104,12 +105,6 @@ NUISANCES: dict[str, Callable[[CellSpec, int], CellSpec]] = {
 _ROUTINE = frozenset({str(FindingCode.PRIOR_NOTE), str(FindingCode.DATA_NOTE)})
 
 
-def _kinds(quality: dict[str, Any]) -> list[str]:
-    """The kinds of the findings that qualify or annotate an estimate (its warnings): each code with its joint or
-    segment (``elastic_term elbow``), so that alike warnings count together."""
-    return [f"{f.code} {f.where}".strip() for f in findings_of(quality) if f.severity is not Severity.INVALID]
-
-
 def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
     options = IdentifyOptions(subject=SubjectInfo(75.0, 1.78, "male"))
     if tare:
@@ -143,7 +138,7 @@ def _run(spec: CellSpec, tare: bool) -> dict[str, Any]:
         else math.nan,
         "max_z": run.max_z,
         "residuals": run.residuals,
-        "warnings": _kinds(document["quality"]),
+        "warnings": warning_kinds(document["quality"]),
         "message": document["quality"].get("message", ""),
     }
 
